@@ -1,0 +1,57 @@
+#include <iostream>
+
+#include "commands.h"
+#include "rdtf/write.h"
+
+namespace rdtf::cli {
+namespace {
+
+struct ConvertArguments {
+  ConvertOptions options;
+  std::string input;
+  std::string output;
+  bool glb = false;
+  bool verbose = false;
+};
+
+std::filesystem::path default_output(const std::filesystem::path& input, bool glb) {
+  std::filesystem::path output = input;
+  output.replace_extension(glb ? ".rdtf.glb" : ".rdtf.gltf");
+  return output;
+}
+
+int run_convert(ConvertArguments& args) {
+  Diagnostics diag(args.input);
+  auto conversion = convert_or_report(args.input, args.options, diag);
+  if (!conversion) return kExitInvalidInput;
+  bool glb = args.glb;
+  if (!args.output.empty() && std::filesystem::path(args.output).extension() == ".glb") glb = true;
+  const std::filesystem::path target = args.output.empty() ? default_output(args.input, glb)
+                                                           : std::filesystem::path(args.output);
+  Diagnostics write_diag(target.string());
+  const bool written = write_rdtf(conversion->asset, target,
+                                  glb ? OutputFormat::kGlb : OutputFormat::kGltf, write_diag);
+  print_diagnostics(diag, args.verbose);
+  print_diagnostics(write_diag, args.verbose);
+  if (!written) return kExitInternalError;
+  std::cerr << "wrote " << target.string() << ": " << conversion->robot.links.size() << " links, "
+            << conversion->robot.joints.size() << " joints\n";
+  return kExitOk;
+}
+
+}  // namespace
+
+void add_convert_command(CLI::App& app, int& exit_code) {
+  auto args = std::make_shared<ConvertArguments>();
+  CLI::App* command = app.add_subcommand("convert", "Convert a glTF (.gltf or .glb) to RDTF");
+  command->add_option("input", args->input, "The glTF model")->required();
+  command->add_option("-o,--output", args->output,
+                      "Where to write (default: beside the input, NAME.rdtf.gltf or .glb); a "
+                      ".glb name implies --glb");
+  command->add_flag("--glb", args->glb, "Write a binary .glb with every buffer and image embedded");
+  command->add_flag("-v,--verbose", args->verbose, "Also print info diagnostics");
+  add_conversion_options(*command, args->options);
+  command->callback([args, &exit_code] { exit_code = run_convert(*args); });
+}
+
+}  // namespace rdtf::cli

@@ -1,0 +1,24 @@
+// rdtf: the one-shot command line over librdtf. `rdtf --help` lists the commands.
+// Exit codes: 0 success, 2 invalid input (diagnostics on stderr), 1 internal error.
+#include <exception>
+#include <iostream>
+
+#include "commands.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{"rdtf: turns glTF 2.0 models into RDTF robot descriptions (glTF + extras.RDTF)"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "rdtf 0.1.0");
+  int exit_code = rdtf::cli::kExitOk;
+  rdtf::cli::add_convert_command(app, exit_code);
+  rdtf::cli::add_inspect_command(app, exit_code);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& error) {
+    return app.exit(error);
+  } catch (const std::exception& error) {
+    std::cerr << "rdtf: internal error: " << error.what() << "\n";
+    return rdtf::cli::kExitInternalError;
+  }
+  return exit_code;
+}

@@ -1,0 +1,83 @@
+#include "rdtf/diagnostics.h"
+
+#include <algorithm>
+
+namespace rdtf {
+
+std::string_view to_string(Severity severity) {
+  switch (severity) {
+    case Severity::kInfo:
+      return "info";
+    case Severity::kWarning:
+      return "warning";
+    case Severity::kError:
+      return "error";
+  }
+  return "error";
+}
+
+std::string format(const Diagnostic& d) {
+  std::string place = d.file.empty() ? std::string("<input>") : d.file;
+  if (!d.pointer.empty()) {
+    place += ":" + d.pointer;
+  } else if (d.byte_offset) {
+    place += ":@" + std::to_string(*d.byte_offset);
+  }
+  return place + ": " + std::string(to_string(d.severity)) + " " + d.code + ": " + d.message;
+}
+
+void Diagnostics::add(Severity severity, std::string code, std::string pointer,
+                      std::string message) {
+  Diagnostic d;
+  d.severity = severity;
+  d.code = std::move(code);
+  d.file = file_;
+  d.pointer = std::move(pointer);
+  d.message = std::move(message);
+  if (severity == Severity::kError) ++error_count_;
+  items_.push_back(std::move(d));
+}
+
+void Diagnostics::error_at_offset(std::string code, std::uint64_t offset, std::string message) {
+  Diagnostic d;
+  d.severity = Severity::kError;
+  d.code = std::move(code);
+  d.file = file_;
+  d.byte_offset = offset;
+  d.message = std::move(message);
+  ++error_count_;
+  items_.push_back(std::move(d));
+}
+
+void Diagnostics::append(const Diagnostics& other) {
+  for (const Diagnostic& d : other.items_) {
+    if (d.severity == Severity::kError) ++error_count_;
+    items_.push_back(d);
+  }
+}
+
+bool Diagnostics::contains(std::string_view code) const {
+  return std::any_of(items_.begin(), items_.end(),
+                     [&](const Diagnostic& d) { return d.code == code; });
+}
+
+std::string json_pointer(std::string_view base, std::string_view token) {
+  std::string out(base);
+  out += '/';
+  for (char c : token) {
+    if (c == '~') {
+      out += "~0";
+    } else if (c == '/') {
+      out += "~1";
+    } else {
+      out += c;
+    }
+  }
+  return out;
+}
+
+std::string json_pointer(std::string_view base, std::size_t index) {
+  return std::string(base) + "/" + std::to_string(index);
+}
+
+}  // namespace rdtf

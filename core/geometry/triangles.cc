@@ -1,0 +1,191 @@
+#include <cstring>
+
+#include "rdtf/geometry.h"
+
+namespace rdtf {
+namespace {
+
+constexpr int kByte = 5120;
+constexpr int kUnsignedByte = 5121;
+constexpr int kShort = 5122;
+constexpr int kUnsignedShort = 5123;
+constexpr int kUnsignedInt = 5125;
+constexpr int kFloat = 5126;
+
+std::size_t component_bytes(int component_type) {
+  switch (component_type) {
+    case kByte:
+    case kUnsignedByte:
+      return 1;
+    case kShort:
+    case kUnsignedShort:
+      return 2;
+    default:
+      return 4;
+  }
+}
+
+template <typename T>
+T load(const std::uint8_t* p) {
+  T value;
+  std::memcpy(&value, p, sizeof(T));
+  return value;
+}
+
+// One component as a double, applying glTF's normalisation rules for integers.
+double read_component(const std::uint8_t* p, int component_type, bool normalized) {
+  switch (component_type) {
+    case kByte: {
+      const double v = load<std::int8_t>(p);
+      return normalized ? std::max(v / 127.0, -1.0) : v;
+    }
+    case kUnsignedByte: {
+      const double v = load<std::uint8_t>(p);
+      return normalized ? v / 255.0 : v;
+    }
+    case kShort: {
+      const double v = load<std::int16_t>(p);
+      return normalized ? std::max(v / 32767.0, -1.0) : v;
+    }
+    case kUnsignedShort: {
+      const double v = load<std::uint16_t>(p);
+      return normalized ? v / 65535.0 : v;
+    }
+    case kUnsignedInt:
+      return load<std::uint32_t>(p);
+    case kFloat:
+      return load<float>(p);
+    default:
+      return 0;
+  }
+}
+
+// Reads `count` elements of `components` components from a buffer view into out (row-major).
+void read_elements(const GltfAsset& asset, std::size_t view_index, std::uint64_t byte_offset,
+                   std::uint64_t count, int components, int component_type, bool normalized,
+                   std::size_t default_stride, double* out) {
+  const Json& view = asset.document["bufferViews"][view_index];
+  const auto& buffer = asset.buffers[view["buffer"].get<std::size_t>()];
+  const std::uint64_t view_offset = view.value("byteOffset", std::uint64_t{0});
+  const std::uint64_t stride = view.value("byteStride", std::uint64_t{default_stride});
+  const std::size_t size = component_bytes(component_type);
+  const std::uint8_t* base = buffer.data() + view_offset + byte_offset;
+  for (std::uint64_t i = 0; i < count; ++i) {
+    const std::uint8_t* element = base + i * stride;
+    for (int c = 0; c < components; ++c) {
+      out[i * components + c] = read_component(element + c * size, component_type, normalized);
+    }
+  }
+}
+
+std::vector<std::uint32_t> read_unsigned(const GltfAsset& asset, std::size_t view_index,
+                                         std::uint64_t byte_offset, std::uint64_t count,
+                                         int component_type) {
+  std::vector<double> values(count);
+  read_elements(asset, view_index, byte_offset, count, 1, component_type, false,
+                component_bytes(component_type), values.data());
+  return {values.begin(), values.end()};
+}
+
+}  // namespace
+
+int component_count(const std::string& type) {
+  if (type == "SCALAR") return 1;
+  if (type == "VEC2") return 2;
+  if (type == "VEC3") return 3;
+  if (type == "VEC4" || type == "MAT2") return 4;
+  if (type == "MAT3") return 9;
+  if (type == "MAT4") return 16;
+  return 0;
+}
+
+std::vector<double> read_accessor(const GltfAsset& asset, std::size_t index) {
+  const Json& accessor = asset.document["accessors"][index];
+  const auto count = accessor["count"].get<std::uint64_t>();
+  const int components = component_count(accessor["type"].get<std::string>());
+  const int component_type = accessor["componentType"].get<int>();
+  const bool normalized = accessor.value("normalized", false);
+  std::vector<double> values(count * components, 0.0);
+  if (accessor.contains("bufferView")) {
+    read_elements(asset, accessor["bufferView"].get<std::size_t>(),
+                  accessor.value("byteOffset", std::uint64_t{0}), count, components,
+                  component_type, normalized, component_bytes(component_type) * components,
+                  values.data());
+  }
+  if (accessor.contains("sparse")) {
+    const Json& sparse = accessor["sparse"];
+    const auto sparse_count = sparse["count"].get<std::uint64_t>();
+    const Json& indices = sparse["indices"];
+    const auto rows = read_unsigned(asset, indices["bufferView"].get<std::size_t>(),
+                                    indices.value("byteOffset", std::uint64_t{0}), sparse_count,
+                                    indices["componentType"].get<int>());
+    const Json& sparse_values = sparse["values"];
+    std::vector<double> replacement(sparse_count * components);
+    // Sparse value views are tightly packed: no byteStride applies.
+    read_elements(asset, sparse_values["bufferView"].get<std::size_t>(),
+                  sparse_values.value("byteOffset", std::uint64_t{0}), sparse_count, components,
+                  component_type, normalized, component_bytes(component_type) * components,
+                  replacement.data());
+    for (std::uint64_t i = 0; i < sparse_count; ++i) {
+      std::copy_n(replacement.begin() + static_cast<std::ptrdiff_t>(i * components), components,
+                  values.begin() + static_cast<std::ptrdiff_t>(rows[i] * components));
+    }
+  }
+  return values;
+}
+
+std::optional<TriangleMesh> read_primitive_triangles(const GltfAsset& asset, std::size_t mesh,
+                                                     std::size_t primitive, Diagnostics& diag) {
+  const Json& prim = asset.document["meshes"][mesh]["primitives"][primitive];
+  const std::string pointer =
+      json_pointer(json_pointer("/meshes", mesh) + "/primitives", primitive);
+  const int mode = prim.value("mode", 4);
+  if (mode < 4) {
+    static const char* const kNames[] = {"POINTS", "LINES", "LINE_LOOP", "LINE_STRIP"};
+    diag.info("PRIMITIVE_SKIPPED", pointer,
+              std::string("primitive of mode ") + kNames[mode] + " has no volume; skipped");
+    return std::nullopt;
+  }
+  if (!prim["attributes"].contains("POSITION")) {
+    diag.info("PRIMITIVE_SKIPPED", pointer, "primitive has no POSITION attribute; skipped");
+    return std::nullopt;
+  }
+  TriangleMesh result;
+  const auto values = read_accessor(asset, prim["attributes"]["POSITION"].get<std::size_t>());
+  result.positions.resize(values.size() / 3);
+  for (std::size_t i = 0; i < result.positions.size(); ++i) {
+    result.positions[i] = Eigen::Vector3d(values[3 * i], values[3 * i + 1], values[3 * i + 2]);
+  }
+  std::vector<std::uint32_t> order;
+  if (prim.contains("indices")) {
+    const auto indices = read_accessor(asset, prim["indices"].get<std::size_t>());
+    order.assign(indices.begin(), indices.end());
+  } else {
+    order.resize(result.positions.size());
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<std::uint32_t>(i);
+  }
+  const std::size_t n = order.size();
+  if (mode == 4) {
+    result.triangles.reserve(n / 3);
+    for (std::size_t i = 0; i + 2 < n; i += 3) {
+      result.triangles.push_back({order[i], order[i + 1], order[i + 2]});
+    }
+    if (n % 3 != 0) {
+      diag.warning("MESH_PRIMITIVE_INCOMPATIBLE_MODE", pointer,
+                   std::to_string(n) + " vertices is not a multiple of 3; the last " +
+                       std::to_string(n % 3) + " are ignored");
+    }
+  } else if (mode == 5) {
+    // glTF 2.0 section 3.7.2.1: triangle i is (i, i + 1 + i%2, i + 2 - i%2).
+    for (std::size_t i = 0; i + 2 < n; ++i) {
+      result.triangles.push_back({order[i], order[i + 1 + i % 2], order[i + 2 - i % 2]});
+    }
+  } else {
+    for (std::size_t i = 1; i + 1 < n; ++i) {
+      result.triangles.push_back({order[i], order[i + 1], order[0]});
+    }
+  }
+  return result;
+}
+
+}  // namespace rdtf

@@ -1,0 +1,226 @@
+#include "confined_files.h"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <limits>
+
+namespace rdtf::internal {
+namespace {
+
+int hex_value(char c) {
+  if (c >= '0' && c <= '9') return c - '0';
+  if (c >= 'a' && c <= 'f') return c - 'a' + 10;
+  if (c >= 'A' && c <= 'F') return c - 'A' + 10;
+  return -1;
+}
+
+std::string describe_file_type(mode_t mode) {
+  if (S_ISDIR(mode)) return "a directory";
+  if (S_ISFIFO(mode)) return "a FIFO";
+  if (S_ISCHR(mode) || S_ISBLK(mode)) return "a device";
+  if (S_ISSOCK(mode)) return "a socket";
+  return "not a regular file";
+}
+
+bool is_inside(const std::filesystem::path& folder, const std::filesystem::path& real) {
+  const std::string root = folder.string();
+  const std::string candidate = real.string();
+  if (root == "/") return true;
+  return candidate.size() > root.size() && candidate.compare(0, root.size(), root) == 0 &&
+         candidate[root.size()] == '/';
+}
+
+// A file descriptor that closes itself.
+class Fd {
+ public:
+  explicit Fd(int fd) : fd_(fd) {}
+  ~Fd() {
+    if (fd_ >= 0) ::close(fd_);
+  }
+  Fd(const Fd&) = delete;
+  Fd& operator=(const Fd&) = delete;
+  int get() const { return fd_; }
+
+ private:
+  int fd_;
+};
+
+// Opens `path` for reading and checks it is a regular file of at most max_bytes; when `folder`
+// is given, also that its real location (resolved through /proc, so no symlink race) is inside.
+std::optional<std::uint64_t> open_checked(const std::filesystem::path* folder,
+                                          const std::filesystem::path& path,
+                                          std::uint64_t max_bytes, int& fd_out,
+                                          std::string& why) {
+  // O_NONBLOCK: opening a FIFO must not wait for a writer.
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK | O_NOCTTY);
+  if (fd < 0) {
+    why = std::string(std::strerror(errno));
+    return std::nullopt;
+  }
+  fd_out = fd;
+  struct stat info {};
+  if (::fstat(fd, &info) != 0) {
+    why = std::string(std::strerror(errno));
+    return std::nullopt;
+  }
+  if (!S_ISREG(info.st_mode)) {
+    why = "is " + describe_file_type(info.st_mode) + ", not a regular file";
+    return std::nullopt;
+  }
+  if (folder != nullptr) {
+    std::error_code error;
+    const auto real =
+        std::filesystem::read_symlink("/proc/self/fd/" + std::to_string(fd), error);
+    if (error) {
+      why = "cannot tell where it really is: " + error.message();
+      return std::nullopt;
+    }
+    if (!is_inside(*folder, real)) {
+      why = "resolves to " + real.string() + ", outside the model's folder " + folder->string();
+      return std::nullopt;
+    }
+  }
+  const auto size = static_cast<std::uint64_t>(info.st_size);
+  if (size > max_bytes) {
+    why = "is " + std::to_string(size) + " bytes, over the limit of " + std::to_string(max_bytes);
+    return std::nullopt;
+  }
+  return size;
+}
+
+bool read_all(int fd, std::uint64_t size, std::vector<std::uint8_t>& out, std::string& why) {
+  out.resize(static_cast<std::size_t>(size));
+  std::size_t done = 0;
+  while (done < out.size()) {
+    const ssize_t n = ::read(fd, out.data() + done, out.size() - done);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      why = std::string(std::strerror(errno));
+      return false;
+    }
+    if (n == 0) {
+      why = "file shrank while being read (" + std::to_string(done) + " of " +
+            std::to_string(size) + " bytes)";
+      return false;
+    }
+    done += static_cast<std::size_t>(n);
+  }
+  return true;
+}
+
+}  // namespace
+
+std::optional<std::string> percent_decode(std::string_view uri) {
+  std::string out;
+  out.reserve(uri.size());
+  for (std::size_t i = 0; i < uri.size(); ++i) {
+    if (uri[i] != '%') {
+      out += uri[i];
+      continue;
+    }
+    if (i + 2 >= uri.size()) return std::nullopt;
+    const int high = hex_value(uri[i + 1]);
+    const int low = hex_value(uri[i + 2]);
+    if (high < 0 || low < 0) return std::nullopt;
+    out += static_cast<char>(high * 16 + low);
+    i += 2;
+  }
+  return out;
+}
+
+bool is_data_uri(std::string_view uri) { return uri.substr(0, 5) == "data:"; }
+
+std::optional<std::filesystem::path> resolve_uri(const std::filesystem::path& folder,
+                                                 std::string_view uri, std::string& why) {
+  if (uri.empty()) {
+    why = "the URI is empty";
+    return std::nullopt;
+  }
+  // A scheme is letters, digits, '+', '-', '.' before the first ':' (RFC 3986 section 3.1).
+  const auto colon = uri.find(':');
+  const auto slash = uri.find('/');
+  if (colon != std::string_view::npos && (slash == std::string_view::npos || colon < slash)) {
+    why = "URIs with a scheme ('" + std::string(uri.substr(0, colon)) +
+          ":') are refused: only paths relative to the model's folder are allowed";
+    return std::nullopt;
+  }
+  if (uri.find_first_of("?#") != std::string_view::npos) {
+    why = "URIs with a query or fragment are refused";
+    return std::nullopt;
+  }
+  const auto decoded = percent_decode(uri);
+  if (!decoded) {
+    why = "malformed percent-escape";
+    return std::nullopt;
+  }
+  if (decoded->find('\0') != std::string::npos) {
+    why = "the decoded URI contains a NUL byte";
+    return std::nullopt;
+  }
+  if (decoded->front() == '/' || decoded->find('\\') != std::string::npos) {
+    why = "absolute paths and backslashes are refused: only paths relative to the model's "
+          "folder are allowed";
+    return std::nullopt;
+  }
+  // Walk the segments, refusing any ".." that would climb above the folder.
+  std::filesystem::path relative;
+  int depth = 0;
+  std::size_t start = 0;
+  while (start <= decoded->size()) {
+    auto end = decoded->find('/', start);
+    if (end == std::string::npos) end = decoded->size();
+    const std::string segment = decoded->substr(start, end - start);
+    if (segment == "..") {
+      if (depth == 0) {
+        why = "'../' leaves the model's folder";
+        return std::nullopt;
+      }
+      relative = relative.parent_path();
+      --depth;
+    } else if (!segment.empty() && segment != ".") {
+      relative /= segment;
+      ++depth;
+    }
+    start = end + 1;
+  }
+  if (depth == 0) {
+    why = "the URI names the model's folder itself, not a file";
+    return std::nullopt;
+  }
+  return folder / relative;
+}
+
+bool read_confined_file(const std::filesystem::path& folder, const std::filesystem::path& path,
+                        std::uint64_t max_bytes, std::vector<std::uint8_t>& out,
+                        std::string& why) {
+  int raw_fd = -1;
+  const auto size = open_checked(&folder, path, max_bytes, raw_fd, why);
+  Fd fd(raw_fd);
+  if (!size) return false;
+  return read_all(fd.get(), *size, out, why);
+}
+
+std::optional<std::uint64_t> confined_file_size(const std::filesystem::path& folder,
+                                                const std::filesystem::path& path,
+                                                std::string& why) {
+  int raw_fd = -1;
+  const auto size =
+      open_checked(&folder, path, std::numeric_limits<std::uint64_t>::max(), raw_fd, why);
+  Fd fd(raw_fd);
+  return size;
+}
+
+bool read_regular_file(const std::filesystem::path& path, std::uint64_t max_bytes,
+                       std::vector<std::uint8_t>& out, std::string& why) {
+  int raw_fd = -1;
+  const auto size = open_checked(nullptr, path, max_bytes, raw_fd, why);
+  Fd fd(raw_fd);
+  if (!size) return false;
+  return read_all(fd.get(), *size, out, why);
+}
+
+}  // namespace rdtf::internal

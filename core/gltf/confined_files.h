@@ -1,0 +1,43 @@
+// Reading files that a model refers to, without ever leaving the model's folder.
+//
+// tinygltf 2.7 resolves "../", absolute paths and the current directory on its own, and reads
+// whatever it finds with no size cap (facts.md). We resolve every URI here instead and hand tinygltf
+// only files that passed these checks.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace rdtf::internal {
+
+// RFC 3986 percent-decoding of a URI path ('+' stays '+'). Nothing on a malformed escape.
+std::optional<std::string> percent_decode(std::string_view uri);
+
+bool is_data_uri(std::string_view uri);
+
+// Maps a relative URI reference to a path inside `folder` (canonical). Refuses URIs with a
+// scheme (file:, http:, ...), absolute paths, a query or fragment, NUL bytes, and "../" that
+// climbs out of the folder; `why` says which. The file need not exist yet.
+std::optional<std::filesystem::path> resolve_uri(const std::filesystem::path& folder,
+                                                 std::string_view uri, std::string& why);
+
+// Reads a regular file whose real location (after following symlinks) lies inside `folder`.
+// Refuses directories, devices, FIFOs and sockets (without blocking on a FIFO) and files over
+// `max_bytes`, checked before reading. `why` says what went wrong.
+bool read_confined_file(const std::filesystem::path& folder, const std::filesystem::path& path,
+                        std::uint64_t max_bytes, std::vector<std::uint8_t>& out, std::string& why);
+
+// The same checks without reading: the size of the file, or nothing and `why`.
+std::optional<std::uint64_t> confined_file_size(const std::filesystem::path& folder,
+                                                const std::filesystem::path& path,
+                                                std::string& why);
+
+// Reads any regular file (the model itself), refusing non-regular files and files over max_bytes.
+bool read_regular_file(const std::filesystem::path& path, std::uint64_t max_bytes,
+                       std::vector<std::uint8_t>& out, std::string& why);
+
+}  // namespace rdtf::internal

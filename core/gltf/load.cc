@@ -1,0 +1,318 @@
+#include <tiny_gltf.h>
+
+#include <map>
+
+#include "confined_files.h"
+#include "rdtf/glb.h"
+#include "rdtf/gltf.h"
+#include "rdtf/validate.h"
+
+namespace rdtf {
+namespace {
+
+constexpr int kMaxJsonDepth = 64;
+
+// nlohmann's parser recurses once per nesting level: bound the depth before parsing so that a
+// hostile "[[[[..." cannot overflow the stack.
+bool json_depth_within(std::string_view text, int max_depth, std::size_t& offset) {
+  int depth = 0;
+  bool in_string = false;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (in_string) {
+      if (c == '\\') {
+        ++i;
+      } else if (c == '"') {
+        in_string = false;
+      }
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == '[' || c == '{') {
+      if (++depth > max_depth) {
+        offset = i;
+        return false;
+      }
+    } else if (c == ']' || c == '}') {
+      --depth;
+    }
+  }
+  return true;
+}
+
+std::optional<Json> parse_json(std::string_view text, Diagnostics& diag) {
+  if (text.substr(0, 3) == "\xEF\xBB\xBF") {
+    diag.error("JSON_BOM", "", "the JSON starts with a UTF-8 byte order mark, which glTF forbids");
+    return std::nullopt;
+  }
+  std::size_t offset = 0;
+  if (!json_depth_within(text, kMaxJsonDepth, offset)) {
+    diag.error("JSON_TOO_DEEP", "",
+               "JSON nesting deeper than " + std::to_string(kMaxJsonDepth) + " levels at byte " +
+                   std::to_string(offset));
+    return std::nullopt;
+  }
+  try {
+    Json document = Json::parse(text.begin(), text.end());
+    if (!document.is_object()) {
+      diag.error("TYPE_MISMATCH", "", "the glTF JSON must be an object");
+      return std::nullopt;
+    }
+    return document;
+  } catch (const Json::parse_error& error) {
+    // Turn the byte offset into line:column, which is what an editor shows.
+    std::size_t line = 1;
+    std::size_t column = 1;
+    const std::size_t end = std::min<std::size_t>(error.byte == 0 ? 0 : error.byte - 1, text.size());
+    for (std::size_t i = 0; i < end; ++i) {
+      if (text[i] == '\n') {
+        ++line;
+        column = 1;
+      } else {
+        ++column;
+      }
+    }
+    diag.error("INVALID_JSON", "",
+               "invalid JSON at line " + std::to_string(line) + ", column " +
+                   std::to_string(column) + " (byte " + std::to_string(error.byte) +
+                   "): " + error.what());
+    return std::nullopt;
+  }
+}
+
+// Files that passed our checks, by the token tinygltf is given instead of the model's URI.
+struct ConfinedReads {
+  std::filesystem::path folder;
+  std::uint64_t max_bytes = 0;
+  std::map<std::string, std::filesystem::path> files;
+};
+
+bool fs_file_exists(const std::string& name, void* user) {
+  const auto* reads = static_cast<const ConfinedReads*>(user);
+  return reads->files.count(name) > 0;
+}
+
+std::string fs_expand(const std::string& name, void*) { return name; }
+
+bool fs_read(std::vector<unsigned char>* out, std::string* err, const std::string& name,
+             void* user) {
+  const auto* reads = static_cast<const ConfinedReads*>(user);
+  const auto found = reads->files.find(name);
+  if (found == reads->files.end()) {
+    if (err) *err = "refused: not a file of this model";
+    return false;
+  }
+  std::string why;
+  if (!internal::read_confined_file(reads->folder, found->second, reads->max_bytes, *out, why)) {
+    if (err) *err = why;
+    return false;
+  }
+  return true;
+}
+
+bool fs_write(std::string* err, const std::string&, const std::vector<unsigned char>&, void*) {
+  if (err) *err = "writing through tinygltf is disabled";
+  return false;
+}
+
+bool skip_image(tinygltf::Image*, const int, std::string*, std::string*, int, int,
+                const unsigned char*, int, void*) {
+  return true;  // Images are never decoded: the converter needs none, and decoding is slow.
+}
+
+// Checks every external URI (buffers and images) and prepares the document tinygltf loads: only
+// the buffers, each external one renamed to a token that maps to a checked path.
+std::optional<Json> prepare_buffers(const Json& document, bool binary, const LoadLimits& limits,
+                                    const std::filesystem::path& folder, ConfinedReads& reads,
+                                    Diagnostics& diag) {
+  Json loader_document = {{"asset", {{"version", "2.0"}}}, {"buffers", Json::array()}};
+  if (!document.contains("buffers")) return loader_document;
+  const Json& buffers = document["buffers"];
+  for (std::size_t i = 0; i < buffers.size(); ++i) {
+    const Json& buffer = buffers[i];
+    const std::string pointer = json_pointer("/buffers", i);
+    Json entry = {{"byteLength", buffer["byteLength"]}};
+    if (!buffer.contains("uri")) {
+      if (!binary || i != 0) {
+        diag.error("BUFFER_MISSING_URI", pointer,
+                   "buffer has no uri; only the first buffer of a GLB may use the BIN chunk");
+        continue;
+      }
+      loader_document["buffers"].push_back(entry);
+      continue;
+    }
+    const std::string uri = buffer["uri"].get<std::string>();
+    if (internal::is_data_uri(uri)) {
+      entry["uri"] = uri;
+      loader_document["buffers"].push_back(entry);
+      continue;
+    }
+    std::string why;
+    const auto path = internal::resolve_uri(folder, uri, why);
+    if (!path) {
+      diag.error("URI_REFUSED", pointer + "/uri", "'" + uri + "': " + why);
+      continue;
+    }
+    const auto size = internal::confined_file_size(folder, *path, why);
+    if (!size) {
+      diag.error("IO_ERROR", pointer + "/uri", "'" + uri + "' (" + path->string() + ") " + why);
+      continue;
+    }
+    const std::uint64_t declared = buffer["byteLength"].get<std::uint64_t>();
+    if (*size > limits.max_file_bytes) {
+      diag.error("LIMIT_EXCEEDED", pointer + "/uri",
+                 "'" + uri + "' is " + std::to_string(*size) + " bytes, over the limit of " +
+                     std::to_string(limits.max_file_bytes));
+      continue;
+    }
+    if (*size != declared) {
+      diag.error("BUFFER_EXTERNAL_BYTELENGTH_MISMATCH", pointer + "/byteLength",
+                 "'" + uri + "' has " + std::to_string(*size) + " bytes but byteLength is " +
+                     std::to_string(declared));
+      continue;
+    }
+    const std::string token = "rdtf-confined-buffer-" + std::to_string(i);
+    reads.files[token] = *path;
+    entry["uri"] = token;
+    loader_document["buffers"].push_back(entry);
+  }
+  if (document.contains("images")) {
+    const Json& images = document["images"];
+    for (std::size_t i = 0; i < images.size(); ++i) {
+      if (!images[i].is_object() || !images[i].contains("uri") || !images[i]["uri"].is_string())
+        continue;
+      const std::string uri = images[i]["uri"].get<std::string>();
+      if (internal::is_data_uri(uri)) continue;
+      std::string why;
+      const std::string pointer = json_pointer("/images", i) + "/uri";
+      const auto path = internal::resolve_uri(folder, uri, why);
+      if (!path) {
+        diag.error("URI_REFUSED", pointer, "'" + uri + "': " + why);
+      } else if (!internal::confined_file_size(folder, *path, why)) {
+        diag.warning("IO_ERROR", pointer,
+                     "image '" + uri + "' " + why + "; it will be missing from the output");
+      }
+    }
+  }
+  if (diag.has_errors()) return std::nullopt;
+  return loader_document;
+}
+
+}  // namespace
+
+bool looks_like_glb(const std::vector<std::uint8_t>& bytes) {
+  return bytes.size() >= 4 && bytes[0] == 'g' && bytes[1] == 'l' && bytes[2] == 'T' &&
+         bytes[3] == 'F';
+}
+
+std::optional<GltfAsset> load_gltf_from_memory(const std::vector<std::uint8_t>& bytes,
+                                               const std::filesystem::path& display_path,
+                                               const std::filesystem::path& folder,
+                                               const LoadLimits& limits, Diagnostics& diag) {
+  diag.set_file(display_path.string());
+  if (bytes.empty()) {
+    diag.error("EMPTY_FILE", "", "the file is empty");
+    return std::nullopt;
+  }
+  GltfAsset asset;
+  asset.path = display_path;
+  asset.folder = folder;
+  asset.limits = limits;
+  asset.binary = looks_like_glb(bytes);
+
+  std::string_view json_text(reinterpret_cast<const char*>(bytes.data()), bytes.size());
+  std::span<const std::uint8_t> bin;
+  if (asset.binary) {
+    const auto chunks = parse_glb(bytes, diag);
+    if (!chunks) return std::nullopt;
+    json_text = chunks->json;
+    if (chunks->bin) bin = *chunks->bin;
+  }
+  auto document = parse_json(json_text, diag);
+  if (!document) return std::nullopt;
+  validate_document(*document, limits, diag);
+  if (diag.has_errors()) return std::nullopt;
+
+  ConfinedReads reads;
+  reads.folder = folder;
+  reads.max_bytes = limits.max_file_bytes;
+  const auto loader_document =
+      prepare_buffers(*document, asset.binary, limits, folder, reads, diag);
+  if (!loader_document) return std::nullopt;
+
+  tinygltf::TinyGLTF loader;
+  loader.SetImageLoader(&skip_image, nullptr);
+  tinygltf::FsCallbacks callbacks{&fs_file_exists, &fs_expand, &fs_read, &fs_write, &reads};
+  loader.SetFsCallbacks(callbacks);
+  tinygltf::Model model;
+  std::string error;
+  std::string warning;
+  const std::string loader_json = loader_document->dump();
+  bool loaded = false;
+  if (asset.binary) {
+    const auto glb = make_glb(loader_json, bin);
+    loaded = loader.LoadBinaryFromMemory(&model, &error, &warning, glb.data(),
+                                         static_cast<unsigned int>(glb.size()), "");
+  } else {
+    loaded = loader.LoadASCIIFromString(&model, &error, &warning, loader_json.data(),
+                                        static_cast<unsigned int>(loader_json.size()), "");
+  }
+  if (!loaded || model.buffers.size() != loader_document->at("buffers").size()) {
+    // tinygltf names our tokens; map them back to the pointers the user knows.
+    std::string message = error.empty() ? std::string("tinygltf could not load the buffers") : error;
+    while (!message.empty() && message.back() == '\n') message.pop_back();
+    diag.error("BUFFER_LOAD_FAILED", "/buffers", message);
+    return std::nullopt;
+  }
+  asset.buffers.reserve(model.buffers.size());
+  for (auto& buffer : model.buffers) asset.buffers.push_back(std::move(buffer.data));
+  asset.document = std::move(*document);
+
+  validate_data(asset, diag);
+  if (diag.has_errors()) return std::nullopt;
+  return asset;
+}
+
+std::vector<std::filesystem::path> referenced_files(const std::vector<std::uint8_t>& bytes,
+                                                    const std::filesystem::path& folder) {
+  std::vector<std::filesystem::path> files;
+  Diagnostics ignored;
+  std::string_view text(reinterpret_cast<const char*>(bytes.data()), bytes.size());
+  if (looks_like_glb(bytes)) {
+    const auto chunks = parse_glb(bytes, ignored);
+    if (!chunks) return files;
+    text = chunks->json;
+  }
+  const auto document = parse_json(text, ignored);
+  if (!document) return files;
+  for (const char* array : {"buffers", "images"}) {
+    if (!document->contains(array) || !(*document)[array].is_array()) continue;
+    for (const Json& item : (*document)[array]) {
+      if (!item.is_object() || !item.contains("uri") || !item["uri"].is_string()) continue;
+      const std::string uri = item["uri"].get<std::string>();
+      if (internal::is_data_uri(uri)) continue;
+      std::string why;
+      if (auto path = internal::resolve_uri(folder, uri, why)) files.push_back(std::move(*path));
+    }
+  }
+  return files;
+}
+
+std::optional<GltfAsset> load_gltf(const std::filesystem::path& path, const LoadLimits& limits,
+                                   Diagnostics& diag) {
+  diag.set_file(path.string());
+  std::vector<std::uint8_t> bytes;
+  std::string why;
+  if (!internal::read_regular_file(path, limits.max_file_bytes, bytes, why)) {
+    diag.error("IO_ERROR", "", "cannot read the model: " + why);
+    return std::nullopt;
+  }
+  std::error_code error;
+  auto folder = std::filesystem::canonical(std::filesystem::absolute(path, error).parent_path(), error);
+  if (error) {
+    diag.error("IO_ERROR", "", "cannot resolve the model's folder: " + error.message());
+    return std::nullopt;
+  }
+  return load_gltf_from_memory(bytes, path, folder, limits, diag);
+}
+
+}  // namespace rdtf

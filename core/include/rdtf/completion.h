@@ -1,0 +1,22 @@
+// Node completion: the RDTF paper's Algorithm 4, with the amendments docs/format.md lists.
+#pragma once
+
+#include <vector>
+
+#include "rdtf/diagnostics.h"
+#include "rdtf/gltf.h"
+#include "rdtf/typing.h"
+
+namespace rdtf {
+
+// Inserts visual, joint and inertial nodes under every link, appending them to document["nodes"]
+// in link order (so the paper's List 1 becomes List 5 exactly) and extending `types` to match.
+// A link that carries its own mesh (Blender) gets a new mesh node for it, first under its visual
+// node. Links that already have their visual, joint and inertial nodes are left as they are, so
+// completing twice changes nothing.
+void complete_nodes(Json& document, std::vector<NodeType>& types, Diagnostics& diag);
+
+// The name a node goes by in generated names and the robot: its name, else "node<index>".
+std::string node_name(const Json& document, std::size_t node);
+
+}  // namespace rdtf

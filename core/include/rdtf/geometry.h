@@ -1,0 +1,44 @@
+// Geometry from glTF accessors: positions and triangles of mesh primitives, node transforms.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "rdtf/diagnostics.h"
+#include "rdtf/gltf.h"
+#include "rdtf/triangle_mesh.h"
+
+namespace rdtf {
+
+// Every element of an accessor as doubles, `components` per element, row after row: honours
+// byteStride, sparse substitution and normalized integers (glTF 2.0 section 3.11). Assumes the
+// accessor passed validate_document and validate_data.
+std::vector<double> read_accessor(const GltfAsset& asset, std::size_t accessor);
+
+// Number of components of an accessor's element type ("VEC3" -> 3, "MAT4" -> 16).
+int component_count(const std::string& type);
+
+// The triangles of one primitive (modes TRIANGLES, TRIANGLE_STRIP, TRIANGLE_FAN, indexed or not).
+// Points and lines give nothing and an info diagnostic.
+std::optional<TriangleMesh> read_primitive_triangles(const GltfAsset& asset, std::size_t mesh,
+                                                     std::size_t primitive, Diagnostics& diag);
+
+// A node's local transform (matrix, or translation * rotation * scale).
+Eigen::Affine3d node_local_transform(const Json& node);
+
+// Parent of every node (-1 for none); assumes a validated document (a forest).
+std::vector<int> node_parents(const Json& document);
+
+// Transform from the scene frame to each node's frame, X_SN; identity for nodes in no scene.
+std::vector<Eigen::Affine3d> node_world_transforms(const Json& document);
+
+// The rigid part of an affine transform: its translation and the rotation nearest its linear
+// part (polar decomposition; a mirrored frame keeps its rotation, the mirror goes into the rest).
+Eigen::Isometry3d rigid_part(const Eigen::Affine3d& X);
+
+}  // namespace rdtf

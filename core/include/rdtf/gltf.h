@@ -1,0 +1,59 @@
+// Loading a glTF 2.0 asset (.gltf or .glb) from disk or memory, confined to one folder.
+//
+// The asset keeps the document as ordered JSON (so that the RDTF we write is the input plus our
+// additions, keys in their original order) and the bytes of every buffer, which tinygltf loads
+// through filesystem callbacks that refuse anything outside the model's folder.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "rdtf/diagnostics.h"
+
+namespace rdtf {
+
+using Json = nlohmann::ordered_json;
+
+// Caps on untrusted input, each checked before the memory it guards is allocated.
+struct LoadLimits {
+  std::uint64_t max_file_bytes = 512ull << 20;    // The .gltf/.glb and each external file.
+  std::uint64_t max_buffer_bytes = 1ull << 30;    // Sum of every buffer's byteLength.
+  std::uint64_t max_accessor_count = 1ull << 26;  // Elements in one accessor.
+  std::uint64_t max_triangles = 1ull << 26;       // Triangles in the whole scene.
+};
+
+struct GltfAsset {
+  std::filesystem::path path;    // As given by the caller; used in diagnostics.
+  std::filesystem::path folder;  // Canonical folder that confines every external URI.
+  bool binary = false;           // Loaded from a GLB container.
+  Json document;
+  std::vector<std::vector<std::uint8_t>> buffers;  // One per document["buffers"] entry.
+  LoadLimits limits;  // The caps it was loaded with; writers read external images under them.
+};
+
+// Reads and validates a model file. Returns nothing (and errors in `diagnostics`) when the file
+// cannot be used: every error names the file and the place in it.
+std::optional<GltfAsset> load_gltf(const std::filesystem::path& path, const LoadLimits& limits,
+                                   Diagnostics& diagnostics);
+
+// The same from bytes already in memory; `folder` confines external URIs (empty: none allowed).
+std::optional<GltfAsset> load_gltf_from_memory(const std::vector<std::uint8_t>& bytes,
+                                               const std::filesystem::path& display_path,
+                                               const std::filesystem::path& folder,
+                                               const LoadLimits& limits,
+                                               Diagnostics& diagnostics);
+
+bool looks_like_glb(const std::vector<std::uint8_t>& bytes);
+
+// The files a model refers to (external buffers and images) inside `folder`, read from its JSON
+// without validating anything else: a watcher uses it to re-convert a model when one of them
+// changes, even after a failed load (a .bin that is still missing). Unusable URIs are left out.
+std::vector<std::filesystem::path> referenced_files(const std::vector<std::uint8_t>& model_bytes,
+                                                    const std::filesystem::path& folder);
+
+}  // namespace rdtf

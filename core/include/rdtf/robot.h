@@ -1,0 +1,89 @@
+// The robot that an RDTF document describes: links and joints with frames, limits, dynamics and
+// mass properties. One owner (a value), cross references by index. Every element remembers the
+// glTF node it came from so that a late error (URDF, ODE) can still name it.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "rdtf/mass_properties.h"
+
+namespace rdtf {
+
+enum class JointKind { kFixed, kRevolute, kContinuous, kPrismatic, kFloating, kPlanar, kBall };
+
+const char* to_string(JointKind kind);
+std::optional<JointKind> joint_kind_from_string(const std::string& text);
+
+enum class InertialSource { kComputed, kAuthored };
+
+// One solid a link's mass comes from: a mesh node (or, for a skinned mesh, its part on a bone).
+struct LinkMesh {
+  int node = -1;
+  double volume = 0;   // m^3, in the link frame (transform applied, inside-out turned right)
+  double density = 0;  // kg/m^3
+};
+
+struct Link {
+  std::string name;
+  int node = -1;          // glTF node index of the link node.
+  int parent_joint = -1;  // Index into Robot::joints; -1 for a root link.
+  std::vector<int> child_joints;
+  // Pose of the link frame in the scene frame (the link node's world transform with any scale
+  // removed; exactly the node's frame when the node and its ancestors carry no scale).
+  Eigen::Isometry3d X_SL = Eigen::Isometry3d::Identity();
+  std::vector<LinkMesh> meshes;     // The solids this link's mass comes from.
+  MassProperties inertial;          // Centre of mass and inertia in the link frame.
+  InertialSource inertial_source = InertialSource::kComputed;
+  int inertial_node = -1;           // The inserted (or authored) inertial node.
+};
+
+struct JointLimits {
+  double lower = 0;     // rad or m
+  double upper = 0;     // rad or m
+  double effort = 0;    // N m or N; 0: not given
+  double velocity = 0;  // rad/s or m/s; 0: not given
+};
+
+struct Joint {
+  std::string name;
+  int node = -1;  // glTF node index of the joint node.
+  int parent_link = -1;
+  int child_link = -1;
+  JointKind kind = JointKind::kFixed;
+  // The joint frame is the child link's frame (as in URDF): X_PJ is its pose in the parent link
+  // frame at zero joint position. The axis is a unit vector in that frame.
+  Eigen::Isometry3d X_PJ = Eigen::Isometry3d::Identity();
+  Eigen::Vector3d axis = Eigen::Vector3d::UnitX();
+  std::optional<JointLimits> limits;
+  double damping = 0;           // N m s/rad or N s/m
+  double friction = 0;          // N m or N
+  double spring_stiffness = 0;  // N m/rad or N/m
+};
+
+struct Robot {
+  std::string name;
+  std::vector<Link> links;
+  std::vector<Joint> joints;
+  std::vector<int> root_links;  // Links with no parent joint, in scene order.
+};
+
+}  // namespace rdtf
+
+#include "rdtf/diagnostics.h"
+#include "rdtf/gltf.h"
+#include "rdtf/typing.h"
+
+namespace rdtf {
+
+// The links and joints of a completed document (mass properties not yet filled in). Joint kinds,
+// axes, limits and dynamics come from extras.RDTF, then node extras (docs/format.md lists the
+// keys), else a fixed joint as in the paper's List 4.
+Robot build_robot(const Json& document, const std::vector<NodeType>& types, std::size_t scene,
+                  Diagnostics& diag);
+
+}  // namespace rdtf

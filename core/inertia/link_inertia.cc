@@ -1,0 +1,241 @@
+#include "rdtf/link_inertia.h"
+
+#include <cmath>
+#include <map>
+#include <numeric>
+
+#include "rdtf/completion.h"
+#include "rdtf/geometry.h"
+#include "rdtf/mesh_checks.h"
+#include "skinning.h"
+
+namespace rdtf {
+namespace {
+
+struct MeshGeometry {
+  std::vector<TriangleMesh> pieces;  // One per triangle primitive.
+  std::vector<std::size_t> primitive_index;
+  SurfaceTopology topology;
+};
+
+const MeshGeometry& geometry_of(const GltfAsset& asset, std::size_t mesh,
+                                std::map<std::size_t, MeshGeometry>& cache, Diagnostics& diag) {
+  const auto found = cache.find(mesh);
+  if (found != cache.end()) return found->second;
+  MeshGeometry geometry;
+  const Json& primitives = asset.document["meshes"][mesh]["primitives"];
+  for (std::size_t p = 0; p < primitives.size(); ++p) {
+    auto triangles = read_primitive_triangles(asset, mesh, p, diag);
+    if (!triangles) continue;
+    geometry.pieces.push_back(std::move(*triangles));
+    geometry.primitive_index.push_back(p);
+  }
+  geometry.topology = analyze_surface(geometry.pieces);
+  return cache.emplace(mesh, std::move(geometry)).first->second;
+}
+
+std::optional<double> positive_extra(const Json& document, std::size_t node, const char* key,
+                                     Diagnostics& diag) {
+  const Json& n = document["nodes"][node];
+  if (!n.contains("extras") || !n["extras"].is_object() || !n["extras"].contains(key)) {
+    return std::nullopt;
+  }
+  const Json& value = n["extras"][key];
+  if (!value.is_number() || !std::isfinite(value.get<double>()) || value.get<double>() <= 0) {
+    diag.error("RDTF_INVALID_VALUE", json_pointer("/nodes", node) + "/extras/" + key,
+               std::string(key) + " must be a positive number");
+    return std::nullopt;
+  }
+  return value.get<double>();
+}
+
+// rdtf_density on the node or an ancestor, up to and including `link_node`.
+double density_for(const Json& document, const std::vector<int>& parents, int node,
+                   int link_node, double default_density, Diagnostics& diag) {
+  for (int up = node; up >= 0; up = parents[up]) {
+    if (auto density = positive_extra(document, up, "rdtf_density", diag)) return *density;
+    if (up == link_node) break;
+  }
+  return default_density;
+}
+
+// Reports what the surface check found; returns false when the volume cannot be trusted at all.
+void report_topology(const MeshGeometry& geometry, const std::string& pointer,
+                     const std::string& name, Diagnostics& diag) {
+  const SurfaceTopology& t = geometry.topology;
+  if (!t.closed()) {
+    diag.warning("MESH_OPEN", pointer,
+                 "mesh of '" + name + "' is not closed (" + std::to_string(t.boundary_edges) +
+                     " boundary edges, " + std::to_string(t.nonmanifold_edges) +
+                     " non-manifold edges): its volume, and so its mass, is unreliable");
+  }
+  if (!t.consistently_oriented()) {
+    diag.warning("MESH_INCONSISTENT_WINDING", pointer,
+                 "mesh of '" + name + "' has " + std::to_string(t.misoriented_edges) +
+                     " edges whose triangles wind the same way: some faces are flipped, so its "
+                     "mass is wrong; recalculate normals outside in the modeller");
+  }
+}
+
+// A solid's integrals, inside-out ones turned right with a warning.
+VolumeIntegrals oriented(VolumeIntegrals integrals, const std::string& pointer,
+                         const std::string& name, Diagnostics& diag) {
+  if (integrals.volume < 0) {
+    diag.warning("MESH_INSIDE_OUT", pointer,
+                 "mesh of '" + name + "' is inside out (signed volume " +
+                     std::to_string(integrals.volume) +
+                     " m^3): its faces wind clockwise; mass computed as if turned right");
+    integrals.volume = -integrals.volume;
+    integrals.second_central = -integrals.second_central;
+  }
+  return integrals;
+}
+
+std::optional<MassProperties> authored_inertial(const Json& entry, const std::string& pointer,
+                                                Diagnostics& diag) {
+  if (!entry.contains("inertial") || !entry["inertial"].is_object()) return std::nullopt;
+  const Json& inertial = entry["inertial"];
+  if (inertial.value("source", std::string()) == "computed") return std::nullopt;
+  const std::string where = pointer + "/inertial";
+  auto number = [&](const Json& value) { return value.is_number() && std::isfinite(value.get<double>()); };
+  MassProperties result;
+  if (!inertial.contains("mass") || !number(inertial["mass"])) {
+    diag.error("RDTF_INVALID_VALUE", where + "/mass", "an authored inertial needs a finite mass");
+    return std::nullopt;
+  }
+  result.mass = inertial["mass"].get<double>();
+  if (inertial.contains("gravityCenter")) {
+    const Json& c = inertial["gravityCenter"];
+    if (!c.is_array() || c.size() != 3 || !number(c[0]) || !number(c[1]) || !number(c[2])) {
+      diag.error("RDTF_INVALID_VALUE", where + "/gravityCenter", "gravityCenter must be 3 numbers");
+      return std::nullopt;
+    }
+    result.center_of_mass = {c[0].get<double>(), c[1].get<double>(), c[2].get<double>()};
+  }
+  if (inertial.contains("inertia")) {
+    const Json& I = inertial["inertia"];
+    const bool six = I.is_array() && I.size() == 6;
+    const bool nine = I.is_array() && I.size() == 9;
+    bool valid = six || nine;
+    for (std::size_t i = 0; valid && i < I.size(); ++i) valid = number(I[i]);
+    if (!valid) {
+      diag.error("RDTF_INVALID_VALUE", where + "/inertia",
+                 "inertia must be [ixx, ixy, ixz, iyy, iyz, izz] or a row-major 3x3 matrix");
+      return std::nullopt;
+    }
+    if (six) {
+      const double ixx = I[0].get<double>(), ixy = I[1].get<double>(), ixz = I[2].get<double>();
+      const double iyy = I[3].get<double>(), iyz = I[4].get<double>(), izz = I[5].get<double>();
+      result.inertia << ixx, ixy, ixz, ixy, iyy, iyz, ixz, iyz, izz;
+    } else {
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) result.inertia(r, c) = I[r * 3 + c].get<double>();
+    }
+  }
+  if (inertial.contains("volume") && number(inertial["volume"])) result.volume = inertial["volume"].get<double>();
+  return result;
+}
+
+// extras.RDTF entry of a node, if any.
+const Json* rdtf_entry(const Json& document, std::size_t node, std::string& pointer) {
+  if (!document.contains("extras") || !document["extras"].is_object()) return nullptr;
+  const Json& extras = document["extras"];
+  if (!extras.contains("RDTF") || !extras["RDTF"].is_object()) return nullptr;
+  const Json& rdtf = extras["RDTF"];
+  if (!rdtf.contains("nodes") || !rdtf["nodes"].is_array()) return nullptr;
+  for (std::size_t i = 0; i < rdtf["nodes"].size(); ++i) {
+    const Json& entry = rdtf["nodes"][i];
+    if (entry.is_object() && entry.contains("node") && entry["node"].is_number_unsigned() &&
+        entry["node"].get<std::size_t>() == node) {
+      pointer = json_pointer("/extras/RDTF/nodes", i);
+      return &entry;
+    }
+  }
+  return nullptr;
+}
+
+}  // namespace
+
+void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& types,
+                          double default_density, Robot& robot, Diagnostics& diag) {
+  const Json& document = asset.document;
+  if (!document.contains("nodes")) return;
+  const auto parents = node_parents(document);
+  const auto world = node_world_transforms(document);
+  std::vector<int> link_of_node(types.size(), -1);
+  for (std::size_t l = 0; l < robot.links.size(); ++l) link_of_node[robot.links[l].node] = static_cast<int>(l);
+
+  std::map<std::size_t, MeshGeometry> cache;
+  std::vector<std::vector<MassPiece>> pieces(robot.links.size());
+
+  for (std::size_t node = 0; node < types.size(); ++node) {
+    if (types[node] != NodeType::kMesh || !document["nodes"][node].contains("mesh")) continue;
+    int owner = parents[node];
+    while (owner >= 0 && types[owner] != NodeType::kLink) owner = parents[owner];
+    const std::string pointer = json_pointer("/nodes", node);
+    const std::string name = node_name(document, node);
+    const bool skinned = document["nodes"][node].contains("skin");
+    if (owner < 0 && !skinned) {
+      diag.warning("MESH_WITHOUT_LINK", pointer, "mesh node '" + name + "' belongs to no link; ignored");
+      continue;
+    }
+    const auto mesh = document["nodes"][node]["mesh"].get<std::size_t>();
+    const MeshGeometry& geometry = geometry_of(asset, mesh, cache, diag);
+    if (geometry.pieces.empty()) continue;
+    report_topology(geometry, pointer, name, diag);
+    const double density =
+        density_for(document, parents, static_cast<int>(node), owner, default_density, diag);
+    const auto mass_override = positive_extra(document, node, "rdtf_mass", diag);
+
+    if (skinned) {
+      // Skinned: each bone gets the parts of the mesh bound to it, in its bind pose.
+      for (const BoneGeometry& bone : split_by_bone(asset, node, geometry.pieces, geometry.primitive_index, diag)) {
+        const int link = link_of_node[bone.joint_node];
+        const Eigen::Affine3d X_LV = robot.links[link].X_SL.inverse() * world[bone.joint_node] * bone.inverse_bind;
+        auto integrals = oriented(integrate_solid(bone.pieces, X_LV), pointer, name, diag);
+        pieces[link].push_back({integrals, density});
+        robot.links[link].meshes.push_back({static_cast<int>(node), integrals.volume, density});
+      }
+      continue;
+    }
+    const int link = link_of_node[owner];
+    const Eigen::Affine3d X_LN = robot.links[link].X_SL.inverse() * world[node];
+    auto integrals = oriented(integrate_solid(geometry.pieces, X_LN), pointer, name, diag);
+    double mesh_density = density;
+    if (mass_override && integrals.volume > 0) mesh_density = *mass_override / integrals.volume;
+    pieces[link].push_back({integrals, mesh_density});
+    robot.links[link].meshes.push_back({static_cast<int>(node), integrals.volume, mesh_density});
+  }
+
+  for (std::size_t l = 0; l < robot.links.size(); ++l) {
+    Link& link = robot.links[l];
+    const std::string pointer = json_pointer("/nodes", link.node);
+    for (const Json& child : document["nodes"][link.node].value("children", Json::array())) {
+      if (types[child.get<std::size_t>()] == NodeType::kInertial) link.inertial_node = child.get<int>();
+    }
+    if (link.inertial_node >= 0) {
+      std::string entry_pointer;
+      if (const Json* entry = rdtf_entry(document, link.inertial_node, entry_pointer)) {
+        if (auto authored = authored_inertial(*entry, entry_pointer, diag)) {
+          link.inertial = *authored;
+          link.inertial_source = InertialSource::kAuthored;
+          continue;
+        }
+      }
+    }
+    link.inertial = combine(pieces[l]);
+    if (auto mass = positive_extra(document, link.node, "rdtf_mass", diag)) {
+      if (link.inertial.mass > 0) {
+        const double factor = *mass / link.inertial.mass;
+        link.inertial.mass = *mass;
+        link.inertial.inertia *= factor;
+      }
+    }
+    if (link.inertial.volume <= 0) {
+      diag.warning("LINK_NO_VOLUME", pointer,
+                   "link '" + link.name + "' has no volume (no closed mesh): its mass is zero");
+    }
+  }
+}
+
+}  // namespace rdtf

@@ -1,0 +1,156 @@
+#include "skinning.h"
+
+#include <numeric>
+#include <unordered_map>
+
+#include "rdtf/geometry.h"
+
+namespace rdtf {
+namespace {
+
+struct UnionFind {
+  std::vector<std::uint32_t> parent;
+  explicit UnionFind(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0u); }
+  std::uint32_t find(std::uint32_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  }
+  void unite(std::uint32_t a, std::uint32_t b) { parent[find(a)] = find(b); }
+};
+
+struct PositionKey {
+  double x, y, z;
+  bool operator==(const PositionKey& o) const { return x == o.x && y == o.y && z == o.z; }
+};
+struct PositionKeyHash {
+  std::size_t operator()(const PositionKey& p) const {
+    const std::hash<double> h;
+    return h(p.x) ^ (h(p.y) * 31) ^ (h(p.z) * 1000003);
+  }
+};
+
+std::vector<Eigen::Affine3d> inverse_bind_matrices(const GltfAsset& asset, const Json& skin,
+                                                   std::size_t joints) {
+  std::vector<Eigen::Affine3d> result(joints, Eigen::Affine3d::Identity());
+  if (!skin.contains("inverseBindMatrices")) return result;
+  const auto values = read_accessor(asset, skin["inverseBindMatrices"].get<std::size_t>());
+  for (std::size_t j = 0; j < joints && (j + 1) * 16 <= values.size(); ++j) {
+    Eigen::Matrix4d m;
+    for (int column = 0; column < 4; ++column)
+      for (int row = 0; row < 4; ++row) m(row, column) = values[j * 16 + column * 4 + row];
+    result[j].matrix() = m;
+  }
+  return result;
+}
+
+}  // namespace
+
+std::vector<BoneGeometry> split_by_bone(const GltfAsset& asset, std::size_t mesh_node,
+                                        const std::vector<TriangleMesh>& pieces,
+                                        const std::vector<std::size_t>& primitive_index,
+                                        Diagnostics& diag) {
+  const Json& document = asset.document;
+  const Json& node = document["nodes"][mesh_node];
+  const Json& skin = document["skins"][node["skin"].get<std::size_t>()];
+  const std::size_t joint_count = skin["joints"].size();
+  const Json& primitives = document["meshes"][node["mesh"].get<std::size_t>()]["primitives"];
+  const std::string pointer = json_pointer("/nodes", mesh_node);
+
+  // Weld vertices of all pieces, and give each its weight per joint.
+  std::unordered_map<PositionKey, std::uint32_t, PositionKeyHash> ids;
+  std::vector<std::vector<std::uint32_t>> welded(pieces.size());
+  std::vector<std::vector<double>> vertex_weights;  // Per welded vertex, per joint.
+  for (std::size_t p = 0; p < pieces.size(); ++p) {
+    const Json& attributes = primitives[primitive_index[p]]["attributes"];
+    const std::size_t n = pieces[p].positions.size();
+    std::vector<double> joints_of(n * 4, 0.0), weights_of(n * 4, 0.0);
+    bool bound = false;
+    for (int set = 0; attributes.contains("JOINTS_" + std::to_string(set)); ++set) {
+      const std::string suffix = std::to_string(set);
+      if (!attributes.contains("WEIGHTS_" + suffix)) break;
+      const auto joints = read_accessor(asset, attributes["JOINTS_" + suffix].get<std::size_t>());
+      const auto weights = read_accessor(asset, attributes["WEIGHTS_" + suffix].get<std::size_t>());
+      if (set > 0) {
+        joints_of.resize(n * 4 * (set + 1));
+        weights_of.resize(n * 4 * (set + 1));
+      }
+      for (std::size_t v = 0; v < n && v * 4 + 3 < joints.size(); ++v) {
+        for (int k = 0; k < 4; ++k) {
+          joints_of[(set * n + v) * 4 + k] = joints[v * 4 + k];
+          weights_of[(set * n + v) * 4 + k] = weights[v * 4 + k];
+        }
+      }
+      bound = true;
+    }
+    if (!bound) {
+      diag.warning("SKIN_NO_WEIGHTS", pointer,
+                   "a primitive of the skinned mesh has no JOINTS_0/WEIGHTS_0; its triangles "
+                   "are left out of the mass");
+    }
+    welded[p].resize(n);
+    for (std::size_t v = 0; v < n; ++v) {
+      const Eigen::Vector3d& q = pieces[p].positions[v];
+      const auto [it, inserted] =
+          ids.try_emplace(PositionKey{q.x(), q.y(), q.z()}, static_cast<std::uint32_t>(ids.size()));
+      if (inserted) vertex_weights.emplace_back(joint_count, 0.0);
+      welded[p][v] = it->second;
+      if (!bound) continue;
+      for (std::size_t s = 0; s < joints_of.size() / (n * 4); ++s) {
+        for (int k = 0; k < 4; ++k) {
+          const auto joint = static_cast<std::size_t>(joints_of[(s * n + v) * 4 + k]);
+          if (joint < joint_count) vertex_weights[it->second][joint] += weights_of[(s * n + v) * 4 + k];
+        }
+      }
+    }
+  }
+
+  UnionFind parts(ids.size());
+  for (std::size_t p = 0; p < pieces.size(); ++p) {
+    for (const auto& t : pieces[p].triangles) {
+      parts.unite(welded[p][t[0]], welded[p][t[1]]);
+      parts.unite(welded[p][t[1]], welded[p][t[2]]);
+    }
+  }
+  std::unordered_map<std::uint32_t, std::vector<double>> part_weights;
+  for (std::uint32_t v = 0; v < vertex_weights.size(); ++v) {
+    auto& sum = part_weights.try_emplace(parts.find(v), joint_count, 0.0).first->second;
+    for (std::size_t j = 0; j < joint_count; ++j) sum[j] += vertex_weights[v][j];
+  }
+  std::unordered_map<std::uint32_t, int> bone_of_part;
+  for (const auto& [part, sum] : part_weights) {
+    const auto best = std::max_element(sum.begin(), sum.end());
+    const double total = std::accumulate(sum.begin(), sum.end(), 0.0);
+    if (total <= 0) {
+      bone_of_part[part] = -1;
+      continue;
+    }
+    bone_of_part[part] = static_cast<int>(best - sum.begin());
+    if (*best < 0.999 * total) {
+      diag.info("SKIN_PART_SHARED", pointer,
+                "a connected part of the skinned mesh is weighted to several bones; all of it "
+                "counts for the bone with the most weight");
+    }
+  }
+
+  const auto inverse_binds = inverse_bind_matrices(asset, skin, joint_count);
+  std::vector<BoneGeometry> bones(joint_count);
+  for (std::size_t j = 0; j < joint_count; ++j) {
+    bones[j].joint_node = skin["joints"][j].get<int>();
+    bones[j].inverse_bind = inverse_binds[j];
+    bones[j].pieces.resize(pieces.size());
+    for (std::size_t p = 0; p < pieces.size(); ++p) bones[j].pieces[p].positions = pieces[p].positions;
+  }
+  for (std::size_t p = 0; p < pieces.size(); ++p) {
+    for (const auto& t : pieces[p].triangles) {
+      const int bone = bone_of_part[parts.find(welded[p][t[0]])];
+      if (bone >= 0) bones[bone].pieces[p].triangles.push_back(t);
+    }
+  }
+  std::erase_if(bones, [](const BoneGeometry& bone) {
+    return std::all_of(bone.pieces.begin(), bone.pieces.end(),
+                       [](const TriangleMesh& m) { return m.triangles.empty(); });
+  });
+  return bones;
+}
+
+}  // namespace rdtf

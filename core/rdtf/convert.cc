@@ -1,0 +1,94 @@
+#include "rdtf/convert.h"
+
+#include <map>
+#include <set>
+
+#include "rdtf/completion.h"
+#include "rdtf/geometry.h"
+#include "rdtf/link_inertia.h"
+#include "rdtf/rdtf_extras.h"
+#include "rdtf/typing.h"
+
+namespace rdtf {
+namespace {
+
+// extras.RDTF.name when the author set one, else the file's name without extensions.
+std::string robot_name(const GltfAsset& asset) {
+  const Json& document = asset.document;
+  if (document.contains("extras") && document["extras"].is_object() &&
+      document["extras"].contains("RDTF") && document["extras"]["RDTF"].is_object() &&
+      document["extras"]["RDTF"].contains("name") && document["extras"]["RDTF"]["name"].is_string()) {
+    return document["extras"]["RDTF"]["name"].get<std::string>();
+  }
+  std::string stem = asset.path.filename().string();
+  stem = stem.substr(0, stem.find('.'));
+  return stem.empty() ? std::string("robot") : stem;
+}
+
+// Old exporters (glTF-Sample-Models' Box among them) let several vertex accessors share a
+// buffer view without byteStride, which glTF 2.0 forbids. When they all have one element size the
+// stride is that size: add it, so the output validates.
+void add_missing_strides(Json& document, Diagnostics& diag) {
+  if (!document.contains("meshes") || !document.contains("bufferViews")) return;
+  std::map<std::size_t, std::set<std::size_t>> accessors_of_view;
+  for (const Json& mesh : document["meshes"]) {
+    for (const Json& primitive : mesh["primitives"]) {
+      std::vector<const Json*> attribute_sets{&primitive["attributes"]};
+      if (primitive.contains("targets")) {
+        for (const Json& target : primitive["targets"]) attribute_sets.push_back(&target);
+      }
+      for (const Json* attributes : attribute_sets) {
+        for (const auto& [name, index] : attributes->items()) {
+          const Json& accessor = document["accessors"][index.get<std::size_t>()];
+          if (accessor.contains("bufferView")) {
+            accessors_of_view[accessor["bufferView"].get<std::size_t>()].insert(index.get<std::size_t>());
+          }
+        }
+      }
+    }
+  }
+  for (const auto& [view, accessors] : accessors_of_view) {
+    Json& buffer_view = document["bufferViews"][view];
+    if (accessors.size() < 2 || buffer_view.contains("byteStride")) continue;
+    std::set<std::size_t> sizes;
+    for (std::size_t a : accessors) {
+      const Json& accessor = document["accessors"][a];
+      const int component = accessor["componentType"].get<int>();
+      const std::size_t bytes = (component == 5120 || component == 5121) ? 1 : (component == 5122 || component == 5123) ? 2 : 4;
+      sizes.insert(bytes * static_cast<std::size_t>(component_count(accessor["type"].get<std::string>())));
+    }
+    if (sizes.size() != 1 || *sizes.begin() % 4 != 0) continue;
+    buffer_view["byteStride"] = *sizes.begin();
+    diag.info("BUFFER_VIEW_STRIDE_ADDED", json_pointer("/bufferViews", view),
+              "buffer view shared by " + std::to_string(accessors.size()) +
+                  " vertex accessors had no byteStride (glTF 2.0 requires one); set to " +
+                  std::to_string(*sizes.begin()));
+  }
+}
+
+}  // namespace
+
+std::optional<Conversion> convert(GltfAsset asset, const ConvertOptions& options,
+                                  Diagnostics& diag) {
+  const auto scene = default_scene(asset.document, diag);
+  if (!scene) return std::nullopt;
+  auto types = type_nodes(asset.document, *scene, diag);
+  if (diag.has_errors()) return std::nullopt;
+  add_missing_strides(asset.document, diag);
+  complete_nodes(asset.document, types, diag);
+  Robot robot = build_robot(asset.document, types, *scene, diag);
+  robot.name = robot_name(asset);
+  compute_link_inertia(asset, types, options.default_density, robot, diag);
+  if (diag.has_errors()) return std::nullopt;
+  if (!write_rdtf_extras(asset.document, types, robot, diag)) return std::nullopt;
+  return Conversion{std::move(asset), std::move(robot)};
+}
+
+std::optional<Conversion> convert_file(const std::filesystem::path& path,
+                                       const ConvertOptions& options, Diagnostics& diag) {
+  auto asset = load_gltf(path, options.limits, diag);
+  if (!asset) return std::nullopt;
+  return convert(std::move(*asset), options, diag);
+}
+
+}  // namespace rdtf

@@ -1,0 +1,197 @@
+#include "rdtf/write.h"
+
+#include <system_error>
+
+#include "../gltf/confined_files.h"
+#include "rdtf/atomic_file.h"
+#include "rdtf/glb.h"
+
+namespace rdtf {
+namespace {
+
+std::string percent_encode(const std::string& text) {
+  static const char* const kHex = "0123456789ABCDEF";
+  std::string out;
+  for (unsigned char c : text) {
+    if (std::isalnum(c) || c == '-' || c == '_' || c == '.' || c == '~') {
+      out += static_cast<char>(c);
+    } else {
+      out += '%';
+      out += kHex[c >> 4];
+      out += kHex[c & 15];
+    }
+  }
+  return out;
+}
+
+bool same_file(const std::filesystem::path& a, const std::filesystem::path& b) {
+  std::error_code error;
+  return std::filesystem::equivalent(a, b, error) && !error;
+}
+
+bool write_bytes(const std::filesystem::path& path, std::span<const std::uint8_t> bytes,
+                 const std::string& pointer, Diagnostics& diag) {
+  std::error_code error;
+  std::filesystem::create_directories(path.parent_path(), error);
+  std::string why;
+  if (!write_file_atomically(path, bytes, why)) {
+    diag.error("WRITE_FAILED", pointer, "cannot write " + path.string() + ": " + why);
+    return false;
+  }
+  return true;
+}
+
+// The bytes of an image referenced by URI, read again from the model's folder under its caps.
+std::optional<std::vector<std::uint8_t>> read_image(const GltfAsset& asset, const std::string& uri,
+                                                    std::filesystem::path& source) {
+  std::string why;
+  const auto path = internal::resolve_uri(asset.folder, uri, why);
+  if (!path) return std::nullopt;
+  std::vector<std::uint8_t> bytes;
+  if (!internal::read_confined_file(asset.folder, *path, asset.limits.max_file_bytes, bytes, why)) {
+    return std::nullopt;
+  }
+  source = *path;
+  return bytes;
+}
+
+std::string mime_type_for(const std::string& uri) {
+  const auto dot = uri.rfind('.');
+  std::string extension = dot == std::string::npos ? "" : uri.substr(dot + 1);
+  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (extension == "png") return "image/png";
+  if (extension == "jpg" || extension == "jpeg") return "image/jpeg";
+  if (extension == "webp") return "image/webp";
+  if (extension == "ktx2") return "image/ktx2";
+  return "application/octet-stream";
+}
+
+bool write_gltf(const GltfAsset& asset, const std::filesystem::path& output, Diagnostics& diag,
+                std::string* written_json) {
+  Json document = asset.document;
+  const std::filesystem::path folder = output.has_parent_path() ? output.parent_path() : ".";
+  bool ok = true;
+  if (document.contains("buffers")) {
+    Json& buffers = document["buffers"];
+    for (std::size_t i = 0; i < buffers.size(); ++i) {
+      const std::string pointer = json_pointer("/buffers", i);
+      std::filesystem::path target;
+      if (!buffers[i].contains("uri")) {
+        const std::string name = output.stem().string() + (i == 0 ? "" : "_" + std::to_string(i)) + ".bin";
+        buffers[i]["uri"] = percent_encode(name);
+        target = folder / name;
+      } else {
+        const std::string uri = buffers[i]["uri"].get<std::string>();
+        if (internal::is_data_uri(uri)) continue;
+        std::string why;
+        const auto source = internal::resolve_uri(asset.folder, uri, why);
+        const auto relative = internal::resolve_uri(std::filesystem::path("/"), uri, why);
+        if (!source || !relative) continue;  // The loader refused these already.
+        target = folder / relative->relative_path();
+        if (same_file(*source, target)) continue;
+      }
+      ok &= write_bytes(target, asset.buffers[i], pointer, diag);
+    }
+  }
+  if (document.contains("images")) {
+    const Json& images = document["images"];
+    for (std::size_t i = 0; i < images.size(); ++i) {
+      if (!images[i].contains("uri")) continue;
+      const std::string uri = images[i]["uri"].get<std::string>();
+      if (internal::is_data_uri(uri)) continue;
+      std::filesystem::path source;
+      const auto bytes = read_image(asset, uri, source);
+      std::string why;
+      const auto relative = internal::resolve_uri(std::filesystem::path("/"), uri, why);
+      if (!bytes || !relative) {
+        diag.warning("IMAGE_NOT_COPIED", json_pointer("/images", i) + "/uri",
+                     "image '" + uri + "' could not be read, so it is missing beside the output");
+        continue;
+      }
+      const auto target = folder / relative->relative_path();
+      if (same_file(source, target)) continue;
+      ok &= write_bytes(target, *bytes, json_pointer("/images", i), diag);
+    }
+  }
+  // The JSON last: whoever sees it finds its resources already in place.
+  const std::string text = document_text(document);
+  if (written_json != nullptr) *written_json = text;
+  std::string why;
+  if (ok && !write_file_atomically(output, text, why)) {
+    diag.error("WRITE_FAILED", "", "cannot write " + output.string() + ": " + why);
+    ok = false;
+  }
+  return ok;
+}
+
+void append_aligned(std::vector<std::uint8_t>& bin, std::span<const std::uint8_t> bytes) {
+  bin.resize((bin.size() + 3) & ~std::size_t{3}, 0);
+  bin.insert(bin.end(), bytes.begin(), bytes.end());
+}
+
+bool write_glb(const GltfAsset& asset, const std::filesystem::path& output, Diagnostics& diag,
+               std::string* written_json) {
+  Json document = asset.document;
+  std::vector<std::uint8_t> bin;
+  std::vector<std::size_t> offsets;
+  for (const auto& buffer : asset.buffers) {
+    bin.resize((bin.size() + 3) & ~std::size_t{3}, 0);
+    offsets.push_back(bin.size());
+    bin.insert(bin.end(), buffer.begin(), buffer.end());
+  }
+  if (document.contains("bufferViews")) {
+    for (Json& view : document["bufferViews"]) {
+      const auto buffer = view["buffer"].get<std::size_t>();
+      view["byteOffset"] = view.value("byteOffset", std::uint64_t{0}) + offsets[buffer];
+      view["buffer"] = 0;
+    }
+  }
+  if (document.contains("images")) {
+    Json& images = document["images"];
+    for (std::size_t i = 0; i < images.size(); ++i) {
+      if (!images[i].contains("uri")) continue;
+      const std::string uri = images[i]["uri"].get<std::string>();
+      if (internal::is_data_uri(uri)) continue;
+      std::filesystem::path source;
+      const auto bytes = read_image(asset, uri, source);
+      if (!bytes) {
+        diag.warning("IMAGE_NOT_EMBEDDED", json_pointer("/images", i) + "/uri",
+                     "image '" + uri + "' could not be read; the output keeps its URI");
+        continue;
+      }
+      append_aligned(bin, *bytes);
+      document["bufferViews"].push_back(
+          Json{{"buffer", 0}, {"byteOffset", bin.size() - bytes->size()}, {"byteLength", bytes->size()}});
+      images[i].erase("uri");
+      images[i]["bufferView"] = document["bufferViews"].size() - 1;
+      if (!images[i].contains("mimeType")) images[i]["mimeType"] = mime_type_for(uri);
+    }
+  }
+  if (bin.empty()) {
+    document.erase("buffers");
+  } else {
+    document["buffers"] = Json::array({Json{{"byteLength", bin.size()}}});
+  }
+  const std::string json = document.dump();
+  if (written_json != nullptr) *written_json = json;
+  const auto glb = make_glb(json, bin);
+  std::string why;
+  if (!write_file_atomically(output, glb, why)) {
+    diag.error("WRITE_FAILED", "", "cannot write " + output.string() + ": " + why);
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+std::string document_text(const Json& document) { return document.dump(2) + "\n"; }
+
+bool write_rdtf(const GltfAsset& asset, const std::filesystem::path& output, OutputFormat format,
+                Diagnostics& diag, std::string* written_json) {
+  diag.set_file(output.string());
+  return format == OutputFormat::kGlb ? write_glb(asset, output, diag, written_json)
+                                      : write_gltf(asset, output, diag, written_json);
+}
+
+}  // namespace rdtf

@@ -1,0 +1,200 @@
+#include "rdtf/typing.h"
+
+#include "rdtf/geometry.h"
+
+namespace rdtf {
+namespace {
+
+bool has_mesh(const Json& node) { return node.contains("mesh"); }
+
+const Json* node_extras(const Json& node) {
+  if (!node.contains("extras") || !node["extras"].is_object()) return nullptr;
+  return &node["extras"];
+}
+
+bool has_extra(const Json& node, const char* key) {
+  const Json* extras = node_extras(node);
+  return extras != nullptr && extras->contains(key);
+}
+
+std::vector<std::size_t> children_of(const Json& node) {
+  std::vector<std::size_t> children;
+  if (node.contains("children")) {
+    for (const Json& child : node["children"]) children.push_back(child.get<std::size_t>());
+  }
+  return children;
+}
+
+// Types the document or its author fixed: extras.RDTF.nodes[].type, then node extras rdtf_type.
+void read_authored_types(const Json& document, std::vector<NodeType>& types,
+                         std::vector<char>& fixed, Diagnostics& diag) {
+  const Json& nodes = document["nodes"];
+  if (document.contains("extras") && document["extras"].is_object() &&
+      document["extras"].contains("RDTF")) {
+    const Json& rdtf = document["extras"]["RDTF"];
+    if (rdtf.is_object() && rdtf.contains("nodes") && rdtf["nodes"].is_array()) {
+      const Json& entries = rdtf["nodes"];
+      for (std::size_t i = 0; i < entries.size(); ++i) {
+        const std::string pointer = json_pointer("/extras/RDTF/nodes", i);
+        const Json& entry = entries[i];
+        if (!entry.is_object() || !entry.contains("node") || !entry["node"].is_number_unsigned() ||
+            entry["node"].get<std::size_t>() >= nodes.size()) {
+          diag.error("RDTF_INVALID_NODE_ENTRY", pointer,
+                     "an RDTF node entry needs \"node\": the index of an existing node");
+          continue;
+        }
+        if (!entry.contains("type")) continue;
+        const auto type =
+            entry["type"].is_string() ? node_type_from_string(entry["type"].get<std::string>())
+                                      : std::nullopt;
+        if (!type) {
+          diag.error("RDTF_INVALID_TYPE", pointer + "/type",
+                     "type must be one of link, joint, mesh, visual, inertial");
+          continue;
+        }
+        const auto node = entry["node"].get<std::size_t>();
+        types[node] = *type;
+        fixed[node] = 1;
+      }
+    }
+  }
+  for (std::size_t i = 0; i < nodes.size(); ++i) {
+    const Json* extras = node_extras(nodes[i]);
+    if (fixed[i] || extras == nullptr || !extras->contains("rdtf_type")) continue;
+    const Json& value = (*extras)["rdtf_type"];
+    const auto type = value.is_string() ? node_type_from_string(value.get<std::string>()) : std::nullopt;
+    if (!type) {
+      diag.error("RDTF_INVALID_TYPE", json_pointer("/nodes", i) + "/extras/rdtf_type",
+                 "rdtf_type must be one of link, joint, mesh, visual, inertial");
+      continue;
+    }
+    types[i] = *type;
+    fixed[i] = 1;
+  }
+}
+
+// Amendment: every joint of a skin used in the scene is a link (an armature is a kinematic tree).
+void type_skin_joints(const Json& document, const std::vector<char>& in_scene,
+                      std::vector<NodeType>& types, std::vector<char>& fixed) {
+  const Json& nodes = document["nodes"];
+  for (std::size_t i = 0; i < nodes.size(); ++i) {
+    if (!in_scene[i] || !nodes[i].contains("skin") || !has_mesh(nodes[i])) continue;
+    const Json& skin = document["skins"][nodes[i]["skin"].get<std::size_t>()];
+    for (const Json& joint : skin["joints"]) {
+      const auto j = joint.get<std::size_t>();
+      if (fixed[j]) continue;
+      types[j] = NodeType::kLink;
+      fixed[j] = 1;
+    }
+  }
+}
+
+// Algorithm 2, amended: see docs/format.md, "Typing".
+NodeType mesh_or_visual(const Json& nodes, const Json* parent, const Json& node) {
+  const auto children = children_of(node);
+  if (has_mesh(node)) {
+    // A skinned mesh moves with its bones, whose links carry its mass: never a link itself.
+    if (node.contains("skin") && children.empty()) return NodeType::kMesh;
+    // Blender puts an object's mesh on the node that parents other objects; and an object
+    // parented to a mesh object moves on its own: both are links.
+    if (!children.empty() || parent == nullptr || has_mesh(*parent) || has_extra(node, "rdtf_joint")) {
+      return NodeType::kLink;
+    }
+    return NodeType::kMesh;
+  }
+  if (has_extra(node, "rdtf_joint")) return NodeType::kJoint;
+  if (children.empty()) {
+    bool sibling_has_mesh = false;
+    if (parent != nullptr) {
+      for (std::size_t sibling : children_of(*parent)) sibling_has_mesh |= has_mesh(nodes[sibling]);
+    }
+    if (!sibling_has_mesh) return NodeType::kVisual;
+  }
+  return NodeType::kNone;
+}
+
+// Algorithm 3.
+NodeType joint_or_link(const Json& nodes, const Json& node) {
+  const auto children = children_of(node);
+  if (children.size() == 1 && !has_mesh(nodes[children[0]])) return NodeType::kJoint;
+  return NodeType::kLink;
+}
+
+}  // namespace
+
+const char* to_string(NodeType type) {
+  switch (type) {
+    case NodeType::kLink:
+      return "link";
+    case NodeType::kJoint:
+      return "joint";
+    case NodeType::kMesh:
+      return "mesh";
+    case NodeType::kVisual:
+      return "visual";
+    case NodeType::kInertial:
+      return "inertial";
+    case NodeType::kNone:
+      break;
+  }
+  return "none";
+}
+
+std::optional<NodeType> node_type_from_string(const std::string& text) {
+  for (NodeType type : {NodeType::kLink, NodeType::kJoint, NodeType::kMesh, NodeType::kVisual,
+                        NodeType::kInertial}) {
+    if (text == to_string(type)) return type;
+  }
+  return std::nullopt;
+}
+
+std::optional<std::size_t> default_scene(const Json& document, Diagnostics& diag) {
+  const std::size_t scenes = document.contains("scenes") ? document["scenes"].size() : 0;
+  if (document.contains("scene")) return document["scene"].get<std::size_t>();
+  if (scenes > 0) return 0;
+  diag.error("NO_SCENE", "/scenes", "the model has no scene, so no node tree to convert");
+  return std::nullopt;
+}
+
+std::vector<NodeType> type_nodes(const Json& document, std::size_t scene, Diagnostics& diag) {
+  const std::size_t count = document.contains("nodes") ? document["nodes"].size() : 0;
+  std::vector<NodeType> types(count, NodeType::kNone);
+  if (count == 0) return types;
+  const Json& nodes = document["nodes"];
+
+  // Algorithm 1: walk every root of the scene, parents before children.
+  std::vector<std::pair<int, std::size_t>> order;  // (parent, node), pre-order
+  std::vector<char> in_scene(count, 0);
+  std::vector<std::pair<int, std::size_t>> stack;
+  const Json& roots = document["scenes"][scene].value("nodes", Json::array());
+  for (auto it = roots.rbegin(); it != roots.rend(); ++it) stack.emplace_back(-1, it->get<std::size_t>());
+  while (!stack.empty()) {
+    const auto [parent, node] = stack.back();
+    stack.pop_back();
+    if (in_scene[node]) continue;  // Validated documents have no cycles; stay safe regardless.
+    order.emplace_back(parent, node);
+    in_scene[node] = 1;
+    const auto children = children_of(nodes[node]);
+    for (auto it = children.rbegin(); it != children.rend(); ++it) {
+      stack.emplace_back(static_cast<int>(node), *it);
+    }
+  }
+
+  std::vector<char> fixed(count, 0);
+  read_authored_types(document, types, fixed, diag);
+  type_skin_joints(document, in_scene, types, fixed);
+  for (std::size_t i = 0; i < count; ++i) {
+    if (!in_scene[i] && !fixed[i]) types[i] = NodeType::kNone;
+  }
+  for (const auto& [parent, node] : order) {
+    if (fixed[node]) continue;
+    types[node] = mesh_or_visual(nodes, parent < 0 ? nullptr : &nodes[parent], nodes[node]);
+  }
+  for (const auto& [parent, node] : order) {
+    if (fixed[node] || types[node] != NodeType::kNone) continue;
+    types[node] = joint_or_link(nodes, nodes[node]);
+  }
+  return types;
+}
+
+}  // namespace rdtf

@@ -1,0 +1,182 @@
+// Bad input through the real CLI: each case is a clear error on stderr that names the file and
+// the place in it, exit code 2, and no output file.
+#include <gtest/gtest.h>
+
+#include <sys/stat.h>
+
+#include <functional>
+
+#include "rdtf/gltf.h"
+#include "support/test_support.h"
+
+namespace rdtf {
+namespace {
+
+struct BadCase {
+  std::string name;
+  // Writes the model into the folder and returns its path.
+  std::function<std::filesystem::path(const std::filesystem::path&)> make;
+  std::string expected_place;  // A JSON pointer or other locator the error must name.
+};
+
+Json arm3() { return Json::parse(testing::read_file(testing::data_dir() / "blender" / "arm3.gltf")); }
+
+// arm3.gltf with `edit` applied, beside a copy of arm3.bin.
+std::function<std::filesystem::path(const std::filesystem::path&)> edited_arm3(
+    std::function<void(Json&)> edit) {
+  return [edit](const std::filesystem::path& folder) {
+    Json document = arm3();
+    edit(document);
+    std::filesystem::copy_file(testing::data_dir() / "blender" / "arm3.bin", folder / "arm3.bin");
+    testing::write_file(folder / "model.gltf", document.dump());
+    return folder / "model.gltf";
+  };
+}
+
+std::function<std::filesystem::path(const std::filesystem::path&)> raw_file(std::string name,
+                                                                            std::string bytes) {
+  return [name, bytes](const std::filesystem::path& folder) {
+    testing::write_file(folder / name, bytes);
+    return folder / name;
+  };
+}
+
+std::string glb_bytes() { return testing::read_file(testing::data_dir() / "blender" / "arm3.glb"); }
+
+std::vector<BadCase> cases() {
+  std::vector<BadCase> all;
+  all.push_back({"TruncatedGlb", raw_file("model.glb", glb_bytes().substr(0, 1000)), "@8"});
+  all.push_back({"WrongMagic", raw_file("model.glb", "glTX" + glb_bytes().substr(4)), ""});
+  {
+    std::string bytes = glb_bytes();
+    bytes[0] = 'G';
+    // Not glTF's magic, so it is read as JSON and is not JSON.
+    all.push_back({"WrongMagicReadAsJson", raw_file("model.glb", bytes), "line 1"});
+  }
+  all.push_back({"InvalidJson", raw_file("model.gltf", "{\"asset\": {\"version\": \"2.0\"},\n \"nodes\": [}"),
+                 "line 2"});
+  all.push_back({"EmptyFile", raw_file("model.gltf", ""), "empty"});
+  all.push_back({"AccessorOutOfItsBufferView",
+                 edited_arm3([](Json& d) { d["accessors"][0]["byteOffset"] = 4096; }), "/accessors/0"});
+  all.push_back({"AbsurdCount",
+                 edited_arm3([](Json& d) { d["accessors"][0]["count"] = 2147483648ull; }),
+                 "/accessors/0"});
+  all.push_back({"MissingBin",
+                 [](const std::filesystem::path& folder) {
+                   testing::write_file(folder / "model.gltf", arm3().dump());
+                   return folder / "model.gltf";
+                 },
+                 "/buffers/0/uri"});
+  all.push_back({"UriClimbsOutOfTheFolder",
+                 edited_arm3([](Json& d) { d["buffers"][0]["uri"] = "../arm3.bin"; }), "/buffers/0/uri"});
+  all.push_back({"PercentEncodedClimb",
+                 edited_arm3([](Json& d) { d["buffers"][0]["uri"] = "%2e%2e/%2e%2e/etc/passwd"; }),
+                 "/buffers/0/uri"});
+  all.push_back({"AbsoluteUri", edited_arm3([](Json& d) { d["buffers"][0]["uri"] = "/etc/passwd"; }),
+                 "/buffers/0/uri"});
+  all.push_back({"FileUri",
+                 edited_arm3([](Json& d) { d["buffers"][0]["uri"] = "file:///etc/passwd"; }),
+                 "/buffers/0/uri"});
+  all.push_back({"DotUri", edited_arm3([](Json& d) { d["buffers"][0]["uri"] = "."; }), "/buffers/0/uri"});
+  all.push_back({"SymlinkLeavingTheFolder",
+                 [](const std::filesystem::path& folder) {
+                   std::filesystem::create_directories(folder / "model");
+                   std::filesystem::copy_file(testing::data_dir() / "blender" / "arm3.bin",
+                                              folder / "outside.bin");
+                   std::filesystem::create_symlink(folder / "outside.bin", folder / "model" / "arm3.bin");
+                   testing::write_file(folder / "model" / "model.gltf", arm3().dump());
+                   return folder / "model" / "model.gltf";
+                 },
+                 "/buffers/0/uri"});
+  all.push_back({"NodeCycle", edited_arm3([](Json& d) { d["nodes"][0]["children"] = Json::array({7}); }),
+                 "/nodes/"});
+  all.push_back({"NodeWithTwoParents",
+                 edited_arm3([](Json& d) { d["nodes"][2]["children"].push_back(4); }), "/nodes/"});
+  all.push_back({"IndexOutOfRange",
+                 [](const std::filesystem::path& folder) {
+                   // One triangle whose third index (5) is past its 3 vertices; data: URI buffer.
+                   // Positions (0,0,0), (1,0,0), (0,1,0) as float32, then uint16 indices 0 1 5 + pad.
+                   const std::string model = R"({
+                     "asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
+                     "nodes": [{"mesh": 0}],
+                     "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+                     "buffers": [{"byteLength": 44, "uri": "data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAABAAUAAAA="}],
+                     "bufferViews": [{"buffer": 0, "byteLength": 36}, {"buffer": 0, "byteOffset": 36, "byteLength": 6}],
+                     "accessors": [
+                       {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0,0,0], "max": [1,1,0]},
+                       {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"}]
+                   })";
+                   testing::write_file(folder / "model.gltf", model);
+                   return folder / "model.gltf";
+                 },
+                 "/accessors/1"});
+  return all;
+}
+
+class BadInput : public ::testing::TestWithParam<BadCase> {};
+
+TEST_P(BadInput, CliRefusesWithAPlaceAndWritesNothing) {
+  testing::TempDir folder;
+  const auto model = GetParam().make(folder.path());
+  const auto output = folder / "out.gltf";
+  const auto run = testing::run_command("'" + testing::cli_path() + "' convert '" + model.string() +
+                                        "' -o '" + output.string() + "'");
+  EXPECT_EQ(run.exit_code, 2) << run.err;
+  EXPECT_NE(run.err.find(model.string()), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find(GetParam().expected_place), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find("error"), std::string::npos) << run.err;
+  EXPECT_FALSE(std::filesystem::exists(output));
+  EXPECT_FALSE(std::filesystem::exists(folder / "arm3.rdtf.gltf"));
+  // Nothing new in the folder: no output, no temporary file.
+  for (const auto& entry : std::filesystem::recursive_directory_iterator(folder.path())) {
+    const std::string name = entry.path().filename().string();
+    EXPECT_EQ(name.find(".tmp"), std::string::npos) << name;
+    EXPECT_EQ(name.find("rdtf"), std::string::npos) << name;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Cases, BadInput, ::testing::ValuesIn(cases()),
+                         [](const auto& case_info) { return case_info.param.name; });
+
+TEST(BadInputLoader, SymlinkInsideTheFolderIsFollowed) {
+  testing::TempDir folder;
+  std::filesystem::create_directories(folder / "data");
+  std::filesystem::copy_file(testing::data_dir() / "blender" / "arm3.bin", folder / "data" / "real.bin");
+  std::filesystem::create_symlink("data/real.bin", folder / "arm3.bin");
+  testing::write_file(folder / "model.gltf", arm3().dump());
+  Diagnostics diag;
+  EXPECT_TRUE(load_gltf(folder / "model.gltf", LoadLimits{}, diag)) << format(diag.all().front());
+}
+
+TEST(BadInputLoader, UriWithSpacesAndPercentEscapesLoads) {
+  testing::TempDir folder;
+  std::filesystem::copy_file(testing::data_dir() / "blender" / "arm3.bin", folder / "my arm+1.bin");
+  Json document = arm3();
+  document["buffers"][0]["uri"] = "my%20arm+1.bin";
+  testing::write_file(folder / "model.gltf", document.dump());
+  Diagnostics diag;
+  EXPECT_TRUE(load_gltf(folder / "model.gltf", LoadLimits{}, diag))
+      << (diag.all().empty() ? "" : format(diag.all().front()));
+}
+
+TEST(BadInputLoader, FileOverTheSizeLimitIsRefusedBeforeReading) {
+  LoadLimits limits;
+  limits.max_file_bytes = 1000;
+  Diagnostics diag;
+  EXPECT_FALSE(load_gltf(testing::data_dir() / "blender" / "arm3.gltf", limits, diag));
+  ASSERT_TRUE(diag.has_errors());
+  EXPECT_NE(diag.all().front().message.find("over the limit"), std::string::npos);
+}
+
+TEST(BadInputLoader, FifoIsRefusedWithoutBlocking) {
+  testing::TempDir folder;
+  ASSERT_EQ(::mkfifo((folder / "arm3.bin").c_str(), 0600), 0);
+  testing::write_file(folder / "model.gltf", arm3().dump());
+  Diagnostics diag;
+  EXPECT_FALSE(load_gltf(folder / "model.gltf", LoadLimits{}, diag));
+  ASSERT_TRUE(diag.has_errors());
+  EXPECT_NE(format(diag.all().front()).find("FIFO"), std::string::npos) << format(diag.all().front());
+}
+
+}  // namespace
+}  // namespace rdtf

@@ -1,0 +1,92 @@
+// The rdtf command line as users and scripts run it.
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include "support/test_support.h"
+
+namespace rdtf {
+namespace {
+
+std::string cli() { return "'" + testing::cli_path() + "'"; }
+
+std::string fixture(const std::string& name) {
+  return "'" + (testing::data_dir() / "blender" / name).string() + "'";
+}
+
+TEST(Cli, ConvertWritesBesideTheInputByDefault) {
+  testing::TempDir folder;
+  std::filesystem::copy_file(testing::data_dir() / "blender" / "two_cylinder.gltf", folder / "two_cylinder.gltf");
+  std::filesystem::copy_file(testing::data_dir() / "blender" / "two_cylinder.bin", folder / "two_cylinder.bin");
+  const auto run = testing::run_command(cli() + " convert '" + (folder / "two_cylinder.gltf").string() + "'");
+  EXPECT_EQ(run.exit_code, 0) << run.err;
+  const auto output = folder / "two_cylinder.rdtf.gltf";
+  ASSERT_TRUE(std::filesystem::exists(output));
+  const auto document = nlohmann::json::parse(testing::read_file(output));
+  EXPECT_TRUE(document["extras"]["RDTF"]["nodes"].is_array());
+  EXPECT_NE(run.err.find("2 links, 1 joints"), std::string::npos) << run.err;
+}
+
+TEST(Cli, ConvertToGlbByFlagOrByName) {
+  testing::TempDir folder;
+  const auto by_flag = folder / "a.bin.out";
+  auto run = testing::run_command(cli() + " convert " + fixture("arm3.gltf") + " --glb -o '" + by_flag.string() + "'");
+  EXPECT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_EQ(testing::read_file(by_flag).substr(0, 4), "glTF");
+  const auto by_name = folder / "robot.glb";
+  run = testing::run_command(cli() + " convert " + fixture("arm3.gltf") + " -o '" + by_name.string() + "'");
+  EXPECT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_EQ(testing::read_file(by_name).substr(0, 4), "glTF");
+}
+
+TEST(Cli, InspectPrintsLinksJointsAndMass) {
+  const auto run = testing::run_command(cli() + " inspect " + fixture("arm3.gltf"));
+  EXPECT_EQ(run.exit_code, 0) << run.err;
+  for (const char* text : {"base_link", "upper_arm", "forearm", "shoulder", "elbow", "revolute",
+                           "mass", "inertia", "centre of mass"}) {
+    EXPECT_NE(run.out.find(text), std::string::npos) << text << "\n" << run.out;
+  }
+}
+
+TEST(Cli, InspectJsonIsMachineReadable) {
+  const auto run = testing::run_command(cli() + " inspect --json " + fixture("arm3.gltf"));
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const auto summary = nlohmann::json::parse(run.out);
+  ASSERT_EQ(summary["links"].size(), 3u);
+  EXPECT_EQ(summary["links"][0]["name"], "base_link");
+  // base_link is a 0.2 m cube (float32 vertices): 8 kg at 1000 kg/m^3.
+  EXPECT_NEAR(summary["links"][0]["mass"].get<double>(), 8.000000357627874, 8e-6);
+  EXPECT_EQ(summary["links"][0]["inertia"].size(), 6u);
+  EXPECT_EQ(summary["joints"][0]["name"], "shoulder");
+  EXPECT_EQ(summary["joints"][0]["type"], "revolute");
+}
+
+TEST(Cli, DensityOptionScalesMass) {
+  const auto run = testing::run_command(cli() + " inspect --json --density 2000 " + fixture("arm3.gltf"));
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const auto summary = nlohmann::json::parse(run.out);
+  EXPECT_NEAR(summary["links"][0]["mass"].get<double>(), 16.000000715255748, 16e-6);
+}
+
+TEST(Cli, HelpForEveryCommand) {
+  for (const char* command : {"", " convert", " inspect"}) {
+    const auto run = testing::run_command(cli() + command + " --help");
+    EXPECT_EQ(run.exit_code, 0) << command;
+    EXPECT_NE(run.out.find("Usage"), std::string::npos) << command;
+  }
+}
+
+TEST(Cli, UnknownOptionIsAUsageError) {
+  const auto run = testing::run_command(cli() + " convert --no-such-option x.gltf");
+  EXPECT_NE(run.exit_code, 0);
+  EXPECT_NE(run.err.find("no-such-option"), std::string::npos) << run.err;
+}
+
+TEST(Cli, MissingInputFileExits2) {
+  const auto run = testing::run_command(cli() + " inspect /nonexistent/model.gltf");
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.err.find("/nonexistent/model.gltf"), std::string::npos) << run.err;
+}
+
+}  // namespace
+}  // namespace rdtf

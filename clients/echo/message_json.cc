@@ -1,0 +1,154 @@
+#include "message_json.h"
+
+#include <functional>
+#include <map>
+
+#include <rdtf/description_chunk_t.hpp>
+#include <rdtf/description_t.hpp>
+#include <rdtf/inertia_table_t.hpp>
+#include <rdtf/joint_command_t.hpp>
+#include <rdtf/joint_state_t.hpp>
+#include <rdtf/model_error_t.hpp>
+#include <rdtf/model_removed_t.hpp>
+#include <rdtf/request_t.hpp>
+#include <rdtf/status_t.hpp>
+#include <rdtf/validation_report_t.hpp>
+
+namespace rdtf::clients {
+namespace {
+
+using Json = nlohmann::ordered_json;
+
+Json to_json(const rdtf::diagnostic_t& m) {
+  static const char* const kSeverity[] = {"info", "warning", "error"};
+  return {{"severity", m.severity >= 0 && m.severity <= 2 ? kSeverity[m.severity] : "?"},
+          {"code", m.code}, {"file", m.file}, {"pointer", m.pointer},
+          {"byte_offset", m.byte_offset}, {"message", m.message}};
+}
+
+Json header(const char* type, std::int64_t utime, const std::string& model_id) {
+  return {{"type", type}, {"utime", utime}, {"model_id", model_id}};
+}
+
+Json to_json(const rdtf::description_t& m) {
+  Json j = header("rdtf.description_t", m.utime, m.model_id);
+  j.update({{"source_path", m.source_path}, {"revision", m.revision},
+            {"content_hash", m.content_hash}, {"output_path", m.output_path},
+            {"urdf_path", m.urdf_path}, {"num_links", m.num_links}, {"num_joints", m.num_joints},
+            {"validated", m.validated}, {"validation_passed", m.validation_passed},
+            {"num_chunks", m.num_chunks}, {"rdtf_json_size", m.rdtf_json_size},
+            {"rdtf_json_sha256", m.rdtf_json_sha256}, {"rdtf_json", m.rdtf_json},
+            {"urdf", m.urdf}});
+  return j;
+}
+
+Json to_json(const rdtf::description_chunk_t& m) {
+  Json j = header("rdtf.description_chunk_t", m.utime, m.model_id);
+  j.update({{"revision", m.revision}, {"content_hash", m.content_hash}, {"index", m.index},
+            {"count", m.count}, {"size", m.size},
+            {"data", std::string(m.data.begin(), m.data.end())}});
+  return j;
+}
+
+Json to_json(const rdtf::inertia_table_t& m) {
+  Json links = Json::array();
+  for (const auto& l : m.links) {
+    links.push_back({{"name", l.name}, {"node", l.node}, {"mass", l.mass}, {"volume", l.volume},
+                     {"center_of_mass", {l.center_of_mass[0], l.center_of_mass[1], l.center_of_mass[2]}},
+                     {"ixx", l.ixx}, {"ixy", l.ixy}, {"ixz", l.ixz}, {"iyy", l.iyy},
+                     {"iyz", l.iyz}, {"izz", l.izz}, {"authored", l.authored}});
+  }
+  Json j = header("rdtf.inertia_table_t", m.utime, m.model_id);
+  j.update({{"revision", m.revision}, {"content_hash", m.content_hash},
+            {"total_mass", m.total_mass},
+            {"center_of_mass_scene", {m.center_of_mass_scene[0], m.center_of_mass_scene[1], m.center_of_mass_scene[2]}},
+            {"links", links}});
+  return j;
+}
+
+Json to_json(const rdtf::model_error_t& m) {
+  Json diagnostics = Json::array();
+  for (const auto& d : m.diagnostics) diagnostics.push_back(to_json(d));
+  Json j = header("rdtf.model_error_t", m.utime, m.model_id);
+  j.update({{"source_path", m.source_path}, {"live_revision", m.live_revision},
+            {"content_hash", m.content_hash}, {"diagnostics", diagnostics}});
+  return j;
+}
+
+Json to_json(const rdtf::model_removed_t& m) {
+  Json j = header("rdtf.model_removed_t", m.utime, m.model_id);
+  j.update({{"source_path", m.source_path}, {"last_revision", m.last_revision}});
+  return j;
+}
+
+Json to_json(const rdtf::request_t& m) {
+  Json j = header("rdtf.request_t", m.utime, m.model_id);
+  j["requester"] = m.requester;
+  return j;
+}
+
+Json to_json(const rdtf::status_t& m) {
+  return {{"type", "rdtf.status_t"}, {"utime", m.utime}, {"version", m.version},
+          {"pid", m.pid}, {"uptime", m.uptime}, {"num_models", m.num_models},
+          {"num_watched_dirs", m.num_watched_dirs}, {"conversions", m.conversions},
+          {"rejections", m.rejections}, {"skipped_unchanged", m.skipped_unchanged},
+          {"rescans", m.rescans}, {"pending", m.pending}, {"model_ids", m.model_ids}};
+}
+
+Json to_json(const rdtf::joint_state_t& m) {
+  Json j = header("rdtf.joint_state_t", m.utime, m.model_id);
+  j.update({{"revision", m.revision}, {"content_hash", m.content_hash}, {"sim_time", m.sim_time},
+            {"name", m.name}, {"position", m.position}, {"velocity", m.velocity},
+            {"effort", m.effort}});
+  return j;
+}
+
+Json to_json(const rdtf::joint_command_t& m) {
+  std::vector<int> modes(m.mode.begin(), m.mode.end());
+  Json j = header("rdtf.joint_command_t", m.utime, m.model_id);
+  j.update({{"revision", m.revision}, {"content_hash", m.content_hash}, {"name", m.name},
+            {"mode", modes}, {"value", m.value}, {"kp", m.kp}, {"kd", m.kd}});
+  return j;
+}
+
+Json to_json(const rdtf::validation_report_t& m) {
+  Json diagnostics = Json::array();
+  for (const auto& d : m.diagnostics) diagnostics.push_back(to_json(d));
+  Json j = header("rdtf.validation_report_t", m.utime, m.model_id);
+  j.update({{"revision", m.revision}, {"content_hash", m.content_hash}, {"passed", m.passed},
+            {"simulated_time", m.simulated_time}, {"steps", m.steps},
+            {"energy_drift", m.energy_drift}, {"worst_joint_error", m.worst_joint_error},
+            {"wall_time", m.wall_time}, {"diagnostics", diagnostics}});
+  return j;
+}
+
+using Decoder = std::function<std::optional<Json>(const void*, std::uint32_t)>;
+
+template <typename Message>
+std::pair<std::int64_t, Decoder> decoder() {
+  return {Message::getHash(), [](const void* data, std::uint32_t size) -> std::optional<Json> {
+            Message message;
+            if (message.decode(data, 0, static_cast<int>(size)) < 0) return std::nullopt;
+            return to_json(message);
+          }};
+}
+
+}  // namespace
+
+std::optional<nlohmann::ordered_json> message_to_json(const void* data, std::uint32_t size) {
+  static const std::map<std::int64_t, Decoder> decoders = {
+      decoder<rdtf::description_t>(),    decoder<rdtf::description_chunk_t>(),
+      decoder<rdtf::inertia_table_t>(),  decoder<rdtf::model_error_t>(),
+      decoder<rdtf::model_removed_t>(),  decoder<rdtf::request_t>(),
+      decoder<rdtf::status_t>(),         decoder<rdtf::joint_state_t>(),
+      decoder<rdtf::joint_command_t>(),  decoder<rdtf::validation_report_t>()};
+  if (size < 8) return std::nullopt;
+  const auto* bytes = static_cast<const std::uint8_t*>(data);
+  std::uint64_t hash = 0;
+  for (int i = 0; i < 8; ++i) hash = hash << 8 | bytes[i];  // LCM writes it big-endian.
+  const auto found = decoders.find(static_cast<std::int64_t>(hash));
+  if (found == decoders.end()) return std::nullopt;
+  return found->second(data, size);
+}
+
+}  // namespace rdtf::clients

@@ -1,0 +1,42 @@
+// rdtfd's settings: a JSON file (config/rdtfd.json documents every key), overridden by the
+// command line. Reloaded on SIGHUP.
+#pragma once
+
+#include <chrono>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "rdtf/convert.h"
+
+namespace rdtf::daemon {
+
+struct DaemonConfig {
+  std::vector<std::filesystem::path> watch;  // Folders watched recursively.
+  std::filesystem::path output;              // Where RDTF and URDF files go (events there are ignored).
+  std::string lcm_url;                       // "" = LCM's default (LCM_DEFAULT_URL or udpm).
+  std::string channel_prefix = "RDTF";
+  std::chrono::milliseconds settle{50};      // Quiet time after the last event of a model.
+  std::chrono::milliseconds max_open_wait{5000};  // Longest wait for a writer to close a file.
+  std::chrono::milliseconds republish_period{5000};  // Descriptions again, for late subscribers.
+  std::chrono::milliseconds status_period{1000};
+  int workers = 2;                           // Conversion threads.
+  std::size_t max_chunk_bytes = 60000;       // Largest LCM payload per description chunk.
+  double chunk_rate_bytes_per_s = 32e6;      // Pacing of chunks, so receivers keep up.
+  ConvertOptions convert;
+};
+
+// Built-in defaults: watch $XDG_DATA_HOME/rdtf/models (~/.local/share/rdtf/models), write to
+// $XDG_STATE_HOME/rdtf/output (~/.local/state/rdtf/output).
+DaemonConfig default_config();
+
+// Reads a config file over `base`. Unknown keys and wrong types are errors naming the key.
+std::optional<DaemonConfig> load_config(const std::filesystem::path& path, DaemonConfig base,
+                                        std::string& error);
+
+// Checks the settings make sense (folders exist or can be made, positive periods). Creates
+// missing watch and output folders and makes every folder absolute and canonical.
+bool check_config(DaemonConfig& config, std::string& error);
+
+}  // namespace rdtf::daemon

@@ -1,0 +1,423 @@
+#include "daemon.h"
+
+#include <poll.h>
+#include <sys/eventfd.h>
+#include <sys/signalfd.h>
+#include <unistd.h>
+
+#include <csignal>
+#include <cstring>
+#include <ctime>
+#include <iostream>
+
+#include <rdtf/status_t.hpp>
+
+#include "messages.h"
+
+namespace rdtf::daemon {
+namespace {
+
+// LCM channel names are at most 63 characters: "<prefix>/<id>/DESCRIPTION_CHUNK" must fit.
+constexpr std::size_t kMaxChannelLength = 63;
+constexpr std::size_t kLongestKind = sizeof("/DESCRIPTION_CHUNK") - 1;
+
+std::string milliseconds(std::chrono::microseconds duration) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%.1f ms", static_cast<double>(duration.count()) / 1000.0);
+  return text;
+}
+
+std::string first_error(const Diagnostics& diag) {
+  for (const Diagnostic& d : diag.all()) {
+    if (d.severity == Severity::kError) return format(d);
+  }
+  return "unknown error";
+}
+
+}  // namespace
+
+void log_line(const std::string& text) {
+  const auto now = std::chrono::system_clock::now();
+  const std::time_t seconds = std::chrono::system_clock::to_time_t(now);
+  const auto millis = std::chrono::duration_cast<std::chrono::milliseconds>(now.time_since_epoch()).count() % 1000;
+  std::tm utc{};
+  gmtime_r(&seconds, &utc);
+  char stamp[32];
+  std::strftime(stamp, sizeof(stamp), "%Y-%m-%dT%H:%M:%S", &utc);
+  char full[40];
+  std::snprintf(full, sizeof(full), "%s.%03lldZ", stamp, static_cast<long long>(millis));
+  std::cerr << full << " " << text << std::endl;
+}
+
+Daemon::Daemon(DaemonConfig config, ConfigLoader reload)
+    : config_(std::move(config)),
+      reload_(std::move(reload)),
+      settle_(config_.settle, config_.max_open_wait) {}
+
+Daemon::~Daemon() {
+  {
+    std::lock_guard lock(mutex_);
+    workers_stop_ = true;
+  }
+  work_ready_.notify_all();
+  for (auto& worker : workers_) worker.join();
+  if (signal_fd_ >= 0) ::close(signal_fd_);
+  if (wake_fd_ >= 0) ::close(wake_fd_);
+}
+
+bool Daemon::connect_lcm(std::string& error) {
+  auto lcm = std::make_unique<lcm::LCM>(config_.lcm_url);
+  if (!lcm->good()) {
+    error = "cannot open LCM at '" + (config_.lcm_url.empty() ? std::string("default URL") : config_.lcm_url) + "'";
+    return false;
+  }
+  lcm->subscribe(config_.channel_prefix + "/REQUEST", &Daemon::on_request, this);
+  publisher_ = std::make_unique<Publisher>(*lcm, config_.chunk_rate_bytes_per_s, 128 * 1024);
+  lcm_ = std::move(lcm);
+  return true;
+}
+
+bool Daemon::start(std::string& error) {
+  if (!watcher_.ok()) {
+    error = std::string("inotify: ") + std::strerror(errno);
+    return false;
+  }
+  if (!connect_lcm(error)) return false;
+  sigset_t signals;
+  sigemptyset(&signals);
+  for (int s : {SIGTERM, SIGINT, SIGHUP}) sigaddset(&signals, s);
+  // Blocked here (and so in the workers started below): they arrive through the signalfd only.
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+  signal_fd_ = ::signalfd(-1, &signals, SFD_NONBLOCK | SFD_CLOEXEC);
+  wake_fd_ = ::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC);
+  if (signal_fd_ < 0 || wake_fd_ < 0) {
+    error = std::string("signalfd/eventfd: ") + std::strerror(errno);
+    return false;
+  }
+  for (int i = 0; i < config_.workers; ++i) workers_.emplace_back([this] { worker_loop(); });
+  rescan("start");
+  next_republish_ = Clock::now() + config_.republish_period;
+  next_status_ = Clock::now();
+  std::string watched;
+  for (const auto& folder : config_.watch) watched += " " + folder.string();
+  log_line("rdtfd started: watching" + watched + "; output " + config_.output.string() +
+           "; LCM " + (config_.lcm_url.empty() ? std::string("default URL") : config_.lcm_url) +
+           "; channels " + config_.channel_prefix + "/...");
+  return true;
+}
+
+bool Daemon::ignored(const std::filesystem::path& path) const {
+  const std::string name = path.filename().string();
+  // Temporary files of editors and of our own atomic writes.
+  if (name.empty() || name.front() == '.' || name.back() == '~' ||
+      (name.size() > 4 && name.compare(name.size() - 4, 4, ".tmp") == 0)) {
+    return true;
+  }
+  const auto relative = path.lexically_relative(config_.output);
+  return !relative.empty() && *relative.begin() != "..";
+}
+
+std::string Daemon::channel(const std::string& model_id, const char* kind) const {
+  return config_.channel_prefix + "/" + model_id + "/" + kind;
+}
+
+void Daemon::note_change(const std::filesystem::path& path, bool still_open, bool closed) {
+  if (ignored(path)) return;
+  const auto now = Clock::now();
+  auto touch = [&](const std::filesystem::path& model) {
+    if (closed) {
+      settle_.closed(model.string(), now);
+    } else {
+      settle_.touch(model.string(), now, still_open);
+    }
+  };
+  if (is_model_file(path)) {
+    const std::size_t max_id = kMaxChannelLength - config_.channel_prefix.size() - 1 - kLongestKind;
+    registry_.ensure(path, model_id_for(path, config_.watch, max_id));
+    touch(path);
+  }
+  for (const auto& model : registry_.dependents(path)) touch(model);
+}
+
+void Daemon::rescan(const char* why) {
+  ++counters_.rescans;
+  watcher_.clear();
+  std::vector<std::filesystem::path> files;
+  for (const auto& root : config_.watch) {
+    std::string error;
+    auto found = watcher_.watch_tree(root, error);
+    if (!error.empty()) log_line("watch error: " + error);
+    files.insert(files.end(), found.begin(), found.end());
+  }
+  // Known models that are no longer there get converted too: the conversion finds them gone.
+  for (const auto& [source, record] : registry_.all()) settle_.touch(source.string(), Clock::now());
+  for (const auto& file : files) note_change(file, false, true);
+  log_line(std::string("rescan (") + why + "): " + std::to_string(files.size()) + " files, " +
+           std::to_string(watcher_.watch_count()) + " folders watched");
+}
+
+void Daemon::handle_file_events() {
+  std::string error;
+  const auto events = watcher_.read_events(error);
+  if (!error.empty()) log_line("watch error: " + error);
+  for (const FileEvent& event : events) {
+    switch (event.kind) {
+      case FileEvent::Kind::kRescan:
+        rescan("inotify queue overflow or a watched folder moved");
+        return;
+      case FileEvent::Kind::kModified:
+        note_change(event.path, true, false);
+        break;
+      case FileEvent::Kind::kWritten:
+        note_change(event.path, false, true);
+        break;
+      case FileEvent::Kind::kRemoved:
+        note_change(event.path, false, true);
+        break;
+    }
+  }
+}
+
+void Daemon::dispatch_due() {
+  for (const std::string& source : settle_.take_due(Clock::now())) {
+    ModelRecord* record = registry_.find(source);
+    if (record == nullptr) continue;
+    if (record->in_flight) {
+      record->again = true;
+      continue;
+    }
+    record->in_flight = true;
+    ConversionJob job;
+    job.model_id = record->id;
+    job.source = record->source;
+    job.output_dir = config_.output / record->id;
+    job.options = config_.convert;
+    job.previous_hash = record->last_hash;
+    {
+      std::lock_guard lock(mutex_);
+      jobs_.push_back(std::move(job));
+    }
+    work_ready_.notify_one();
+  }
+}
+
+void Daemon::worker_loop() {
+  for (;;) {
+    ConversionJob job;
+    {
+      std::unique_lock lock(mutex_);
+      work_ready_.wait(lock, [this] { return workers_stop_ || !jobs_.empty(); });
+      if (jobs_.empty()) return;  // Stopping, and nothing left to finish.
+      job = std::move(jobs_.front());
+      jobs_.pop_front();
+    }
+    ConversionOutcome outcome;
+    try {
+      outcome = run_conversion(job);
+    } catch (const std::exception& error) {
+      // No exception crosses a thread: an internal failure becomes a rejection with its reason.
+      outcome.model_id = job.model_id;
+      outcome.source = job.source;
+      outcome.kind = ConversionOutcome::Kind::kRejected;
+      outcome.diagnostics.set_file(job.source.string());
+      outcome.diagnostics.error("INTERNAL_ERROR", "", error.what());
+    }
+    {
+      std::lock_guard lock(mutex_);
+      outcomes_.push_back(std::move(outcome));
+    }
+    const std::uint64_t one = 1;
+    [[maybe_unused]] auto written = ::write(wake_fd_, &one, sizeof(one));
+  }
+}
+
+void Daemon::handle_outcomes() {
+  std::uint64_t value = 0;
+  [[maybe_unused]] auto read = ::read(wake_fd_, &value, sizeof(value));
+  std::deque<ConversionOutcome> outcomes;
+  {
+    std::lock_guard lock(mutex_);
+    outcomes.swap(outcomes_);
+  }
+  for (auto& outcome : outcomes) apply(std::move(outcome));
+}
+
+void Daemon::apply(ConversionOutcome outcome) {
+  ModelRecord* record = registry_.find(outcome.source);
+  if (record == nullptr) return;
+  record->in_flight = false;
+  const std::string id = record->id;
+  switch (outcome.kind) {
+    case ConversionOutcome::Kind::kConverted: {
+      ++counters_.conversions;
+      ++record->revisions;
+      record->last_hash = outcome.content_hash;
+      record->dependencies = outcome.dependencies;
+      record->live = std::move(outcome.converted);
+      log_line("converted " + id + " revision " + std::to_string(record->revisions) + " (" +
+               std::to_string(record->live->robot.links.size()) + " links, " +
+               std::to_string(record->live->robot.joints.size()) + " joints) in " +
+               milliseconds(outcome.duration));
+      publish_model(*record);
+      break;
+    }
+    case ConversionOutcome::Kind::kUnchanged:
+      ++counters_.skipped_unchanged;
+      record->dependencies = outcome.dependencies;
+      break;
+    case ConversionOutcome::Kind::kRejected:
+      ++counters_.rejections;
+      record->last_hash = outcome.content_hash;
+      record->dependencies = outcome.dependencies;
+      log_line("rejected " + id + " in " + milliseconds(outcome.duration) + ": " +
+               first_error(outcome.diagnostics) +
+               (record->live ? "; still serving revision " + std::to_string(record->revisions) : ""));
+      publisher_->publish(channel(id, "ERROR"),
+                          make_model_error(*record, outcome.content_hash, outcome.diagnostics));
+      break;
+    case ConversionOutcome::Kind::kVanished:
+      log_line("removed " + id);
+      if (record->live) publisher_->publish(channel(id, "REMOVED"), make_model_removed(*record));
+      settle_.forget(outcome.source.string());
+      registry_.erase(outcome.source);
+      return;
+  }
+  if (record->again) {
+    record->again = false;
+    settle_.touch(record->source.string(), Clock::now());
+  }
+}
+
+void Daemon::publish_model(const ModelRecord& record) {
+  if (!record.live) return;
+  std::vector<rdtf::description_chunk_t> chunks;
+  const auto description = make_description(record, config_.max_chunk_bytes, chunks);
+  for (const auto& chunk : chunks) publisher_->publish(channel(record.id, "DESCRIPTION_CHUNK"), chunk);
+  publisher_->publish(channel(record.id, "DESCRIPTION"), description);
+  publisher_->publish(channel(record.id, "INERTIA"), make_inertia_table(record));
+}
+
+void Daemon::publish_all() {
+  for (const auto& [source, record] : registry_.all()) publish_model(record);
+}
+
+void Daemon::publish_status() {
+  rdtf::status_t status;
+  status.utime = now_utime();
+  status.version = "rdtfd 0.1.0";
+  status.pid = static_cast<std::int32_t>(::getpid());
+  status.uptime = std::chrono::duration<double>(Clock::now() - started_).count();
+  status.num_watched_dirs = static_cast<std::int32_t>(config_.watch.size());
+  status.conversions = counters_.conversions;
+  status.rejections = counters_.rejections;
+  status.skipped_unchanged = counters_.skipped_unchanged;
+  status.rescans = counters_.rescans;
+  std::int32_t pending = static_cast<std::int32_t>(settle_.size());
+  for (const auto& [source, record] : registry_.all()) {
+    if (record.live) status.model_ids.push_back(record.id);
+    if (record.in_flight) ++pending;
+  }
+  status.pending = pending;
+  status.num_models = static_cast<std::int32_t>(status.model_ids.size());
+  status.num_model_ids = status.num_models;
+  publisher_->publish(config_.channel_prefix + "/STATUS", status);
+}
+
+void Daemon::on_request(const lcm::ReceiveBuffer*, const std::string&, const rdtf::request_t* request) {
+  if (request->model_id.empty()) {
+    log_line("republished every model on request of '" + request->requester + "'");
+    publish_all();
+    return;
+  }
+  if (ModelRecord* record = registry_.find_id(request->model_id)) {
+    log_line("republished " + record->id + " on request of '" + request->requester + "'");
+    publish_model(*record);
+  }
+}
+
+void Daemon::reload_config() {
+  std::string error;
+  auto fresh = reload_ ? reload_(error) : std::nullopt;
+  if (!fresh || !check_config(*fresh, error)) {
+    log_line("SIGHUP: config not reloaded: " + error);
+    return;
+  }
+  const bool lcm_changed = fresh->lcm_url != config_.lcm_url || fresh->channel_prefix != config_.channel_prefix;
+  const bool folders_changed = fresh->watch != config_.watch || fresh->output != config_.output;
+  const int workers = config_.workers;  // The pool keeps its size until a restart.
+  config_ = std::move(*fresh);
+  config_.workers = workers;
+  settle_.set_settle(config_.settle);
+  if (lcm_changed && !connect_lcm(error)) log_line("SIGHUP: " + error);
+  publisher_->set_rate(config_.chunk_rate_bytes_per_s);
+  // New settings (density, limits) apply to every model: convert them all again.
+  for (auto& [source, record] : registry_.all()) record.last_hash.clear();
+  rescan(folders_changed ? "config reloaded, folders changed" : "config reloaded");
+}
+
+void Daemon::handle_signals() {
+  signalfd_siginfo info{};
+  while (::read(signal_fd_, &info, sizeof(info)) == sizeof(info)) {
+    if (info.ssi_signo == SIGHUP) {
+      reload_config();
+    } else {
+      log_line(std::string("received ") + strsignal(static_cast<int>(info.ssi_signo)) + ": stopping");
+      stop_ = true;
+    }
+  }
+}
+
+void Daemon::step(std::chrono::milliseconds max_wait) {
+  auto now = Clock::now();
+  // Sleep until the earliest of: a model settles, the publisher may send, a periodic message.
+  Clock::time_point wake = now + max_wait;
+  if (auto deadline = settle_.next_deadline()) wake = std::min(wake, *deadline);
+  if (auto send = publisher_->drain(now)) wake = std::min(wake, *send);
+  if (config_.republish_period.count() > 0) wake = std::min(wake, next_republish_);
+  wake = std::min(wake, next_status_);
+  const auto timeout = std::chrono::duration_cast<std::chrono::milliseconds>(wake - now).count();
+
+  pollfd fds[4] = {{watcher_.fd(), POLLIN, 0}, {lcm_->getFileno(), POLLIN, 0},
+                   {wake_fd_, POLLIN, 0}, {signal_fd_, POLLIN, 0}};
+  const int ready = ::poll(fds, 4, static_cast<int>(std::max<long long>(timeout, 0) + (timeout > 0 ? 1 : 0)));
+  if (ready > 0) {
+    if (fds[3].revents & POLLIN) handle_signals();
+    if (fds[0].revents & POLLIN) handle_file_events();
+    if (fds[2].revents & POLLIN) handle_outcomes();
+    if (fds[1].revents & POLLIN) lcm_->handleTimeout(0);
+  }
+  now = Clock::now();
+  dispatch_due();
+  if (config_.republish_period.count() > 0 && now >= next_republish_) {
+    publish_all();
+    next_republish_ = now + config_.republish_period;
+  }
+  if (now >= next_status_) {
+    publish_status();
+    next_status_ = now + config_.status_period;
+  }
+  publisher_->drain(Clock::now());
+}
+
+int Daemon::run() {
+  while (!stop_) step(std::chrono::milliseconds(1000));
+  // Let conversions in flight finish: their outputs are written atomically, so nothing is
+  // half-done either way, and waiting keeps the registry consistent with the output folder.
+  {
+    std::lock_guard lock(mutex_);
+    jobs_.clear();
+    workers_stop_ = true;
+  }
+  work_ready_.notify_all();
+  for (auto& worker : workers_) worker.join();
+  workers_.clear();
+  handle_outcomes();
+  const auto flush_until = Clock::now() + std::chrono::seconds(2);
+  while (publisher_->queued() > 0 && Clock::now() < flush_until) {
+    if (auto next = publisher_->drain(Clock::now())) std::this_thread::sleep_until(*next);
+  }
+  log_line("rdtfd stopped");
+  return 0;
+}
+
+}  // namespace rdtf::daemon

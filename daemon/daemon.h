@@ -1,0 +1,96 @@
+// rdtfd's event loop: inotify events -> settle -> conversions on worker threads -> registry ->
+// LCM. One thread owns all state; workers only run conversions and hand back plain values.
+#pragma once
+
+#include <atomic>
+#include <condition_variable>
+#include <deque>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <thread>
+
+#include <lcm/lcm-cpp.hpp>
+
+#include <rdtf/request_t.hpp>
+
+#include "config.h"
+#include "publisher.h"
+#include "registry.h"
+#include "settle.h"
+#include "watcher.h"
+
+namespace rdtf::daemon {
+
+// Reads the configuration again (SIGHUP): the file plus the command line's overrides.
+using ConfigLoader = std::function<std::optional<DaemonConfig>(std::string& error)>;
+
+class Daemon {
+ public:
+  Daemon(DaemonConfig config, ConfigLoader reload);
+  ~Daemon();
+  Daemon(const Daemon&) = delete;
+  Daemon& operator=(const Daemon&) = delete;
+
+  // Watches, connects to LCM, starts the workers and queues every model found.
+  bool start(std::string& error);
+  // Runs until SIGTERM/SIGINT (or request_stop); returns the process exit code.
+  int run();
+  // One turn of the loop, waiting at most `max_wait` for something to happen.
+  void step(std::chrono::milliseconds max_wait);
+  void request_stop() { stop_ = true; }
+
+ private:
+  struct Counters {
+    std::int64_t conversions = 0;
+    std::int64_t rejections = 0;
+    std::int64_t skipped_unchanged = 0;
+    std::int64_t rescans = 0;
+  };
+
+  void handle_file_events();
+  void handle_signals();
+  void rescan(const char* why);
+  void note_change(const std::filesystem::path& path, bool still_open, bool closed);
+  void dispatch_due();
+  void handle_outcomes();
+  void apply(ConversionOutcome outcome);
+  void publish_model(const ModelRecord& record);
+  void publish_all();
+  void publish_status();
+  void on_request(const lcm::ReceiveBuffer*, const std::string&, const rdtf::request_t* request);
+  bool ignored(const std::filesystem::path& path) const;
+  std::string channel(const std::string& model_id, const char* kind) const;
+  bool connect_lcm(std::string& error);
+  void worker_loop();
+  void reload_config();
+
+  DaemonConfig config_;
+  ConfigLoader reload_;
+  InotifyWatcher watcher_;
+  SettleQueue settle_;
+  Registry registry_;
+  std::unique_ptr<lcm::LCM> lcm_;
+  std::unique_ptr<Publisher> publisher_;
+  Counters counters_;
+  int signal_fd_ = -1;
+  int wake_fd_ = -1;  // eventfd: a worker finished.
+  std::atomic<bool> stop_{false};
+  Clock::time_point started_ = Clock::now();
+  Clock::time_point next_republish_;
+  Clock::time_point next_status_;
+
+  // Shared with the workers.
+  std::mutex mutex_;
+  std::condition_variable work_ready_;
+  std::deque<ConversionJob> jobs_;
+  std::deque<ConversionOutcome> outcomes_;
+  bool workers_stop_ = false;
+  std::vector<std::thread> workers_;
+};
+
+// One log line on stderr with a UTC timestamp.
+void log_line(const std::string& text);
+
+}  // namespace rdtf::daemon

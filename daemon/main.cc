@@ -1,0 +1,93 @@
+// rdtfd: watches model folders, converts every saved glTF to RDTF and publishes it over LCM.
+// `rdtfd --help` lists the options; config/rdtfd.json documents the config file.
+#include <CLI/CLI.hpp>
+
+#include <cstdlib>
+#include <iostream>
+
+#include "daemon.h"
+
+namespace {
+
+struct Overrides {
+  std::vector<std::string> watch;
+  std::string output;
+  std::string lcm_url;
+  std::string channel_prefix;
+  std::optional<double> settle_ms;
+  std::optional<double> republish_ms;
+  std::optional<int> workers;
+  std::optional<double> density;
+};
+
+std::optional<rdtf::daemon::DaemonConfig> load(const std::string& config_file,
+                                               const Overrides& overrides, std::string& error) {
+  auto config = rdtf::daemon::default_config();
+  if (!config_file.empty()) {
+    auto loaded = rdtf::daemon::load_config(config_file, config, error);
+    if (!loaded) return std::nullopt;
+    config = std::move(*loaded);
+  }
+  if (const char* url = std::getenv("LCM_DEFAULT_URL"); url != nullptr && config.lcm_url.empty()) {
+    config.lcm_url = url;
+  }
+  if (!overrides.watch.empty()) {
+    config.watch.assign(overrides.watch.begin(), overrides.watch.end());
+  }
+  if (!overrides.output.empty()) config.output = overrides.output;
+  if (!overrides.lcm_url.empty()) config.lcm_url = overrides.lcm_url;
+  if (!overrides.channel_prefix.empty()) config.channel_prefix = overrides.channel_prefix;
+  if (overrides.settle_ms) config.settle = std::chrono::milliseconds(static_cast<long long>(*overrides.settle_ms));
+  if (overrides.republish_ms) {
+    config.republish_period = std::chrono::milliseconds(static_cast<long long>(*overrides.republish_ms));
+  }
+  if (overrides.workers) config.workers = *overrides.workers;
+  if (overrides.density) config.convert.default_density = *overrides.density;
+  if (!rdtf::daemon::check_config(config, error)) return std::nullopt;
+  return config;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"rdtfd: watches folders of glTF models, converts each save to RDTF and publishes "
+               "it over LCM"};
+  app.set_version_flag("--version", "rdtfd 0.1.0");
+  std::string config_file;
+  Overrides overrides;
+  app.add_option("-c,--config", config_file, "JSON config file (see config/rdtfd.json)")
+      ->check(CLI::ExistingFile);
+  app.add_option("-w,--watch", overrides.watch,
+                 "Folder to watch, recursively (repeatable; default ~/.local/share/rdtf/models)");
+  app.add_option("-o,--output", overrides.output,
+                 "Folder for RDTF outputs (default ~/.local/state/rdtf/output)");
+  app.add_option("--lcm-url", overrides.lcm_url, "LCM URL (default: LCM_DEFAULT_URL, else LCM's default)");
+  app.add_option("--channel-prefix", overrides.channel_prefix, "First part of every channel (default RDTF)");
+  app.add_option("--settle-ms", overrides.settle_ms, "Quiet time after a save before converting (default 50)");
+  app.add_option("--republish-ms", overrides.republish_ms,
+                 "Period of republishing every description; 0 disables (default 5000)");
+  app.add_option("--workers", overrides.workers, "Conversion threads (default 2)")->check(CLI::PositiveNumber);
+  app.add_option("--density", overrides.density, "Default density, kg/m^3 (default 1000)")
+      ->check(CLI::PositiveNumber);
+  CLI11_PARSE(app, argc, argv);
+
+  std::string error;
+  auto config = load(config_file, overrides, error);
+  if (!config) {
+    std::cerr << "rdtfd: " << error << "\n";
+    return 2;
+  }
+  try {
+    rdtf::daemon::Daemon daemon(std::move(*config), [config_file, overrides](std::string& reload_error) {
+      return load(config_file, overrides, reload_error);
+    });
+    if (!daemon.start(error)) {
+      std::cerr << "rdtfd: " << error << "\n";
+      return 1;
+    }
+    return daemon.run();
+  } catch (const std::exception& e) {
+    std::cerr << "rdtfd: internal error: " << e.what() << "\n";
+    return 1;
+  }
+}

@@ -1,0 +1,74 @@
+#include "registry.h"
+
+#include <algorithm>
+
+namespace rdtf::daemon {
+
+bool is_model_file(const std::filesystem::path& path) {
+  std::string extension = path.extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return extension == ".gltf" || extension == ".glb";
+}
+
+std::string model_id_for(const std::filesystem::path& source,
+                         const std::vector<std::filesystem::path>& roots, std::size_t max_length) {
+  std::string id = source.filename().string();
+  for (const auto& root : roots) {
+    const auto relative = source.lexically_relative(root);
+    if (!relative.empty() && *relative.begin() != "..") {
+      id = relative.generic_string();
+      if (roots.size() > 1) id = root.filename().string() + "/" + id;
+      break;
+    }
+  }
+  for (char& c : id) {
+    const bool allowed = std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '_' ||
+                         c == '-' || c == '/';
+    if (!allowed) c = '_';
+  }
+  if (id.size() > max_length) {
+    // Keep the end (the file name) and make it unique with a short hash of the whole id.
+    const std::size_t hash = std::hash<std::string>{}(id);
+    char suffix[10];
+    std::snprintf(suffix, sizeof(suffix), "%08zx", hash & 0xffffffffu);
+    id = std::string(suffix) + "~" + id.substr(id.size() - (max_length - 9));
+  }
+  return id;
+}
+
+ModelRecord& Registry::ensure(const std::filesystem::path& source, const std::string& id) {
+  auto [it, inserted] = models_.try_emplace(source);
+  if (inserted) {
+    it->second.source = source;
+    it->second.id = id;
+  }
+  return it->second;
+}
+
+ModelRecord* Registry::find(const std::filesystem::path& source) {
+  const auto it = models_.find(source);
+  return it == models_.end() ? nullptr : &it->second;
+}
+
+ModelRecord* Registry::find_id(const std::string& id) {
+  for (auto& [source, record] : models_) {
+    if (record.id == id) return &record;
+  }
+  return nullptr;
+}
+
+void Registry::erase(const std::filesystem::path& source) { models_.erase(source); }
+
+std::vector<std::filesystem::path> Registry::dependents(const std::filesystem::path& file) const {
+  std::vector<std::filesystem::path> result;
+  for (const auto& [source, record] : models_) {
+    if (std::find(record.dependencies.begin(), record.dependencies.end(), file) !=
+        record.dependencies.end()) {
+      result.push_back(source);
+    }
+  }
+  return result;
+}
+
+}  // namespace rdtf::daemon

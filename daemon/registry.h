@@ -1,0 +1,51 @@
+// Every model the daemon knows: its id, the files it refers to, and the last good revision it
+// serves (kept when a later save is broken).
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "conversion.h"
+
+namespace rdtf::daemon {
+
+struct ModelRecord {
+  std::string id;
+  std::filesystem::path source;
+  std::int64_t revisions = 0;              // Accepted conversions so far.
+  std::optional<ConvertedModel> live;      // The revision served (number: `revisions`).
+  std::string last_hash;                   // Content last converted, good or bad.
+  std::vector<std::filesystem::path> dependencies;
+  bool in_flight = false;                  // A worker is converting it.
+  bool again = false;                      // It changed while in flight: convert once more.
+};
+
+// Model ids: the model's path below its watched folder ("arm3.gltf", "sub/robot.glb"), prefixed
+// by that folder's name when several folders are watched, with characters outside
+// [A-Za-z0-9._/-] replaced by '_'; shortened (keeping the end and a hash) to fit LCM's channel
+// names. A regex on the id selects one model's channels.
+std::string model_id_for(const std::filesystem::path& source,
+                         const std::vector<std::filesystem::path>& roots, std::size_t max_length);
+
+class Registry {
+ public:
+  ModelRecord& ensure(const std::filesystem::path& source, const std::string& id);
+  ModelRecord* find(const std::filesystem::path& source);
+  ModelRecord* find_id(const std::string& id);
+  void erase(const std::filesystem::path& source);
+  // Models that refer to `file` (a .bin or image).
+  std::vector<std::filesystem::path> dependents(const std::filesystem::path& file) const;
+  std::map<std::filesystem::path, ModelRecord>& all() { return models_; }
+  const std::map<std::filesystem::path, ModelRecord>& all() const { return models_; }
+
+ private:
+  std::map<std::filesystem::path, ModelRecord> models_;
+};
+
+bool is_model_file(const std::filesystem::path& path);
+
+}  // namespace rdtf::daemon

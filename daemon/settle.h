@@ -1,0 +1,48 @@
+// When to convert: a model is converted once its files have been quiet for the settle period,
+// so a burst of saves gives one conversion of the final content. Pure logic over an injected
+// clock, so tests drive it directly.
+#pragma once
+
+#include <chrono>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace rdtf::daemon {
+
+using Clock = std::chrono::steady_clock;
+
+class SettleQueue {
+ public:
+  // settle: quiet time after the last event. max_open_wait: how long a file that is still open
+  // for writing (modified, not yet closed) may hold its model back before it is converted anyway.
+  SettleQueue(Clock::duration settle, Clock::duration max_open_wait)
+      : settle_(settle), max_open_wait_(max_open_wait) {}
+
+  // Something happened to a file of `model`. `still_open`: the file was modified and not yet
+  // closed by its writer (an in-place save in progress).
+  void touch(const std::string& model, Clock::time_point now, bool still_open = false);
+  void closed(const std::string& model, Clock::time_point now);  // Its writer closed the file.
+  void forget(const std::string& model);
+
+  // Models whose quiet period has passed, removed from the queue.
+  std::vector<std::string> take_due(Clock::time_point now);
+  std::optional<Clock::time_point> next_deadline() const;
+  std::size_t size() const { return pending_.size(); }
+  void set_settle(Clock::duration settle) { settle_ = settle; }
+
+ private:
+  struct Pending {
+    Clock::time_point last_event;
+    Clock::time_point first_event;
+    bool open_for_writing = false;
+  };
+  Clock::time_point deadline(const Pending& pending) const;
+
+  Clock::duration settle_;
+  Clock::duration max_open_wait_;
+  std::map<std::string, Pending> pending_;
+};
+
+}  // namespace rdtf::daemon

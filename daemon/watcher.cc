@@ -1,0 +1,121 @@
+#include "watcher.h"
+
+#include <sys/inotify.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+
+namespace rdtf::daemon {
+namespace {
+
+constexpr std::uint32_t kFolderMask = IN_CLOSE_WRITE | IN_MODIFY | IN_CREATE | IN_DELETE |
+                                      IN_MOVED_FROM | IN_MOVED_TO | IN_DELETE_SELF |
+                                      IN_MOVE_SELF | IN_ONLYDIR | IN_EXCL_UNLINK;
+
+std::string watch_error(const std::filesystem::path& folder) {
+  const int error = errno;
+  std::string text = "cannot watch " + folder.string() + ": " + std::strerror(error);
+  if (error == ENOSPC) {
+    text += " (inotify watches exhausted: raise /proc/sys/fs/inotify/max_user_watches)";
+  }
+  return text;
+}
+
+}  // namespace
+
+InotifyWatcher::InotifyWatcher() : fd_(::inotify_init1(IN_NONBLOCK | IN_CLOEXEC)) {}
+
+InotifyWatcher::~InotifyWatcher() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+void InotifyWatcher::clear() {
+  for (const auto& [wd, folder] : folders_) ::inotify_rm_watch(fd_, wd);
+  folders_.clear();
+}
+
+void InotifyWatcher::add_folder(const std::filesystem::path& folder,
+                                std::vector<std::filesystem::path>& files, std::string& error) {
+  // Watch first, then list: a file created in between shows up in both, never in neither.
+  const int wd = ::inotify_add_watch(fd_, folder.c_str(), kFolderMask);
+  if (wd < 0) {
+    if (!error.empty()) error += "; ";
+    error += watch_error(folder);
+    return;
+  }
+  folders_[wd] = folder;
+  std::error_code ec;
+  for (std::filesystem::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
+    std::error_code type_error;
+    if (it->is_directory(type_error) && !it->is_symlink(type_error)) {
+      add_folder(it->path(), files, error);
+    } else if (it->is_regular_file(type_error)) {
+      files.push_back(it->path());
+    }
+  }
+}
+
+std::vector<std::filesystem::path> InotifyWatcher::watch_tree(const std::filesystem::path& root,
+                                                              std::string& error) {
+  std::vector<std::filesystem::path> files;
+  add_folder(root, files, error);
+  return files;
+}
+
+std::vector<FileEvent> InotifyWatcher::read_events(std::string& error) {
+  std::vector<FileEvent> events;
+  alignas(inotify_event) char buffer[64 * 1024];
+  for (;;) {
+    const ssize_t n = ::read(fd_, buffer, sizeof(buffer));
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      if (errno != EAGAIN) error = std::string("inotify read: ") + std::strerror(errno);
+      break;
+    }
+    if (n == 0) break;
+    for (ssize_t offset = 0; offset < n;) {
+      const auto* event = reinterpret_cast<const inotify_event*>(buffer + offset);
+      offset += static_cast<ssize_t>(sizeof(inotify_event) + event->len);
+      if (event->mask & IN_Q_OVERFLOW) {
+        events.push_back({FileEvent::Kind::kRescan, {}});
+        continue;
+      }
+      const auto folder = folders_.find(event->wd);
+      if (folder == folders_.end()) continue;
+      if (event->mask & (IN_DELETE_SELF | IN_MOVE_SELF)) {
+        // The folder itself went: its files are gone from our view.
+        if (event->mask & IN_MOVE_SELF) events.push_back({FileEvent::Kind::kRescan, {}});
+        continue;
+      }
+      if (event->mask & IN_IGNORED) {
+        folders_.erase(folder);
+        continue;
+      }
+      if (event->len == 0) continue;
+      const std::filesystem::path path = folder->second / event->name;
+      if (event->mask & IN_ISDIR) {
+        if (event->mask & (IN_CREATE | IN_MOVED_TO)) {
+          std::vector<std::filesystem::path> files;
+          add_folder(path, files, error);
+          for (auto& file : files) events.push_back({FileEvent::Kind::kWritten, std::move(file)});
+        } else if (event->mask & (IN_DELETE | IN_MOVED_FROM)) {
+          // Files of a folder moved out of the tree: a rescan finds which models went.
+          events.push_back({FileEvent::Kind::kRescan, {}});
+        }
+        continue;
+      }
+      if (event->mask & (IN_DELETE | IN_MOVED_FROM)) {
+        events.push_back({FileEvent::Kind::kRemoved, path});
+      } else if (event->mask & (IN_CLOSE_WRITE | IN_MOVED_TO)) {
+        events.push_back({FileEvent::Kind::kWritten, path});
+      } else if (event->mask & (IN_MODIFY | IN_CREATE)) {
+        // Created or written and still open: a close (IN_CLOSE_WRITE) will follow.
+        events.push_back({FileEvent::Kind::kModified, path});
+      }
+    }
+  }
+  return events;
+}
+
+}  // namespace rdtf::daemon

@@ -1,0 +1,54 @@
+// Recursive directory watching with inotify. Turns kernel events into what the daemon cares
+// about: a file changed (or is being written), a file went away, the view was lost (rescan).
+#pragma once
+
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace rdtf::daemon {
+
+struct FileEvent {
+  enum class Kind {
+    kModified,  // Written but not yet closed: an in-place save in progress.
+    kWritten,   // Closed after writing, created, or moved in: content may be new.
+    kRemoved,   // Deleted or moved out.
+    kRescan,    // Events were lost (queue overflow) or a watched tree moved: rescan everything.
+  };
+  Kind kind;
+  std::filesystem::path path;  // Absolute; empty for kRescan.
+};
+
+class InotifyWatcher {
+ public:
+  InotifyWatcher();
+  ~InotifyWatcher();
+  InotifyWatcher(const InotifyWatcher&) = delete;
+  InotifyWatcher& operator=(const InotifyWatcher&) = delete;
+
+  bool ok() const { return fd_ >= 0; }
+  int fd() const { return fd_; }
+
+  // Watches `root` and every folder below it. Returns the files found (for the initial scan);
+  // `error` tells of folders that could not be watched (e.g. max_user_watches reached).
+  std::vector<std::filesystem::path> watch_tree(const std::filesystem::path& root, std::string& error);
+
+  // Drops every watch (before a full rescan or a config reload).
+  void clear();
+
+  // Reads what the kernel has queued (non-blocking). New folders are watched as they appear and
+  // the files already in them reported as written.
+  std::vector<FileEvent> read_events(std::string& error);
+
+  std::size_t watch_count() const { return folders_.size(); }
+
+ private:
+  void add_folder(const std::filesystem::path& folder, std::vector<std::filesystem::path>& files,
+                  std::string& error);
+
+  int fd_ = -1;
+  std::map<int, std::filesystem::path> folders_;  // watch descriptor -> folder
+};
+
+}  // namespace rdtf::daemon

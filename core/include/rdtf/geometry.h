@@ -34,7 +34,8 @@ Eigen::Affine3d node_local_transform(const Json& node);
 // Parent of every node (-1 for none); assumes a validated document (a forest).
 std::vector<int> node_parents(const Json& document);
 
-// Transform from the scene frame to each node's frame, X_SN; identity for nodes in no scene.
+// Transform from the scene frame to each node's frame, X_SN: every root of the node forest (in a
+// scene or not) is placed in the scene frame.
 std::vector<Eigen::Affine3d> node_world_transforms(const Json& document);
 
 // The rigid part of an affine transform: its translation and the rotation nearest its linear

@@ -58,6 +58,10 @@ std::optional<Json> parse_json(std::string_view text, Diagnostics& diag) {
       return std::nullopt;
     }
     return document;
+  } catch (const Json::out_of_range& error) {
+    // E.g. a number beyond double's range ("1e309"): valid JSON syntax, not a usable value.
+    diag.error("INVALID_JSON", "", std::string("unusable JSON value: ") + error.what());
+    return std::nullopt;
   } catch (const Json::parse_error& error) {
     // Turn the byte offset into line:column, which is what an editor shows.
     std::size_t line = 1;
@@ -75,6 +79,9 @@ std::optional<Json> parse_json(std::string_view text, Diagnostics& diag) {
                "invalid JSON at line " + std::to_string(line) + ", column " +
                    std::to_string(column) + " (byte " + std::to_string(error.byte) +
                    "): " + error.what());
+    return std::nullopt;
+  } catch (const Json::exception& error) {
+    diag.error("INVALID_JSON", "", std::string("invalid JSON: ") + error.what());
     return std::nullopt;
   }
 }

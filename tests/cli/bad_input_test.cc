@@ -109,7 +109,7 @@ std::vector<BadCase> cases() {
                    testing::write_file(folder / "model.gltf", model);
                    return folder / "model.gltf";
                  },
-                 "/accessors/1"});
+                 "/meshes/0/primitives/0/indices"});
   return all;
 }
 

@@ -23,7 +23,8 @@ VolumeIntegrals integrate_solid(std::span<const TriangleMesh> pieces, const Eige
   // second moment D/120 ((a+b+c)(a+b+c)^T + aa^T + bb^T + cc^T).
   double six_volume = 0;
   Eigen::Vector3d first24 = Eigen::Vector3d::Zero();
-  Eigen::Matrix3d second120 = Eigen::Matrix3d::Zero();
+  // The six distinct entries of the symmetric second moment, times 120: xx yy zz xy yz zx.
+  double s_xx = 0, s_yy = 0, s_zz = 0, s_xy = 0, s_yz = 0, s_zx = 0;
   std::vector<Eigen::Vector3d> mapped;
   for (const TriangleMesh& piece : pieces) {
     mapped.resize(piece.positions.size());
@@ -36,10 +37,16 @@ VolumeIntegrals integrate_solid(std::span<const TriangleMesh> pieces, const Eige
       const Eigen::Vector3d s = a + b + c;
       six_volume += D;
       first24 += D * s;
-      second120.noalias() += D * (s * s.transpose() + a * a.transpose() + b * b.transpose() +
-                                  c * c.transpose());
+      s_xx += D * (s.x() * s.x() + a.x() * a.x() + b.x() * b.x() + c.x() * c.x());
+      s_yy += D * (s.y() * s.y() + a.y() * a.y() + b.y() * b.y() + c.y() * c.y());
+      s_zz += D * (s.z() * s.z() + a.z() * a.z() + b.z() * b.z() + c.z() * c.z());
+      s_xy += D * (s.x() * s.y() + a.x() * a.y() + b.x() * b.y() + c.x() * c.y());
+      s_yz += D * (s.y() * s.z() + a.y() * a.z() + b.y() * b.z() + c.y() * c.z());
+      s_zx += D * (s.z() * s.x() + a.z() * a.x() + b.z() * b.x() + c.z() * c.x());
     }
   }
+  Eigen::Matrix3d second120;
+  second120 << s_xx, s_xy, s_zx, s_xy, s_yy, s_yz, s_zx, s_yz, s_zz;
   // A mirroring map turns counter-clockwise triangles clockwise: undo the sign it introduced.
   const double orientation = X.linear().determinant() < 0 ? -1.0 : 1.0;
   const double volume = orientation * six_volume / 6.0;

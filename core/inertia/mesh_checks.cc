@@ -1,77 +1,121 @@
 #include "rdtf/mesh_checks.h"
 
-#include <algorithm>
+#include <bit>
 #include <cstdint>
-#include <unordered_map>
+#include <cstring>
 #include <vector>
 
 namespace rdtf {
 namespace {
 
-struct PositionHash {
-  std::size_t operator()(const Eigen::Vector3d& p) const {
-    const std::hash<double> h;
-    std::size_t seed = h(p.x());
-    seed ^= h(p.y()) + 0x9e3779b97f4a7c15ull + (seed << 6) + (seed >> 2);
-    seed ^= h(p.z()) + 0x9e3779b97f4a7c15ull + (seed << 6) + (seed >> 2);
-    return seed;
+std::uint64_t bits_of(double value) {
+  value += 0.0;  // -0.0 and +0.0 are one position.
+  std::uint64_t bits;
+  std::memcpy(&bits, &value, sizeof(bits));
+  return bits;
+}
+
+std::uint64_t mix(std::uint64_t x) {  // splitmix64's finaliser
+  x ^= x >> 30;
+  x *= 0xbf58476d1ce4e5b9ull;
+  x ^= x >> 27;
+  x *= 0x94d049bb133111ebull;
+  return x ^ (x >> 31);
+}
+
+// Welds vertices by exact position with an open-addressing table: one id per distinct position.
+class Welder {
+ public:
+  explicit Welder(std::size_t expected) {
+    std::size_t capacity = 16;
+    while (capacity < 2 * expected) capacity *= 2;
+    slots_.assign(capacity, kEmpty);
   }
+  std::uint32_t id(const Eigen::Vector3d& p) {
+    const std::uint64_t x = bits_of(p.x()), y = bits_of(p.y()), z = bits_of(p.z());
+    std::size_t slot = mix(x ^ mix(y ^ mix(z))) & (slots_.size() - 1);
+    for (;;) {
+      const std::uint32_t found = slots_[slot];
+      if (found == kEmpty) {
+        slots_[slot] = static_cast<std::uint32_t>(positions_.size());
+        positions_.push_back({x, y, z});
+        return slots_[slot];
+      }
+      const auto& q = positions_[found];
+      if (q[0] == x && q[1] == y && q[2] == z) return found;
+      slot = (slot + 1) & (slots_.size() - 1);
+    }
+  }
+
+ private:
+  static constexpr std::uint32_t kEmpty = 0xffffffffu;
+  std::vector<std::uint32_t> slots_;
+  std::vector<std::array<std::uint64_t, 3>> positions_;
 };
 
-struct PositionEqual {
-  bool operator()(const Eigen::Vector3d& a, const Eigen::Vector3d& b) const { return a == b; }
-};
+// LSD radix sort of 64-bit keys, 16 bits a pass: much faster than comparison sorting for the
+// millions of edges of a large mesh.
+void radix_sort(std::vector<std::uint64_t>& keys) {
+  std::vector<std::uint64_t> scratch(keys.size());
+  std::vector<std::size_t> counts(1 << 16);
+  for (int shift = 0; shift < 64; shift += 16) {
+    std::fill(counts.begin(), counts.end(), 0);
+    for (std::uint64_t k : keys) ++counts[(k >> shift) & 0xffff];
+    std::size_t total = 0;
+    for (auto& c : counts) {
+      const std::size_t n = c;
+      c = total;
+      total += n;
+    }
+    for (std::uint64_t k : keys) scratch[counts[(k >> shift) & 0xffff]++] = k;
+    keys.swap(scratch);
+  }
+}
 
 }  // namespace
 
 SurfaceTopology analyze_surface(std::span<const TriangleMesh> pieces) {
   SurfaceTopology topology;
-  std::unordered_map<Eigen::Vector3d, std::uint32_t, PositionHash, PositionEqual> ids;
-  // Directed edges as (from << 32 | to) over welded vertex ids.
+  std::size_t vertices = 0;
+  std::size_t triangles = 0;
+  for (const TriangleMesh& piece : pieces) {
+    vertices += piece.positions.size();
+    triangles += piece.triangles.size();
+  }
+  Welder welder(vertices);
+  // Each directed edge as one key: (low id << 33) | (high id << 1) | (goes high -> low). Sorting
+  // brings the uses of one undirected edge together, with their directions. Ids fit 31 bits: the
+  // accessor limits keep vertex counts far below 2^31.
   std::vector<std::uint64_t> edges;
+  edges.reserve(3 * triangles);
   for (const TriangleMesh& piece : pieces) {
     std::vector<std::uint32_t> welded(piece.positions.size());
-    for (std::size_t i = 0; i < piece.positions.size(); ++i) {
-      welded[i] = ids.try_emplace(piece.positions[i], static_cast<std::uint32_t>(ids.size()))
-                      .first->second;
-    }
+    for (std::size_t i = 0; i < piece.positions.size(); ++i) welded[i] = welder.id(piece.positions[i]);
     for (const auto& t : piece.triangles) {
       ++topology.triangles;
-      const std::uint32_t v[3] = {welded[t[0]], welded[t[1]], welded[t[2]]};
+      const std::uint64_t v[3] = {welded[t[0]], welded[t[1]], welded[t[2]]};
       if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2]) {
         ++topology.degenerate_triangles;
         continue;
       }
       for (int k = 0; k < 3; ++k) {
-        edges.push_back(static_cast<std::uint64_t>(v[k]) << 32 | v[(k + 1) % 3]);
+        const std::uint64_t from = v[k];
+        const std::uint64_t to = v[(k + 1) % 3];
+        edges.push_back(from < to ? (from << 33 | to << 1) : (to << 33 | from << 1 | 1));
       }
     }
   }
-  std::sort(edges.begin(), edges.end());
-  // Count each undirected edge's uses in both directions.
-  std::vector<std::uint64_t> undirected;
-  undirected.reserve(edges.size());
-  for (std::uint64_t e : edges) {
-    const std::uint64_t from = e >> 32;
-    const std::uint64_t to = e & 0xffffffffu;
-    undirected.push_back(std::min(from, to) << 32 | std::max(from, to));
-  }
-  std::sort(undirected.begin(), undirected.end());
-  for (std::size_t i = 0; i < undirected.size();) {
+  radix_sort(edges);
+  for (std::size_t i = 0; i < edges.size();) {
     std::size_t j = i;
-    while (j < undirected.size() && undirected[j] == undirected[i]) ++j;
+    std::size_t backward = 0;
+    while (j < edges.size() && (edges[j] >> 1) == (edges[i] >> 1)) backward += edges[j++] & 1;
     const std::size_t uses = j - i;
-    const std::uint64_t low = undirected[i] >> 32;
-    const std::uint64_t high = undirected[i] & 0xffffffffu;
-    const auto forward = static_cast<std::size_t>(
-        std::upper_bound(edges.begin(), edges.end(), low << 32 | high) -
-        std::lower_bound(edges.begin(), edges.end(), low << 32 | high));
-    const std::size_t backward = uses - forward;
     if (uses == 1) {
       ++topology.boundary_edges;
     } else if (uses > 2) {
       ++topology.nonmanifold_edges;
-    } else if (forward != 1 || backward != 1) {
+    } else if (backward != 1) {
       ++topology.misoriented_edges;
     }
     i = j;

@@ -1,7 +1,9 @@
 #include "config.h"
 
 #include <cstdlib>
+#include <algorithm>
 #include <fstream>
+#include <type_traits>
 
 #include <nlohmann/json.hpp>
 
@@ -14,16 +16,40 @@ std::filesystem::path xdg_folder(const char* variable, const char* fallback) {
   return std::filesystem::path(home != nullptr ? home : "/tmp") / fallback;
 }
 
+// JSON's own type must match the setting's: a boolean is no number, -1 is no count.
+template <typename T>
+bool json_type_matches(const nlohmann::json& value) {
+  if constexpr (std::is_same_v<T, bool>) {
+    return value.is_boolean();
+  } else if constexpr (std::is_integral_v<T> && std::is_unsigned_v<T>) {
+    return value.is_number_unsigned();
+  } else if constexpr (std::is_integral_v<T>) {
+    return value.is_number_integer();
+  } else if constexpr (std::is_floating_point_v<T>) {
+    return value.is_number();
+  } else if constexpr (std::is_same_v<T, std::string>) {
+    return value.is_string();
+  } else {
+    return true;  // Containers: checked element by element by get<T>() below.
+  }
+}
+
 template <typename T>
 bool read_key(const nlohmann::json& json, const char* key, T& out, std::string& error) {
   if (!json.contains(key)) return true;
-  try {
-    out = json[key].get<T>();
-    return true;
-  } catch (const nlohmann::json::exception&) {
-    error = std::string("\"") + key + "\" has the wrong type";
+  const nlohmann::json& value = json[key];
+  bool ok = json_type_matches<T>(value);
+  if constexpr (std::is_same_v<T, std::vector<std::string>>) {
+    ok = value.is_array() && std::all_of(value.begin(), value.end(), [](const auto& v) { return v.is_string(); });
+  } else if constexpr (std::is_same_v<T, std::vector<double>>) {
+    ok = value.is_array() && std::all_of(value.begin(), value.end(), [](const auto& v) { return v.is_number(); });
+  }
+  if (!ok) {
+    error = std::string("\"") + key + "\" has the wrong type (" + value.type_name() + ")";
     return false;
   }
+  out = value.get<T>();
+  return true;
 }
 
 bool read_ms(const nlohmann::json& json, const char* key, std::chrono::milliseconds& out,
@@ -69,7 +95,9 @@ std::optional<DaemonConfig> load_config(const std::filesystem::path& path, Daemo
       "watch", "output", "lcm_url", "channel_prefix", "settle_ms", "max_open_wait_ms",
       "republish_period_ms", "status_period_ms", "workers", "max_chunk_bytes",
       "chunk_rate_bytes_per_s", "default_density", "max_file_bytes", "max_buffer_bytes",
-      "max_accessor_count", "max_triangles", "_comment"};
+      "max_accessor_count", "max_triangles", "validate", "validation_seconds", "publish_failed",
+      "simulate", "state_rate_hz", "real_time_factor", "floating_root", "gravity", "urdf",
+      "urdf_y_up", "_comment"};
   for (const auto& [key, value] : json.items()) {
     if (std::find(std::begin(kKeys), std::end(kKeys), key) == std::end(kKeys)) {
       error = path.string() + ": unknown key \"" + key + "\"";
@@ -94,7 +122,25 @@ std::optional<DaemonConfig> load_config(const std::filesystem::path& path, Daemo
             read_key(json, "max_file_bytes", config.convert.limits.max_file_bytes, error) &&
             read_key(json, "max_buffer_bytes", config.convert.limits.max_buffer_bytes, error) &&
             read_key(json, "max_accessor_count", config.convert.limits.max_accessor_count, error) &&
-            read_key(json, "max_triangles", config.convert.limits.max_triangles, error);
+            read_key(json, "max_triangles", config.convert.limits.max_triangles, error) &&
+            read_key(json, "validate", config.validate, error) &&
+            read_key(json, "validation_seconds", config.validation_seconds, error) &&
+            read_key(json, "publish_failed", config.publish_failed, error) &&
+            read_key(json, "simulate", config.simulate, error) &&
+            read_key(json, "state_rate_hz", config.state_rate_hz, error) &&
+            read_key(json, "real_time_factor", config.real_time_factor, error) &&
+            read_key(json, "floating_root", config.floating_root, error) &&
+            read_key(json, "urdf", config.urdf, error) &&
+            read_key(json, "urdf_y_up", config.urdf_y_up, error);
+  if (ok && json.contains("gravity")) {
+    std::vector<double> gravity;
+    ok = read_key(json, "gravity", gravity, error);
+    if (ok && gravity.size() != 3) {
+      error = "\"gravity\" must be three numbers (m/s^2, scene frame)";
+      ok = false;
+    }
+    if (ok) config.gravity = Eigen::Vector3d(gravity[0], gravity[1], gravity[2]);
+  }
   if (!ok) {
     error = path.string() + ": " + error;
     return std::nullopt;
@@ -127,6 +173,19 @@ bool check_config(DaemonConfig& config, std::string& error) {
     return false;
   }
   config.output = std::filesystem::canonical(config.output);
+  if (!(config.validation_seconds > 0) || !(config.state_rate_hz > 0) || !(config.real_time_factor > 0)) {
+    error = "validation_seconds, state_rate_hz and real_time_factor must be > 0";
+    return false;
+  }
+  for (const auto& folder : config.watch) {
+    // An output folder that contains a watched folder would hide every save in it.
+    const auto relative = folder.lexically_relative(config.output);
+    if (!relative.empty() && *relative.begin() != "..") {
+      error = "output folder " + config.output.string() + " contains the watched folder " +
+              folder.string() + ": choose an output folder outside it (or inside the watched one)";
+      return false;
+    }
+  }
   if (config.settle.count() <= 0 || config.workers < 1 || config.max_chunk_bytes < 1024 ||
       config.max_chunk_bytes > 65000 || config.chunk_rate_bytes_per_s <= 0 ||
       config.status_period.count() <= 0) {

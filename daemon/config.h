@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include <Eigen/Core>
+
 #include "rdtf/convert.h"
 
 namespace rdtf::daemon {
@@ -25,6 +27,20 @@ struct DaemonConfig {
   std::size_t max_chunk_bytes = 60000;       // Largest LCM payload per description chunk.
   double chunk_rate_bytes_per_s = 32e6;      // Pacing of chunks, so receivers keep up.
   ConvertOptions convert;
+
+  // Dynamics (docs/dynamics.md): every revision is validated in ODE before it is published.
+  bool validate = true;
+  double validation_seconds = 3.0;        // Simulated time of the validation run.
+  bool publish_failed = false;            // Publish a revision that fails validation (marked failed).
+  bool simulate = true;                   // Run every live model and publish its joint states.
+  double state_rate_hz = 100;             // Joint-state messages per second and model.
+  double real_time_factor = 1.0;
+  bool floating_root = false;             // Default: root links are fixed to the world.
+  Eigen::Vector3d gravity{0, -9.80665, 0};  // Scene frame; glTF is Y up. Z-up content: {0, 0, -9.80665}.
+
+  // URDF beside each RDTF output (docs/urdf.md), and its text in the description.
+  bool urdf = true;
+  bool urdf_y_up = false;                 // Keep glTF's Y up instead of ROS's Z up.
 };
 
 // Built-in defaults: watch $XDG_DATA_HOME/rdtf/models (~/.local/share/rdtf/models), write to

@@ -51,8 +51,10 @@ std::string sha256_hex(const std::vector<const std::vector<std::uint8_t>*>& part
 }
 
 std::string sha256_hex(std::string_view text) {
-  const std::vector<std::uint8_t> bytes(text.begin(), text.end());
-  return sha256_hex({&bytes});
+  unsigned char digest[EVP_MAX_MD_SIZE];
+  unsigned int length = 0;
+  EVP_Digest(text.data(), text.size(), digest, &length, EVP_sha256(), nullptr);
+  return to_hex(digest, length);
 }
 
 ConversionOutcome run_conversion(const ConversionJob& job) {
@@ -114,6 +116,31 @@ ConversionOutcome run_conversion(const ConversionJob& job) {
     return finish();
   }
   outcome.diagnostics.append(write_diag);
+  if (job.urdf) {
+    // URDF is a second output: a model URDF cannot express (a ball joint) still converts.
+    Diagnostics urdf_diag(converted.output_path.string());
+    const auto urdf_dir = job.output_dir / "urdf";
+    if (write_urdf(*conversion, urdf_dir, *job.urdf, urdf_diag, &converted.urdf)) {
+      converted.urdf_path = urdf_dir / "robot.urdf";
+    } else {
+      for (const Diagnostic& d : urdf_diag.all()) {
+        outcome.diagnostics.warning("URDF_NOT_WRITTEN", d.pointer, d.message);
+      }
+    }
+  }
+  if (job.validation) {
+    ValidationReport report = validate_dynamics(*conversion, *job.validation, job.source.string());
+    ValidationSummary summary;
+    summary.passed = report.passed;
+    summary.simulated_time = report.simulated_time;
+    summary.steps = report.steps;
+    summary.energy_drift = report.energy_drift;
+    summary.worst_joint_error = report.worst_joint_error;
+    summary.wall_time = report.wall_time;
+    summary.summary_line = validation_summary_line(report);
+    summary.diagnostics = std::move(report.diagnostics);
+    converted.validation = std::move(summary);
+  }
   converted.totals = robot_totals(conversion->robot);
   converted.robot = std::move(conversion->robot);
   outcome.converted = std::move(converted);

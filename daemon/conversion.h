@@ -10,6 +10,8 @@
 
 #include "rdtf/convert.h"
 #include "rdtf/diagnostics.h"
+#include "rdtf/dynamics.h"
+#include "rdtf/urdf.h"
 #include "rdtf/robot.h"
 #include "rdtf/summary.h"
 
@@ -21,6 +23,20 @@ struct ConversionJob {
   std::filesystem::path output_dir;  // This model's own output folder.
   ConvertOptions options;
   std::string previous_hash;         // Content last converted (good or bad): skip when equal.
+  std::optional<ValidationOptions> validation;  // Run the dynamics check when given.
+  std::optional<UrdfOptions> urdf;              // Write <output_dir>/urdf/robot.urdf when given.
+};
+
+// The dynamics check of a revision, without the ODE world.
+struct ValidationSummary {
+  bool passed = false;
+  double simulated_time = 0;
+  std::uint64_t steps = 0;
+  double energy_drift = 0;
+  double worst_joint_error = 0;
+  double wall_time = 0;
+  Diagnostics diagnostics;
+  std::string summary_line;
 };
 
 // What a good conversion leaves behind: all a publisher needs, no reference to the document.
@@ -30,6 +46,9 @@ struct ConvertedModel {
   std::string rdtf_json;
   Robot robot;
   RobotTotals totals;
+  std::optional<ValidationSummary> validation;
+  std::filesystem::path urdf_path;  // Empty when no URDF was written.
+  std::string urdf;
 };
 
 struct ConversionOutcome {
@@ -46,8 +65,10 @@ struct ConversionOutcome {
 
 ConversionOutcome run_conversion(const ConversionJob& job);
 
-// Hex SHA-256 of the concatenation of the given byte strings.
+// Content hash of several files: hex SHA-256 over each part's length (8 bytes, little endian)
+// followed by its bytes, so that moving bytes from one file to the next changes it.
 std::string sha256_hex(const std::vector<const std::vector<std::uint8_t>*>& parts);
+// Plain hex SHA-256 of a text (e.g. rdtf_json_sha256, checkable with sha256sum).
 std::string sha256_hex(std::string_view text);
 
 }  // namespace rdtf::daemon

@@ -72,6 +72,7 @@ bool Daemon::connect_lcm(std::string& error) {
     return false;
   }
   lcm->subscribe(config_.channel_prefix + "/REQUEST", &Daemon::on_request, this);
+  lcm->subscribe(config_.channel_prefix + "/.*/JOINT_COMMAND", &Daemon::on_command, this);
   publisher_ = std::make_unique<Publisher>(*lcm, config_.chunk_rate_bytes_per_s, 128 * 1024);
   lcm_ = std::move(lcm);
   return true;
@@ -95,6 +96,7 @@ bool Daemon::start(std::string& error) {
     return false;
   }
   for (int i = 0; i < config_.workers; ++i) workers_.emplace_back([this] { worker_loop(); });
+  start_simulation_host();
   rescan("start");
   next_republish_ = Clock::now() + config_.republish_period;
   next_status_ = Clock::now();
@@ -132,15 +134,67 @@ void Daemon::note_change(const std::filesystem::path& path, bool still_open, boo
     }
   };
   if (is_model_file(path)) {
-    const std::size_t max_id = kMaxChannelLength - config_.channel_prefix.size() - 1 - kLongestKind;
-    registry_.ensure(path, model_id_for(path, config_.watch, max_id));
+    if (registry_.find(path) == nullptr) registry_.ensure(path, unique_model_id(path));
     touch(path);
+    return;
   }
-  for (const auto& model : registry_.dependents(path)) touch(model);
+  const auto dependents = registry_.dependents(path);
+  for (const auto& model : dependents) touch(model);
+  if (!dependents.empty()) return;
+  // A file no known model refers to yet: it may be the .bin of a model never converted (Blender
+  // writes the .gltf first). Such models in the same folder wait for it too.
+  for (const auto& [source, record] : registry_.all()) {
+    if (record.revisions == 0 && record.dependencies.empty() && source.parent_path() == path.parent_path()) {
+      touch(source);
+    }
+  }
+}
+
+std::string Daemon::unique_model_id(const std::filesystem::path& source) const {
+  const std::size_t max_id = kMaxChannelLength - config_.channel_prefix.size() - 1 - kLongestKind;
+  // Three characters kept free for a "_N" that tells apart ids that sanitise alike.
+  const std::string base = model_id_for(source, config_.watch, max_id - 3);
+  std::string id = base;
+  // Two names that sanitise alike ("a b.gltf", "a_b.gltf") must not share channels.
+  for (int n = 2; registry_.find_id(id) != nullptr; ++n) {
+    id = base + "_" + std::to_string(n);
+  }
+  return id;
+}
+
+bool Daemon::waiting_for_writer(const ModelRecord& record, Clock::time_point now) const {
+  for (const auto& [file, since] : open_for_writing_) {
+    if (now - since > config_.max_open_wait) continue;  // A writer that never closes: go anyway.
+    const bool referenced = std::find(record.dependencies.begin(), record.dependencies.end(), file) !=
+                            record.dependencies.end();
+    const bool maybe_referenced = record.dependencies.empty() && file.parent_path() == record.source.parent_path();
+    if (file == record.source || referenced || maybe_referenced) return true;
+  }
+  return false;
+}
+
+void Daemon::drop_model(const std::filesystem::path& source) {
+  ModelRecord* record = registry_.find(source);
+  if (record == nullptr) return;
+  log_line("removed " + record->id);
+  if (record->live) publisher_->publish(channel(record->id, "REMOVED"), make_model_removed(*record));
+  if (simulation_) simulation_->remove(record->id);
+  settle_.forget(source.string());
+  registry_.erase(source);
 }
 
 void Daemon::rescan(const char* why) {
   ++counters_.rescans;
+  // Models outside every watched folder (after a reload changed them) are gone from our view.
+  std::vector<std::filesystem::path> outside;
+  for (const auto& [source, record] : registry_.all()) {
+    const bool watched = std::any_of(config_.watch.begin(), config_.watch.end(), [&](const auto& root) {
+      const auto relative = source.lexically_relative(root);
+      return !relative.empty() && *relative.begin() != "..";
+    });
+    if (!watched) outside.push_back(source);
+  }
+  for (const auto& source : outside) drop_model(source);
   watcher_.clear();
   std::vector<std::filesystem::path> files;
   for (const auto& root : config_.watch) {
@@ -166,12 +220,12 @@ void Daemon::handle_file_events() {
         rescan("inotify queue overflow or a watched folder moved");
         return;
       case FileEvent::Kind::kModified:
+        if (!ignored(event.path)) open_for_writing_.try_emplace(event.path, Clock::now());
         note_change(event.path, true, false);
         break;
       case FileEvent::Kind::kWritten:
-        note_change(event.path, false, true);
-        break;
       case FileEvent::Kind::kRemoved:
+        open_for_writing_.erase(event.path);
         note_change(event.path, false, true);
         break;
     }
@@ -179,9 +233,14 @@ void Daemon::handle_file_events() {
 }
 
 void Daemon::dispatch_due() {
-  for (const std::string& source : settle_.take_due(Clock::now())) {
+  const auto now = Clock::now();
+  for (const std::string& source : settle_.take_due(now)) {
     ModelRecord* record = registry_.find(source);
     if (record == nullptr) continue;
+    if (waiting_for_writer(*record, now)) {
+      settle_.touch(source, now);  // Look again a settle period later.
+      continue;
+    }
     if (record->in_flight) {
       record->again = true;
       continue;
@@ -193,6 +252,18 @@ void Daemon::dispatch_due() {
     job.output_dir = config_.output / record->id;
     job.options = config_.convert;
     job.previous_hash = record->last_hash;
+    if (config_.validate) {
+      ValidationOptions validation;
+      validation.duration = config_.validation_seconds;
+      validation.simulation.gravity = config_.gravity;
+      validation.simulation.floating_root = config_.floating_root;
+      job.validation = validation;
+    }
+    if (config_.urdf) {
+      UrdfOptions urdf;
+      urdf.y_up = config_.urdf_y_up;
+      job.urdf = urdf;
+    }
     {
       std::lock_guard lock(mutex_);
       jobs_.push_back(std::move(job));
@@ -249,6 +320,25 @@ void Daemon::apply(ConversionOutcome outcome) {
   const std::string id = record->id;
   switch (outcome.kind) {
     case ConversionOutcome::Kind::kConverted: {
+      const ConvertedModel& candidate = *outcome.converted;
+      const bool failed = candidate.validation && !candidate.validation->passed;
+      if (candidate.validation) {
+        // The report comes first: a description is only ever published with its verdict.
+        publisher_->publish(channel(id, "VALIDATION"),
+                            make_validation_report(id, record->revisions + 1, outcome.content_hash,
+                                                   *candidate.validation));
+      }
+      if (failed && !config_.publish_failed) {
+        ++counters_.rejections;
+        record->last_hash = outcome.content_hash;
+        record->dependencies = outcome.dependencies;
+        log_line("rejected " + id + " (dynamics) in " + milliseconds(outcome.duration) + ": " +
+                 candidate.validation->summary_line +
+                 (record->live ? "; still serving revision " + std::to_string(record->revisions) : ""));
+        publisher_->publish(channel(id, "ERROR"),
+                            make_model_error(*record, outcome.content_hash, candidate.validation->diagnostics));
+        break;
+      }
       ++counters_.conversions;
       ++record->revisions;
       record->last_hash = outcome.content_hash;
@@ -256,9 +346,13 @@ void Daemon::apply(ConversionOutcome outcome) {
       record->live = std::move(outcome.converted);
       log_line("converted " + id + " revision " + std::to_string(record->revisions) + " (" +
                std::to_string(record->live->robot.links.size()) + " links, " +
-               std::to_string(record->live->robot.joints.size()) + " joints) in " +
-               milliseconds(outcome.duration));
+               std::to_string(record->live->robot.joints.size()) + " joints" +
+               (record->live->validation ? std::string(", dynamics ") + (failed ? "FAILED" : "passed") : "") +
+               ") in " + milliseconds(outcome.duration));
       publish_model(*record);
+      if (simulation_ && !failed) {
+        simulation_->load(id, record->revisions, record->live->content_hash, record->live->robot);
+      }
       break;
     }
     case ConversionOutcome::Kind::kUnchanged:
@@ -276,10 +370,7 @@ void Daemon::apply(ConversionOutcome outcome) {
                           make_model_error(*record, outcome.content_hash, outcome.diagnostics));
       break;
     case ConversionOutcome::Kind::kVanished:
-      log_line("removed " + id);
-      if (record->live) publisher_->publish(channel(id, "REMOVED"), make_model_removed(*record));
-      settle_.forget(outcome.source.string());
-      registry_.erase(outcome.source);
+      drop_model(outcome.source);
       return;
   }
   if (record->again) {
@@ -335,6 +426,28 @@ void Daemon::on_request(const lcm::ReceiveBuffer*, const std::string&, const rdt
   }
 }
 
+void Daemon::on_command(const lcm::ReceiveBuffer*, const std::string&,
+                        const rdtf::joint_command_t* command) {
+  if (simulation_) simulation_->command(*command);
+}
+
+void Daemon::start_simulation_host() {
+  simulation_.reset();
+  if (!config_.simulate) return;
+  SimulationHostOptions options;
+  options.lcm_url = config_.lcm_url;
+  options.channel_prefix = config_.channel_prefix;
+  options.simulation.gravity = config_.gravity;
+  options.simulation.floating_root = config_.floating_root;
+  options.state_rate_hz = config_.state_rate_hz;
+  options.real_time_factor = config_.real_time_factor;
+  simulation_ = std::make_unique<SimulationHost>(options);
+  for (const auto& [source, record] : registry_.all()) {
+    const bool usable = record.live && !(record.live->validation && !record.live->validation->passed);
+    if (usable) simulation_->load(record.id, record.revisions, record.live->content_hash, record.live->robot);
+  }
+}
+
 void Daemon::reload_config() {
   std::string error;
   auto fresh = reload_ ? reload_(error) : std::nullopt;
@@ -350,6 +463,7 @@ void Daemon::reload_config() {
   settle_.set_settle(config_.settle);
   if (lcm_changed && !connect_lcm(error)) log_line("SIGHUP: " + error);
   publisher_->set_rate(config_.chunk_rate_bytes_per_s);
+  start_simulation_host();
   // New settings (density, limits) apply to every model: convert them all again.
   for (auto& [source, record] : registry_.all()) record.last_hash.clear();
   rescan(folders_changed ? "config reloaded, folders changed" : "config reloaded");

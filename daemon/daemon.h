@@ -13,12 +13,14 @@
 
 #include <lcm/lcm-cpp.hpp>
 
+#include <rdtf/joint_command_t.hpp>
 #include <rdtf/request_t.hpp>
 
 #include "config.h"
 #include "publisher.h"
 #include "registry.h"
 #include "settle.h"
+#include "simulation_host.h"
 #include "watcher.h"
 
 namespace rdtf::daemon {
@@ -52,6 +54,7 @@ class Daemon {
   void handle_file_events();
   void handle_signals();
   void rescan(const char* why);
+  void drop_model(const std::filesystem::path& source);  // Announces REMOVED and forgets it.
   void note_change(const std::filesystem::path& path, bool still_open, bool closed);
   void dispatch_due();
   void handle_outcomes();
@@ -60,7 +63,11 @@ class Daemon {
   void publish_all();
   void publish_status();
   void on_request(const lcm::ReceiveBuffer*, const std::string&, const rdtf::request_t* request);
+  void on_command(const lcm::ReceiveBuffer*, const std::string&, const rdtf::joint_command_t* command);
+  void start_simulation_host();
   bool ignored(const std::filesystem::path& path) const;
+  bool waiting_for_writer(const ModelRecord& record, Clock::time_point now) const;
+  std::string unique_model_id(const std::filesystem::path& source) const;
   std::string channel(const std::string& model_id, const char* kind) const;
   bool connect_lcm(std::string& error);
   void worker_loop();
@@ -73,7 +80,10 @@ class Daemon {
   Registry registry_;
   std::unique_ptr<lcm::LCM> lcm_;
   std::unique_ptr<Publisher> publisher_;
+  std::unique_ptr<SimulationHost> simulation_;  // Null when `simulate` is off.
   Counters counters_;
+  // Files modified and not yet closed by their writer, since when.
+  std::map<std::filesystem::path, Clock::time_point> open_for_writing_;
   int signal_fd_ = -1;
   int wake_fd_ = -1;  // eventfd: a worker finished.
   std::atomic<bool> stop_{false};

@@ -18,6 +18,13 @@ struct Overrides {
   std::optional<double> republish_ms;
   std::optional<int> workers;
   std::optional<double> density;
+  std::optional<double> state_rate_hz;
+  std::vector<double> gravity;
+  bool no_validate = false;
+  bool no_simulate = false;
+  bool no_urdf = false;
+  bool publish_failed = false;
+  bool floating_root = false;
 };
 
 std::optional<rdtf::daemon::DaemonConfig> load(const std::string& config_file,
@@ -43,6 +50,15 @@ std::optional<rdtf::daemon::DaemonConfig> load(const std::string& config_file,
   }
   if (overrides.workers) config.workers = *overrides.workers;
   if (overrides.density) config.convert.default_density = *overrides.density;
+  if (overrides.state_rate_hz) config.state_rate_hz = *overrides.state_rate_hz;
+  if (overrides.gravity.size() == 3) {
+    config.gravity = Eigen::Vector3d(overrides.gravity[0], overrides.gravity[1], overrides.gravity[2]);
+  }
+  if (overrides.no_validate) config.validate = false;
+  if (overrides.no_simulate) config.simulate = false;
+  if (overrides.no_urdf) config.urdf = false;
+  if (overrides.publish_failed) config.publish_failed = true;
+  if (overrides.floating_root) config.floating_root = true;
   if (!rdtf::daemon::check_config(config, error)) return std::nullopt;
   return config;
 }
@@ -69,6 +85,16 @@ int main(int argc, char** argv) {
   app.add_option("--workers", overrides.workers, "Conversion threads (default 2)")->check(CLI::PositiveNumber);
   app.add_option("--density", overrides.density, "Default density, kg/m^3 (default 1000)")
       ->check(CLI::PositiveNumber);
+  app.add_option("--state-rate-hz", overrides.state_rate_hz, "Joint-state messages per second and model (default 100)")
+      ->check(CLI::PositiveNumber);
+  app.add_option("--gravity", overrides.gravity, "Gravity in the scene frame, m/s^2 (default 0 -9.80665 0: glTF is Y up)")
+      ->expected(3);
+  app.add_flag("--no-validate", overrides.no_validate, "Publish without the ODE dynamics check");
+  app.add_flag("--no-simulate", overrides.no_simulate, "Run no live simulation (no joint states)");
+  app.add_flag("--no-urdf", overrides.no_urdf, "Write no URDF beside the RDTF outputs");
+  app.add_flag("--publish-failed", overrides.publish_failed,
+               "Publish revisions that fail the dynamics check (marked failed) instead of keeping the last good one");
+  app.add_flag("--floating-root", overrides.floating_root, "Root links float instead of being fixed to the world");
   CLI11_PARSE(app, argc, argv);
 
   std::string error;

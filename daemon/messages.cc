@@ -37,14 +37,14 @@ rdtf::description_t make_description(const ModelRecord& record, std::size_t max_
   message.revision = record.revisions;
   message.content_hash = model.content_hash;
   message.output_path = model.output_path.string();
-  message.urdf_path = "";
+  message.urdf_path = model.urdf_path.string();
   message.num_links = static_cast<std::int32_t>(model.robot.links.size());
   message.num_joints = static_cast<std::int32_t>(model.robot.joints.size());
-  message.validated = false;
-  message.validation_passed = false;
+  message.validated = model.validation.has_value();
+  message.validation_passed = model.validation && model.validation->passed;
   message.rdtf_json_size = static_cast<std::int64_t>(model.rdtf_json.size());
   message.rdtf_json_sha256 = sha256_hex(model.rdtf_json);
-  message.urdf = "";
+  message.urdf = model.urdf;
   chunks.clear();
   if (model.rdtf_json.size() <= max_inline_bytes) {
     message.rdtf_json = model.rdtf_json;
@@ -121,6 +121,29 @@ rdtf::model_removed_t make_model_removed(const ModelRecord& record) {
   message.model_id = record.id;
   message.source_path = record.source.string();
   message.last_revision = record.revisions;
+  return message;
+}
+
+}  // namespace rdtf::daemon
+
+namespace rdtf::daemon {
+
+rdtf::validation_report_t make_validation_report(const std::string& model_id, std::int64_t revision,
+                                                 const std::string& content_hash,
+                                                 const ValidationSummary& summary) {
+  rdtf::validation_report_t message;
+  message.utime = now_utime();
+  message.model_id = model_id;
+  message.revision = revision;
+  message.content_hash = content_hash;
+  message.passed = summary.passed;
+  message.simulated_time = summary.simulated_time;
+  message.steps = static_cast<std::int32_t>(summary.steps);
+  message.energy_drift = summary.energy_drift;
+  message.worst_joint_error = summary.worst_joint_error;
+  message.wall_time = summary.wall_time;
+  message.diagnostics = to_messages(summary.diagnostics);
+  message.num_diagnostics = static_cast<std::int32_t>(message.diagnostics.size());
   return message;
 }
 

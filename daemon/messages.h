@@ -12,6 +12,7 @@
 #include <rdtf/model_error_t.hpp>
 #include <rdtf/model_removed_t.hpp>
 #include <rdtf/status_t.hpp>
+#include <rdtf/validation_report_t.hpp>
 
 #include "registry.h"
 
@@ -30,6 +31,10 @@ rdtf::model_error_t make_model_error(const ModelRecord& record, const std::strin
                                      const Diagnostics& diagnostics);
 
 rdtf::model_removed_t make_model_removed(const ModelRecord& record);
+
+rdtf::validation_report_t make_validation_report(const std::string& model_id, std::int64_t revision,
+                                                 const std::string& content_hash,
+                                                 const ValidationSummary& summary);
 
 std::vector<rdtf::diagnostic_t> to_messages(const Diagnostics& diagnostics);
 

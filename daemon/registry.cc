@@ -14,13 +14,22 @@ bool is_model_file(const std::filesystem::path& path) {
 std::string model_id_for(const std::filesystem::path& source,
                          const std::vector<std::filesystem::path>& roots, std::size_t max_length) {
   std::string id = source.filename().string();
-  for (const auto& root : roots) {
-    const auto relative = source.lexically_relative(root);
-    if (!relative.empty() && *relative.begin() != "..") {
-      id = relative.generic_string();
-      if (roots.size() > 1) id = root.filename().string() + "/" + id;
-      break;
+  for (std::size_t r = 0; r < roots.size(); ++r) {
+    const auto relative = source.lexically_relative(roots[r]);
+    if (relative.empty() || *relative.begin() == "..") continue;
+    id = relative.generic_string();
+    if (roots.size() > 1) {
+      // The watched folder's name, made unique by its position when two share a name.
+      std::string prefix = roots[r].filename().string();
+      for (std::size_t other = 0; other < roots.size(); ++other) {
+        if (other != r && roots[other].filename() == roots[r].filename()) {
+          prefix += "_" + std::to_string(r + 1);
+          break;
+        }
+      }
+      id = prefix + "/" + id;
     }
+    break;
   }
   for (char& c : id) {
     const bool allowed = std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '_' ||
@@ -32,7 +41,7 @@ std::string model_id_for(const std::filesystem::path& source,
     const std::size_t hash = std::hash<std::string>{}(id);
     char suffix[10];
     std::snprintf(suffix, sizeof(suffix), "%08zx", hash & 0xffffffffu);
-    id = std::string(suffix) + "~" + id.substr(id.size() - (max_length - 9));
+    id = std::string(suffix) + "-" + id.substr(id.size() - (max_length - 9));
   }
   return id;
 }
@@ -53,6 +62,13 @@ ModelRecord* Registry::find(const std::filesystem::path& source) {
 
 ModelRecord* Registry::find_id(const std::string& id) {
   for (auto& [source, record] : models_) {
+    if (record.id == id) return &record;
+  }
+  return nullptr;
+}
+
+const ModelRecord* Registry::find_id(const std::string& id) const {
+  for (const auto& [source, record] : models_) {
     if (record.id == id) return &record;
   }
   return nullptr;

@@ -25,7 +25,8 @@ struct ModelRecord {
 };
 
 // Model ids: the model's path below its watched folder ("arm3.gltf", "sub/robot.glb"), prefixed
-// by that folder's name when several folders are watched, with characters outside
+// by that folder's name when several folders are watched ("<name>_<position>" when two share a
+// name), with characters outside
 // [A-Za-z0-9._/-] replaced by '_'; shortened (keeping the end and a hash) to fit LCM's channel
 // names. A regex on the id selects one model's channels.
 std::string model_id_for(const std::filesystem::path& source,
@@ -36,6 +37,7 @@ class Registry {
   ModelRecord& ensure(const std::filesystem::path& source, const std::string& id);
   ModelRecord* find(const std::filesystem::path& source);
   ModelRecord* find_id(const std::string& id);
+  const ModelRecord* find_id(const std::string& id) const;
   void erase(const std::filesystem::path& source);
   // Models that refer to `file` (a .bin or image).
   std::vector<std::filesystem::path> dependents(const std::filesystem::path& file) const;

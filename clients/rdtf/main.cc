@@ -12,6 +12,9 @@ int main(int argc, char** argv) {
   int exit_code = rdtf::cli::kExitOk;
   rdtf::cli::add_convert_command(app, exit_code);
   rdtf::cli::add_inspect_command(app, exit_code);
+  rdtf::cli::add_urdf_command(app, exit_code);
+  rdtf::cli::add_import_command(app, exit_code);
+  rdtf::cli::add_validate_command(app, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {

@@ -1,0 +1,75 @@
+// rdtf validate IN: the dynamics gate (docs/dynamics.md) on the command line. Exit code 0 when
+// the model passes, 2 when it fails or cannot be converted, 1 on an internal error.
+#include <iostream>
+
+#include "commands.h"
+#include "rdtf/dynamics.h"
+
+namespace rdtf::cli {
+namespace {
+
+struct ValidateArguments {
+  ConvertOptions options;
+  ValidationOptions validation;
+  std::string input;
+  std::vector<double> gravity;
+  bool json = false;
+  bool verbose = false;
+};
+
+int run_validate(ValidateArguments& args) {
+  Diagnostics diag(args.input);
+  const auto conversion = convert_or_report(args.input, args.options, diag);
+  if (!conversion) return kExitInvalidInput;
+  if (!args.gravity.empty()) {
+    args.validation.simulation.gravity = {args.gravity[0], args.gravity[1], args.gravity[2]};
+  }
+  const ValidationReport report = validate_dynamics(*conversion, args.validation, args.input);
+  if (args.json) {
+    Json out = validation_report_json(report);
+    out["conversionDiagnostics"] = Json::array();
+    for (const Diagnostic& d : diag.all()) {
+      if (d.severity != Severity::kInfo || args.verbose) {
+        out["conversionDiagnostics"].push_back(
+            {{"severity", to_string(d.severity)}, {"code", d.code}, {"pointer", d.pointer}, {"message", d.message}});
+      }
+    }
+    std::cout << out.dump(2) << "\n";
+  } else {
+    print_diagnostics(diag, args.verbose);
+    print_diagnostics(report.diagnostics, args.verbose);
+    std::cout << args.input << ": " << validation_summary_line(report) << "\n";
+  }
+  return report.passed ? kExitOk : kExitInvalidInput;
+}
+
+}  // namespace
+
+void add_validate_command(CLI::App& app, int& exit_code) {
+  auto args = std::make_shared<ValidateArguments>();
+  CLI::App* command = app.add_subcommand(
+      "validate", "Check the physics and simulate the model in ODE (exit 0 pass, 2 fail)");
+  command->add_option("input", args->input, "The glTF or RDTF model")->required();
+  command->add_flag("--json", args->json, "Print the report as JSON");
+  command->add_option("--seconds", args->validation.duration, "Simulated time of the passive run")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  command->add_option("--time-step", args->validation.simulation.time_step, "ODE time step (s)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  command->add_flag("--floating", args->validation.simulation.floating_root,
+                    "Let the root link float instead of fixing it to the world");
+  command->add_option("--gravity", args->gravity,
+                      "Gravity in the scene frame, m/s^2 (default 0 -9.80665 0: glTF is Y up; "
+                      "a Z-up model: 0 0 -9.80665)")
+      ->expected(3);
+  command->add_option("--max-mass-ratio", args->validation.checks.max_mass_ratio,
+                      "Largest mass ratio across a joint")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  command->add_flag("-v,--verbose", args->verbose, "Also print info diagnostics");
+  add_conversion_options(*command, args->options);
+  command->callback([args, &exit_code] { exit_code = run_validate(*args); });
+}
+
+}  // namespace rdtf::cli

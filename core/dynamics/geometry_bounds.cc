@@ -1,0 +1,85 @@
+// Bounds of each link's geometry in its link frame, for the centre-of-mass check.
+#include "rdtf/dynamics.h"
+#include "rdtf/geometry.h"
+
+namespace rdtf {
+namespace {
+
+bool is_triangle_mode(const Json& primitive) {
+  const int mode = primitive.value("mode", 4);
+  return mode == 4 || mode == 5 || mode == 6;  // TRIANGLES, TRIANGLE_STRIP, TRIANGLE_FAN
+}
+
+// Grows `box` by the triangle primitives' positions of `mesh`, mapped by X.
+void add_mesh(const GltfAsset& asset, std::size_t mesh, const Eigen::Affine3d& X,
+              Eigen::AlignedBox3d& box) {
+  const Json& meshes = asset.document["meshes"];
+  if (mesh >= meshes.size()) return;
+  for (const Json& primitive : meshes[mesh].value("primitives", Json::array())) {
+    if (!is_triangle_mode(primitive) || !primitive.contains("attributes") ||
+        !primitive["attributes"].contains("POSITION")) {
+      continue;
+    }
+    const auto accessor = primitive["attributes"]["POSITION"].get<std::size_t>();
+    const std::vector<double> positions = read_accessor(asset, accessor);
+    for (std::size_t i = 0; i + 2 < positions.size(); i += 3) {
+      box.extend(X * Eigen::Vector3d(positions[i], positions[i + 1], positions[i + 2]));
+    }
+  }
+}
+
+// The inverse bind matrix of `joint_node` in the skin of `mesh_node` (identity when none).
+std::optional<Eigen::Affine3d> inverse_bind(const GltfAsset& asset, const Json& mesh_node,
+                                            int joint_node) {
+  const Json& document = asset.document;
+  const auto skin_index = mesh_node["skin"].get<std::size_t>();
+  if (!document.contains("skins") || skin_index >= document["skins"].size()) return std::nullopt;
+  const Json& skin = document["skins"][skin_index];
+  const Json& joints = skin.value("joints", Json::array());
+  for (std::size_t j = 0; j < joints.size(); ++j) {
+    if (joints[j].get<int>() != joint_node) continue;
+    Eigen::Affine3d X = Eigen::Affine3d::Identity();
+    if (skin.contains("inverseBindMatrices")) {
+      const std::vector<double> m = read_accessor(asset, skin["inverseBindMatrices"].get<std::size_t>());
+      if (m.size() < 16 * (j + 1)) return std::nullopt;
+      for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 4; ++r) X.matrix()(r, c) = m[16 * j + 4 * c + r];  // column-major
+    }
+    return X;
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
+LinkBounds link_geometry_bounds(const GltfAsset& asset, const Robot& robot) {
+  LinkBounds bounds(robot.links.size());
+  const Json& document = asset.document;
+  if (!document.contains("nodes")) return bounds;
+  const std::vector<Eigen::Affine3d> world = node_world_transforms(document);
+  const int node_count = static_cast<int>(document["nodes"].size());
+  for (std::size_t l = 0; l < robot.links.size(); ++l) {
+    const Link& link = robot.links[l];
+    const Eigen::Affine3d X_LS(link.X_SL.inverse().matrix());
+    Eigen::AlignedBox3d box;  // empty
+    for (const LinkMesh& mesh : link.meshes) {
+      if (mesh.node < 0 || mesh.node >= node_count) continue;
+      const Json& node = document["nodes"][mesh.node];
+      if (!node.contains("mesh")) continue;
+      const auto mesh_index = node["mesh"].get<std::size_t>();
+      if (node.contains("skin")) {
+        // The whole skinned mesh placed as this bone places its part (superset of the part).
+        if (link.node < 0 || link.node >= node_count) continue;
+        const auto ibm = inverse_bind(asset, node, link.node);
+        if (!ibm) continue;
+        add_mesh(asset, mesh_index, X_LS * world[link.node] * *ibm, box);
+      } else {
+        add_mesh(asset, mesh_index, X_LS * world[mesh.node], box);
+      }
+    }
+    if (!box.isEmpty()) bounds[l] = box;
+  }
+  return bounds;
+}
+
+}  // namespace rdtf

@@ -1,0 +1,141 @@
+// Internals of rdtf_dynamics shared by its .cc files: the robot's structure (tree order, where
+// massless links go, kinematics) and the ODE model behind a Simulation. Not installed.
+#pragma once
+
+#include <limits>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <ode/ode.h>
+
+#include "rdtf/dynamics.h"
+
+namespace rdtf::dynamics_internal {
+
+inline constexpr int kWorld = -1;       // Carried by the world (does not move).
+inline constexpr int kUnresolved = -2;  // A massless link nothing carries: cannot be simulated.
+inline constexpr double kInfinity = std::numeric_limits<double>::infinity();
+
+std::string number(double value);  // "%.6g"
+std::string vector_text(const Eigen::Vector3d& v);
+std::string node_pointer(int node);  // "/nodes/N", or "" for no node
+const char* kind_name(JointKind kind);
+
+bool one_dof(JointKind kind);  // revolute, continuous, prismatic
+bool is_massless(const Link& link);  // mass and inertia exactly zero (an empty link)
+
+// Checks the cross references (indices in range, parent/child agree, no cycle). Each problem is
+// an error with `code`; returns false when there was one (nothing else can then be trusted).
+bool check_structure(const Robot& robot, const char* code, Diagnostics& diag);
+
+// Links parents first (roots in robot order, then depth first). Assumes check_structure passed.
+std::vector<int> tree_order(const Robot& robot);
+// The root link of each link's tree.
+std::vector<int> root_of(const Robot& robot, const std::vector<int>& order);
+
+// Which link's body carries each link: itself when it has mass; for a massless link, the world
+// when it is fixed (through fixed joints) to a root held by the world, else the nearest link with
+// mass it is fixed to, else kUnresolved.
+std::vector<int> carriers(const Robot& robot, bool floating_root);
+
+// The pose of the joint frame relative to the parent link frame at position q.
+Eigen::Isometry3d joint_motion(const Joint& joint, double q);
+// X_SL of every link with the one-dof joints at q (robot.joints order; others at rest). Roots
+// stay at their X_SL.
+std::vector<Eigen::Isometry3d> forward_kinematics(const Robot& robot, const std::vector<int>& order,
+                                                  const std::vector<double>& q);
+
+// A bound on the distance of each link's origin from its root's origin, over every position
+// (infinite below an unlimited prismatic or a floating joint).
+std::vector<double> reach_bounds(const Robot& robot, const std::vector<int>& order);
+
+struct BodyModel {
+  dBodyID id = nullptr;
+  int link = -1;
+  double mass = 0;
+  Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();  // About the COM, link axes (= body axes)
+  Eigen::Vector3d com_L = Eigen::Vector3d::Zero();     // p_LoLcm_L: the body origin in the link
+  double reach = kInfinity;  // Bound on the COM's distance from its root link's origin
+  int root_link = -1;
+};
+
+struct LinkModel {
+  int body = kWorld;  // Index into bodies, or kWorld.
+  Eigen::Isometry3d X_BL = Eigen::Isometry3d::Identity();  // In its body (X_SL for the world)
+};
+
+struct JointModel {
+  int joint = -1;  // robot.joints index
+  JointKind kind = JointKind::kFixed;
+  dJointID id = nullptr;  // Nothing for a floating joint or one inside a body (massless link)
+  dJointID friction_motor = nullptr;
+  int child_body = -1;
+  int parent_body = kWorld;
+  // The joint frame's origin on each side (child body, parent body or world), and the axis.
+  Eigen::Vector3d anchor_child = Eigen::Vector3d::Zero();
+  Eigen::Vector3d anchor_parent = Eigen::Vector3d::Zero();
+  Eigen::Vector3d axis_child = Eigen::Vector3d::UnitX();
+  Eigen::Vector3d axis_parent = Eigen::Vector3d::UnitX();
+  Eigen::Quaterniond rotation0 = Eigen::Quaterniond::Identity();  // R_parent^T R_child at q0
+  bool dof = false;
+  double q = 0;           // unwrapped position
+  double qdot = 0;
+  double ode_angle = 0;   // ODE's (wrapped) hinge angle after the last step
+  bool limited = false;
+  double lower = 0;
+  double upper = 0;
+  double effort_limit = 0;  // 0: none
+  double damping = 0;
+  double stiffness = 0;
+  std::optional<JointCommand> command;
+  double effort = 0;  // actuator effort applied in the last step
+};
+
+}  // namespace rdtf::dynamics_internal
+
+namespace rdtf {
+
+struct Simulation::Model {
+  Robot robot;
+  SimulationOptions options;
+  dWorldID world = nullptr;
+  // Each world steps with its own threading implementation: ODE's default one is a single global
+  // object, and worlds stepped on two threads at once (validation workers, the live simulation)
+  // corrupt it ("ODE INTERNAL ERROR ... ReleaseAJob").
+  dThreadingImplementationID threading = nullptr;
+  std::vector<dynamics_internal::BodyModel> bodies;
+  std::vector<dynamics_internal::LinkModel> links;    // robot.links order
+  std::vector<dynamics_internal::JointModel> joints;  // robot.joints order
+  std::vector<int> root_links;
+  std::map<std::string, int, std::less<>> joint_index;
+  std::map<std::string, int, std::less<>> link_index;
+  bool quickstep = false;
+  double time = 0;
+  std::uint64_t steps = 0;
+  double dissipated = 0;
+  double actuator_work = 0;
+  std::vector<std::string> messages;
+
+  Model() = default;
+  Model(const Model&) = delete;
+  Model& operator=(const Model&) = delete;
+  ~Model();
+};
+
+namespace dynamics_internal {
+
+// Builds the ODE world (ode_model.cc). Nothing, with errors, when the robot cannot be simulated.
+std::unique_ptr<Simulation::Model> build_model(const Robot& robot, const SimulationOptions& options,
+                                               const std::map<std::string, double>& initial,
+                                               Diagnostics& diag);
+
+Eigen::Isometry3d body_pose(dBodyID body);  // X_SB
+// Reads back the ODE state of the one-dof joints without unwrapping (after set-up).
+void prime_joint_states(Simulation::Model& model);
+// The ODE messages the calling thread received since the last call.
+std::vector<std::string> take_ode_messages();
+
+}  // namespace dynamics_internal
+}  // namespace rdtf

@@ -1,0 +1,266 @@
+// The live simulation of one robot: stepping with the joint force model (docs/dynamics.md),
+// joint states and link poses in the scene frame, commands, and the health of the state.
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+
+#include "ode_model.h"
+
+namespace rdtf {
+namespace {
+
+using dynamics_internal::body_pose;
+using dynamics_internal::BodyModel;
+using dynamics_internal::JointModel;
+using dynamics_internal::kWorld;
+
+Eigen::Vector3d vec(const dReal* v) { return {v[0], v[1], v[2]}; }
+
+double command_effort(const JointModel& jm) {
+  if (!jm.command) return 0;
+  const JointCommand& c = *jm.command;
+  double effort = c.effort;
+  if (c.mode == CommandMode::kPosition) effort += c.kp * (c.position - jm.q) + c.kd * (c.velocity - jm.qdot);
+  if (c.mode == CommandMode::kVelocity) effort += c.kd * (c.velocity - jm.qdot);
+  if (jm.effort_limit > 0) effort = std::clamp(effort, -jm.effort_limit, jm.effort_limit);
+  return effort;
+}
+
+Eigen::Vector3d angular_velocity(const Simulation::Model& model, int body) {
+  return body == kWorld ? Eigen::Vector3d::Zero() : vec(dBodyGetAngularVel(model.bodies[body].id));
+}
+
+bool body_finite(dBodyID id) {
+  const dReal* values[] = {dBodyGetPosition(id), dBodyGetLinearVel(id), dBodyGetAngularVel(id)};
+  for (const dReal* v : values) {
+    if (!std::isfinite(v[0]) || !std::isfinite(v[1]) || !std::isfinite(v[2])) return false;
+  }
+  const dReal* q = dBodyGetQuaternion(id);
+  return std::isfinite(q[0]) && std::isfinite(q[1]) && std::isfinite(q[2]) && std::isfinite(q[3]);
+}
+
+}  // namespace
+
+Simulation::Simulation(std::unique_ptr<Model> model) : model_(std::move(model)) {}
+Simulation::~Simulation() = default;
+
+std::unique_ptr<Simulation> Simulation::create(const Robot& robot, const SimulationOptions& options,
+                                               const std::map<std::string, double>& initial_positions,
+                                               Diagnostics& diag) {
+  auto model = dynamics_internal::build_model(robot, options, initial_positions, diag);
+  if (!model) return nullptr;
+  return std::unique_ptr<Simulation>(new Simulation(std::move(model)));
+}
+
+void Simulation::step() { step(model_->options.time_step); }
+
+void Simulation::step(double dt) {
+  if (!(dt > 0) || !std::isfinite(dt)) throw std::invalid_argument("Simulation::step: dt must be positive");
+  init_ode();
+  Model& m = *model_;
+  std::vector<double> damping_effort(m.joints.size(), 0.0);
+  std::vector<double> previous(m.joints.size(), 0.0);
+  for (JointModel& jm : m.joints) {
+    if (!jm.id) continue;
+    const std::size_t j = static_cast<std::size_t>(jm.joint);
+    if (jm.dof) {
+      jm.effort = command_effort(jm);
+      damping_effort[j] = -jm.damping * jm.qdot;
+      const double total = jm.effort + damping_effort[j] - jm.stiffness * jm.q;
+      if (jm.kind == JointKind::kPrismatic) {
+        dJointAddSliderForce(jm.id, total);
+      } else {
+        dJointAddHingeTorque(jm.id, total);
+      }
+      previous[j] = jm.q;
+    } else if (jm.kind == JointKind::kBall && jm.damping > 0) {
+      const Eigen::Vector3d w = angular_velocity(m, jm.child_body) - angular_velocity(m, jm.parent_body);
+      const Eigen::Vector3d tau = -jm.damping * w;
+      dBodyAddTorque(m.bodies[jm.child_body].id, tau.x(), tau.y(), tau.z());
+      if (jm.parent_body != kWorld) dBodyAddTorque(m.bodies[jm.parent_body].id, -tau.x(), -tau.y(), -tau.z());
+    }
+  }
+  if (m.quickstep) {
+    dWorldQuickStep(m.world, dt);
+  } else {
+    dWorldStep(m.world, dt);
+  }
+  for (JointModel& jm : m.joints) {
+    if (!jm.id) continue;
+    const std::size_t j = static_cast<std::size_t>(jm.joint);
+    if (jm.dof) {
+      if (jm.kind == JointKind::kPrismatic) {
+        jm.q = dJointGetSliderPosition(jm.id);
+        jm.qdot = dJointGetSliderPositionRate(jm.id);
+      } else {
+        const double angle = dJointGetHingeAngle(jm.id);
+        jm.q += std::remainder(angle - jm.ode_angle, 2 * std::numbers::pi);
+        jm.ode_angle = angle;
+        jm.qdot = dJointGetHingeAngleRate(jm.id);
+      }
+      const double dq = jm.q - previous[j];
+      m.dissipated -= damping_effort[j] * dq;
+      m.actuator_work += jm.effort * dq;
+    } else if (jm.kind == JointKind::kBall && jm.damping > 0) {
+      const Eigen::Vector3d w = angular_velocity(m, jm.child_body) - angular_velocity(m, jm.parent_body);
+      m.dissipated += jm.damping * w.squaredNorm() * dt;
+    }
+  }
+  m.time += dt;
+  ++m.steps;
+  for (std::string& message : dynamics_internal::take_ode_messages()) {
+    if (m.messages.size() < 100) m.messages.push_back(std::move(message));
+  }
+}
+
+double Simulation::time() const { return model_->time; }
+std::uint64_t Simulation::steps() const { return model_->steps; }
+const Robot& Simulation::robot() const { return model_->robot; }
+const SimulationOptions& Simulation::options() const { return model_->options; }
+std::string_view Simulation::stepper_name() const {
+  return model_->quickstep ? "dWorldQuickStep" : "dWorldStep";
+}
+int Simulation::body_count() const { return static_cast<int>(model_->bodies.size()); }
+const std::vector<std::string>& Simulation::ode_messages() const { return model_->messages; }
+
+std::vector<JointState> Simulation::joint_states() const {
+  std::vector<JointState> states;
+  for (const JointModel& jm : model_->joints) {
+    if (!jm.dof) continue;
+    states.push_back({model_->robot.joints[jm.joint].name, jm.kind, jm.q, jm.qdot, jm.effort});
+  }
+  return states;
+}
+
+std::optional<JointState> Simulation::joint_state(std::string_view joint) const {
+  const auto found = model_->joint_index.find(joint);
+  if (found == model_->joint_index.end() || !model_->joints[found->second].dof) return std::nullopt;
+  const JointModel& jm = model_->joints[found->second];
+  return JointState{model_->robot.joints[jm.joint].name, jm.kind, jm.q, jm.qdot, jm.effort};
+}
+
+std::vector<LinkPose> Simulation::link_poses() const {
+  std::vector<LinkPose> poses;
+  poses.reserve(model_->links.size());
+  for (std::size_t l = 0; l < model_->links.size(); ++l) {
+    const dynamics_internal::LinkModel& link = model_->links[l];
+    LinkPose pose;
+    pose.name = model_->robot.links[l].name;
+    if (link.body == kWorld) {
+      pose.X_SL = link.X_BL;
+    } else {
+      const dBodyID id = model_->bodies[link.body].id;
+      const Eigen::Isometry3d X_SB = body_pose(id);
+      pose.X_SL = X_SB * link.X_BL;
+      pose.w_SL_S = vec(dBodyGetAngularVel(id));
+      pose.v_SLo_S = vec(dBodyGetLinearVel(id)) + pose.w_SL_S.cross(pose.X_SL.translation() - X_SB.translation());
+    }
+    poses.push_back(std::move(pose));
+  }
+  return poses;
+}
+
+std::optional<LinkPose> Simulation::link_pose(std::string_view link) const {
+  const auto found = model_->link_index.find(link);
+  if (found == model_->link_index.end()) return std::nullopt;
+  return link_poses()[found->second];
+}
+
+bool Simulation::set_command(const JointCommand& command, std::string* error) {
+  const auto fail = [&](std::string why) {
+    if (error) *error = "command for '" + command.joint + "' rejected: " + why;
+    return false;
+  };
+  const auto found = model_->joint_index.find(command.joint);
+  if (found == model_->joint_index.end()) return fail("no such joint");
+  JointModel& jm = model_->joints[found->second];
+  if (!jm.dof) return fail(std::string("a ") + to_string(jm.kind) + " joint takes no command");
+  for (double value : {command.effort, command.position, command.velocity, command.kp, command.kd}) {
+    if (!std::isfinite(value)) return fail("values must be finite");
+  }
+  if (command.kp < 0 || command.kd < 0) return fail("gains must not be negative");
+  jm.command = command;
+  return true;
+}
+
+void Simulation::clear_command(std::string_view joint) {
+  const auto found = model_->joint_index.find(joint);
+  if (found != model_->joint_index.end()) model_->joints[found->second].command.reset();
+}
+
+void Simulation::clear_commands() {
+  for (JointModel& jm : model_->joints) jm.command.reset();
+}
+
+SimulationHealth Simulation::health(const HealthTolerances& tolerances) const {
+  const Model& m = *model_;
+  SimulationHealth h;
+  h.dissipated_energy = m.dissipated;
+  h.actuator_work = m.actuator_work;
+  std::vector<Eigen::Isometry3d> X_SB(m.bodies.size());
+  for (std::size_t b = 0; b < m.bodies.size(); ++b) {
+    const BodyModel& body = m.bodies[b];
+    if (!body_finite(body.id)) h.finite = false;
+    X_SB[b] = body_pose(body.id);
+    const Eigen::Vector3d v = vec(dBodyGetLinearVel(body.id));
+    const Eigen::Vector3d w = vec(dBodyGetAngularVel(body.id));
+    const Eigen::Matrix3d& R = X_SB[b].linear();
+    h.kinetic_energy += 0.5 * body.mass * v.squaredNorm() + 0.5 * w.dot(R * body.inertia * R.transpose() * w);
+    h.potential_energy -= body.mass * m.options.gravity.dot(X_SB[b].translation());
+  }
+  if (!h.finite) return h;
+  const auto pose_of = [&](int body) { return body == kWorld ? Eigen::Isometry3d::Identity() : X_SB[body]; };
+  for (const JointModel& jm : m.joints) {
+    if (jm.dof) h.potential_energy += 0.5 * jm.stiffness * jm.q * jm.q;
+    if (jm.limited) {
+      const double violation = std::max({jm.lower - jm.q, jm.q - jm.upper, 0.0});
+      const double tolerance = jm.kind == JointKind::kPrismatic ? tolerances.limit_linear : tolerances.limit_angular;
+      if (violation / tolerance > h.worst_limit_ratio) {
+        h.worst_limit_ratio = violation / tolerance;
+        h.worst_limit_violation = violation;
+        h.worst_limit_joint = jm.joint;
+      }
+    }
+    if (!jm.id) continue;
+    const Eigen::Isometry3d& XC = pose_of(jm.child_body);
+    const Eigen::Isometry3d XP = pose_of(jm.parent_body);
+    Eigen::Vector3d d = XC * jm.anchor_child - XP * jm.anchor_parent;
+    if (jm.kind == JointKind::kPrismatic) {
+      const Eigen::Vector3d a = XP.linear() * jm.axis_parent;
+      d -= a.dot(d) * a;
+    }
+    if (d.norm() > h.worst_joint_separation) {
+      h.worst_joint_separation = d.norm();
+      h.worst_separation_joint = jm.joint;
+    }
+    double misalignment = 0;
+    if (jm.kind == JointKind::kRevolute || jm.kind == JointKind::kContinuous) {
+      const Eigen::Vector3d ac = XC.linear() * jm.axis_child, ap = XP.linear() * jm.axis_parent;
+      misalignment = std::atan2(ac.cross(ap).norm(), ac.dot(ap));
+    } else if (jm.kind == JointKind::kFixed || jm.kind == JointKind::kPrismatic) {
+      const Eigen::Quaterniond relative(XP.linear().transpose() * XC.linear());
+      misalignment = jm.rotation0.angularDistance(relative);
+    }
+    if (misalignment > h.worst_joint_misalignment) {
+      h.worst_joint_misalignment = misalignment;
+      h.worst_misalignment_joint = jm.joint;
+    }
+  }
+  // Region: each body's centre of mass against its reach from its root link's origin.
+  for (std::size_t b = 0; b < m.bodies.size(); ++b) {
+    const BodyModel& body = m.bodies[b];
+    if (!std::isfinite(body.reach)) continue;
+    const dynamics_internal::LinkModel& root = m.links[body.root_link];
+    const Eigen::Vector3d origin = (pose_of(root.body) * root.X_BL).translation();
+    const double distance = (X_SB[b].translation() - origin).norm();
+    const double allowed = body.reach * (1 + tolerances.region_margin_relative) + tolerances.region_margin_absolute;
+    if (distance / allowed > h.worst_region_ratio) {
+      h.worst_region_ratio = distance / allowed;
+      h.worst_region_distance = distance;
+      h.worst_region_link = body.link;
+    }
+  }
+  return h;
+}
+
+}  // namespace rdtf

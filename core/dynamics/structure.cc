@@ -1,0 +1,191 @@
+// The robot's tree as the dynamics code needs it: order, roots, kinematics, reach, and where the
+// massless links go.
+#include <cmath>
+#include <cstdio>
+#include <deque>
+
+#include "ode_model.h"
+
+namespace rdtf::dynamics_internal {
+
+std::string number(double value) {
+  char text[64];
+  std::snprintf(text, sizeof(text), "%.6g", value);
+  return text;
+}
+
+std::string vector_text(const Eigen::Vector3d& v) {
+  return "(" + number(v.x()) + ", " + number(v.y()) + ", " + number(v.z()) + ")";
+}
+
+std::string node_pointer(int node) { return node >= 0 ? json_pointer("/nodes", node) : std::string(); }
+
+const char* kind_name(JointKind kind) { return to_string(kind); }
+
+bool one_dof(JointKind kind) {
+  return kind == JointKind::kRevolute || kind == JointKind::kContinuous ||
+         kind == JointKind::kPrismatic;
+}
+
+bool is_massless(const Link& link) {
+  return link.inertial.mass == 0 && link.inertial.inertia.isZero(0);
+}
+
+bool check_structure(const Robot& robot, const char* code, Diagnostics& diag) {
+  const int links = static_cast<int>(robot.links.size());
+  const int joints = static_cast<int>(robot.joints.size());
+  const std::size_t before = diag.error_count();
+  for (int j = 0; j < joints; ++j) {
+    const Joint& joint = robot.joints[j];
+    const std::string where = node_pointer(joint.node);
+    if (joint.parent_link < 0 || joint.parent_link >= links || joint.child_link < 0 ||
+        joint.child_link >= links || joint.parent_link == joint.child_link) {
+      diag.error(code, where, "joint '" + joint.name + "' refers to links " +
+                                  std::to_string(joint.parent_link) + " -> " +
+                                  std::to_string(joint.child_link) + " of " + std::to_string(links));
+      continue;
+    }
+    if (robot.links[joint.child_link].parent_joint != j) {
+      diag.error(code, where, "joint '" + joint.name + "' has child link '" +
+                                  robot.links[joint.child_link].name +
+                                  "' whose parent joint is another");
+    }
+  }
+  if (diag.error_count() > before) return false;
+  for (int l = 0; l < links; ++l) {
+    const Link& link = robot.links[l];
+    if (link.parent_joint >= joints || (link.parent_joint >= 0 && robot.joints[link.parent_joint].child_link != l)) {
+      diag.error(code, node_pointer(link.node),
+                 "link '" + link.name + "' has parent joint " + std::to_string(link.parent_joint) +
+                     ", which does not have it as its child");
+    }
+  }
+  if (diag.error_count() > before) return false;
+  // Every chain of parents ends within `links` steps, or there is a cycle.
+  for (int l = 0; l < links; ++l) {
+    int at = l;
+    int steps = 0;
+    while (robot.links[at].parent_joint >= 0 && steps <= links) {
+      at = robot.joints[robot.links[at].parent_joint].parent_link;
+      ++steps;
+    }
+    if (steps > links) {
+      diag.error(code, node_pointer(robot.links[l].node),
+                 "link '" + robot.links[l].name + "' is on a cycle of joints");
+      return false;
+    }
+  }
+  return true;
+}
+
+std::vector<int> tree_order(const Robot& robot) {
+  std::vector<std::vector<int>> children(robot.links.size());
+  for (const Joint& joint : robot.joints) children[joint.parent_link].push_back(joint.child_link);
+  std::vector<int> order;
+  order.reserve(robot.links.size());
+  for (std::size_t l = 0; l < robot.links.size(); ++l) {
+    if (robot.links[l].parent_joint >= 0) continue;
+    std::vector<int> stack{static_cast<int>(l)};
+    while (!stack.empty()) {
+      const int at = stack.back();
+      stack.pop_back();
+      order.push_back(at);
+      for (auto it = children[at].rbegin(); it != children[at].rend(); ++it) stack.push_back(*it);
+    }
+  }
+  return order;
+}
+
+std::vector<int> root_of(const Robot& robot, const std::vector<int>& order) {
+  std::vector<int> root(robot.links.size(), -1);
+  for (int l : order) {
+    const int pj = robot.links[l].parent_joint;
+    root[l] = pj < 0 ? l : root[robot.joints[pj].parent_link];
+  }
+  return root;
+}
+
+std::vector<int> carriers(const Robot& robot, bool floating_root) {
+  const int n = static_cast<int>(robot.links.size());
+  std::vector<std::vector<int>> fixed_neighbours(n);
+  for (const Joint& joint : robot.joints) {
+    if (joint.kind != JointKind::kFixed) continue;
+    fixed_neighbours[joint.parent_link].push_back(joint.child_link);
+    fixed_neighbours[joint.child_link].push_back(joint.parent_link);
+  }
+  std::vector<int> carrier(n, kUnresolved);
+  for (int l = 0; l < n; ++l) {
+    if (!is_massless(robot.links[l])) {
+      carrier[l] = l;
+      continue;
+    }
+    // Breadth first through fixed joints: the world if the group is held by it, else the nearest
+    // link with mass.
+    std::vector<bool> seen(n, false);
+    std::deque<int> queue{l};
+    seen[l] = true;
+    int nearest = kUnresolved;
+    bool world = false;
+    while (!queue.empty()) {
+      const int at = queue.front();
+      queue.pop_front();
+      if (!floating_root && robot.links[at].parent_joint < 0) world = true;
+      if (nearest == kUnresolved && !is_massless(robot.links[at])) nearest = at;
+      for (int next : fixed_neighbours[at]) {
+        if (!seen[next]) {
+          seen[next] = true;
+          queue.push_back(next);
+        }
+      }
+    }
+    carrier[l] = world ? kWorld : nearest;
+  }
+  return carrier;
+}
+
+Eigen::Isometry3d joint_motion(const Joint& joint, double q) {
+  Eigen::Isometry3d X = joint.X_PJ;
+  if (q == 0 || joint.axis.norm() == 0) return X;
+  const Eigen::Vector3d axis = joint.axis.normalized();
+  if (joint.kind == JointKind::kRevolute || joint.kind == JointKind::kContinuous) {
+    X.rotate(Eigen::AngleAxisd(q, axis));
+  } else if (joint.kind == JointKind::kPrismatic) {
+    X.translate(q * axis);
+  }
+  return X;
+}
+
+std::vector<Eigen::Isometry3d> forward_kinematics(const Robot& robot, const std::vector<int>& order,
+                                                  const std::vector<double>& q) {
+  std::vector<Eigen::Isometry3d> X(robot.links.size(), Eigen::Isometry3d::Identity());
+  for (int l : order) {
+    const int pj = robot.links[l].parent_joint;
+    if (pj < 0) {
+      X[l] = robot.links[l].X_SL;
+    } else {
+      const Joint& joint = robot.joints[pj];
+      X[l] = X[joint.parent_link] * joint_motion(joint, q[pj]);
+    }
+  }
+  return X;
+}
+
+std::vector<double> reach_bounds(const Robot& robot, const std::vector<int>& order) {
+  std::vector<double> reach(robot.links.size(), 0.0);
+  for (int l : order) {
+    const int pj = robot.links[l].parent_joint;
+    if (pj < 0) continue;
+    const Joint& joint = robot.joints[pj];
+    double travel = 0;
+    if (joint.kind == JointKind::kPrismatic) {
+      travel = joint.limits ? std::max(std::abs(joint.limits->lower), std::abs(joint.limits->upper))
+                            : kInfinity;
+    } else if (joint.kind == JointKind::kFloating || joint.kind == JointKind::kPlanar) {
+      travel = kInfinity;
+    }
+    reach[l] = reach[joint.parent_link] + joint.X_PJ.translation().norm() + travel;
+  }
+  return reach;
+}
+
+}  // namespace rdtf::dynamics_internal

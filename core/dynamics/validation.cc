@@ -1,0 +1,222 @@
+// The validation run (the gate, docs/dynamics.md): physical checks, then a passive scenario in
+// ODE watched for NaN, energy created, joints coming apart, limits overrun and bodies flying off.
+#include <chrono>
+#include <cmath>
+
+#include "ode_model.h"
+#include "rdtf/summary.h"
+
+namespace rdtf {
+namespace {
+
+using dynamics_internal::node_pointer;
+using dynamics_internal::number;
+
+// The first time a check failed, its worst value and where.
+struct Failure {
+  bool failed = false;
+  double first_time = 0;
+  double worst = 0;
+  double worst_time = 0;
+  int where = -1;
+
+  void record(bool fails, double value, double time, int index) {
+    if (!fails) return;
+    if (!failed) first_time = time;
+    failed = true;
+    if (value > worst) {
+      worst = value;
+      worst_time = time;
+      where = index;
+    }
+  }
+  std::string when() const {
+    return "at t = " + number(worst_time) + " s (first at " + number(first_time) + " s)";
+  }
+};
+
+// The model's size: its largest finite reach bound or radius of gyration, at least 1 cm.
+double model_size(const Simulation::Model& model) {
+  double size = 0.01;
+  for (const dynamics_internal::BodyModel& body : model.bodies) {
+    if (std::isfinite(body.reach)) size = std::max(size, body.reach);
+    size = std::max(size, std::sqrt(body.inertia.trace() / (2 * body.mass)));
+  }
+  return size;
+}
+
+// The energy scale's floor: the total weight times the model's size.
+double energy_floor(const Simulation::Model& model) {
+  double mass = 0;
+  for (const dynamics_internal::BodyModel& body : model.bodies) mass += body.mass;
+  return mass * model.options.gravity.norm() * model_size(model);
+}
+
+}  // namespace
+
+// Friend-free access to the model for the run: the Simulation owns it.
+struct ValidationRun {
+  static const Simulation::Model& model(const Simulation& simulation) { return *simulation.model_; }
+};
+
+namespace {
+
+void run_scenario(Simulation& sim, const Simulation::Model& model, const ValidationOptions& options,
+                  ValidationReport& report) {
+  const Robot& robot = sim.robot();
+  Diagnostics& diag = report.diagnostics;
+  const HealthTolerances tolerances{options.limit_tolerance_angular, options.limit_tolerance_linear,
+                                    options.region_margin_relative, options.region_margin_absolute};
+  const double dt = options.simulation.time_step;
+  const auto steps = static_cast<std::uint64_t>(std::llround(options.duration / dt));
+  const SimulationHealth start = sim.health(tolerances);
+  const double energy0 = start.kinetic_energy + start.potential_energy;
+  const double floor = energy_floor(model);
+  double largest_kinetic = start.kinetic_energy;
+  const double separation_bound =
+      std::max(options.joint_separation_tolerance, options.joint_separation_relative * model_size(model));
+  Failure energy, separation, misalignment, limits, region;
+  for (std::uint64_t n = 0; n < steps; ++n) {
+    sim.step(dt);
+    const double t = sim.time();
+    const SimulationHealth h = sim.health(tolerances);
+    if (!h.finite) {
+      diag.error("SIM_NOT_FINITE", "",
+                 "the state became NaN or infinite at t = " + number(t) + " s (step " +
+                     std::to_string(sim.steps()) + "): the model is unstable in ODE");
+      break;
+    }
+    largest_kinetic = std::max(largest_kinetic, h.kinetic_energy);
+    const double scale = std::max(floor, largest_kinetic);
+    const double balance = h.kinetic_energy + h.potential_energy + h.dissipated_energy - h.actuator_work - energy0;
+    const double drift = scale > 0 ? balance / scale : 0.0;
+    report.energy_drift = std::max(report.energy_drift, drift);
+    report.final_energy_drift = drift;
+    energy.record(drift > options.energy_tolerance, drift, t, -1);
+    if (h.worst_joint_separation > report.worst_joint_error) {
+      report.worst_joint_error = h.worst_joint_separation;
+      report.worst_joint = robot.joints[h.worst_separation_joint].name;
+    }
+    report.worst_joint_misalignment = std::max(report.worst_joint_misalignment, h.worst_joint_misalignment);
+    if (h.worst_limit_ratio > 0 && h.worst_limit_violation > report.worst_limit_violation) {
+      report.worst_limit_violation = h.worst_limit_violation;
+      report.worst_limit_joint = robot.joints[h.worst_limit_joint].name;
+    }
+    separation.record(h.worst_joint_separation > separation_bound,
+                      h.worst_joint_separation, t, h.worst_separation_joint);
+    misalignment.record(h.worst_joint_misalignment > options.joint_misalignment_tolerance,
+                        h.worst_joint_misalignment, t, h.worst_misalignment_joint);
+    limits.record(h.worst_limit_ratio > 1, h.worst_limit_violation, t, h.worst_limit_joint);
+    region.record(h.worst_region_ratio > 1, h.worst_region_distance, t, h.worst_region_link);
+  }
+  report.simulated_time = sim.time();
+  report.steps = sim.steps();
+  if (energy.failed) {
+    diag.error("SIM_ENERGY_RISE", "",
+               "total energy (kinetic + potential + dissipated) rose by " + number(100 * energy.worst) +
+                   "% of its scale " + energy.when() + "; the bound is " +
+                   number(100 * options.energy_tolerance) +
+                   "%: ODE creates energy (an inertia too small for its mass, or a mass ratio too "
+                   "large, makes it unstable)");
+  }
+  const auto joint_text = [&](int j) { return "joint '" + robot.joints[j].name + "'"; };
+  if (separation.failed) {
+    diag.error("SIM_JOINT_SEPARATION", node_pointer(robot.joints[separation.where].node),
+               joint_text(separation.where) + ": its anchor points came " + number(separation.worst) +
+                   " m apart " + separation.when() + "; the bound is " + number(separation_bound) +
+                   " m");
+  }
+  if (misalignment.failed) {
+    diag.error("SIM_JOINT_MISALIGNMENT", node_pointer(robot.joints[misalignment.where].node),
+               joint_text(misalignment.where) + ": its two sides turned " + number(misalignment.worst) +
+                   " rad out of line " + misalignment.when() + "; the bound is " +
+                   number(options.joint_misalignment_tolerance) + " rad");
+  }
+  if (limits.failed) {
+    const Joint& joint = robot.joints[limits.where];
+    const bool linear = joint.kind == JointKind::kPrismatic;
+    diag.error("SIM_LIMIT_VIOLATED", node_pointer(joint.node),
+               joint_text(limits.where) + ": went " + number(limits.worst) + (linear ? " m" : " rad") +
+                   " beyond its limits [" + number(joint.limits->lower) + ", " +
+                   number(joint.limits->upper) + "] " + limits.when() + "; the tolerance is " +
+                   number(linear ? options.limit_tolerance_linear : options.limit_tolerance_angular));
+  }
+  if (region.failed) {
+    const Link& link = robot.links[region.where];
+    diag.error("SIM_BODY_LEFT_REGION", node_pointer(link.node),
+               "link '" + link.name + "': its centre of mass got " + number(region.worst) +
+                   " m from its root link's origin " + region.when() +
+                   ", further than its joints and limits allow");
+  }
+  for (const std::string& message : sim.ode_messages()) diag.warning("ODE_MESSAGE", "", message);
+}
+
+}  // namespace
+
+ValidationReport validate_dynamics(const Robot& robot, const ValidationOptions& options,
+                                   const LinkBounds* bounds, std::string file) {
+  const auto started = std::chrono::steady_clock::now();
+  ValidationReport report;
+  report.diagnostics.set_file(std::move(file));
+  report.time_step = options.simulation.time_step;
+  PhysicalCheckOptions checks = options.checks;
+  checks.floating_root = options.simulation.floating_root;
+  check_physics(robot, checks, bounds, report.diagnostics);
+  if (!(options.duration >= 0) || !std::isfinite(options.duration)) {
+    report.diagnostics.error("SIM_INVALID_OPTIONS", "", "the duration must be finite and not negative");
+  } else if (!report.diagnostics.contains("ROBOT_INVALID_REFERENCE")) {
+    auto sim = Simulation::create(robot, options.simulation, options.initial_positions, report.diagnostics);
+    if (sim) {
+      report.simulated = true;
+      report.stepper = std::string(sim->stepper_name());
+      report.bodies = sim->body_count();
+      run_scenario(*sim, ValidationRun::model(*sim), options, report);
+    }
+  }
+  report.passed = !report.diagnostics.has_errors();
+  report.wall_time = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  return report;
+}
+
+ValidationReport validate_dynamics(const Conversion& conversion, const ValidationOptions& options,
+                                   std::string file) {
+  const LinkBounds bounds = link_geometry_bounds(conversion.asset, conversion.robot);
+  return validate_dynamics(conversion.robot, options, &bounds, std::move(file));
+}
+
+Json validation_report_json(const ValidationReport& report) {
+  return {{"passed", report.passed},
+          {"simulated", report.simulated},
+          {"simulatedTime", report.simulated_time},
+          {"steps", report.steps},
+          {"stepper", report.stepper},
+          {"bodies", report.bodies},
+          {"timeStep", report.time_step},
+          {"energyDrift", report.energy_drift},
+          {"finalEnergyDrift", report.final_energy_drift},
+          {"worstJointError", report.worst_joint_error},
+          {"worstJoint", report.worst_joint},
+          {"worstJointMisalignment", report.worst_joint_misalignment},
+          {"worstLimitViolation", report.worst_limit_violation},
+          {"worstLimitJoint", report.worst_limit_joint},
+          {"wallTime", report.wall_time},
+          {"diagnostics", diagnostics_json(report.diagnostics)}};
+}
+
+std::string validation_summary_line(const ValidationReport& report) {
+  std::string line = report.passed ? "PASS" : "FAIL";
+  if (!report.simulated) {
+    return line + ": not simulated (" + std::to_string(report.diagnostics.error_count()) + " errors), wall " +
+           number(report.wall_time * 1e3) + " ms";
+  }
+  line += ": " + number(report.simulated_time) + " s simulated in " + std::to_string(report.steps) +
+          " steps of " + number(report.time_step) + " s (" + report.stepper + ", " +
+          std::to_string(report.bodies) + " bodies); energy drift " + number(100 * report.energy_drift) +
+          "% (end " + number(100 * report.final_energy_drift) + "%); worst joint error " +
+          number(report.worst_joint_error) + " m" +
+          (report.worst_joint.empty() ? "" : " (" + report.worst_joint + ")") + ", misalignment " +
+          number(report.worst_joint_misalignment) + " rad; wall " + number(report.wall_time * 1e3) + " ms";
+  return line;
+}
+
+}  // namespace rdtf

@@ -1,0 +1,234 @@
+// Meshes: primitives, their attributes, indices and morph targets. See document_check.h.
+#include <algorithm>
+
+#include "document_check.h"
+#include "validate_util.h"
+
+namespace rdtf::internal {
+namespace {
+
+// "POSITION", "TEXCOORD_0", "_CUSTOM": the attribute names glTF allows, split into semantic and
+// set index (-1 for none). Morph targets allow fewer.
+std::optional<std::pair<std::string, long>> parse_semantic(const std::string& name, bool target) {
+  if (name.size() > 1 && name[0] == '_') return std::pair{name, -1L};
+  if (name == "POSITION" || name == "NORMAL" || name == "TANGENT") return std::pair{name, -1L};
+  const auto underscore = name.rfind('_');
+  if (underscore == std::string::npos) return std::nullopt;
+  const std::string base = name.substr(0, underscore);
+  const std::string digits = name.substr(underscore + 1);
+  const bool indexed =
+      base == "TEXCOORD" || base == "COLOR" || (!target && (base == "JOINTS" || base == "WEIGHTS"));
+  if (!indexed || digits.empty() || digits.size() > 6 || (digits.size() > 1 && digits[0] == '0') ||
+      digits.find_first_not_of("0123456789") != std::string::npos) {
+    return std::nullopt;
+  }
+  return std::pair{base, std::stol(digits)};
+}
+
+std::string format_name(const AccessorFacts& accessor) {
+  return accessor.type + " of component type " + std::to_string(accessor.component_type) +
+         (accessor.normalized ? " (normalized)" : "");
+}
+
+}  // namespace
+
+void DocumentCheck::check_meshes() {
+  const auto& meshes = entries_["meshes"];
+  meshes_.resize(meshes.size());
+  for (std::size_t m = 0; m < meshes.size(); ++m) {
+    if (meshes[m] != nullptr) check_mesh(*meshes[m], json_pointer("/meshes", m), meshes_[m]);
+  }
+}
+
+void DocumentCheck::check_mesh(const Json& mesh, const std::string& pointer, MeshFacts& facts) {
+  const Json* primitives = read_array(mesh, "primitives", pointer, true);
+  const auto weights = read_numbers(mesh, "weights", pointer, 0);
+  if (primitives == nullptr) return;
+  facts.valid = true;
+  for (std::size_t p = 0; p < primitives->size(); ++p) {
+    const std::string here = json_pointer(pointer + "/primitives", p);
+    const Json* primitive = object_at(*primitives, p, pointer + "/primitives");
+    if (primitive == nullptr || !check_primitive(*primitive, here, facts)) {
+      facts.valid = false;
+      continue;
+    }
+    const std::size_t targets = primitive->contains("targets") ? (*primitive)["targets"].size() : 0;
+    if (p == 0) facts.targets = targets;
+    if (targets != facts.targets) {
+      diag_.error("MESH_PRIMITIVES_UNEQUAL_TARGETS_COUNT", here + (targets != 0 ? "/targets" : ""),
+                  "the primitive has " + std::to_string(targets) +
+                      " morph targets but the first has " + std::to_string(facts.targets) +
+                      "; all primitives of a mesh must have as many");
+    }
+  }
+  if (weights && facts.valid && weights->size() != facts.targets) {
+    diag_.error("MESH_INVALID_WEIGHTS_COUNT", pointer + "/weights",
+                "the mesh has " + std::to_string(weights->size()) + " weights for " +
+                    std::to_string(facts.targets) + " morph targets");
+  }
+}
+
+// True when the primitive has no error; adds its triangles to the mesh's.
+bool DocumentCheck::check_primitive(const Json& primitive, const std::string& pointer,
+                                    MeshFacts& mesh) {
+  const std::size_t errors = diag_.error_count();
+  const Json* attributes = read_object(primitive, "attributes", pointer, true);
+  std::map<std::string, std::size_t> accessors;  // The attributes with a valid accessor.
+  if (attributes != nullptr)
+    accessors = check_attributes(*attributes, pointer + "/attributes", false);
+  const std::size_t indices = read_ref(primitive, "indices", pointer, "accessors");
+  if (indices != kNone && accessors_[indices].valid) check_indices(indices, pointer + "/indices");
+  const auto mode = read_uint(primitive, "mode", pointer).value_or(4);
+  if (mode > 6) {
+    diag_.error("VALUE_NOT_IN_RANGE", pointer + "/mode",
+                "mode " + std::to_string(mode) +
+                    " is not a glTF primitive mode (0 POINTS .. 6 TRIANGLE_FAN)");
+  }
+  read_ref(primitive, "material", pointer, "materials");
+  if (const Json* targets = read_array(primitive, "targets", pointer)) {
+    for (std::size_t t = 0; t < targets->size(); ++t) {
+      const Json* target = object_at(*targets, t, pointer + "/targets");
+      if (target != nullptr)
+        check_target(*target, json_pointer(pointer + "/targets", t), accessors);
+    }
+  }
+  mesh.skinned |= accessors.count("JOINTS_0") > 0;
+  const auto position = accessors.find("POSITION");
+  const std::uint64_t vertices = indices != kNone              ? accessors_[indices].count
+                                 : position != accessors.end() ? accessors_[position->second].count
+                                                               : 0;
+  if (mode == 4) mesh.triangles = saturating_add(mesh.triangles, vertices / 3);
+  if ((mode == 5 || mode == 6) && vertices >= 3) {
+    mesh.triangles = saturating_add(mesh.triangles, vertices - 2);
+  }
+  return diag_.error_count() == errors;
+}
+
+// Names, references and formats of a primitive's attributes (or of a morph target's); returns
+// those with a valid accessor.
+std::map<std::string, std::size_t> DocumentCheck::check_attributes(const Json& attributes,
+                                                                   const std::string& pointer,
+                                                                   bool target) {
+  std::map<std::string, std::size_t> resolved;
+  std::map<std::string, std::vector<long>> sets;  // "TEXCOORD" -> {0, 1}
+  std::uint64_t count = 0;
+  for (const auto& [name, value] : attributes.items()) {
+    const std::string here = json_pointer(pointer, name);
+    const auto semantic = parse_semantic(name, target);
+    if (!semantic) {
+      diag_.error("MESH_PRIMITIVE_INVALID_ATTRIBUTE", here,
+                  "'" + quote(name) + "' is not a glTF attribute name");
+    }
+    const std::size_t accessor = reference(value, here, "accessors");
+    if (accessor == kNone || !semantic) continue;
+    if (semantic->second >= 0) sets[semantic->first].push_back(semantic->second);
+    if (!accessors_[accessor].valid) continue;
+    resolved[name] = accessor;
+    check_attribute_format(name, accessor, here);
+    use_view(accessors_[accessor].view, kArrayBuffer, here);
+    if (count != 0 && accessors_[accessor].count != count) {
+      diag_.error("MESH_PRIMITIVE_UNEQUAL_ACCESSOR_COUNT", here,
+                  "has " + std::to_string(accessors_[accessor].count) +
+                      " elements but another attribute has " + std::to_string(count) +
+                      "; all attributes of a primitive must have the same count");
+    }
+    count = accessors_[accessor].count;
+  }
+  for (auto& [base, numbers] : sets) {
+    std::sort(numbers.begin(), numbers.end());
+    if (numbers.back() + 1 != static_cast<long>(numbers.size())) {
+      diag_.error("MESH_PRIMITIVE_INDEXED_SEMANTIC_CONTINUITY", pointer,
+                  base + "_n attributes must be numbered 0, 1, 2... without gaps; found " +
+                      std::to_string(numbers.size()) + " up to " + base + "_" +
+                      std::to_string(numbers.back()));
+    }
+  }
+  if (!target && sets["JOINTS"].size() != sets["WEIGHTS"].size()) {
+    diag_.error("MESH_PRIMITIVE_JOINTS_WEIGHTS_MISMATCH", pointer,
+                std::to_string(sets["JOINTS"].size()) + " JOINTS_n attributes but " +
+                    std::to_string(sets["WEIGHTS"].size()) + " WEIGHTS_n; they come in pairs");
+  }
+  return resolved;
+}
+
+// The formats of the attributes the converter reads: POSITION, JOINTS_n and WEIGHTS_n.
+void DocumentCheck::check_attribute_format(const std::string& name, std::size_t accessor,
+                                           const std::string& pointer) {
+  const AccessorFacts& facts = accessors_[accessor];
+  const std::uint64_t type = facts.component_type;
+  const bool small_unsigned = type == kUnsignedByte || type == kUnsignedShort;
+  bool ok = true;
+  std::string expected;
+  if (name == "POSITION") {
+    const bool quantized = quantization_ && type != kUnsignedInt && type != kFloat;
+    ok = facts.type == "VEC3" && ((type == kFloat && !facts.normalized) || quantized);
+    expected = quantization_ ? "VEC3 of FLOAT, or of BYTE or SHORT (KHR_mesh_quantization)"
+                             : "VEC3 of FLOAT";
+  } else if (name.rfind("JOINTS_", 0) == 0) {
+    ok = facts.type == "VEC4" && small_unsigned && !facts.normalized;
+    expected = "VEC4 of UNSIGNED_BYTE or UNSIGNED_SHORT";
+  } else if (name.rfind("WEIGHTS_", 0) == 0) {
+    ok = facts.type == "VEC4" &&
+         (type == kFloat ? !facts.normalized : small_unsigned && facts.normalized);
+    expected = "VEC4 of FLOAT, or of normalized UNSIGNED_BYTE or UNSIGNED_SHORT";
+  }
+  if (!ok) {
+    diag_.error("MESH_PRIMITIVE_ATTRIBUTES_ACCESSOR_INVALID_FORMAT", pointer,
+                "the accessor is " + format_name(facts) + "; " + name + " must be " + expected);
+  }
+  const Json& json = *entries_["accessors"][accessor];
+  if (name == "POSITION" && ok && (!json.contains("min") || !json.contains("max"))) {
+    diag_.error("MESH_PRIMITIVE_POSITION_ACCESSOR_WITHOUT_BOUNDS", pointer,
+                "a POSITION accessor must declare min and max (its bounding box)");
+  }
+}
+
+void DocumentCheck::check_indices(std::size_t accessor, const std::string& pointer) {
+  const AccessorFacts& facts = accessors_[accessor];
+  const std::uint64_t type = facts.component_type;
+  if (facts.type != "SCALAR" || facts.normalized ||
+      (type != kUnsignedByte && type != kUnsignedShort && type != kUnsignedInt)) {
+    diag_.error("MESH_PRIMITIVE_INDICES_ACCESSOR_INVALID_FORMAT", pointer,
+                "indices must be SCALAR of UNSIGNED_BYTE, UNSIGNED_SHORT or UNSIGNED_INT, not " +
+                    format_name(facts));
+  }
+  if (facts.view != kNone && views_[facts.view].byte_stride != 0) {
+    diag_.error("MESH_PRIMITIVE_INDICES_ACCESSOR_WITH_BYTESTRIDE", pointer,
+                "buffer view " + std::to_string(facts.view) +
+                    " holds indices, so it must not have a byteStride");
+  }
+  use_view(facts.view, kElementArrayBuffer, pointer);
+}
+
+// A buffer view holds either vertices or indices: its target, else its first use, says which.
+void DocumentCheck::use_view(std::size_t view, std::uint64_t usage, const std::string& pointer) {
+  if (view == kNone) return;
+  if (views_[view].usage == 0) views_[view].usage = usage;
+  if (views_[view].usage == usage) return;
+  const auto kind = [](std::uint64_t u) { return u == kArrayBuffer ? "vertex" : "index"; };
+  diag_.error("BUFFER_VIEW_TARGET_OVERRIDE", pointer,
+              "buffer view " + std::to_string(view) + " holds " + kind(views_[view].usage) +
+                  " data, but is used here for " + kind(usage) + " data");
+}
+
+void DocumentCheck::check_target(const Json& target, const std::string& pointer,
+                                 const std::map<std::string, std::size_t>& base) {
+  const auto attributes = check_attributes(target, pointer, true);
+  for (const auto& [name, value] : target.items()) {
+    if (base.count(name) != 0) continue;
+    diag_.error("MESH_PRIMITIVE_MORPH_TARGET_NO_BASE_ACCESSOR", json_pointer(pointer, name),
+                "the morph target moves " + quote(name) + ", which the primitive does not have");
+  }
+  for (const auto& [name, accessor] : attributes) {
+    const auto found = base.find(name);
+    if (found == base.end() || accessors_[found->second].count == accessors_[accessor].count) {
+      continue;
+    }
+    diag_.error("MESH_PRIMITIVE_MORPH_TARGET_INVALID_ATTRIBUTE_COUNT", json_pointer(pointer, name),
+                "has " + std::to_string(accessors_[accessor].count) +
+                    " elements but the primitive's " + name + " has " +
+                    std::to_string(accessors_[found->second].count));
+  }
+}
+
+}  // namespace rdtf::internal

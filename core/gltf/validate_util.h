@@ -1,0 +1,88 @@
+// Small helpers shared by the glTF checks (validate_*.cc): glTF's numeric enums, overflow-checked
+// arithmetic, and untrusted JSON values read or quoted without throwing.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <limits>
+#include <optional>
+#include <string>
+
+#include "rdtf/gltf.h"
+
+namespace rdtf::internal {
+
+inline constexpr std::uint64_t kByte = 5120, kUnsignedByte = 5121, kShort = 5122,
+                               kUnsignedShort = 5123, kUnsignedInt = 5125, kFloat = 5126;
+// bufferView.target: vertex attributes, indices.
+inline constexpr std::uint64_t kArrayBuffer = 34962, kElementArrayBuffer = 34963;
+
+// Bytes of one component; 0 for a value that is no glTF componentType.
+inline std::uint64_t component_size(std::uint64_t component_type) {
+  switch (component_type) {
+    case kByte:
+    case kUnsignedByte:
+      return 1;
+    case kShort:
+    case kUnsignedShort:
+      return 2;
+    case kUnsignedInt:
+    case kFloat:
+      return 4;
+    default:
+      return 0;
+  }
+}
+
+inline std::optional<std::uint64_t> checked_add(std::uint64_t a, std::uint64_t b) {
+  if (b > std::numeric_limits<std::uint64_t>::max() - a) return std::nullopt;
+  return a + b;
+}
+
+inline std::optional<std::uint64_t> checked_mul(std::uint64_t a, std::uint64_t b) {
+  if (a != 0 && b > std::numeric_limits<std::uint64_t>::max() / a) return std::nullopt;
+  return a * b;
+}
+
+inline std::uint64_t saturating_add(std::uint64_t a, std::uint64_t b) {
+  return checked_add(a, b).value_or(std::numeric_limits<std::uint64_t>::max());
+}
+
+// A non-negative integer; an integral float (3.0) counts, as JavaScript readers see it.
+inline std::optional<std::uint64_t> as_uint(const Json& value) {
+  if (value.is_number_unsigned()) return value.get<std::uint64_t>();
+  if (value.is_number_integer() && value.get<std::int64_t>() >= 0) {
+    return value.get<std::uint64_t>();
+  }
+  if (value.is_number_float()) {
+    const double d = value.get<double>();
+    if (d >= 0 && d < 18446744073709551616.0 && d == std::floor(d)) {
+      return static_cast<std::uint64_t>(d);
+    }
+  }
+  return std::nullopt;
+}
+
+// Text from the file, shortened for a message without splitting a UTF-8 character.
+inline std::string quote(const std::string& text) {
+  constexpr std::size_t kMax = 40;
+  if (text.size() <= kMax) return text;
+  std::size_t end = kMax - 3;
+  while (end > 0 && (static_cast<unsigned char>(text[end]) & 0xC0) == 0x80) --end;
+  return text.substr(0, end) + "...";
+}
+
+// A JSON value as it appears in the file, shortened; never throws (invalid UTF-8 is replaced).
+inline std::string describe(const Json& value) {
+  return quote(value.dump(-1, ' ', false, Json::error_handler_t::replace));
+}
+
+// A number as a modeller reads it: "0", "1.5", "0.100000001" (enough digits for a float).
+inline std::string number_text(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.9g", value);
+  return text;
+}
+
+}  // namespace rdtf::internal

@@ -1,0 +1,250 @@
+// Dynamics of an RDTF robot: physical checks on its mass properties and joints, an ODE model of it,
+// the validation run that gates a model (docs/dynamics.md), and a live simulation for the daemon.
+//
+// Frames: every pose, position and velocity in this API is in the scene frame S (glTF: Y up) or a
+// link frame L (the robot's frames, docs/format.md). ODE's body frames (link frame moved to the
+// centre of mass) stay inside the implementation.
+//
+// ODE is process-global state: call init_ode() once before anything else touches ODE (Simulation
+// and validate_dynamics call it themselves). A Simulation is thread-confined: one thread at a time
+// uses it; any thread may own it (each thread's ODE data is allocated on first use).
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "rdtf/convert.h"
+#include "rdtf/diagnostics.h"
+#include "rdtf/gltf.h"
+#include "rdtf/robot.h"
+
+namespace rdtf {
+
+inline constexpr double kStandardGravity = 9.80665;  // m/s^2
+
+// ---------------------------------------------------------------------------------------------
+// Physical checks: pure functions of the robot (and optionally its geometry's bounds).
+
+struct PhysicalCheckOptions {
+  // A joint whose two links' masses differ by more than this factor is an error.
+  double max_mass_ratio = 1e3;
+  // |I - I^T| may reach this much of the largest |I_ij|.
+  double symmetry_tolerance = 1e-9;
+  // Principal moments A, B, C must satisfy A + B >= C - triangle_tolerance * (A + B + C).
+  double triangle_tolerance = 1e-6;
+  // Computed inertials: half the trace (the polar moment) may fall this much (relative) below the
+  // smallest any solid of the link's volumes and densities can have (that of balls).
+  double solid_bound_tolerance = 1e-6;
+  // The centre of mass may lie this far outside its link's geometry bounds, relative to the
+  // bounds' diagonal.
+  double geometry_tolerance = 1e-6;
+  // Whether the root links will float: a massless root is then not held by the world.
+  bool floating_root = false;
+};
+
+// Axis-aligned bounds of each link's geometry in its link frame (robot.links order); nothing for
+// a link without geometry. Skinned meshes count whole in each bone they are bound to (a superset
+// of the bone's part).
+using LinkBounds = std::vector<std::optional<Eigen::AlignedBox3d>>;
+LinkBounds link_geometry_bounds(const GltfAsset& asset, const Robot& robot);
+
+// Appends one diagnostic per failed condition (docs/dynamics.md lists the codes), each naming the
+// link or joint and its glTF node (/nodes/N) with the numbers that failed. `bounds` (optional)
+// enables the centre-of-mass-inside-geometry check.
+void check_physics(const Robot& robot, const PhysicalCheckOptions& options, const LinkBounds* bounds,
+                   Diagnostics& diag);
+
+// ---------------------------------------------------------------------------------------------
+// ODE.
+
+// dInitODE2 once per process (thread-safe, idempotent) and ODE's data for the calling thread.
+// ODE's messages (e.g. "LCP internal error") are counted per thread instead of printed.
+void init_ode();
+
+enum class Stepper { kAuto, kWorldStep, kQuickStep };
+
+struct SimulationOptions {
+  // In the scene frame. glTF is Y up; a model whose content is Z up sets {0, 0, -g}.
+  Eigen::Vector3d gravity{0, -kStandardGravity, 0};
+  bool floating_root = false;  // Default: every root link is fixed to the world.
+  double time_step = 1e-3;     // s; step() without an argument.
+  Stepper stepper = Stepper::kAuto;
+  int quickstep_min_bodies = 15;  // kAuto: dWorldStep below this many bodies, QuickStep from it.
+  int quickstep_iterations = 50;  // Gazebo's defaults.
+  double quickstep_sor = 1.3;
+  double erp = 0.2;
+  double cfm = 1e-10;
+};
+
+// A joint with one degree of freedom (revolute, continuous, prismatic). Position in rad or m
+// (continuous joints unwrapped: they count turns), velocity in rad/s or m/s, effort the actuator
+// torque or force applied in the last step (after clamping to the joint's effort limit).
+struct JointState {
+  std::string name;
+  JointKind kind = JointKind::kRevolute;
+  double position = 0;
+  double velocity = 0;
+  double effort = 0;
+};
+
+struct LinkPose {
+  std::string name;
+  Eigen::Isometry3d X_SL = Eigen::Isometry3d::Identity();  // Link frame in the scene frame.
+  Eigen::Vector3d v_SLo_S = Eigen::Vector3d::Zero();       // Velocity of the link origin.
+  Eigen::Vector3d w_SL_S = Eigen::Vector3d::Zero();        // Angular velocity.
+};
+
+enum class CommandMode { kTorque, kPosition, kVelocity };
+
+// Held until replaced or cleared. Torque: effort. Position: kp (position - q) + kd (velocity -
+// qdot) + effort. Velocity: kd (velocity - qdot) + effort. Clamped to the joint's effort limit.
+struct JointCommand {
+  std::string joint;
+  CommandMode mode = CommandMode::kTorque;
+  double effort = 0;    // N m or N (feed-forward in the position and velocity modes)
+  double position = 0;  // rad or m
+  double velocity = 0;  // rad/s or m/s
+  double kp = 0;        // N m/rad or N/m
+  double kd = 0;        // N m s/rad or N s/m
+};
+
+// What counts as a limit violated or a body out of its region, for SimulationHealth's ranking.
+struct HealthTolerances {
+  double limit_angular = 1e-2;           // rad
+  double limit_linear = 1e-3;            // m
+  double region_margin_relative = 0.1;   // of each body's reach bound
+  double region_margin_absolute = 0.01;  // m
+};
+
+// The state's physics, for watching a run (validation, or a live model).
+struct SimulationHealth {
+  bool finite = true;                   // Every body's position, orientation and velocities.
+  double kinetic_energy = 0;            // J
+  double potential_energy = 0;          // J: gravity (relative to the scene origin) and springs
+  double dissipated_energy = 0;         // J: work of the joint damping so far
+  double actuator_work = 0;             // J: work of the commands so far
+  double worst_joint_separation = 0;    // m between a joint's anchor points on its two bodies
+  int worst_separation_joint = -1;      // robot.joints index
+  double worst_joint_misalignment = 0;  // rad: axis (hinge) or relative rotation (fixed, slider)
+  int worst_misalignment_joint = -1;
+  double worst_limit_violation = 0;     // rad or m beyond a limit: the joint furthest beyond
+  double worst_limit_ratio = 0;         // its limit relative to its tolerance (> 1: violated)
+  int worst_limit_joint = -1;
+  // A body's centre of mass cannot get further from its root link's origin than its reach bound
+  // (joint offsets, centre-of-mass offset and prismatic travel along its path) plus the margins.
+  double worst_region_ratio = 0;        // distance / allowed distance (> 1: out of its region)
+  double worst_region_distance = 0;     // m
+  int worst_region_link = -1;           // robot.links index of that body's link
+};
+
+class Simulation {
+ public:
+  // Builds the ODE model of `robot` with the joints at `initial_positions` (by joint name; the
+  // rest pose for the others; values outside a joint's limits are clamped into them). Unknown
+  // names are reported as infos (a hot reload keeps what still exists). Returns nothing, with
+  // errors in `diag`, when the robot cannot be simulated.
+  static std::unique_ptr<Simulation> create(const Robot& robot, const SimulationOptions& options,
+                                            const std::map<std::string, double>& initial_positions,
+                                            Diagnostics& diag);
+  ~Simulation();
+  Simulation(const Simulation&) = delete;
+  Simulation& operator=(const Simulation&) = delete;
+
+  void step();           // options.time_step
+  void step(double dt);  // dt > 0, s
+
+  double time() const;
+  std::uint64_t steps() const;
+  const Robot& robot() const;
+  const SimulationOptions& options() const;
+  std::string_view stepper_name() const;  // of the last (or next) step: "dWorldStep" or "dWorldQuickStep"
+  int body_count() const;
+
+  std::vector<JointState> joint_states() const;  // robot.joints order, one-dof joints only
+  std::optional<JointState> joint_state(std::string_view joint) const;
+  std::vector<LinkPose> link_poses() const;      // robot.links order
+  std::optional<LinkPose> link_pose(std::string_view link) const;
+
+  // Applies nothing and returns false, with the reason in *error, for an unknown joint, a joint
+  // without one degree of freedom, non-finite values or negative gains.
+  bool set_command(const JointCommand& command, std::string* error = nullptr);
+  void clear_command(std::string_view joint);
+  void clear_commands();
+
+  SimulationHealth health(const HealthTolerances& tolerances = {}) const;
+  // ODE messages received while this simulation stepped (see init_ode).
+  const std::vector<std::string>& ode_messages() const;
+
+  struct Model;
+
+ private:
+  friend struct ValidationRun;  // validation.cc reads the model's bodies
+  explicit Simulation(std::unique_ptr<Model> model);
+  std::unique_ptr<Model> model_;
+};
+
+// ---------------------------------------------------------------------------------------------
+// The validation run (the gate).
+
+struct ValidationOptions {
+  PhysicalCheckOptions checks;      // checks.floating_root is taken from simulation.floating_root.
+  SimulationOptions simulation;
+  double duration = 3.0;            // s of simulated time from the start pose, passive.
+  std::map<std::string, double> initial_positions;  // Default: the rest pose.
+  // Failure thresholds.
+  double energy_tolerance = 0.01;   // relative rise of kinetic + potential + dissipated energy
+  // Joints may come apart by the larger of these (ODE's error grows with speed and size).
+  double joint_separation_tolerance = 1e-3;   // m
+  double joint_separation_relative = 1e-3;    // of the model's size (its largest reach bound)
+  double joint_misalignment_tolerance = 1e-2; // rad
+  double limit_tolerance_angular = 1e-2;      // rad
+  double limit_tolerance_linear = 1e-3;       // m
+  double region_margin_relative = 0.1;        // of each body's reach bound
+  double region_margin_absolute = 0.01;       // m
+};
+
+struct ValidationReport {
+  bool passed = false;       // No error diagnostic.
+  bool simulated = false;    // The ODE model was built and stepped.
+  Diagnostics diagnostics;   // Physical checks, ODE model, run: every one.
+  double simulated_time = 0; // s
+  std::uint64_t steps = 0;
+  std::string stepper;
+  int bodies = 0;
+  double time_step = 0;
+  // (E(t) + dissipated(t) - E(0)) / scale, E kinetic + potential; scale: the larger of the total
+  // weight times the reach and the largest kinetic energy so far. Largest value over the run
+  // (a rise is positive) and the value at its end.
+  double energy_drift = 0;
+  double final_energy_drift = 0;
+  double worst_joint_error = 0;          // m, separation
+  std::string worst_joint;               // its joint
+  double worst_joint_misalignment = 0;   // rad
+  double worst_limit_violation = 0;      // rad or m beyond a limit
+  std::string worst_limit_joint;
+  double wall_time = 0;                  // s, checks + model + run
+};
+
+// Physical checks, then (when the ODE model can be built) the run.
+ValidationReport validate_dynamics(const Robot& robot, const ValidationOptions& options,
+                                   const LinkBounds* bounds = nullptr, std::string file = {});
+// The same with the geometry bounds of a conversion.
+ValidationReport validate_dynamics(const Conversion& conversion, const ValidationOptions& options,
+                                   std::string file = {});
+
+// {"passed", "simulated", "simulatedTime", "steps", "stepper", "bodies", "timeStep",
+//  "energyDrift", "finalEnergyDrift", "worstJointError", "worstJoint", "worstJointMisalignment",
+//  "worstLimitViolation", "worstLimitJoint", "wallTime", "diagnostics": [...]}
+Json validation_report_json(const ValidationReport& report);
+// One line: "PASS|FAIL: 3 s simulated in 3000 steps (dWorldStep, 3 bodies), ...".
+std::string validation_summary_line(const ValidationReport& report);
+
+}  // namespace rdtf

@@ -1,0 +1,107 @@
+#include <array>
+#include <charconv>
+#include <cmath>
+
+#include <console_bridge/console.h>
+
+#include "urdf_internal.h"
+
+namespace rdtf::urdf_internal {
+
+Eigen::Matrix3d y_up_to_z_up() {
+  Eigen::Matrix3d C;
+  C << 1, 0, 0,  //
+      0, 0, -1,  //
+      0, 1, 0;
+  return C;
+}
+
+Eigen::Isometry3d conjugate(const Eigen::Matrix3d& C, const Eigen::Isometry3d& X) {
+  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
+  out.linear() = C * X.linear() * C.transpose();
+  out.translation() = C * X.translation();
+  return out;
+}
+
+Eigen::Vector3d rpy_from_rotation(const Eigen::Matrix3d& R) {
+  // R = Rz(y) Ry(p) Rx(r): R(2,0) = -sin p, R(2,1) = cos p sin r, R(2,2) = cos p cos r,
+  // R(1,0) = sin y cos p, R(0,0) = cos y cos p.
+  const double cos_pitch = std::hypot(R(0, 0), R(1, 0));
+  const double pitch = std::atan2(-R(2, 0), cos_pitch);
+  if (cos_pitch > 1e-12) {
+    return {std::atan2(R(2, 1), R(2, 2)), pitch, std::atan2(R(1, 0), R(0, 0))};
+  }
+  // Gimbal lock: only roll - yaw (pitch +90) or roll + yaw (pitch -90) is defined; put it in roll.
+  return {std::atan2(-R(1, 2), R(1, 1)), pitch, 0.0};
+}
+
+Eigen::Matrix3d rotation_from_rpy(const Eigen::Vector3d& rpy) {
+  return (Eigen::AngleAxisd(rpy.z(), Eigen::Vector3d::UnitZ()) *
+          Eigen::AngleAxisd(rpy.y(), Eigen::Vector3d::UnitY()) *
+          Eigen::AngleAxisd(rpy.x(), Eigen::Vector3d::UnitX()))
+      .toRotationMatrix();
+}
+
+std::string exact_number(double value) {
+  if (value == 0.0) return "0";
+  std::array<char, 64> buffer{};
+  const auto result = std::to_chars(buffer.data(), buffer.data() + buffer.size(), value);
+  return std::string(buffer.data(), result.ptr);
+}
+
+std::string valid_urdf_name(const std::string& text, const std::string& fallback) {
+  std::string out;
+  for (unsigned char c : text) {
+    const bool keep = std::isalnum(c) || c == '_' || c == '-' || c == '.';
+    out += keep ? static_cast<char>(c) : '_';
+  }
+  return out.empty() ? fallback : out;
+}
+
+std::string unique_name(const std::string& name, std::vector<std::string>& taken) {
+  auto used = [&](const std::string& candidate) {
+    for (const std::string& t : taken) {
+      if (t == candidate) return true;
+    }
+    return false;
+  };
+  std::string candidate = name;
+  for (int n = 2; used(candidate); ++n) candidate = name + "_" + std::to_string(n);
+  taken.push_back(candidate);
+  return candidate;
+}
+
+namespace {
+
+class Capture : public console_bridge::OutputHandler {
+ public:
+  void log(const std::string& text, console_bridge::LogLevel level, const char*, int) override {
+    if (level < console_bridge::CONSOLE_BRIDGE_LOG_WARN) return;
+    if (!messages.empty()) messages += "\n";
+    messages += text;
+  }
+  std::string messages;
+};
+
+}  // namespace
+
+std::string with_console_captured(const std::function<void()>& body) {
+  static std::mutex mutex;
+  const std::lock_guard<std::mutex> lock(mutex);
+  Capture capture;
+  const auto level = console_bridge::getLogLevel();
+  console_bridge::setLogLevel(console_bridge::CONSOLE_BRIDGE_LOG_WARN);
+  console_bridge::useOutputHandler(&capture);
+  try {
+    body();
+  } catch (...) {
+    console_bridge::restorePreviousOutputHandler();
+    console_bridge::setLogLevel(level);
+    throw;
+  }
+  console_bridge::restorePreviousOutputHandler();
+  console_bridge::setLogLevel(level);
+  return capture.messages;
+}
+
+}  // namespace rdtf::urdf_internal

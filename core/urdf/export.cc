@@ -1,0 +1,349 @@
+// RDTF -> URDF with urdfdom's own model types and exporter. docs/urdf.md describes the mapping.
+#include <map>
+#include <memory>
+
+#include <urdf_parser/urdf_parser.h>
+
+#include "rdtf/atomic_file.h"
+#include "rdtf/urdf.h"
+#include "urdf_check.h"
+#include "urdf_internal.h"
+
+namespace rdtf {
+namespace {
+
+using namespace urdf_internal;
+
+urdf::Vector3 to_urdf(const Eigen::Vector3d& v) { return urdf::Vector3(v.x(), v.y(), v.z()); }
+
+std::string node_pointer(int node) { return node >= 0 ? json_pointer("/nodes", node) : ""; }
+
+// URDF names for every link and joint: valid and unique, with a warning when changed.
+void choose_names(const Robot& robot, Diagnostics& diag, std::vector<std::string>& links,
+                  std::vector<std::string>& joints, std::vector<std::string>& taken_links,
+                  std::vector<std::string>& taken_joints) {
+  auto choose = [&](const std::string& name, int node, const char* what, const char* fallback,
+                    std::vector<std::string>& taken) {
+    const std::string chosen = unique_name(valid_urdf_name(name, fallback), taken);
+    if (chosen != name) {
+      diag.warning("URDF_NAME_CHANGED", node_pointer(node),
+                   std::string(what) + " '" + name + "' is named '" + chosen +
+                       "' in the URDF (URDF names here are unique and use letters, digits, '_', "
+                       "'-' and '.')");
+    }
+    return chosen;
+  };
+  for (const Link& link : robot.links) links.push_back(choose(link.name, link.node, "link", "link", taken_links));
+  for (const Joint& joint : robot.joints) {
+    joints.push_back(choose(joint.name, joint.node, "joint", "joint", taken_joints));
+  }
+}
+
+// The joint type in URDF, or nothing (and an error) when URDF cannot say it.
+std::optional<int> urdf_joint_type(const Joint& joint, const std::string& name, Diagnostics& diag) {
+  const std::string pointer = node_pointer(joint.node);
+  switch (joint.kind) {
+    case JointKind::kFixed:
+      return urdf::Joint::FIXED;
+    case JointKind::kContinuous:
+      return urdf::Joint::CONTINUOUS;
+    case JointKind::kFloating:
+      return urdf::Joint::FLOATING;
+    case JointKind::kPlanar:
+      return urdf::Joint::PLANAR;
+    case JointKind::kRevolute:
+      if (joint.limits) return urdf::Joint::REVOLUTE;
+      diag.warning("URDF_REVOLUTE_WITHOUT_LIMITS", pointer,
+                   "revolute joint '" + name + "' has no limits, which URDF requires: it turns "
+                   "without end, so it is written as a continuous joint");
+      return urdf::Joint::CONTINUOUS;
+    case JointKind::kPrismatic:
+      if (joint.limits) return urdf::Joint::PRISMATIC;
+      diag.error("URDF_PRISMATIC_WITHOUT_LIMITS", pointer,
+                 "prismatic joint '" + name + "' has no limits, which URDF requires and which "
+                 "have no neutral value: set rdtf_lower and rdtf_upper (m) on it");
+      return std::nullopt;
+    case JointKind::kBall:
+      diag.error("URDF_BALL_JOINT", pointer,
+                 "ball joint '" + name + "' has no URDF equivalent (URDF joints are fixed, "
+                 "revolute, continuous, prismatic, floating or planar)");
+      return std::nullopt;
+  }
+  return std::nullopt;
+}
+
+void set_origin(urdf::Pose& pose, const Eigen::Isometry3d& X, Eigen::Vector3d& rpy) {
+  pose.position = to_urdf(X.translation());
+  rpy = rpy_from_rotation(X.linear());
+  pose.rotation.setFromRPY(rpy.x(), rpy.y(), rpy.z());
+}
+
+urdf::LinkSharedPtr make_link(const std::string& name, const Link* link, const LinkSurface* surface,
+                              const Eigen::Matrix3d& C, const std::string& mesh_uri) {
+  auto out = std::make_shared<urdf::Link>();
+  out->name = name;
+  if (link == nullptr) return out;
+  const MassProperties& m = link->inertial;
+  if (m.mass != 0 || !m.inertia.isZero(0)) {
+    auto inertial = std::make_shared<urdf::Inertial>();
+    inertial->mass = m.mass;
+    inertial->origin.position = to_urdf(C * m.center_of_mass);
+    const Eigen::Matrix3d I = C * m.inertia * C.transpose();
+    inertial->ixx = I(0, 0);
+    inertial->ixy = I(0, 1);
+    inertial->ixz = I(0, 2);
+    inertial->iyy = I(1, 1);
+    inertial->iyz = I(1, 2);
+    inertial->izz = I(2, 2);
+    out->inertial = inertial;
+  }
+  if (surface != nullptr && !surface->mesh.triangles.empty()) {
+    auto mesh = std::make_shared<urdf::Mesh>();
+    mesh->filename = mesh_uri;
+    auto visual = std::make_shared<urdf::Visual>();
+    visual->geometry = mesh;
+    out->visual = visual;
+    out->visual_array.push_back(visual);
+    if (surface->closed) {
+      auto collision = std::make_shared<urdf::Collision>();
+      collision->geometry = mesh;
+      out->collision = collision;
+      out->collision_array.push_back(collision);
+    }
+  }
+  return out;
+}
+
+std::string vector_text(const urdf::Vector3& v) {
+  return exact_number(v.x) + " " + exact_number(v.y) + " " + exact_number(v.z);
+}
+
+std::string vector_text(const Eigen::Vector3d& v) {
+  return exact_number(v.x()) + " " + exact_number(v.y()) + " " + exact_number(v.z());
+}
+
+// urdfdom prints six significant digits: print every number of the model again, exactly.
+void fix_precision(TiXmlElement* robot, const urdf::ModelInterface& model,
+                   const std::map<std::string, Eigen::Vector3d>& joint_rpy) {
+  for (TiXmlElement* e = robot->FirstChildElement("link"); e; e = e->NextSiblingElement("link")) {
+    const auto link = model.getLink(e->Attribute("name") ? e->Attribute("name") : "");
+    if (!link) continue;
+    if (TiXmlElement* inertial = e->FirstChildElement("inertial"); inertial && link->inertial) {
+      const urdf::Inertial& in = *link->inertial;
+      if (TiXmlElement* mass = inertial->FirstChildElement("mass")) mass->SetAttribute("value", exact_number(in.mass));
+      if (TiXmlElement* origin = inertial->FirstChildElement("origin")) {
+        origin->SetAttribute("xyz", vector_text(in.origin.position));
+        origin->SetAttribute("rpy", "0 0 0");
+      }
+      if (TiXmlElement* I = inertial->FirstChildElement("inertia")) {
+        I->SetAttribute("ixx", exact_number(in.ixx));
+        I->SetAttribute("ixy", exact_number(in.ixy));
+        I->SetAttribute("ixz", exact_number(in.ixz));
+        I->SetAttribute("iyy", exact_number(in.iyy));
+        I->SetAttribute("iyz", exact_number(in.iyz));
+        I->SetAttribute("izz", exact_number(in.izz));
+      }
+    }
+    for (const char* kind : {"visual", "collision"}) {
+      for (TiXmlElement* v = e->FirstChildElement(kind); v; v = v->NextSiblingElement(kind)) {
+        if (TiXmlElement* origin = v->FirstChildElement("origin")) {
+          origin->SetAttribute("xyz", "0 0 0");
+          origin->SetAttribute("rpy", "0 0 0");
+        }
+      }
+    }
+  }
+  for (TiXmlElement* e = robot->FirstChildElement("joint"); e; e = e->NextSiblingElement("joint")) {
+    const std::string name = e->Attribute("name") ? e->Attribute("name") : "";
+    const auto joint = model.getJoint(name);
+    if (!joint) continue;
+    if (TiXmlElement* origin = e->FirstChildElement("origin")) {
+      origin->SetAttribute("xyz", vector_text(joint->parent_to_joint_origin_transform.position));
+      origin->SetAttribute("rpy", vector_text(joint_rpy.at(name)));
+    }
+    if (TiXmlElement* axis = e->FirstChildElement("axis")) axis->SetAttribute("xyz", vector_text(joint->axis));
+    if (TiXmlElement* limit = e->FirstChildElement("limit"); limit && joint->limits) {
+      limit->SetAttribute("lower", exact_number(joint->limits->lower));
+      limit->SetAttribute("upper", exact_number(joint->limits->upper));
+      limit->SetAttribute("effort", exact_number(joint->limits->effort));
+      limit->SetAttribute("velocity", exact_number(joint->limits->velocity));
+    }
+    if (TiXmlElement* dynamics = e->FirstChildElement("dynamics"); dynamics && joint->dynamics) {
+      dynamics->SetAttribute("damping", exact_number(joint->dynamics->damping));
+      dynamics->SetAttribute("friction", exact_number(joint->dynamics->friction));
+    }
+  }
+}
+
+}  // namespace
+
+std::optional<UrdfExport> export_urdf(const Conversion& conversion, const UrdfOptions& options,
+                                      Diagnostics& diag) {
+  const Robot& robot = conversion.robot;
+  if (robot.links.empty()) {
+    diag.error("URDF_NO_LINKS", "", "the model has no link, and a URDF needs at least one");
+    return std::nullopt;
+  }
+  const Eigen::Matrix3d C = options.y_up ? Eigen::Matrix3d::Identity() : y_up_to_z_up();
+  UrdfExport result;
+  std::vector<std::string> taken_links, taken_joints;
+  choose_names(robot, diag, result.link_names, result.joint_names, taken_links, taken_joints);
+  const auto surfaces = link_surfaces(conversion.asset, robot);
+
+  auto model = std::make_shared<urdf::ModelInterface>();
+  model->name_ = robot.name.empty() ? "robot" : robot.name;
+  for (std::size_t l = 0; l < robot.links.size(); ++l) {
+    const Link& link = robot.links[l];
+    const std::string& name = result.link_names[l];
+    const std::string file = "meshes/" + name + ".stl";
+    model->links_[name] = make_link(name, &link, &surfaces[l], C, options.mesh_uri_prefix + file);
+    if (!surfaces[l].mesh.triangles.empty()) {
+      result.meshes.push_back({file, stl_bytes(surfaces[l].mesh, "rdtf: link " + name)});
+      if (!surfaces[l].closed) {
+        diag.info("URDF_VISUAL_ONLY", node_pointer(link.node),
+                  "link '" + name + "': a mesh of it is open or has no volume, so it is visual "
+                  "geometry only (no <collision>; MuJoCo refuses collision meshes without volume)");
+      }
+    }
+  }
+
+  bool ok = true;
+  std::map<std::string, Eigen::Vector3d> joint_rpy;
+  for (std::size_t j = 0; j < robot.joints.size(); ++j) {
+    const Joint& joint = robot.joints[j];
+    const std::string& name = result.joint_names[j];
+    const auto type = urdf_joint_type(joint, name, diag);
+    if (!type) {
+      ok = false;
+      continue;
+    }
+    auto out = std::make_shared<urdf::Joint>();
+    out->name = name;
+    out->type = static_cast<decltype(out->type)>(*type);
+    out->parent_link_name = result.link_names[joint.parent_link];
+    out->child_link_name = result.link_names[joint.child_link];
+    set_origin(out->parent_to_joint_origin_transform, conjugate(C, joint.X_PJ), joint_rpy[name]);
+    if (*type != urdf::Joint::FIXED && *type != urdf::Joint::FLOATING) {
+      out->axis = to_urdf(C * joint.axis);
+      out->dynamics = std::make_shared<urdf::JointDynamics>();
+      out->dynamics->damping = joint.damping;
+      out->dynamics->friction = joint.friction;
+    }
+    if (joint.limits && *type != urdf::Joint::FIXED && *type != urdf::Joint::FLOATING &&
+        *type != urdf::Joint::PLANAR) {
+      out->limits = std::make_shared<urdf::JointLimits>();
+      out->limits->lower = joint.limits->lower;
+      out->limits->upper = joint.limits->upper;
+      out->limits->effort = joint.limits->effort;
+      out->limits->velocity = joint.limits->velocity;
+    }
+    if (joint.spring_stiffness != 0) {
+      diag.warning("URDF_SPRING_DROPPED", node_pointer(joint.node),
+                   "joint '" + name + "': URDF has no spring, its stiffness is not exported");
+    }
+    const Link& child = robot.links[joint.child_link];
+    if (*type != urdf::Joint::FIXED && child.inertial.mass <= 0) {
+      diag.warning("URDF_MASSLESS_MOVING_LINK", node_pointer(child.node),
+                   "link '" + result.link_names[joint.child_link] + "' moves on joint '" + name +
+                       "' but has no mass: simulators (MuJoCo among them) refuse it");
+    }
+    model->joints_[name] = out;
+  }
+  if (!ok) return std::nullopt;
+
+  // One root: with several root links, an empty link "root" (the scene frame) holds them all.
+  if (robot.root_links.size() > 1) {
+    const std::string root = unique_name("root", taken_links);
+    model->links_[root] = make_link(root, nullptr, nullptr, C, "");
+    for (int l : robot.root_links) {
+      const std::string name = unique_name(root + "_" + result.link_names[l] + "_joint", taken_joints);
+      auto joint = std::make_shared<urdf::Joint>();
+      joint->name = name;
+      joint->type = urdf::Joint::FIXED;
+      joint->parent_link_name = root;
+      joint->child_link_name = result.link_names[l];
+      set_origin(joint->parent_to_joint_origin_transform, conjugate(C, robot.links[l].X_SL), joint_rpy[name]);
+      model->joints_[name] = joint;
+    }
+    diag.info("URDF_ROOT_ADDED", "",
+              std::to_string(robot.root_links.size()) + " root links: the URDF's root is a new "
+              "empty link '" + root + "' (the scene frame) holding each of them by a fixed joint");
+  }
+
+  std::string text;
+  std::string failure;
+  const std::string messages = urdf_internal::with_console_captured([&] {
+    try {
+      std::map<std::string, std::string> parent_of;
+      model->initTree(parent_of);
+      model->initRoot(parent_of);
+    } catch (const std::exception& error) {
+      failure = error.what();
+      return;
+    }
+    std::unique_ptr<TiXmlDocument> document(urdf::exportURDF(*model));
+    if (!document || !document->RootElement()) {
+      failure = "urdfdom's exporter returned no document";
+      return;
+    }
+    TiXmlElement* root = document->RootElement();
+    fix_precision(root, *model, joint_rpy);
+    if (options.mujoco_compiler) {
+      TiXmlElement mujoco("mujoco");
+      TiXmlElement compiler("compiler");
+      compiler.SetAttribute("meshdir", "meshes");
+      compiler.SetAttribute("fusestatic", "false");
+      compiler.SetAttribute("inertiafromgeom", "false");
+      mujoco.InsertEndChild(compiler);
+      if (root->FirstChild()) {
+        root->InsertBeforeChild(root->FirstChild(), mujoco);
+      } else {
+        root->InsertEndChild(mujoco);
+      }
+    }
+    document->InsertBeforeChild(document->FirstChild(), TiXmlDeclaration("1.0", "UTF-8", ""));
+    TiXmlPrinter printer;
+    printer.SetIndent("  ");
+    document->Accept(&printer);
+    text = printer.Str();
+  });
+  if (!failure.empty()) {
+    diag.error("URDF_EXPORT_FAILED", "", "urdfdom refused the model: " + failure + (messages.empty() ? "" : " (" + messages + ")"));
+    return std::nullopt;
+  }
+  // The check: urdfdom reads it back, with every number exactly as we meant it.
+  std::string mismatch;
+  if (!urdf_internal::reads_back_exactly(text, *model, mismatch)) {
+    diag.error("URDF_SELF_CHECK_FAILED", "", "the URDF written does not read back: " + mismatch);
+    return std::nullopt;
+  }
+  result.text = std::move(text);
+  return result;
+}
+
+bool write_urdf(const Conversion& conversion, const std::filesystem::path& dir,
+                const UrdfOptions& options, Diagnostics& diag, std::string* urdf_text) {
+  auto exported = export_urdf(conversion, options, diag);
+  if (!exported) return false;
+  std::error_code error;
+  std::filesystem::create_directories(dir / "meshes", error);
+  if (error) {
+    diag.error("WRITE_FAILED", "", "cannot create " + (dir / "meshes").string() + ": " + error.message());
+    return false;
+  }
+  std::string why;
+  for (const UrdfMeshFile& mesh : exported->meshes) {  // Meshes first: the URDF refers to them.
+    if (!write_file_atomically(dir / mesh.path, mesh.bytes, why)) {
+      diag.error("WRITE_FAILED", "", "cannot write " + (dir / mesh.path).string() + ": " + why);
+      return false;
+    }
+  }
+  if (!write_file_atomically(dir / "robot.urdf", exported->text, why)) {
+    diag.error("WRITE_FAILED", "", "cannot write " + (dir / "robot.urdf").string() + ": " + why);
+    return false;
+  }
+  if (urdf_text != nullptr) *urdf_text = std::move(exported->text);
+  return true;
+}
+
+}  // namespace rdtf

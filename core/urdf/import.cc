@@ -1,0 +1,313 @@
+// URDF -> RDTF: a glTF whose every node is typed in extras.RDTF, then the ordinary conversion.
+#include <fstream>
+#include <map>
+
+#include <urdf_parser/urdf_parser.h>
+
+#include "import_internal.h"
+#include "rdtf/glb.h"
+#include "rdtf/rdtf_extras.h"
+#include "rdtf/urdf.h"
+#include "urdf_internal.h"
+
+namespace rdtf {
+namespace {
+
+using namespace urdf_internal;
+namespace fs = std::filesystem;
+
+std::optional<std::string> read_text(const fs::path& path, std::uint64_t max_bytes, Diagnostics& diag) {
+  std::error_code error;
+  if (!fs::is_regular_file(path, error)) {
+    diag.error("URDF_READ_FAILED", "", "cannot read " + path.string() + ": not a regular file");
+    return std::nullopt;
+  }
+  if (fs::file_size(path, error) > max_bytes) {
+    diag.error("FILE_TOO_LARGE", "", path.string() + " is larger than " + std::to_string(max_bytes) + " bytes");
+    return std::nullopt;
+  }
+  std::ifstream in(path, std::ios::binary);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (!in && !in.eof()) {
+    diag.error("URDF_READ_FAILED", "", "cannot read " + path.string());
+    return std::nullopt;
+  }
+  return text;
+}
+
+Eigen::Isometry3d to_isometry(const urdf::Pose& pose) {
+  Eigen::Isometry3d X = Eigen::Isometry3d::Identity();
+  const urdf::Rotation& q = pose.rotation;
+  X.linear() = Eigen::Quaterniond(q.w, q.x, q.y, q.z).normalized().toRotationMatrix();
+  X.translation() = Eigen::Vector3d(pose.position.x, pose.position.y, pose.position.z);
+  return X;
+}
+
+Eigen::Vector3d to_eigen(const urdf::Vector3& v) { return {v.x, v.y, v.z}; }
+
+// translation and rotation of a glTF node (left out when they are the identity's).
+void set_transform(Json& node, const Eigen::Isometry3d& X) {
+  const Eigen::Vector3d t = X.translation();
+  if (!t.isZero(0)) node["translation"] = vector_to_json(t);
+  Eigen::Quaterniond q(X.linear());
+  q.normalize();
+  if (q.w() < 0) q.coeffs() = -q.coeffs();
+  if (!(q.x() == 0 && q.y() == 0 && q.z() == 0)) node["rotation"] = Json::array({q.x(), q.y(), q.z(), q.w()});
+}
+
+class Builder {
+ public:
+  Builder(const fs::path& urdf_path, const UrdfImportOptions& import_options, Diagnostics& diagnostics,
+          const Eigen::Matrix3d& axes)
+      : urdf(urdf_path), options(import_options), diag(diagnostics), C(axes), writer(document) {}
+
+  const fs::path& urdf;
+  const UrdfImportOptions& options;
+  Diagnostics& diag;
+  const Eigen::Matrix3d C;  // URDF axes -> glTF axes.
+  Json document = Json{{"asset", {{"version", "2.0"}, {"generator", "rdtf import (URDF)"}}},
+                       {"nodes", Json::array()}};
+  GltfMeshWriter writer;  // One buffer for every mesh.
+  Json entries = Json::array();
+  std::map<std::string, std::size_t> materials;
+  std::uint64_t triangles = 0;
+  bool ok = true;
+
+  std::size_t add_node(Json node, const char* type, Json extra = nullptr) {
+    document["nodes"].push_back(std::move(node));
+    const std::size_t index = document["nodes"].size() - 1;
+    Json entry{{"node", index}, {"type", type}};
+    if (!extra.is_null()) entry[type] = std::move(extra);
+    entries.push_back(std::move(entry));
+    return index;
+  }
+
+  std::optional<std::size_t> material_for(const urdf::Visual& visual) {
+    if (!visual.material || visual.material_name.empty()) return std::nullopt;
+    if (const auto found = materials.find(visual.material_name); found != materials.end()) return found->second;
+    const urdf::Color& c = visual.material->color;
+    auto clamp = [](float v) { return std::min(1.0, std::max(0.0, static_cast<double>(v))); };
+    Json material{{"name", visual.material_name},
+                  {"pbrMetallicRoughness",
+                   {{"baseColorFactor", Json::array({clamp(c.r), clamp(c.g), clamp(c.b), clamp(c.a)})},
+                    {"metallicFactor", 0.0}}}};
+    if (clamp(c.a) < 1) material["alphaMode"] = "BLEND";
+    document["materials"].push_back(std::move(material));
+    return materials[visual.material_name] = document["materials"].size() - 1;
+  }
+
+  // The triangles of one <visual> (or <collision>) geometry in its own frame, or nothing.
+  std::optional<TriangleMesh> geometry(const urdf::Geometry& g, const std::string& pointer, int row,
+                                       Eigen::Vector3d& scale) {
+    const std::string at = "line " + std::to_string(row) + ": ";
+    auto skip = [&](const std::string& why) {
+      diag.warning("URDF_GEOMETRY_SKIPPED", pointer, at + why + "; this geometry is skipped");
+      return std::nullopt;
+    };
+    scale = Eigen::Vector3d::Ones();
+    switch (g.type) {
+      case urdf::Geometry::BOX: {
+        const auto& box = static_cast<const urdf::Box&>(g);
+        const Eigen::Vector3d size = to_eigen(box.dim);
+        if (!(size.minCoeff() > 0)) return skip("box size is not positive");
+        return box_mesh(size);
+      }
+      case urdf::Geometry::CYLINDER: {
+        const auto& cylinder = static_cast<const urdf::Cylinder&>(g);
+        if (!(cylinder.radius > 0 && cylinder.length > 0)) return skip("cylinder radius or length is not positive");
+        return cylinder_mesh(cylinder.radius, cylinder.length);
+      }
+      case urdf::Geometry::SPHERE: {
+        const auto& sphere = static_cast<const urdf::Sphere&>(g);
+        if (!(sphere.radius > 0)) return skip("sphere radius is not positive");
+        return sphere_mesh(sphere.radius);
+      }
+      case urdf::Geometry::MESH:
+        break;
+    }
+    const auto& mesh = static_cast<const urdf::Mesh&>(g);
+    std::string extension = fs::path(mesh.filename).extension().string();
+    for (char& ch : extension) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+    if (extension != ".stl") {
+      diag.warning("URDF_MESH_FORMAT_UNSUPPORTED", pointer,
+                   at + "mesh '" + mesh.filename + "' is not STL (the one mesh format import reads); skipped");
+      return std::nullopt;
+    }
+    std::string why;
+    const auto path = resolve_mesh_path(mesh.filename, urdf.parent_path().empty() ? fs::path(".") : urdf.parent_path(), why);
+    if (!path) {
+      diag.error("URDF_MESH_NOT_FOUND", pointer, at + why);
+      ok = false;
+      return std::nullopt;
+    }
+    Diagnostics read_diag(path->string());
+    const auto bytes = read_text(*path, options.convert.limits.max_file_bytes, read_diag);
+    if (!bytes) {
+      diag.error("URDF_MESH_NOT_FOUND", pointer, at + "mesh '" + mesh.filename + "': " + read_diag.all().front().message);
+      ok = false;
+      return std::nullopt;
+    }
+    auto triangles_read = parse_stl(std::vector<std::uint8_t>(bytes->begin(), bytes->end()), why);
+    if (!triangles_read) {
+      diag.error("URDF_MESH_INVALID", pointer, at + "mesh '" + path->string() + "': " + why);
+      ok = false;
+      return std::nullopt;
+    }
+    if (triangles_read->triangles.empty()) return skip("mesh '" + path->string() + "' has no triangles");
+    scale = to_eigen(mesh.scale);
+    return triangles_read;
+  }
+
+  // The link's visual node with a mesh node per geometry, or nothing when it has none.
+  std::optional<std::size_t> visuals(const urdf::Link& link, const XmlLink& xml) {
+    bool use_collision = link.visual_array.empty() && !link.collision_array.empty();
+    if (use_collision) {
+      diag.info("URDF_COLLISION_AS_VISUAL", link_pointer(link.name),
+                "link '" + link.name + "' has no <visual>: its <collision> geometry is its mesh");
+    }
+    std::vector<std::size_t> mesh_nodes;
+    const std::size_t count = use_collision ? link.collision_array.size() : link.visual_array.size();
+    for (std::size_t i = 0; i < count; ++i) {
+      const urdf::GeometrySharedPtr& g = use_collision ? link.collision_array[i]->geometry : link.visual_array[i]->geometry;
+      const urdf::Pose& origin = use_collision ? link.collision_array[i]->origin : link.visual_array[i]->origin;
+      const std::string element = use_collision ? "collision" : "visual";
+      const std::vector<int>& rows = use_collision ? xml.collision_rows : xml.visual_rows;
+      const int row = i < rows.size() ? rows[i] : xml.row;
+      const std::string pointer = link_pointer(link.name) + "/" + element + "[" + std::to_string(i + 1) + "]";
+      if (!g) continue;
+      Eigen::Vector3d scale;
+      auto mesh = geometry(*g, pointer, row, scale);
+      if (!mesh) continue;
+      triangles += mesh->triangles.size();
+      if (triangles > options.convert.limits.max_triangles) {
+        diag.error("TOO_MANY_TRIANGLES", pointer, "more than " + std::to_string(options.convert.limits.max_triangles) + " triangles");
+        ok = false;
+        return std::nullopt;
+      }
+      std::string name = use_collision ? link.collision_array[i]->name : link.visual_array[i]->name;
+      if (name.empty()) name = link.name + "_" + element + (count > 1 ? "_" + std::to_string(i + 1) : "");
+      const auto material = use_collision ? std::nullopt : material_for(*link.visual_array[i]);
+      const std::size_t mesh_index = writer.add_mesh(*mesh, name, material);
+      Json node{{"name", name}, {"mesh", mesh_index}};
+      Eigen::Isometry3d X = to_isometry(origin);
+      X.linear() = C * X.linear();
+      X.translation() = C * X.translation();
+      set_transform(node, X);
+      if (scale != Eigen::Vector3d::Ones()) node["scale"] = vector_to_json(scale);
+      mesh_nodes.push_back(add_node(std::move(node), "mesh"));
+    }
+    if (mesh_nodes.empty()) return std::nullopt;
+    return add_node(Json{{"name", link.name + "_visual"}, {"children", mesh_nodes}}, "visual");
+  }
+
+  Json joint_json(const urdf::Joint& joint) {
+    static const std::map<int, const char*> kinds{
+        {urdf::Joint::FIXED, "fixed"},         {urdf::Joint::REVOLUTE, "revolute"},
+        {urdf::Joint::CONTINUOUS, "continuous"}, {urdf::Joint::PRISMATIC, "prismatic"},
+        {urdf::Joint::FLOATING, "floating"},   {urdf::Joint::PLANAR, "planar"}};
+    Json out{{"type", kinds.at(joint.type)}};
+    if (joint.type != urdf::Joint::FIXED && joint.type != urdf::Joint::FLOATING) {
+      out["axis"] = vector_to_json(C * to_eigen(joint.axis));
+    }
+    if (joint.limits) {
+      out["lower"] = joint.limits->lower;
+      out["upper"] = joint.limits->upper;
+      if (joint.limits->effort > 0) out["effort"] = joint.limits->effort;
+      if (joint.limits->velocity > 0) out["velocity"] = joint.limits->velocity;
+    }
+    out["friction"] = joint.dynamics ? joint.dynamics->friction : 0.0;
+    out["damping"] = joint.dynamics ? joint.dynamics->damping : 0.0;
+    out["springStiffness"] = 0.0;
+    if (joint.mimic || joint.safety || joint.calibration) {
+      diag.info("URDF_IGNORED", joint_pointer(joint.name),
+                "joint '" + joint.name + "': <mimic>, <safety_controller> and <calibration> have no "
+                "RDTF equivalent and are not imported");
+    }
+    return out;
+  }
+
+  Json inertial_json(const urdf::Inertial& in) {
+    Eigen::Matrix3d I;
+    I << in.ixx, in.ixy, in.ixz, in.ixy, in.iyy, in.iyz, in.ixz, in.iyz, in.izz;
+    const Eigen::Matrix3d R = C * to_isometry(in.origin).linear();
+    return Json{{"mass", in.mass},
+                {"gravityCenter", vector_to_json(C * to_eigen(in.origin.position))},
+                {"inertia", inertia_to_json(R * I * R.transpose())},
+                {"frame", "link"}};
+  }
+};
+
+}  // namespace
+
+std::optional<Conversion> import_urdf(const fs::path& urdf, const UrdfImportOptions& options,
+                                      Diagnostics& diag) {
+  diag.set_file(urdf.string());
+  const auto text = read_text(urdf, options.convert.limits.max_file_bytes, diag);
+  if (!text) return std::nullopt;
+  const auto xml = scan_urdf_xml(*text, diag);
+  if (!xml) return std::nullopt;
+  urdf::ModelInterfaceSharedPtr model;
+  const std::string messages = with_console_captured([&] { model = urdf::parseURDF(*text); });
+  if (!model) {
+    diag.error("URDF_PARSE_FAILED", "/robot", "urdfdom cannot read it: " + messages);
+    return std::nullopt;
+  }
+
+  Builder b(urdf, options, diag,
+            options.z_up ? Eigen::Matrix3d::Identity() : Eigen::Matrix3d(y_up_to_z_up().transpose()));
+
+  // Links depth first from the root, children in document order.
+  std::map<std::string, std::size_t> xml_link;
+  for (std::size_t i = 0; i < xml->links.size(); ++i) xml_link[xml->links[i].name] = i;
+  std::map<std::string, std::vector<std::size_t>> child_joints;
+  for (std::size_t j = 0; j < xml->joints.size(); ++j) child_joints[xml->joints[j].parent].push_back(j);
+
+  std::map<std::string, std::size_t> link_node;
+  std::vector<std::pair<std::size_t, std::string>> joint_children;  // (joint node, child link)
+  std::vector<std::pair<std::string, const XmlJoint*>> stack{{xml->links[xml->root].name, nullptr}};
+  while (!stack.empty()) {
+    const auto [name, via] = stack.back();
+    stack.pop_back();
+    urdf::LinkConstSharedPtr link = model->getLink(name);
+    Json node{{"name", name}};
+    if (via != nullptr) set_transform(node, conjugate(b.C, to_isometry(model->getJoint(via->name)->parent_to_joint_origin_transform)));
+    const std::size_t index = b.add_node(std::move(node), "link");
+    link_node[name] = index;
+    Json children = Json::array();
+    if (const auto visual = b.visuals(*link, xml->links[xml_link.at(name)])) children.push_back(*visual);
+    const auto& joints = child_joints[name];
+    for (std::size_t j : joints) {
+      const XmlJoint& joint = xml->joints[j];
+      const std::size_t joint_node = b.add_node(Json{{"name", joint.name}}, "joint", b.joint_json(*model->getJoint(joint.name)));
+      children.push_back(joint_node);
+      joint_children.emplace_back(joint_node, joint.child);
+    }
+    for (auto it = joints.rbegin(); it != joints.rend(); ++it) stack.emplace_back(xml->joints[*it].child, &xml->joints[*it]);
+    if (link->inertial) {
+      children.push_back(b.add_node(Json{{"name", name + "_inertial"}}, "inertial", b.inertial_json(*link->inertial)));
+    } else {
+      diag.info("URDF_NO_INERTIAL", link_pointer(name),
+                "link '" + name + "' has no <inertial>: rdtf computes it from the link's geometry");
+    }
+    if (!children.empty()) b.document["nodes"][index]["children"] = std::move(children);
+  }
+  if (!b.ok) return std::nullopt;
+  for (const auto& [joint_node, child] : joint_children) {
+    b.document["nodes"][joint_node]["children"] = Json::array({link_node.at(child)});
+  }
+  b.document["scene"] = 0;
+  b.document["scenes"] = Json::array({Json{{"nodes", Json::array({link_node.at(xml->links[xml->root].name)})}}});
+  const std::vector<std::uint8_t> bin = b.writer.take_buffer();
+  if (!bin.empty()) b.document["buffers"] = Json::array({Json{{"byteLength", bin.size()}}});
+  b.document["extras"] = Json{{"RDTF", {{"version", "1.0"}, {"name", model->getName()}, {"nodes", b.entries}}}};
+
+  // Through the loader, as any model: the generated glTF is validated like input.
+  const std::string display = urdf.string() + " (as glTF)";
+  diag.set_file(display);
+  const auto glb = make_glb(b.document.dump(), bin);
+  auto asset = load_gltf_from_memory(glb, display, fs::path(), options.convert.limits, diag);
+  if (!asset) return std::nullopt;
+  return convert(std::move(*asset), options.convert, diag);
+}
+
+}  // namespace rdtf

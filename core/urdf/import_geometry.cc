@@ -1,0 +1,172 @@
+// Geometry for URDF import: generated primitives, mesh file lookup, and the glTF buffer.
+#include <cmath>
+#include <cstring>
+#include <numbers>
+
+#include "import_internal.h"
+#include "rdtf/mass_properties.h"
+
+namespace rdtf::urdf_internal {
+namespace {
+
+std::uint32_t add_vertex(TriangleMesh& mesh, const Eigen::Vector3d& p) {
+  mesh.positions.push_back(p);
+  return static_cast<std::uint32_t>(mesh.positions.size() - 1);
+}
+
+void scale_to_volume(TriangleMesh& mesh, double volume) {
+  const double have = integrate_solid(std::span<const TriangleMesh>(&mesh, 1), Eigen::Affine3d::Identity()).volume;
+  const double factor = std::cbrt(volume / have);
+  for (Eigen::Vector3d& p : mesh.positions) p *= factor;
+}
+
+}  // namespace
+
+TriangleMesh box_mesh(const Eigen::Vector3d& size) {
+  TriangleMesh mesh;
+  const Eigen::Vector3d h = size / 2;
+  for (int i = 0; i < 8; ++i) {
+    add_vertex(mesh, {(i & 1) ? h.x() : -h.x(), (i & 2) ? h.y() : -h.y(), (i & 4) ? h.z() : -h.z()});
+  }
+  // Two outward triangles per face (corner index bits: x = 1, y = 2, z = 4).
+  mesh.triangles = {{0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6}, {0, 1, 5}, {0, 5, 4},
+                    {2, 6, 7}, {2, 7, 3}, {0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5}};
+  return mesh;
+}
+
+TriangleMesh cylinder_mesh(double radius, double length, int segments) {
+  TriangleMesh mesh;
+  const double step = 2 * std::numbers::pi / segments;
+  // The polygon's area N/2 r'^2 sin(2 pi / N) equals the circle's pi r^2.
+  const double r = radius * std::sqrt(2 * std::numbers::pi / (segments * std::sin(step)));
+  const double z = length / 2;
+  const std::uint32_t bottom = add_vertex(mesh, {0, 0, -z});
+  const std::uint32_t top = add_vertex(mesh, {0, 0, z});
+  const auto first = static_cast<std::uint32_t>(mesh.positions.size());
+  for (int i = 0; i < segments; ++i) {
+    const double c = std::cos(step * i), s = std::sin(step * i);
+    add_vertex(mesh, {r * c, r * s, -z});
+    add_vertex(mesh, {r * c, r * s, z});
+  }
+  for (int i = 0; i < segments; ++i) {
+    const std::uint32_t b0 = first + 2 * i, t0 = b0 + 1;
+    const std::uint32_t b1 = first + 2 * ((i + 1) % segments), t1 = b1 + 1;
+    mesh.triangles.push_back({bottom, b1, b0});
+    mesh.triangles.push_back({top, t0, t1});
+    mesh.triangles.push_back({b0, b1, t1});
+    mesh.triangles.push_back({b0, t1, t0});
+  }
+  return mesh;
+}
+
+TriangleMesh sphere_mesh(double radius, int stacks, int slices) {
+  TriangleMesh mesh;
+  const std::uint32_t north = add_vertex(mesh, {0, 0, 1});
+  for (int k = 1; k < stacks; ++k) {
+    const double theta = std::numbers::pi * k / stacks;
+    for (int i = 0; i < slices; ++i) {
+      const double phi = 2 * std::numbers::pi * i / slices;
+      add_vertex(mesh, {std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta)});
+    }
+  }
+  const std::uint32_t south = add_vertex(mesh, {0, 0, -1});
+  auto ring = [&](int k, int i) { return static_cast<std::uint32_t>(1 + (k - 1) * slices + (i % slices)); };
+  for (int i = 0; i < slices; ++i) {
+    mesh.triangles.push_back({north, ring(1, i), ring(1, i + 1)});
+    for (int k = 1; k + 1 < stacks; ++k) {
+      mesh.triangles.push_back({ring(k, i), ring(k + 1, i), ring(k + 1, i + 1)});
+      mesh.triangles.push_back({ring(k, i), ring(k + 1, i + 1), ring(k, i + 1)});
+    }
+    mesh.triangles.push_back({ring(stacks - 1, i), south, ring(stacks - 1, i + 1)});
+  }
+  scale_to_volume(mesh, 4.0 / 3.0 * std::numbers::pi * radius * radius * radius);
+  return mesh;
+}
+
+std::optional<std::filesystem::path> resolve_mesh_path(const std::string& filename,
+                                                       const std::filesystem::path& urdf_folder,
+                                                       std::string& why) {
+  namespace fs = std::filesystem;
+  std::vector<fs::path> candidates;
+  const std::string package = "package://";
+  if (filename.rfind(package, 0) == 0) {
+    const std::string rest = filename.substr(package.size());
+    const auto slash = rest.find('/');
+    if (slash == std::string::npos || slash == 0) {
+      why = "'" + filename + "' is not package://NAME/path";
+      return std::nullopt;
+    }
+    const std::string name = rest.substr(0, slash);
+    const fs::path inside = rest.substr(slash + 1);
+    for (fs::path dir = urdf_folder;; dir = dir.parent_path()) {
+      if (dir.filename() == name) candidates.push_back(dir / inside);
+      candidates.push_back(dir / name / inside);
+      if (dir == dir.parent_path() || dir.empty()) break;
+    }
+  } else if (filename.rfind("file://", 0) == 0) {
+    candidates.push_back(fs::path(filename.substr(7)));
+  } else if (filename.find("://") != std::string::npos) {
+    why = "'" + filename + "': only relative paths, absolute paths, file:// and package:// are read";
+    return std::nullopt;
+  } else {
+    const fs::path path(filename);
+    candidates.push_back(path.is_absolute() ? path : urdf_folder / path);
+  }
+  for (const fs::path& candidate : candidates) {
+    std::error_code error;
+    if (fs::is_regular_file(candidate, error)) return candidate;
+  }
+  why = "mesh file '" + filename + "' not found (looked for " + candidates.front().string() +
+        (candidates.size() > 1 ? " and " + std::to_string(candidates.size() - 1) + " other places" : "") + ")";
+  return std::nullopt;
+}
+
+std::size_t GltfMeshWriter::add_view(std::size_t offset, std::size_t length, int target) {
+  document_["bufferViews"].push_back(
+      Json{{"buffer", 0}, {"byteOffset", offset}, {"byteLength", length}, {"target", target}});
+  return document_["bufferViews"].size() - 1;
+}
+
+std::size_t GltfMeshWriter::add_mesh(const TriangleMesh& mesh, const std::string& name,
+                                     std::optional<std::size_t> material) {
+  // Positions (float32 VEC3), then indices (uint32): both 4-byte aligned.
+  const std::size_t position_offset = bin_.size();
+  std::array<float, 3> low{}, high{};
+  for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
+    for (int i = 0; i < 3; ++i) {
+      const float f = static_cast<float>(mesh.positions[v][i]);
+      if (v == 0 || f < low[i]) low[i] = f;
+      if (v == 0 || f > high[i]) high[i] = f;
+      std::uint8_t bytes[4];
+      std::memcpy(bytes, &f, 4);
+      bin_.insert(bin_.end(), bytes, bytes + 4);
+    }
+  }
+  const std::size_t index_offset = bin_.size();
+  for (const auto& t : mesh.triangles) {
+    for (std::uint32_t i : t) {
+      std::uint8_t bytes[4];
+      std::memcpy(bytes, &i, 4);
+      bin_.insert(bin_.end(), bytes, bytes + 4);
+    }
+  }
+  const std::size_t position_view = add_view(position_offset, index_offset - position_offset, 34962);
+  const std::size_t index_view = add_view(index_offset, bin_.size() - index_offset, 34963);
+  Json& accessors = document_["accessors"];
+  accessors.push_back(Json{{"bufferView", position_view}, {"componentType", 5126},
+                           {"count", mesh.positions.size()}, {"type", "VEC3"},
+                           {"min", Json::array({low[0], low[1], low[2]})},
+                           {"max", Json::array({high[0], high[1], high[2]})}});
+  const std::size_t position_accessor = accessors.size() - 1;
+  accessors.push_back(Json{{"bufferView", index_view}, {"componentType", 5125},
+                           {"count", mesh.triangles.size() * 3}, {"type", "SCALAR"}});
+  const std::size_t index_accessor = accessors.size() - 1;
+  Json primitive{{"attributes", {{"POSITION", position_accessor}}}, {"indices", index_accessor}, {"mode", 4}};
+  if (material) primitive["material"] = *material;
+  document_["meshes"].push_back(Json{{"name", name}, {"primitives", Json::array({primitive})}});
+  return document_["meshes"].size() - 1;
+}
+
+std::vector<std::uint8_t> GltfMeshWriter::take_buffer() { return std::move(bin_); }
+
+}  // namespace rdtf::urdf_internal

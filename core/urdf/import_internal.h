@@ -1,0 +1,74 @@
+// URDF import internals: the structural pre-check of the XML (clear errors with line numbers
+// before urdfdom sees it) and the geometry that becomes glTF meshes.
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "rdtf/diagnostics.h"
+#include "rdtf/gltf.h"
+#include "rdtf/triangle_mesh.h"
+
+namespace rdtf::urdf_internal {
+
+struct XmlLink {
+  std::string name;
+  int row = 0;
+  std::vector<int> visual_rows;     // Line of each <visual>, in order.
+  std::vector<int> collision_rows;  // Line of each <collision>, in order.
+};
+
+struct XmlJoint {
+  std::string name, type, parent, child;
+  int row = 0;
+};
+
+// The robot's structure in document order, checked: a <robot> root; named, unique links and
+// joints; known joint types; parents and children that exist; a tree (one parent per link, no
+// loops, one root).
+struct XmlRobot {
+  std::vector<XmlLink> links;
+  std::vector<XmlJoint> joints;
+  std::size_t root = 0;  // Index into links.
+};
+
+std::optional<XmlRobot> scan_urdf_xml(const std::string& text, Diagnostics& diag);
+
+// "/robot/link[@name='base']", the place an import diagnostic points at.
+std::string link_pointer(const std::string& name);
+std::string joint_pointer(const std::string& name);
+
+// Generated surfaces, outward wound, in the geometry's own frame as URDF defines it (box centred;
+// cylinder along z, centred; sphere centred). The cylinder's polygon and the sphere's polyhedron
+// are scaled so that their volumes are exactly the true solid's (pi r^2 l, 4/3 pi r^3).
+TriangleMesh box_mesh(const Eigen::Vector3d& size);
+TriangleMesh cylinder_mesh(double radius, double length, int segments = 32);
+TriangleMesh sphere_mesh(double radius, int stacks = 16, int slices = 32);
+
+// Where a <mesh filename> is on disk: a path relative to the URDF's folder, an absolute path,
+// file://, or package://NAME/rest (found as rest under a folder named NAME among the URDF's folder
+// and its ancestors, or under NAME/ in one of them). Nothing, and `why`, when it is not there.
+std::optional<std::filesystem::path> resolve_mesh_path(const std::string& filename,
+                                                       const std::filesystem::path& urdf_folder,
+                                                       std::string& why);
+
+// Builds the binary buffer of a generated glTF: one mesh per call, positions as float32 (with
+// min and max) and indices as uint32.
+class GltfMeshWriter {
+ public:
+  explicit GltfMeshWriter(Json& document) : document_(document) {}
+  // Returns the index of the new mesh.
+  std::size_t add_mesh(const TriangleMesh& mesh, const std::string& name, std::optional<std::size_t> material);
+  std::vector<std::uint8_t> take_buffer();
+
+ private:
+  std::size_t add_view(std::size_t offset, std::size_t length, int target);
+  Json& document_;
+  std::vector<std::uint8_t> bin_;
+};
+
+}  // namespace rdtf::urdf_internal

@@ -1,0 +1,194 @@
+#include "simulation_host.h"
+
+#include <rdtf/joint_state_t.hpp>
+#include <rdtf/model_error_t.hpp>
+
+#include "daemon.h"
+#include "messages.h"
+
+namespace rdtf::daemon {
+
+SimulationHost::SimulationHost(SimulationHostOptions options)
+    : options_(std::move(options)), lcm_(options_.lcm_url) {
+  thread_ = std::thread([this] { run(); });
+}
+
+SimulationHost::~SimulationHost() {
+  stop_ = true;
+  thread_.join();
+}
+
+void SimulationHost::load(const std::string& model_id, std::int64_t revision,
+                          const std::string& content_hash, const Robot& robot) {
+  // The ODE world is built on the host thread (ODE keeps per-thread data); here only the inputs.
+  auto model = std::make_unique<LiveModel>();
+  model->revision = revision;
+  model->content_hash = content_hash;
+  std::lock_guard lock(mutex_);
+  pending_robots_[model_id] = robot;
+  inbox_.loads.emplace_back(model_id, std::move(model));
+}
+
+void SimulationHost::remove(const std::string& model_id) {
+  std::lock_guard lock(mutex_);
+  inbox_.removals.push_back(model_id);
+}
+
+void SimulationHost::command(const rdtf::joint_command_t& command) {
+  std::lock_guard lock(mutex_);
+  inbox_.commands.push_back(command);
+}
+
+std::size_t SimulationHost::model_count() const {
+  std::lock_guard lock(mutex_);
+  return model_count_;
+}
+
+void SimulationHost::apply_inbox() {
+  Inbox inbox;
+  std::map<std::string, Robot> robots;
+  {
+    std::lock_guard lock(mutex_);
+    std::swap(inbox, inbox_);
+    robots.swap(pending_robots_);
+  }
+  for (const std::string& id : inbox.removals) models_.erase(id);
+  // Only the newest load of a model counts; its robot is the one in `robots`.
+  std::map<std::string, std::unique_ptr<LiveModel>> loads;
+  for (auto& [id, model] : inbox.loads) loads[id] = std::move(model);
+  for (auto& [id, model] : loads) {
+    const auto robot = robots.find(id);
+    if (robot == robots.end()) continue;
+    // Hot reload: keep every joint position whose joint still exists.
+    std::map<std::string, double> positions;
+    if (const auto old = models_.find(id); old != models_.end() && old->second->simulation) {
+      for (const JointState& state : old->second->simulation->joint_states()) {
+        positions[state.name] = state.position;
+      }
+    }
+    Diagnostics diag;
+    model->simulation = Simulation::create(robot->second, options_.simulation, positions, diag);
+    if (!model->simulation) {
+      log_line("simulation of " + id + " revision " + std::to_string(model->revision) +
+               " not started: " + (diag.all().empty() ? std::string("unknown reason") : format(diag.all().front())));
+      models_.erase(id);
+      continue;
+    }
+    models_[id] = std::move(model);
+  }
+  for (const auto& command : inbox.commands) apply_command(command);
+  std::lock_guard lock(mutex_);
+  model_count_ = models_.size();
+}
+
+void SimulationHost::reject(const rdtf::joint_command_t& command, const std::string& why) {
+  rdtf::model_error_t message;
+  message.utime = now_utime();
+  message.model_id = command.model_id;
+  const auto live = models_.find(command.model_id);
+  message.live_revision = live == models_.end() ? 0 : live->second->revision;
+  message.content_hash = command.content_hash;
+  rdtf::diagnostic_t d;
+  d.severity = rdtf::diagnostic_t::ERROR;
+  d.code = "COMMAND_REJECTED";
+  d.byte_offset = -1;
+  d.message = why;
+  message.diagnostics.push_back(d);
+  message.num_diagnostics = 1;
+  lcm_.publish(options_.channel_prefix + "/" + command.model_id + "/ERROR", &message);
+}
+
+void SimulationHost::apply_command(const rdtf::joint_command_t& command) {
+  const auto found = models_.find(command.model_id);
+  if (found == models_.end()) return reject(command, "no live simulation of model '" + command.model_id + "'");
+  LiveModel& model = *found->second;
+  if (command.revision != model.revision || command.content_hash != model.content_hash) {
+    return reject(command, "command for revision " + std::to_string(command.revision) +
+                               " but revision " + std::to_string(model.revision) + " is live");
+  }
+  const auto n = static_cast<std::size_t>(command.num_joints);
+  if (command.name.size() != n || command.mode.size() != n || command.value.size() != n ||
+      command.kp.size() != n || command.kd.size() != n) {
+    return reject(command, "array lengths do not match num_joints");
+  }
+  // All or nothing: check every joint before applying any.
+  std::vector<JointCommand> commands;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!model.simulation->joint_state(command.name[i])) {
+      return reject(command, "unknown joint '" + command.name[i] + "' (or not a one-degree-of-freedom joint)");
+    }
+    JointCommand c;
+    c.joint = command.name[i];
+    switch (command.mode[i]) {
+      case rdtf::joint_command_t::TORQUE:
+        c.mode = CommandMode::kTorque;
+        c.effort = command.value[i];
+        break;
+      case rdtf::joint_command_t::POSITION:
+        c.mode = CommandMode::kPosition;
+        c.position = command.value[i];
+        c.kp = command.kp[i];
+        c.kd = command.kd[i];
+        break;
+      case rdtf::joint_command_t::VELOCITY:
+        c.mode = CommandMode::kVelocity;
+        c.velocity = command.value[i];
+        c.kd = command.kd[i];
+        break;
+      default:
+        return reject(command, "unknown mode " + std::to_string(command.mode[i]) + " for joint '" + command.name[i] + "'");
+    }
+    commands.push_back(c);
+  }
+  for (const JointCommand& c : commands) {
+    std::string error;
+    if (!model.simulation->set_command(c, &error)) return reject(command, error);
+  }
+}
+
+void SimulationHost::publish_state(const std::string& model_id, LiveModel& model) {
+  rdtf::joint_state_t message;
+  message.utime = now_utime();
+  message.model_id = model_id;
+  message.revision = model.revision;
+  message.content_hash = model.content_hash;
+  message.sim_time = model.simulation->time();
+  for (const JointState& state : model.simulation->joint_states()) {
+    message.name.push_back(state.name);
+    message.position.push_back(state.position);
+    message.velocity.push_back(state.velocity);
+    message.effort.push_back(state.effort);
+  }
+  message.num_joints = static_cast<std::int32_t>(message.name.size());
+  lcm_.publish(options_.channel_prefix + "/" + model_id + "/JOINT_STATE", &message);
+}
+
+void SimulationHost::run() {
+  init_ode();
+  const double dt = options_.simulation.time_step;
+  const auto tick = std::chrono::duration_cast<Clock::duration>(
+      std::chrono::duration<double>(dt / options_.real_time_factor));
+  const auto state_period = std::chrono::duration_cast<Clock::duration>(
+      std::chrono::duration<double>(1.0 / options_.state_rate_hz));
+  auto next = Clock::now();
+  while (!stop_) {
+    apply_inbox();
+    const auto now = Clock::now();
+    // Real time: step until simulated time catches up, but never more than 50 steps at once
+    // (after a stall the simulation slows down instead of spiralling).
+    for (int catch_up = 0; next <= now && catch_up < 50; ++catch_up) {
+      for (auto& [id, model] : models_) model->simulation->step(dt);
+      next += tick;
+    }
+    if (next < now) next = now;
+    for (auto& [id, model] : models_) {
+      if (now >= model->next_state) {
+        publish_state(id, *model);
+        model->next_state = now + state_period;
+      }
+    }
+    std::this_thread::sleep_until(models_.empty() ? now + std::chrono::milliseconds(20) : next);
+  }
+}
+
+}  // namespace rdtf::daemon

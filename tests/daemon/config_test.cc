@@ -1,0 +1,301 @@
+// rdtfd's config file (daemon/config.h): every key read, unknown keys and wrong types refused
+// with the key named, relative folders relative to the file, and the sanity checks.
+#include "config.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <functional>
+
+#include "support/test_support.h"
+
+namespace rdtf::daemon {
+namespace {
+
+using namespace std::chrono_literals;
+namespace fs = std::filesystem;
+
+// Writes `json` to <folder>/rdtfd.json and loads it over the defaults.
+std::optional<DaemonConfig> load_text(const testing::TempDir& folder, const std::string& json,
+                                      std::string& error, DaemonConfig base = default_config()) {
+  const auto path = folder / "rdtfd.json";
+  testing::write_file(path, json);
+  return load_config(path, std::move(base), error);
+}
+
+TEST(DaemonConfig, RepositoryConfigFileLoads) {
+  const fs::path file = testing::data_dir() / ".." / ".." / "config" / "rdtfd.json";
+  std::string error;
+  auto config = load_config(file, default_config(), error);
+  ASSERT_TRUE(config) << error;
+  EXPECT_EQ(config->channel_prefix, "RDTF");
+  EXPECT_EQ(config->settle, 50ms);
+  EXPECT_EQ(config->republish_period, 5000ms);
+  EXPECT_EQ(config->workers, 2);
+  EXPECT_EQ(config->max_chunk_bytes, 60000u);
+  ASSERT_EQ(config->watch.size(), 1u);
+  // "../examples/models" relative to config/.
+  EXPECT_EQ(fs::weakly_canonical(config->watch[0]),
+            fs::weakly_canonical(testing::data_dir() / ".." / ".." / "examples" / "models"));
+}
+
+TEST(DaemonConfig, EveryKeyIsRead) {
+  testing::TempDir folder;
+  std::string error;
+  auto config = load_text(folder, R"({
+    "watch": ["/abs/models", "/abs/more"], "output": "/abs/out", "lcm_url": "udpm://239.255.76.67:7668?ttl=0",
+    "channel_prefix": "ROBOTS", "settle_ms": 120, "max_open_wait_ms": 900,
+    "republish_period_ms": 0, "status_period_ms": 250, "workers": 3, "max_chunk_bytes": 30000,
+    "chunk_rate_bytes_per_s": 1e6, "default_density": 2700, "max_file_bytes": 1000,
+    "max_buffer_bytes": 2000, "max_accessor_count": 3000, "max_triangles": 4000,
+    "_comment": "ignored"})", error);
+  ASSERT_TRUE(config) << error;
+  EXPECT_EQ(config->watch, (std::vector<fs::path>{"/abs/models", "/abs/more"}));
+  EXPECT_EQ(config->output, fs::path("/abs/out"));
+  EXPECT_EQ(config->lcm_url, "udpm://239.255.76.67:7668?ttl=0");
+  EXPECT_EQ(config->channel_prefix, "ROBOTS");
+  EXPECT_EQ(config->settle, 120ms);
+  EXPECT_EQ(config->max_open_wait, 900ms);
+  EXPECT_EQ(config->republish_period, 0ms);
+  EXPECT_EQ(config->status_period, 250ms);
+  EXPECT_EQ(config->workers, 3);
+  EXPECT_EQ(config->max_chunk_bytes, 30000u);
+  EXPECT_DOUBLE_EQ(config->chunk_rate_bytes_per_s, 1e6);
+  EXPECT_DOUBLE_EQ(config->convert.default_density, 2700);
+  EXPECT_EQ(config->convert.limits.max_file_bytes, 1000u);
+  EXPECT_EQ(config->convert.limits.max_buffer_bytes, 2000u);
+  EXPECT_EQ(config->convert.limits.max_accessor_count, 3000u);
+  EXPECT_EQ(config->convert.limits.max_triangles, 4000u);
+}
+
+TEST(DaemonConfig, MissingKeysKeepTheBaseValues) {
+  testing::TempDir folder;
+  DaemonConfig base = default_config();
+  base.watch = {"/base/watch"};
+  base.settle = 77ms;
+  base.convert.default_density = 500;
+  std::string error;
+  auto config = load_text(folder, R"({"workers": 4})", error, base);
+  ASSERT_TRUE(config) << error;
+  EXPECT_EQ(config->workers, 4);
+  EXPECT_EQ(config->watch, std::vector<fs::path>{"/base/watch"});
+  EXPECT_EQ(config->settle, 77ms);
+  EXPECT_DOUBLE_EQ(config->convert.default_density, 500);
+  auto empty = load_text(folder, "{}", error, base);
+  ASSERT_TRUE(empty) << error;
+  EXPECT_EQ(empty->settle, 77ms);
+}
+
+TEST(DaemonConfig, UnknownKeyIsAnErrorNamingIt) {
+  testing::TempDir folder;
+  std::string error;
+  EXPECT_FALSE(load_text(folder, R"({"settle_ms": 50, "setle_ms": 80})", error));
+  EXPECT_NE(error.find("\"setle_ms\""), std::string::npos) << error;
+  EXPECT_NE(error.find("unknown"), std::string::npos) << error;
+  EXPECT_NE(error.find((folder / "rdtfd.json").string()), std::string::npos) << error;
+}
+
+TEST(DaemonConfig, WrongTypeIsAnErrorNamingTheKey) {
+  testing::TempDir folder;
+  const std::pair<const char*, const char*> cases[] = {
+      {R"({"settle_ms": "fast"})", "settle_ms"},
+      {R"({"watch": "/one/folder"})", "watch"},
+      {R"({"watch": [1, 2]})", "watch"},
+      {R"({"output": ["/a"]})", "output"},
+      {R"({"lcm_url": 7667})", "lcm_url"},
+      {R"({"channel_prefix": null})", "channel_prefix"},
+      {R"({"workers": "two"})", "workers"},
+      {R"({"default_density": {"steel": 7850}})", "default_density"},
+      {R"({"max_triangles": "many"})", "max_triangles"},
+      {R"({"republish_period_ms": [5000]})", "republish_period_ms"},
+  };
+  for (const auto& [json, key] : cases) {
+    std::string error;
+    EXPECT_FALSE(load_text(folder, json, error)) << json;
+    EXPECT_NE(error.find(std::string("\"") + key + "\""), std::string::npos) << json << " -> " << error;
+  }
+}
+
+TEST(DaemonConfig, BooleanForANumberIsAWrongType) {
+  // nlohmann::json converts true to 1 when asked for a number: "workers": true must not quietly
+  // mean one worker, nor "settle_ms": true one millisecond.
+  testing::TempDir folder;
+  for (const char* key : {"workers", "settle_ms", "default_density", "max_file_bytes"}) {
+    std::string error;
+    const auto config = load_text(folder, std::string(R"({")") + key + R"(": true})", error);
+    EXPECT_FALSE(config) << key << ": true was accepted";
+    if (!config) {
+      EXPECT_NE(error.find(key), std::string::npos) << error;
+    }
+  }
+}
+
+TEST(DaemonConfig, NegativeLimitIsAnError) {
+  // The limits are unsigned: -1 must not wrap around to 18446744073709551615 (no limit at all).
+  testing::TempDir folder;
+  for (const char* key : {"max_file_bytes", "max_buffer_bytes", "max_accessor_count", "max_triangles"}) {
+    std::string error;
+    const auto config = load_text(folder, std::string(R"({")") + key + R"(": -1})", error);
+    if (config) {
+      const auto& l = config->convert.limits;
+      ADD_FAILURE() << key << ": -1 was accepted; limits now max_file_bytes " << l.max_file_bytes
+                    << ", max_buffer_bytes " << l.max_buffer_bytes << ", max_accessor_count "
+                    << l.max_accessor_count << ", max_triangles " << l.max_triangles;
+    }
+    if (!config) {
+      EXPECT_NE(error.find(key), std::string::npos) << error;
+    }
+  }
+}
+
+TEST(DaemonConfig, NegativePeriodIsAnError) {
+  testing::TempDir folder;
+  std::string error;
+  EXPECT_FALSE(load_text(folder, R"({"settle_ms": -5})", error));
+  EXPECT_NE(error.find("settle_ms"), std::string::npos) << error;
+}
+
+TEST(DaemonConfig, BadFilesAreErrorsNamingTheFile) {
+  testing::TempDir folder;
+  std::string error;
+  EXPECT_FALSE(load_text(folder, R"({"settle_ms": 50,)", error));
+  EXPECT_NE(error.find("invalid JSON"), std::string::npos) << error;
+  EXPECT_NE(error.find("rdtfd.json"), std::string::npos) << error;
+  EXPECT_FALSE(load_text(folder, R"(["settle_ms", 50])", error));
+  EXPECT_NE(error.find("object"), std::string::npos) << error;
+  EXPECT_FALSE(load_config(folder / "missing.json", default_config(), error));
+  EXPECT_NE(error.find("missing.json"), std::string::npos) << error;
+}
+
+TEST(DaemonConfig, RelativeFoldersAreRelativeToTheConfigFile) {
+  testing::TempDir top;
+  fs::create_directories(top / "etc");
+  const auto path = top / "etc" / "rdtfd.json";
+  testing::write_file(path, R"({"watch": ["../models", "more/models"], "output": "../out"})");
+  std::string error;
+  auto config = load_config(path, default_config(), error);
+  ASSERT_TRUE(config) << error;
+  ASSERT_EQ(config->watch.size(), 2u);
+  EXPECT_EQ(config->watch[0].lexically_normal(), (top / "models").lexically_normal());
+  EXPECT_EQ(config->watch[1].lexically_normal(), (top / "etc" / "more" / "models").lexically_normal());
+  EXPECT_EQ(config->output.lexically_normal(), (top / "out").lexically_normal());
+  // check_config creates them and makes every folder absolute and canonical.
+  ASSERT_TRUE(check_config(*config, error)) << error;
+  EXPECT_EQ(config->watch[0], fs::canonical(top / "models"));
+  EXPECT_EQ(config->watch[1], fs::canonical(top / "etc" / "more" / "models"));
+  EXPECT_EQ(config->output, fs::canonical(top / "out"));
+  EXPECT_TRUE(fs::is_directory(top / "etc" / "more" / "models"));
+}
+
+TEST(DaemonConfig, CheckMakesCommandLineFoldersAbsolute) {
+  // --watch models on the command line: relative to the working directory.
+  testing::TempDir top;
+  const auto previous = fs::current_path();
+  fs::current_path(top.path());
+  DaemonConfig config = default_config();
+  config.watch = {"models", "./nested/../other"};
+  config.output = "out";
+  std::string error;
+  const bool ok = check_config(config, error);
+  fs::current_path(previous);
+  ASSERT_TRUE(ok) << error;
+  EXPECT_EQ(config.watch[0], fs::canonical(top / "models"));
+  EXPECT_EQ(config.watch[1], fs::canonical(top / "other"));
+  EXPECT_EQ(config.output, fs::canonical(top / "out"));
+  EXPECT_TRUE(config.watch[0].is_absolute());
+}
+
+TEST(DaemonConfig, CheckRefusesSettingsThatCannotWork) {
+  testing::TempDir top;
+  auto good = [&] {
+    DaemonConfig config = default_config();
+    config.watch = {top / "w"};
+    config.output = top / "o";
+    return config;
+  };
+  std::string error;
+  {
+    auto config = good();
+    EXPECT_TRUE(check_config(config, error)) << error;
+  }
+  {
+    auto config = good();
+    config.watch.clear();
+    EXPECT_FALSE(check_config(config, error));
+    EXPECT_NE(error.find("watch"), std::string::npos) << error;
+  }
+  {
+    testing::write_file(top / "file", "x");
+    auto config = good();
+    config.watch = {top / "file"};
+    EXPECT_FALSE(check_config(config, error));
+    EXPECT_NE(error.find("not a directory"), std::string::npos) << error;
+  }
+  const std::pair<const char*, std::function<void(DaemonConfig&)>> bad[] = {
+      {"settle 0", [](DaemonConfig& c) { c.settle = 0ms; }},
+      {"status 0", [](DaemonConfig& c) { c.status_period = 0ms; }},
+      {"workers 0", [](DaemonConfig& c) { c.workers = 0; }},
+      {"chunk 100", [](DaemonConfig& c) { c.max_chunk_bytes = 100; }},
+      {"chunk 70000", [](DaemonConfig& c) { c.max_chunk_bytes = 70000; }},
+      {"rate 0", [](DaemonConfig& c) { c.chunk_rate_bytes_per_s = 0; }},
+      {"prefix empty", [](DaemonConfig& c) { c.channel_prefix = ""; }},
+      {"prefix 17", [](DaemonConfig& c) { c.channel_prefix = std::string(17, 'P'); }},
+  };
+  for (const auto& [what, change] : bad) {
+    auto config = good();
+    change(config);
+    EXPECT_FALSE(check_config(config, error)) << what;
+  }
+  {
+    auto config = good();
+    config.republish_period = 0ms;  // 0 disables republishing: allowed.
+    EXPECT_TRUE(check_config(config, error)) << error;
+  }
+}
+
+TEST(DaemonConfig, OutputContainingAWatchedFolderIsRefused) {
+  // Events inside the output folder are ignored: with --output equal to (or above) a watched
+  // folder, every model there would be ignored and the daemon would silently do nothing.
+  testing::TempDir top;
+  std::string error;
+  {
+    DaemonConfig config = default_config();
+    config.watch = {top / "models"};
+    config.output = top / "models";
+    EXPECT_FALSE(check_config(config, error)) << "output == watch accepted";
+  }
+  {
+    DaemonConfig config = default_config();
+    config.watch = {top / "all" / "models"};
+    config.output = top / "all";
+    EXPECT_FALSE(check_config(config, error)) << "output above watch accepted";
+  }
+  {
+    // The supported case: the output inside a watched folder.
+    DaemonConfig config = default_config();
+    config.watch = {top / "models"};
+    config.output = top / "models" / "out";
+    EXPECT_TRUE(check_config(config, error)) << error;
+  }
+}
+
+TEST(DaemonConfig, DefaultsFollowXdgFolders) {
+  const char* data = std::getenv("XDG_DATA_HOME");
+  const char* state = std::getenv("XDG_STATE_HOME");
+  const std::string saved_data = data ? data : "";
+  const std::string saved_state = state ? state : "";
+  ::setenv("XDG_DATA_HOME", "/xdg/data", 1);
+  ::setenv("XDG_STATE_HOME", "/xdg/state", 1);
+  const DaemonConfig config = default_config();
+  data ? ::setenv("XDG_DATA_HOME", saved_data.c_str(), 1) : ::unsetenv("XDG_DATA_HOME");
+  state ? ::setenv("XDG_STATE_HOME", saved_state.c_str(), 1) : ::unsetenv("XDG_STATE_HOME");
+  EXPECT_EQ(config.watch, std::vector<fs::path>{"/xdg/data/rdtf/models"});
+  EXPECT_EQ(config.output, fs::path("/xdg/state/rdtf/output"));
+  EXPECT_EQ(config.settle, 50ms);
+  EXPECT_EQ(config.republish_period, 5000ms);
+  EXPECT_EQ(config.lcm_url, "");
+  EXPECT_EQ(config.channel_prefix, "RDTF");
+}
+
+}  // namespace
+}  // namespace rdtf::daemon

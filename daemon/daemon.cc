@@ -185,6 +185,7 @@ void Daemon::drop_model(const std::filesystem::path& source) {
 
 void Daemon::rescan(const char* why) {
   ++counters_.rescans;
+  open_for_writing_.clear();  // Close events may have been lost with the queue.
   // Models outside every watched folder (after a reload changed them) are gone from our view.
   std::vector<std::filesystem::path> outside;
   for (const auto& [source, record] : registry_.all()) {
@@ -366,12 +367,22 @@ void Daemon::apply(ConversionOutcome outcome) {
       log_line("rejected " + id + " in " + milliseconds(outcome.duration) + ": " +
                first_error(outcome.diagnostics) +
                (record->live ? "; still serving revision " + std::to_string(record->revisions) : ""));
-      publisher_->publish(channel(id, "ERROR"),
-                          make_model_error(*record, outcome.content_hash, outcome.diagnostics));
+      // A newer save already waits: the rejected content is superseded, so say nothing of it.
+      if (!record->again) {
+        publisher_->publish(channel(id, "ERROR"),
+                            make_model_error(*record, outcome.content_hash, outcome.diagnostics));
+      }
       break;
-    case ConversionOutcome::Kind::kVanished:
+    case ConversionOutcome::Kind::kVanished: {
+      std::error_code ec;
+      if (std::filesystem::exists(outcome.source, ec)) {
+        // Recreated while its conversion found it gone: convert the new file.
+        settle_.touch(outcome.source.string(), Clock::now());
+        return;
+      }
       drop_model(outcome.source);
       return;
+    }
   }
   if (record->again) {
     record->again = false;
@@ -461,6 +472,7 @@ void Daemon::reload_config() {
   config_ = std::move(*fresh);
   config_.workers = workers;
   settle_.set_settle(config_.settle);
+  settle_.set_max_open_wait(config_.max_open_wait);
   if (lcm_changed && !connect_lcm(error)) log_line("SIGHUP: " + error);
   publisher_->set_rate(config_.chunk_rate_bytes_per_s);
   start_simulation_host();

@@ -31,6 +31,7 @@ class SettleQueue {
   std::optional<Clock::time_point> next_deadline() const;
   std::size_t size() const { return pending_.size(); }
   void set_settle(Clock::duration settle) { settle_ = settle; }
+  void set_max_open_wait(Clock::duration wait) { max_open_wait_ = wait; }
 
  private:
   struct Pending {

@@ -361,7 +361,9 @@ inline Json inspect(const fs::path& model, const std::string& options = "") {
 
 template <typename Predicate>
 bool wait_until(Predicate predicate, Clock::duration timeout) {
-  const auto deadline = Clock::now() + timeout;
+  // Deadlines only bound how long a failing test hangs; sanitizer builds run several times slower
+  // (RDTF_TEST_DEADLINE_SCALE, set by CMake), so their deadlines stretch by that factor.
+  const auto deadline = Clock::now() + timeout * RDTF_TEST_DEADLINE_SCALE;
   for (;;) {
     if (predicate()) return true;
     if (Clock::now() >= deadline) return false;

@@ -1,6 +1,7 @@
 #include <iostream>
 
 #include "commands.h"
+#include "rdtf/write.h"
 
 namespace rdtf::cli {
 
@@ -30,14 +31,29 @@ void print_diagnostics(const Diagnostics& diag, bool include_infos) {
   }
 }
 
+void report_failure(const std::string& input, const char* verb, const Diagnostics& diag) {
+  print_diagnostics(diag, true);
+  std::cerr << input << ": not " << verb << " (" << diag.error_count() << " error"
+            << (diag.error_count() == 1 ? "" : "s") << ")\n";
+}
+
+int write_conversion(const Conversion& conversion, const std::filesystem::path& target, bool glb,
+                     const Diagnostics& diag, bool verbose) {
+  Diagnostics write_diag(target.string());
+  const bool written = write_rdtf(conversion.asset, target,
+                                  glb ? OutputFormat::kGlb : OutputFormat::kGltf, write_diag);
+  print_diagnostics(diag, verbose);
+  print_diagnostics(write_diag, verbose);
+  if (!written) return kExitInternalError;
+  std::cerr << "wrote " << target.string() << ": " << conversion.robot.links.size() << " links, "
+            << conversion.robot.joints.size() << " joints\n";
+  return kExitOk;
+}
+
 std::optional<Conversion> convert_or_report(const std::string& input, const ConvertOptions& options,
                                             Diagnostics& diag) {
   auto conversion = convert_file(input, options, diag);
-  if (!conversion) {
-    print_diagnostics(diag, true);
-    std::cerr << input << ": not converted (" << diag.error_count() << " error"
-              << (diag.error_count() == 1 ? "" : "s") << ")\n";
-  }
+  if (!conversion) report_failure(input, "converted", diag);
   return conversion;
 }
 

@@ -1,7 +1,4 @@
-#include <iostream>
-
 #include "commands.h"
-#include "rdtf/write.h"
 
 namespace rdtf::cli {
 namespace {
@@ -28,15 +25,7 @@ int run_convert(ConvertArguments& args) {
   if (!args.output.empty() && std::filesystem::path(args.output).extension() == ".glb") glb = true;
   const std::filesystem::path target = args.output.empty() ? default_output(args.input, glb)
                                                            : std::filesystem::path(args.output);
-  Diagnostics write_diag(target.string());
-  const bool written = write_rdtf(conversion->asset, target,
-                                  glb ? OutputFormat::kGlb : OutputFormat::kGltf, write_diag);
-  print_diagnostics(diag, args.verbose);
-  print_diagnostics(write_diag, args.verbose);
-  if (!written) return kExitInternalError;
-  std::cerr << "wrote " << target.string() << ": " << conversion->robot.links.size() << " links, "
-            << conversion->robot.joints.size() << " joints\n";
-  return kExitOk;
+  return write_conversion(*conversion, target, glb, diag, args.verbose);
 }
 
 }  // namespace

@@ -1,8 +1,5 @@
-#include <iostream>
-
 #include "commands.h"
 #include "rdtf/urdf.h"
-#include "rdtf/write.h"
 
 namespace rdtf::cli {
 namespace {
@@ -19,22 +16,12 @@ int run_import(ImportArguments& args) {
   Diagnostics diag(args.input);
   auto conversion = import_urdf(args.input, args.options, diag);
   if (!conversion) {
-    print_diagnostics(diag, true);
-    std::cerr << args.input << ": not imported (" << diag.error_count() << " error"
-              << (diag.error_count() == 1 ? "" : "s") << ")\n";
+    report_failure(args.input, "imported", diag);
     return kExitInvalidInput;
   }
   const std::filesystem::path target(args.output);
   const bool glb = args.glb || target.extension() == ".glb";
-  Diagnostics write_diag(target.string());
-  const bool written = write_rdtf(conversion->asset, target,
-                                  glb ? OutputFormat::kGlb : OutputFormat::kGltf, write_diag);
-  print_diagnostics(diag, args.verbose);
-  print_diagnostics(write_diag, args.verbose);
-  if (!written) return kExitInternalError;
-  std::cerr << "wrote " << target.string() << ": " << conversion->robot.links.size() << " links, "
-            << conversion->robot.joints.size() << " joints\n";
-  return kExitOk;
+  return write_conversion(*conversion, target, glb, diag, args.verbose);
 }
 
 }  // namespace

@@ -1,0 +1,221 @@
+// Issue 3, rdtfd end to end over real LCM (UDP multicast inside the program's own network
+// namespace, see daemon_harness.h):
+// - BM_SaveToPublish: from the close() of an in-place save to the DESCRIPTION of that revision at a
+//   subscriber (and to its last DESCRIPTION_CHUNK when the document is chunked), p50 / p99, for the
+//   arm3 fixture and a one-million-triangle GLB, with rdtfd's defaults (validate, simulate, urdf on)
+//   and with conversion only. The settle period (50 ms, the default) is part of every sample; the
+//   counters also give the latency minus the settle period.
+// - BM_InitialScan: rdtfd started on a tree of N small models; models per second from spawning the
+//   daemon until the subscriber has a DESCRIPTION of every model, and VmRSS / VmHWM of rdtfd then.
+#include <benchmark/benchmark.h>
+
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <regex>
+#include <set>
+
+#include <rdtf/description_chunk_t.hpp>
+#include <rdtf/description_t.hpp>
+
+#include "daemon_harness.h"
+#include "synthetic_models.h"
+
+namespace {
+
+using namespace rdtf::bench;
+using namespace std::chrono_literals;
+
+constexpr int kSettleMs = 50;  // rdtfd's default settle_ms.
+
+Json pipeline_config(bool full_pipeline) {
+  Json config = {{"settle_ms", kSettleMs}};
+  if (!full_pipeline) config.update({{"validate", false}, {"simulate", false}, {"urdf", false}});
+  return config;
+}
+
+// ------------------------------------------------------------------------------------------------
+// Models whose every revision differs by a few bytes (the generator string), content otherwise equal.
+
+struct EditableModel {
+  std::string file_name;
+  std::function<std::string(int)> revision_bytes;  // Content of save number k.
+};
+
+EditableModel arm3_model(const fs::path& folder) {
+  const fs::path source = fs::path(RDTF_BENCH_DATA_DIR) / "blender";
+  fs::copy_file(source / "arm3.bin", folder / "arm3.bin");
+  const Json document = Json::parse(read_file(source / "arm3.gltf"));
+  return {"arm3.gltf", [document](int k) {
+            Json edited = document;
+            edited["asset"]["generator"] = "rdtf bench save " + std::to_string(k);
+            return edited.dump(1);
+          }};
+}
+
+EditableModel sphere_model() {
+  const auto glb = mesh_glb(uv_sphere(1'000'000, 0.5));
+  const std::string bytes(glb.begin(), glb.end());
+  const std::size_t at = bytes.find("rdtf bench");  // asset.generator, 10 characters.
+  if (at == std::string::npos) throw std::runtime_error("generator string not found in the GLB");
+  return {"sphere_1m.glb", [bytes, at](int k) {
+            std::string edited = bytes;
+            char tag[16];
+            std::snprintf(tag, sizeof(tag), "rdtf%06d", k % 1000000);
+            std::memcpy(edited.data() + at, tag, 10);
+            return edited;
+          }};
+}
+
+// When each revision's DESCRIPTION, and its complete document (the last chunk), arrived.
+struct Arrivals {
+  std::map<std::int64_t, Clock::time_point> description;
+  std::map<std::int64_t, Clock::time_point> complete;
+  std::map<std::int64_t, int> chunks_seen;
+  std::map<std::int64_t, int> chunks_expected;
+  std::int64_t triangles_links = 0;
+};
+
+void record(Arrivals& arrivals, const std::string& channel, const lcm::ReceiveBuffer& buffer, Clock::time_point at) {
+  const std::string kind = kind_of(channel);
+  const auto size = static_cast<int>(buffer.data_size);
+  if (kind == "DESCRIPTION") {
+    rdtf::description_t d;
+    if (d.decode(buffer.data, 0, size) < 0) return;
+    arrivals.description.emplace(d.revision, at);
+    arrivals.chunks_expected[d.revision] = d.num_chunks;
+    if (d.num_chunks == 0) arrivals.complete.emplace(d.revision, at);
+  } else if (kind == "DESCRIPTION_CHUNK") {
+    rdtf::description_chunk_t c;
+    if (c.decode(buffer.data, 0, size) < 0) return;
+    if (++arrivals.chunks_seen[c.revision] == c.count) arrivals.complete.emplace(c.revision, at);
+  }
+}
+
+// rdtfd's own time per conversion job (read, hash, convert, validate, URDF, write), from its log
+// lines "converted <id> revision N (...) in X ms", for revisions from `first_revision` on.
+std::vector<double> worker_times_ms(const std::string& log, std::int64_t first_revision) {
+  static const std::regex kLine(R"(converted \S+ revision (\d+) \(.*\) in ([0-9.]+) ms)");
+  std::vector<double> times;
+  for (std::sregex_iterator it(log.begin(), log.end(), kLine), end; it != end; ++it) {
+    if (std::stoll((*it)[1]) >= first_revision) times.push_back(std::stod((*it)[2]));
+  }
+  return times;
+}
+
+// range(0): 0 arm3, 1 the 1M-triangle sphere; range(1): 1 rdtfd's defaults, 0 conversion only.
+void BM_SaveToPublish(benchmark::State& state) {
+  const bool big = state.range(0) == 1;
+  const bool full_pipeline = state.range(1) == 1;
+  TempFolder root;
+  const fs::path watch = root / "models", output = root / "out";
+  fs::create_directories(watch);
+  const EditableModel model = big ? sphere_model() : arm3_model(watch);
+  const auto timeout = big ? 60s : 10s;
+
+  Arrivals arrivals;
+  Subscriber subscriber("RDTF", [&](const std::string& channel, const lcm::ReceiveBuffer& buffer, Clock::time_point at) {
+    record(arrivals, channel, buffer, at);
+  });
+  int saves = 1;
+  write_in_place(watch / model.file_name, model.revision_bytes(saves));
+  Daemon daemon(watch, output, pipeline_config(full_pipeline));
+  if (!subscriber.wait([&] { return arrivals.complete.count(1) > 0; }, timeout)) {
+    state.SkipWithError(("no first revision; rdtfd log:\n" + daemon.log()).c_str());
+    return;
+  }
+
+  std::vector<double> to_description, to_complete;
+  for (auto _ : state) {
+    const std::string bytes = model.revision_bytes(++saves);
+    const Clock::time_point saved = write_in_place(watch / model.file_name, bytes);
+    const std::int64_t revision = saves;
+    if (!subscriber.wait([&] { return arrivals.complete.count(revision) > 0; }, timeout)) {
+      state.SkipWithError(("revision " + std::to_string(revision) + " not published; rdtfd log:\n" + daemon.log()).c_str());
+      break;
+    }
+    subscriber.locked([&] {
+      to_description.push_back(ms_between(saved, arrivals.description.at(revision)));
+      to_complete.push_back(ms_between(saved, arrivals.complete.at(revision)));
+    });
+    state.SetIterationTime(to_complete.back() / 1e3);
+  }
+  state.SetLabel(std::string(big ? "1M-triangle GLB" : "arm3") + (full_pipeline ? ", defaults" : ", convert only"));
+  state.counters["settle_ms"] = kSettleMs;
+  state.counters["p50_ms"] = quantile(to_description, 0.5);
+  state.counters["p99_ms"] = quantile(to_description, 0.99);
+  state.counters["max_ms"] = quantile(to_description, 1.0);
+  state.counters["p50_minus_settle_ms"] = quantile(to_description, 0.5) - kSettleMs;
+  state.counters["p99_minus_settle_ms"] = quantile(to_description, 0.99) - kSettleMs;
+  state.counters["p50_complete_ms"] = quantile(to_complete, 0.5);
+  state.counters["p99_complete_ms"] = quantile(to_complete, 0.99);
+  state.counters["samples"] = static_cast<double>(to_description.size());
+  const std::vector<double> worker = worker_times_ms(daemon.log(), 2);
+  state.counters["p50_worker_ms"] = quantile(worker, 0.5);
+  state.counters["p99_worker_ms"] = quantile(worker, 0.99);
+  daemon.stop();
+}
+BENCHMARK(BM_SaveToPublish)->Args({0, 1})->Iterations(200)->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_SaveToPublish)->Args({0, 0})->Iterations(200)->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_SaveToPublish)->Args({1, 1})->Iterations(20)->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_SaveToPublish)->Args({1, 0})->Iterations(20)->UseManualTime()->Unit(benchmark::kMillisecond);
+
+// ------------------------------------------------------------------------------------------------
+// Initial scan
+
+// `count` one-box models, 100 per folder: models/dNNN/box_NNNNN.gltf.
+void write_model_tree(const fs::path& watch, int count) {
+  for (int i = 0; i < count; ++i) {
+    char folder[16], name[32];
+    std::snprintf(folder, sizeof(folder), "d%03d", i / 100);
+    std::snprintf(name, sizeof(name), "box_%05d", i);
+    fs::create_directories(watch / folder);
+    write_in_place(watch / folder / (std::string(name) + ".gltf"), small_box_gltf(name));
+  }
+}
+
+// range(0): number of models; range(1): 1 rdtfd's defaults, 0 validate, simulate and urdf off.
+void BM_InitialScan(benchmark::State& state) {
+  const int count = static_cast<int>(state.range(0));
+  const bool full_pipeline = state.range(1) == 1;
+  TempFolder root;
+  const fs::path watch = root / "models", output = root / "out";
+  write_model_tree(watch, count);
+
+  std::set<std::string> published;
+  Clock::time_point last_description;
+  Subscriber subscriber("RDTF", [&](const std::string& channel, const lcm::ReceiveBuffer&, Clock::time_point at) {
+    if (kind_of(channel) == "DESCRIPTION" && published.insert(model_id_of(channel)).second) last_description = at;
+  });
+  for (auto _ : state) {
+    const Clock::time_point started = Clock::now();
+    Daemon daemon(watch, output, pipeline_config(full_pipeline));
+    const bool all = subscriber.wait([&] { return static_cast<int>(published.size()) == count; }, 150s);
+    const Memory memory = process_memory(daemon.pid());
+    double seconds = 0;
+    subscriber.locked([&] { seconds = ms_between(started, last_description) / 1e3; });
+    if (!all) {
+      state.SkipWithError(("only " + std::to_string(published.size()) + " of " + std::to_string(count) +
+                           " models published in 150 s").c_str());
+    }
+    state.SetIterationTime(seconds);
+    state.counters["models_per_s"] = static_cast<double>(published.size()) / seconds;
+    state.counters["VmRSS_MiB"] = static_cast<double>(memory.rss_kib) / 1024.0;
+    state.counters["VmHWM_MiB"] = static_cast<double>(memory.hwm_kib) / 1024.0;
+    state.counters["published"] = static_cast<double>(published.size());
+    daemon.stop();
+  }
+  state.SetLabel(std::to_string(count) + " models, " + (full_pipeline ? "defaults" : "validate/simulate/urdf off"));
+}
+BENCHMARK(BM_InitialScan)->Args({1000, 0})->Args({10000, 0})->Args({1000, 1})
+    ->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  run_in_own_network_namespace(argc, argv);
+  benchmark::Initialize(&argc, argv);
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}

@@ -1,0 +1,154 @@
+// The entry points the fuzz targets drive, header-only so that the regression tests
+// (tests/fuzz_regressions/) feed their reproducers through exactly the same code.
+//
+// Each run returns what happened; `contract_violation` says what broke the project's rule for bad
+// input ("a clear error, never a crash"): a refusal without an error diagnostic, a diagnostic
+// without a code, or a converted model whose output no longer loads.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "rdtf/convert.h"
+#include "rdtf/glb.h"
+#include "rdtf/gltf.h"
+#include "rdtf/urdf.h"
+#include "rdtf/write.h"
+
+namespace rdtf::fuzz {
+
+struct RunResult {
+  bool succeeded = false;
+  Diagnostics diag;
+  std::string output;  // The RDTF JSON text (or the GLB JSON chunk) when it succeeded.
+};
+
+inline std::vector<std::uint8_t> to_bytes(const std::string& text) {
+  return {text.begin(), text.end()};
+}
+
+inline std::vector<std::uint8_t> read_bytes(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// Empty when the run kept the contract; else what went wrong.
+inline std::string contract_violation(const RunResult& run) {
+  for (const Diagnostic& d : run.diag.all()) {
+    if (d.code.empty()) return "a diagnostic without a code: " + format(d);
+  }
+  if (!run.succeeded && !run.diag.has_errors()) return "refused without an error diagnostic";
+  return {};
+}
+
+// Load (confined to `folder`), convert, and write the RDTF JSON in memory: the pipeline of
+// `rdtf convert`, minus the files.
+inline RunResult convert_bytes(const std::vector<std::uint8_t>& bytes,
+                               const std::filesystem::path& folder, Conversion* kept = nullptr) {
+  RunResult run;
+  const char* name = looks_like_glb(bytes) ? "fuzz.glb" : "fuzz.gltf";
+  const ConvertOptions options;
+  auto asset = load_gltf_from_memory(bytes, folder / name, folder, options.limits, run.diag);
+  if (!asset) return run;
+  auto conversion = convert(std::move(*asset), options, run.diag);
+  if (!conversion) return run;
+  run.output = document_text(conversion->asset.document);
+  run.succeeded = true;
+  if (kept != nullptr) *kept = std::move(*conversion);
+  return run;
+}
+
+// convert_bytes, then the output loaded and converted again: what rdtf writes must be a model
+// rdtf reads (a GLB's buffer travels in the binary chunk, as write_rdtf puts it).
+inline RunResult convert_and_reconvert(const std::vector<std::uint8_t>& bytes,
+                                       const std::filesystem::path& folder,
+                                       std::string& reconvert_failure) {
+  Conversion conversion;
+  RunResult run = convert_bytes(bytes, folder, &conversion);
+  if (!run.succeeded) return run;
+  std::vector<std::uint8_t> again = to_bytes(run.output);
+  const bool glb = conversion.asset.binary;
+  if (glb) {
+    const auto& buffers = conversion.asset.buffers;
+    const bool first_in_bin = !buffers.empty() && !conversion.asset.document["buffers"][0].contains("uri");
+    again = make_glb(run.output, first_in_bin ? std::span<const std::uint8_t>(buffers[0])
+                                              : std::span<const std::uint8_t>());
+  }
+  RunResult second = convert_bytes(again, folder);
+  if (!second.succeeded) {
+    reconvert_failure = "the converted model does not convert again:";
+    for (const Diagnostic& d : second.diag.all()) reconvert_failure += "\n  " + format(d);
+  }
+  return run;
+}
+
+// The GLB container alone. A container that parses must survive make_glb -> parse_glb unchanged.
+inline RunResult parse_glb_bytes(const std::vector<std::uint8_t>& bytes, std::string& roundtrip_failure) {
+  RunResult run;
+  const auto chunks = parse_glb(bytes, run.diag);
+  if (!chunks) return run;
+  run.succeeded = true;
+  run.output.assign(chunks->json);
+  const std::span<const std::uint8_t> bin = chunks->bin.value_or(std::span<const std::uint8_t>());
+  const auto rebuilt = make_glb(chunks->json, bin);
+  Diagnostics diag;
+  const auto again = parse_glb(rebuilt, diag);
+  if (!again || again->json != chunks->json ||
+      (bin.empty() ? again->bin.has_value()
+                   : !again->bin || !std::equal(bin.begin(), bin.end(), again->bin->begin(),
+                                                again->bin->end()))) {
+    roundtrip_failure = "make_glb of a parsed GLB does not parse back to the same chunks";
+  }
+  return run;
+}
+
+// extras.RDTF and node extras, read by typing, completion, the robot and the extras writer: the
+// fuzzed JSON goes into a real model (`base`, a glTF JSON with its buffers in `folder`). An
+// object input becomes extras.RDTF, except its "nodeExtras" array, whose entries become the
+// extras of the nodes in order; any other value becomes extras.RDTF as it is.
+inline std::optional<std::vector<std::uint8_t>> model_with_extras(const Json& base,
+                                                                  const std::string& extras_text) {
+  Json extras;
+  try {
+    extras = Json::parse(extras_text);
+  } catch (const Json::exception&) {
+    return std::nullopt;  // Not JSON: nothing to put in the model (the loaders fuzz the parser).
+  }
+  Json document = base;
+  if (extras.is_object() && extras.contains("nodeExtras")) {
+    const Json node_extras = extras["nodeExtras"];
+    extras.erase("nodeExtras");
+    if (node_extras.is_array()) {
+      Json& nodes = document["nodes"];
+      for (std::size_t i = 0; i < node_extras.size() && i < nodes.size(); ++i) {
+        nodes[i]["extras"] = node_extras[i];
+      }
+    }
+  }
+  document["extras"]["RDTF"] = std::move(extras);
+  return to_bytes(document.dump());
+}
+
+// URDF import from a file: `dir/fuzz.urdf` holds the bytes (import_urdf takes a path).
+inline RunResult import_urdf_bytes(const std::vector<std::uint8_t>& bytes,
+                                   const std::filesystem::path& dir) {
+  RunResult run;
+  const std::filesystem::path urdf = dir / "fuzz.urdf";
+  {
+    std::ofstream out(urdf, std::ios::binary | std::ios::trunc);
+    out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  }
+  const UrdfImportOptions options;
+  auto conversion = import_urdf(urdf, options, run.diag);
+  if (!conversion) return run;
+  run.output = document_text(conversion->asset.document);
+  run.succeeded = true;
+  return run;
+}
+
+}  // namespace rdtf::fuzz

@@ -26,6 +26,12 @@ void on_ode_message(int errnum, const char* message, va_list ap) {
   }
 }
 
+[[noreturn]] void on_ode_internal_error(int errnum, const char* message, va_list ap) {
+  char text[512];
+  std::vsnprintf(text, sizeof(text), message, ap);
+  throw OdeInternalError("ODE internal error " + std::to_string(errnum) + ": " + text);
+}
+
 dBodyID body_id(const Simulation::Model& model, int body) {
   return body == kWorld ? nullptr : model.bodies[body].id;
 }
@@ -191,9 +197,12 @@ void add_joint(Simulation::Model& model, int j, const Eigen::Isometry3d& X_SJ, D
     if (joint.friction > 0) ignored("friction");
     if (joint.spring_stiffness > 0) ignored("spring stiffness");
   }
-  const bool massless_side = is_massless(model.robot.links[joint.child_link]) ||
-                             is_massless(model.robot.links[joint.parent_link]);
-  if (joint.kind == JointKind::kFloating || (joint.kind == JointKind::kFixed && massless_side)) return;
+  // A fixed joint inside one body (a massless link riding on the body it is fixed to, or two
+  // massless links the world carries) is no constraint. Deciding by the massless side alone left a
+  // body whose massless parent is a root (Khronos RiggedSimple) unheld: it fell.
+  if (joint.kind == JointKind::kFloating || (joint.kind == JointKind::kFixed && jm.child_body == jm.parent_body)) {
+    return;
+  }
 
   dBodyID child = model.bodies[jm.child_body].id;
   dBodyID parent = body_id(model, jm.parent_body);
@@ -334,8 +343,9 @@ std::unique_ptr<Simulation::Model> build_model(const Robot& robot, const Simulat
   for (std::size_t l = 0; l < robot.links.size(); ++l) {
     if (robot.links[l].parent_joint >= 0) continue;
     model->root_links.push_back(static_cast<int>(l));
-    // A root with mass is held by the world unless the roots float (a massless one rides on it).
-    if (!options.floating_root && carrier[l] == static_cast<int>(l)) {
+    // A root is held by the world unless the roots float: through the body that carries it (its
+    // own, or that of the nearest link with mass it is fixed to); a root the world carries is.
+    if (!options.floating_root && carrier[l] >= 0) {
       dJointID hold = dJointCreateFixed(model->world, nullptr);
       dJointAttach(hold, model->bodies[model->links[l].body].id, nullptr);
       dJointSetFixed(hold);
@@ -365,7 +375,7 @@ std::unique_ptr<Simulation::Model> build_model(const Robot& robot, const Simulat
 
 Simulation::Model::~Model() {
   if (world) dWorldDestroy(world);
-  if (threading) dThreadingFreeImplementation(threading);
+  if (threading && !interrupted) dThreadingFreeImplementation(threading);
 }
 
 void init_ode() {
@@ -373,6 +383,8 @@ void init_ode() {
   std::call_once(once, [] {
     if (!dInitODE2(0)) throw std::runtime_error("dInitODE2 failed");
     dSetMessageHandler(&dynamics_internal::on_ode_message);
+    dSetDebugHandler(&dynamics_internal::on_ode_internal_error);
+    dSetErrorHandler(&dynamics_internal::on_ode_internal_error);
   });
   if (!dynamics_internal::thread_ready) {
     if (!dAllocateODEDataForThread(dAllocateFlagBasicData)) {

@@ -5,6 +5,7 @@
 #include <limits>
 #include <map>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -17,6 +18,10 @@ namespace rdtf::dynamics_internal {
 inline constexpr int kWorld = -1;       // Carried by the world (does not move).
 inline constexpr int kUnresolved = -2;  // A massless link nothing carries: cannot be simulated.
 inline constexpr double kInfinity = std::numeric_limits<double>::infinity();
+// No body's position, speed or angular speed may exceed this (SI units) before a step: a state
+// that blew up this far is meaningless, and stepping it further overflows into NaN, on which ODE
+// asserts and aborts the process.
+inline constexpr double kStateBound = 1e100;
 
 std::string number(double value);  // "%.6g"
 std::string vector_text(const Eigen::Vector3d& v);
@@ -35,9 +40,9 @@ std::vector<int> tree_order(const Robot& robot);
 // The root link of each link's tree.
 std::vector<int> root_of(const Robot& robot, const std::vector<int>& order);
 
-// Which link's body carries each link: itself when it has mass; for a massless link, the world
-// when it is fixed (through fixed joints) to a root held by the world, else the nearest link with
-// mass it is fixed to, else kUnresolved.
+// Which link's body carries each link: itself when it has mass; for a massless link, the nearest
+// link with mass it is fixed to (through fixed joints), else the world when it is fixed to a root
+// held by the world, else kUnresolved.
 std::vector<int> carriers(const Robot& robot, bool floating_root);
 
 // The pose of the joint frame relative to the parent link frame at position q.
@@ -117,6 +122,12 @@ struct Simulation::Model {
   double dissipated = 0;
   double actuator_work = 0;
   std::vector<std::string> messages;
+  // The state left what ODE can step (a value not finite or beyond kStateBound), or ODE stopped a
+  // step with an internal error: the state is unusable, health() reports it not finite, and
+  // step() does nothing more. `interrupted`: ODE was left mid-step by an exception, so its
+  // threading object still holds jobs and is not freed (freeing it asserts).
+  bool failed = false;
+  bool interrupted = false;
 
   Model() = default;
   Model(const Model&) = delete;
@@ -136,6 +147,12 @@ Eigen::Isometry3d body_pose(dBodyID body);  // X_SB
 void prime_joint_states(Simulation::Model& model);
 // The ODE messages the calling thread received since the last call.
 std::vector<std::string> take_ode_messages();
+
+// ODE's debug and error handlers throw this instead of letting ODE abort() the process (which it
+// does after either handler returns). Only Simulation::step lets ODE run where it can be raised.
+struct OdeInternalError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
 
 }  // namespace dynamics_internal
 }  // namespace rdtf

@@ -39,6 +39,16 @@ bool body_finite(dBodyID id) {
   return std::isfinite(q[0]) && std::isfinite(q[1]) && std::isfinite(q[2]) && std::isfinite(q[3]);
 }
 
+// A state ODE can step: finite, and no position or velocity beyond kStateBound.
+bool body_steppable(dBodyID id) {
+  if (!body_finite(id)) return false;
+  const dReal* values[] = {dBodyGetPosition(id), dBodyGetLinearVel(id), dBodyGetAngularVel(id)};
+  for (const dReal* v : values) {
+    if (vec(v).cwiseAbs().maxCoeff() > dynamics_internal::kStateBound) return false;
+  }
+  return true;
+}
+
 }  // namespace
 
 Simulation::Simulation(std::unique_ptr<Model> model) : model_(std::move(model)) {}
@@ -58,6 +68,16 @@ void Simulation::step(double dt) {
   if (!(dt > 0) || !std::isfinite(dt)) throw std::invalid_argument("Simulation::step: dt must be positive");
   init_ode();
   Model& m = *model_;
+  if (m.failed) return;
+  for (const BodyModel& body : m.bodies) {
+    if (!body_steppable(body.id)) {
+      m.failed = true;
+      m.messages.push_back("the state of link '" + m.robot.links[body.link].name + "' at t = " +
+                           std::to_string(m.time) +
+                           " s is not finite or beyond 1e100: the simulation stopped");
+      return;
+    }
+  }
   std::vector<double> damping_effort(m.joints.size(), 0.0);
   std::vector<double> previous(m.joints.size(), 0.0);
   for (JointModel& jm : m.joints) {
@@ -80,10 +100,18 @@ void Simulation::step(double dt) {
       if (jm.parent_body != kWorld) dBodyAddTorque(m.bodies[jm.parent_body].id, -tau.x(), -tau.y(), -tau.z());
     }
   }
-  if (m.quickstep) {
-    dWorldQuickStep(m.world, dt);
-  } else {
-    dWorldStep(m.world, dt);
+  try {
+    if (m.quickstep) {
+      dWorldQuickStep(m.world, dt);
+    } else {
+      dWorldStep(m.world, dt);
+    }
+  } catch (const dynamics_internal::OdeInternalError& error) {
+    m.failed = true;
+    m.interrupted = true;
+    m.messages.push_back(std::string(error.what()) + " (at t = " + std::to_string(m.time) +
+                         " s; the simulation stopped)");
+    return;
   }
   for (JointModel& jm : m.joints) {
     if (!jm.id) continue;
@@ -195,6 +223,7 @@ void Simulation::clear_commands() {
 SimulationHealth Simulation::health(const HealthTolerances& tolerances) const {
   const Model& m = *model_;
   SimulationHealth h;
+  h.finite = !m.failed;
   h.dissipated_energy = m.dissipated;
   h.actuator_work = m.actuator_work;
   std::vector<Eigen::Isometry3d> X_SB(m.bodies.size());

@@ -119,8 +119,9 @@ std::vector<int> carriers(const Robot& robot, bool floating_root) {
       carrier[l] = l;
       continue;
     }
-    // Breadth first through fixed joints: the world if the group is held by it, else the nearest
-    // link with mass.
+    // Breadth first through fixed joints: the nearest link with mass, else the world if the group
+    // is held by it. (A body in a group held by the world is itself held by the world through its
+    // root, so riding on it is the same; and its fixed joints then stay inside one body.)
     std::vector<bool> seen(n, false);
     std::deque<int> queue{l};
     seen[l] = true;
@@ -138,7 +139,7 @@ std::vector<int> carriers(const Robot& robot, bool floating_root) {
         }
       }
     }
-    carrier[l] = world ? kWorld : nearest;
+    carrier[l] = nearest != kUnresolved ? nearest : (world ? kWorld : kUnresolved);
   }
   return carrier;
 }

@@ -82,8 +82,9 @@ void run_scenario(Simulation& sim, const Simulation::Model& model, const Validat
     const SimulationHealth h = sim.health(tolerances);
     if (!h.finite) {
       diag.error("SIM_NOT_FINITE", "",
-                 "the state became NaN or infinite at t = " + number(t) + " s (step " +
-                     std::to_string(sim.steps()) + "): the model is unstable in ODE");
+                 "the state became NaN, infinite or too large to step (beyond 1e100) at t = " +
+                     number(t) + " s (step " + std::to_string(sim.steps()) +
+                     "): the model is unstable in ODE");
       break;
     }
     largest_kinetic = std::max(largest_kinetic, h.kinetic_energy);

@@ -1,0 +1,148 @@
+// The live simulation's commands (docs/dynamics.md, "The live simulation"): torque, position and
+// velocity modes against closed forms on a bar turning about a hinge without gravity, clamping to
+// the effort limit, and the commands that are rejected.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "dynamics/dynamics_models.h"
+
+namespace rdtf {
+namespace {
+
+using dynamics_test::box_inertial;
+using dynamics_test::RobotBuilder;
+
+// A 2 kg bar (0.05 x 0.5 x 0.05 m) turning about a hinge along Z through its centre (a propeller:
+// the hinge then carries no load, so ODE's constraint handling adds no error to the closed forms),
+// and a massless tool frame fixed at its end.
+constexpr double kMass = 2.0, kLength = 0.5, kWidth = 0.05;
+const double kInertiaAboutPivot = kMass * (kLength * kLength + kWidth * kWidth) / 12;
+
+RobotBuilder bar_builder() {
+  RobotBuilder b;
+  const int root = b.root("frame", MassProperties{});
+  const int bar = b.child(root, "pivot", JointKind::kRevolute, Eigen::Isometry3d::Identity(), Eigen::Vector3d::UnitZ(),
+                          "bar", box_inertial(kMass, {kWidth, kLength, kWidth}));
+  b.child(bar, "mount", JointKind::kFixed, dynamics_test::translation(0, -kLength / 2, 0), Eigen::Vector3d::UnitX(),
+          "tool", MassProperties{});
+  return b;
+}
+
+std::unique_ptr<Simulation> weightless(const Robot& robot) {
+  SimulationOptions options;
+  options.gravity = Eigen::Vector3d::Zero();
+  Diagnostics diag;
+  auto sim = Simulation::create(robot, options, {}, diag);
+  EXPECT_FALSE(diag.has_errors()) << dynamics_test::all_text(diag);
+  if (!sim) throw std::runtime_error("not built");
+  return sim;
+}
+
+// Constant torque tau: ODE's semi-implicit Euler gives w_n = tau h n / I exactly. Its orientation
+// update (q += h/2 w q, then normalise) turns the bar by 2 atan(w_n h / 2) per step, not w_n h, so
+// q_N = sum 2 atan(w_n h / 2): checked to rounding. Against the plain sum tau h^2 N (N + 1) / 2I the
+// shortfall is sum (w_n h)^3 / 12, relative (w_N h)^2 / 24 = 5.3e-7 here.
+TEST(DynamicsCommands, TorqueAcceleratesAsTauOverI) {
+  auto sim = weightless(bar_builder().robot());
+  const double tau = 0.3, h = 1e-3;
+  const int N = 500;
+  ASSERT_TRUE(sim->set_command({"pivot", CommandMode::kTorque, tau}));
+  double expected_q = 0;
+  for (int n = 1; n <= N; ++n) {
+    sim->step(h);
+    expected_q += 2 * std::atan(tau * h * n / kInertiaAboutPivot * h / 2);
+  }
+  const JointState state = *sim->joint_state("pivot");
+  const double expected_qdot = tau * h * N / kInertiaAboutPivot;
+  const double euler_q = tau * h * h * N * (N + 1) / (2 * kInertiaAboutPivot);
+  std::printf("torque: q %.12g (ODE's update %.12g, Euler sum %.12g), qdot %.12g (%.12g)\n", state.position,
+              expected_q, euler_q, state.velocity, expected_qdot);
+  EXPECT_NEAR(state.position, expected_q, 1e-9 * expected_q);
+  EXPECT_NEAR(state.velocity, expected_qdot, 1e-9 * expected_qdot);
+  const double shortfall = std::pow(expected_qdot * h, 2) / 24;
+  EXPECT_NEAR((euler_q - state.position) / euler_q, shortfall, 0.01 * shortfall);
+  EXPECT_EQ(state.effort, tau);
+}
+
+TEST(DynamicsCommands, EffortIsClampedToTheLimit) {
+  RobotBuilder b = bar_builder();
+  b.joint(0).limits = JointLimits{-3.0, 3.0, 0.1, 0};
+  auto sim = weightless(b.robot());
+  ASSERT_TRUE(sim->set_command({"pivot", CommandMode::kTorque, -5.0}));
+  for (int n = 0; n < 100; ++n) sim->step();
+  const JointState state = *sim->joint_state("pivot");
+  EXPECT_EQ(state.effort, -0.1);
+  EXPECT_NEAR(state.velocity, -0.1 * 0.1 / kInertiaAboutPivot, 1e-9 * 0.1 * 0.1 / kInertiaAboutPivot);
+}
+
+// Critically damped (kd = 2 sqrt(kp I)): the error decays as (1 + w t) exp(-w t), w = sqrt(kp / I)
+// = 7.7 rad/s, below 1e-12 of the step after 5 s.
+TEST(DynamicsCommands, PositionModeReachesTheTarget) {
+  auto sim = weightless(bar_builder().robot());
+  const double kp = 10.0, kd = 2 * std::sqrt(kp * kInertiaAboutPivot);
+  ASSERT_TRUE(sim->set_command({"pivot", CommandMode::kPosition, 0.0, 0.7, 0.0, kp, kd}));
+  while (sim->time() < 5.0) sim->step();
+  const JointState state = *sim->joint_state("pivot");
+  EXPECT_NEAR(state.position, 0.7, 1e-9);
+  EXPECT_NEAR(state.velocity, 0.0, 1e-9);
+  // The tool rides on the bar: L/2 from the pivot along the bar's -Y turned by 0.7 rad.
+  const Eigen::Vector3d tool = sim->link_pose("tool")->X_SL.translation();
+  EXPECT_NEAR(tool.x(), kLength / 2 * std::sin(0.7), 1e-9);
+  EXPECT_NEAR(tool.y(), -kLength / 2 * std::cos(0.7), 1e-9);
+}
+
+TEST(DynamicsCommands, VelocityModeReachesTheSpeed) {
+  auto sim = weightless(bar_builder().robot());
+  ASSERT_TRUE(sim->set_command({"pivot", CommandMode::kVelocity, 0.0, 0.0, 1.5, 0.0, 2.0}));
+  while (sim->time() < 3.0) sim->step();  // time constant I / kd = 0.021 s
+  EXPECT_NEAR(sim->joint_state("pivot")->velocity, 1.5, 1e-9);
+  sim->clear_command("pivot");
+  sim->step();
+  EXPECT_EQ(sim->joint_state("pivot")->effort, 0.0);
+  EXPECT_NEAR(sim->joint_state("pivot")->velocity, 1.5, 1e-9);  // no torque, no gravity: it coasts
+}
+
+TEST(DynamicsCommands, BadCommandsAreRejectedAndChangeNothing) {
+  auto sim = weightless(bar_builder().robot());
+  ASSERT_TRUE(sim->set_command({"pivot", CommandMode::kTorque, 0.2}));
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const struct {
+    JointCommand command;
+    const char* reason;
+  } rejected[] = {
+      {{"wrist", CommandMode::kTorque, 1.0}, "command for 'wrist' rejected: no such joint"},
+      {{"mount", CommandMode::kTorque, 1.0}, "command for 'mount' rejected: a fixed joint takes no command"},
+      {{"pivot", CommandMode::kPosition, 0.0, nan, 0.0, 1.0, 0.0}, "command for 'pivot' rejected: values must be finite"},
+      {{"pivot", CommandMode::kPosition, 0.0, 1.0, 0.0, -1.0, 0.0},
+       "command for 'pivot' rejected: gains must not be negative"},
+      {{"pivot", CommandMode::kVelocity, 0.0, 0.0, 1.0, 0.0, -2.0},
+       "command for 'pivot' rejected: gains must not be negative"},
+  };
+  for (const auto& [command, reason] : rejected) {
+    std::string error;
+    EXPECT_FALSE(sim->set_command(command, &error));
+    EXPECT_EQ(error, reason);
+  }
+  sim->step();
+  EXPECT_EQ(sim->joint_state("pivot")->effort, 0.2);  // the last accepted command still acts
+  EXPECT_FALSE(sim->joint_state("mount").has_value());
+}
+
+// A state that blew up stops the simulation instead of letting ODE abort the process on it.
+TEST(DynamicsCommands, ABlownUpSimulationStops) {
+  auto sim = weightless(bar_builder().robot());
+  // 1e120 N m: after one step the bar turns at 6e117 rad/s, beyond what may be stepped (1e100).
+  ASSERT_TRUE(sim->set_command({"pivot", CommandMode::kTorque, 1e120}));
+  for (int n = 0; n < 20; ++n) sim->step();
+  EXPECT_FALSE(sim->health().finite);
+  ASSERT_FALSE(sim->ode_messages().empty());
+  EXPECT_NE(sim->ode_messages().back().find("the simulation stopped"), std::string::npos) << sim->ode_messages().back();
+  const std::uint64_t steps = sim->steps();
+  sim->step();
+  EXPECT_EQ(sim->steps(), steps);
+}
+
+}  // namespace
+}  // namespace rdtf

@@ -1,0 +1,181 @@
+// `rdtf validate IN [--json]` as users and scripts run it: exit 0 on a good model, 2 with the
+// diagnostic on a broken one, and a JSON report with the documented fields. The broken models are
+// small glTF files written by the test: two boxes, the second on a joint described by node extras
+// (docs/format.md).
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include "support/test_support.h"
+
+namespace rdtf {
+namespace {
+
+using nlohmann::json;
+
+std::string quoted(const std::filesystem::path& path) { return "'" + path.string() + "'"; }
+
+testing::CommandResult validate(const std::string& arguments) {
+  return testing::run_command("'" + testing::cli_path() + "' validate " + arguments);
+}
+
+std::string base64(const std::string& bytes) {
+  static const char* const kTable = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  for (std::size_t i = 0; i < bytes.size(); i += 3) {
+    unsigned v = static_cast<unsigned char>(bytes[i]) << 16;
+    if (i + 1 < bytes.size()) v |= static_cast<unsigned char>(bytes[i + 1]) << 8;
+    if (i + 2 < bytes.size()) v |= static_cast<unsigned char>(bytes[i + 2]);
+    out += kTable[v >> 18 & 63];
+    out += kTable[v >> 12 & 63];
+    out += i + 1 < bytes.size() ? kTable[v >> 6 & 63] : '=';
+    out += i + 2 < bytes.size() ? kTable[v & 63] : '=';
+  }
+  return out;
+}
+
+// A 0.1 m cube mesh (12 triangles wound outwards), embedded.
+json cube_parts() {
+  std::string bin;
+  const auto put = [&](const auto value) { bin.append(reinterpret_cast<const char*>(&value), sizeof(value)); };
+  for (int c = 0; c < 8; ++c) {
+    put(c & 1 ? 0.05f : -0.05f);
+    put(c & 2 ? 0.05f : -0.05f);
+    put(c & 4 ? 0.05f : -0.05f);
+  }
+  const int quads[6][4] = {{1, 3, 7, 5}, {0, 4, 6, 2}, {2, 6, 7, 3}, {0, 1, 5, 4}, {4, 5, 7, 6}, {0, 2, 3, 1}};
+  for (const auto& q : quads) {
+    for (int v : {q[0], q[1], q[2], q[0], q[2], q[3]}) put(static_cast<std::uint16_t>(v));
+  }
+  return {{"meshes", {{{"primitives", {{{"attributes", {{"POSITION", 0}}}, {"indices", 1}}}}}}},
+          {"accessors",
+           {{{"bufferView", 0}, {"componentType", 5126}, {"count", 8}, {"type", "VEC3"},
+             {"min", {-0.05, -0.05, -0.05}}, {"max", {0.05, 0.05, 0.05}}},
+            {{"bufferView", 1}, {"componentType", 5123}, {"count", 36}, {"type", "SCALAR"}}}},
+          {"bufferViews",
+           {{{"buffer", 0}, {"byteOffset", 0}, {"byteLength", 96}, {"target", 34962}},
+            {{"buffer", 0}, {"byteOffset", 96}, {"byteLength", 72}, {"target", 34963}}}},
+          {"buffers", {{{"byteLength", bin.size()}, {"uri", "data:application/octet-stream;base64," + base64(bin)}}}}};
+}
+
+// Nodes: 0 "base" (cube, extras `base_extras`), its child 1 "arm" (cube, 0.3 m along +X, extras
+// `arm_extras`: the joint between them, as Blender exports custom properties).
+std::filesystem::path write_two_boxes(const testing::TempDir& folder, const json& base_extras, const json& arm_extras) {
+  json document = cube_parts();
+  document["asset"] = {{"version", "2.0"}};
+  document["scene"] = 0;
+  document["scenes"] = {{{"nodes", {0}}}};
+  json base = {{"name", "base"}, {"mesh", 0}, {"children", {1}}};
+  if (!base_extras.empty()) base["extras"] = base_extras;
+  json arm = {{"name", "arm"}, {"mesh", 0}, {"translation", {0.3, 0.0, 0.0}}};
+  if (!arm_extras.empty()) arm["extras"] = arm_extras;
+  document["nodes"] = {base, arm};
+  const auto path = folder / "two_boxes.gltf";
+  testing::write_file(path, document.dump(1));
+  return path;
+}
+
+const json kHinge = {{"rdtf_joint", "revolute"}, {"rdtf_axis", {0.0, 0.0, 1.0}}};
+
+TEST(ValidateCli, GoodFixturePassesWithExitZero) {
+  const auto run = validate(quoted(testing::data_dir() / "blender" / "arm3.gltf"));
+  EXPECT_EQ(run.exit_code, 0) << run.out << run.err;
+  EXPECT_NE(run.out.find("arm3.gltf: PASS: 3 s simulated in 3000 steps"), std::string::npos) << run.out;
+}
+
+TEST(ValidateCli, GeneratedGoodModelPasses) {
+  testing::TempDir folder;
+  const auto run = validate(quoted(write_two_boxes(folder, {}, kHinge)));
+  EXPECT_EQ(run.exit_code, 0) << run.out << run.err;
+  EXPECT_NE(run.out.find(": PASS:"), std::string::npos) << run.out;
+}
+
+// base at rdtf_mass 1e7 kg, arm 1 kg (0.1 m cube at 1000 kg/m^3): the joint is named.
+TEST(ValidateCli, MassRatioFailsWithExitTwoAndTheDiagnostic) {
+  testing::TempDir folder;
+  const auto path = write_two_boxes(folder, {{"rdtf_mass", 1e7}}, kHinge);
+  const auto run = validate(quoted(path));
+  EXPECT_EQ(run.exit_code, 2) << run.out << run.err;
+  EXPECT_NE(run.err.find("error JOINT_MASS_RATIO: joint 'base_arm_joint' (revolute): joins 'base' (1e+07 kg) and "
+                         "'arm' (1 kg): mass ratio 1e+07"),
+            std::string::npos)
+      << run.err;
+  EXPECT_NE(run.out.find(": FAIL:"), std::string::npos) << run.out;
+  // The bound is an option.
+  EXPECT_EQ(validate(quoted(path) + " --max-mass-ratio 1e8").exit_code, 0);
+}
+
+// Inverted limits and a zero axis are refused while the joint is read: the extras are named.
+TEST(ValidateCli, JointErrorsInNodeExtrasFailWithExitTwo) {
+  testing::TempDir folder;
+  json inverted = kHinge;
+  inverted["rdtf_lower"] = 1.0;
+  inverted["rdtf_upper"] = -1.0;
+  auto run = validate(quoted(write_two_boxes(folder, {}, inverted)));
+  EXPECT_EQ(run.exit_code, 2) << run.out << run.err;
+  EXPECT_NE(run.err.find("two_boxes.gltf:/nodes/1/extras: error JOINT_LIMITS_INVERTED"), std::string::npos) << run.err;
+  json zero_axis = kHinge;
+  zero_axis["rdtf_axis"] = {0.0, 0.0, 0.0};
+  run = validate(quoted(write_two_boxes(folder, {}, zero_axis)));
+  EXPECT_EQ(run.exit_code, 2) << run.out << run.err;
+  EXPECT_NE(run.err.find("two_boxes.gltf:/nodes/1/extras/rdtf_axis: error JOINT_AXIS_ZERO"), std::string::npos)
+      << run.err;
+}
+
+void expect_report_fields(const json& report) {
+  for (const char* key : {"passed", "simulated"}) EXPECT_TRUE(report.at(key).is_boolean()) << key;
+  for (const char* key : {"simulatedTime", "timeStep", "energyDrift", "finalEnergyDrift", "worstJointError",
+                          "worstJointMisalignment", "worstLimitViolation", "wallTime"}) {
+    EXPECT_TRUE(report.at(key).is_number()) << key;
+  }
+  for (const char* key : {"steps", "bodies"}) EXPECT_TRUE(report.at(key).is_number_integer()) << key;
+  for (const char* key : {"stepper", "worstJoint", "worstLimitJoint"}) EXPECT_TRUE(report.at(key).is_string()) << key;
+  EXPECT_TRUE(report.at("diagnostics").is_array());
+  EXPECT_TRUE(report.at("conversionDiagnostics").is_array());
+}
+
+TEST(ValidateCli, JsonReportHasTheDocumentedFields) {
+  const auto run = validate("--json " + quoted(testing::data_dir() / "blender" / "arm3.gltf"));
+  ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
+  const json report = json::parse(run.out);
+  expect_report_fields(report);
+  EXPECT_TRUE(report["passed"].get<bool>());
+  EXPECT_EQ(report["steps"], 3000);
+  EXPECT_EQ(report["bodies"], 3);
+  EXPECT_EQ(report["stepper"], "dWorldStep");
+  EXPECT_EQ(report["timeStep"], 0.001);
+  EXPECT_NEAR(report["simulatedTime"].get<double>(), 3.0, 1e-9);
+  EXPECT_LE(report["energyDrift"].get<double>(), 0.01);
+  EXPECT_GE(report["wallTime"].get<double>(), 0.0);
+}
+
+TEST(ValidateCli, JsonReportOfABrokenModelCarriesTheDiagnostic) {
+  testing::TempDir folder;
+  const auto run = validate("--json " + quoted(write_two_boxes(folder, {{"rdtf_mass", 1e7}}, kHinge)));
+  EXPECT_EQ(run.exit_code, 2) << run.out << run.err;
+  const json report = json::parse(run.out);
+  expect_report_fields(report);
+  EXPECT_FALSE(report["passed"].get<bool>());
+  int found = 0;
+  for (const json& d : report["diagnostics"]) {
+    if (d["code"] != "JOINT_MASS_RATIO") continue;
+    ++found;
+    EXPECT_EQ(d["severity"], "error");
+    EXPECT_NE(d["message"].get<std::string>().find("'base_arm_joint'"), std::string::npos);
+    EXPECT_NE(d["file"].get<std::string>().find("two_boxes.gltf"), std::string::npos);
+  }
+  EXPECT_EQ(found, 1) << report.dump(1);
+}
+
+// Options reach the run: time step, duration, and gravity for Z-up content.
+TEST(ValidateCli, OptionsChangeTheRun) {
+  const auto run = validate("--json --seconds 0.5 --time-step 0.002 --gravity 0 0 -9.80665 " +
+                            quoted(testing::data_dir() / "blender" / "arm3.gltf"));
+  ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
+  const json report = json::parse(run.out);
+  EXPECT_EQ(report["steps"], 250);
+  EXPECT_EQ(report["timeStep"], 0.002);
+}
+
+}  // namespace
+}  // namespace rdtf

@@ -102,9 +102,13 @@ void SimulationHost::apply_command(const rdtf::joint_command_t& command) {
   const auto found = models_.find(command.model_id);
   if (found == models_.end()) return reject(command, "no live simulation of model '" + command.model_id + "'");
   LiveModel& model = *found->second;
-  if (command.revision != model.revision || command.content_hash != model.content_hash) {
-    return reject(command, "command for revision " + std::to_string(command.revision) +
-                               " but revision " + std::to_string(model.revision) + " is live");
+  if (command.revision != model.revision) {
+    return reject(command, "command for revision " + std::to_string(command.revision) + " but revision " +
+                               std::to_string(model.revision) + " is live");
+  }
+  if (command.content_hash != model.content_hash) {
+    return reject(command, "command for content hash '" + command.content_hash + "' but revision " +
+                               std::to_string(model.revision) + " has content hash '" + model.content_hash + "'");
   }
   const auto n = static_cast<std::size_t>(command.num_joints);
   if (command.name.size() != n || command.mode.size() != n || command.value.size() != n ||
@@ -184,7 +188,10 @@ void SimulationHost::run() {
     for (auto& [id, model] : models_) {
       if (now >= model->next_state) {
         publish_state(id, *model);
-        model->next_state = now + state_period;
+        // On a fixed schedule: `now + period` would add the loop's lateness (up to a step) to
+        // every period and publish below the configured rate. After a stall, start afresh.
+        model->next_state += state_period;
+        if (model->next_state <= now) model->next_state = now + state_period;
       }
     }
     std::this_thread::sleep_until(models_.empty() ? now + std::chrono::milliseconds(20) : next);

@@ -1,0 +1,155 @@
+// rdtf-pd-controller: holds one model of rdtfd's live simulation at a target pose.
+//
+// The loop: every JOINT_STATE of the model (rdtfd publishes them at state_rate_hz) is answered at
+// once by one JOINT_COMMAND for all its joints, stamped with that state's revision and content
+// hash (PdController in pd_controller.h). DESCRIPTIONs tell which revision is newest, so states
+// still in flight from a replaced revision are not answered; after a hot reload the first state
+// of the new revision re-stamps the commands. Commands rejected by rdtfd (ERROR, code
+// COMMAND_REJECTED) are printed. Runs until SIGINT/SIGTERM or --duration.
+//
+//   rdtf-pd-controller --model arm3.gltf --target shoulder=0.3 --target elbow=-0.5 --kp 400 --kd 20
+//
+// docs/controller.md: gains, modes, and how to write your own controller.
+#include <CLI/CLI.hpp>
+
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <iostream>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <lcm/lcm-cpp.hpp>
+
+#include <rdtf/description_t.hpp>
+#include <rdtf/model_error_t.hpp>
+
+#include "pd_controller.h"
+
+namespace {
+
+volatile std::sig_atomic_t g_stop = 0;
+void on_signal(int) { g_stop = 1; }
+
+std::int64_t now_utime() {
+  using namespace std::chrono;
+  return duration_cast<microseconds>(system_clock::now().time_since_epoch()).count();
+}
+
+// "joint=value" into targets; an error message for anything else.
+std::string parse_target(const std::string& text, std::map<std::string, double>& targets) {
+  const auto equals = text.rfind('=');
+  if (equals == std::string::npos || equals == 0) return "expected joint=value, got '" + text + "'";
+  try {
+    std::size_t used = 0;
+    const double value = std::stod(text.substr(equals + 1), &used);
+    if (used != text.size() - equals - 1 || !std::isfinite(value)) throw std::invalid_argument(text);
+    targets[text.substr(0, equals)] = value;
+  } catch (const std::exception&) {
+    return "not a number in '" + text + "'";
+  }
+  return "";
+}
+
+class ControllerNode {
+ public:
+  ControllerNode(lcm::LCM& lcm, std::string prefix, rdtf::controller::PdOptions options)
+      : lcm_(lcm), prefix_(std::move(prefix)), model_id_(options.model_id), controller_(std::move(options)) {
+    const std::string model_channel = prefix_ + "/" + model_id_ + "/";
+    lcm_.subscribe(model_channel + "JOINT_STATE", &ControllerNode::on_state, this);
+    lcm_.subscribe(model_channel + "DESCRIPTION", &ControllerNode::on_description, this);
+    lcm_.subscribe(model_channel + "ERROR", &ControllerNode::on_error, this);
+    command_channel_ = model_channel + "JOINT_COMMAND";
+  }
+
+ private:
+  void on_description(const lcm::ReceiveBuffer*, const std::string&, const rdtf::description_t* d) {
+    controller_.on_description(d->revision);
+  }
+
+  void on_state(const lcm::ReceiveBuffer*, const std::string&, const rdtf::joint_state_t* state) {
+    const std::int64_t followed = controller_.revision();
+    auto command = controller_.on_state(*state);
+    if (!command) return;
+    if (controller_.revision() != followed) report_revision();
+    command->utime = now_utime();
+    lcm_.publish(command_channel_, &*command);
+  }
+
+  void on_error(const lcm::ReceiveBuffer*, const std::string&, const rdtf::model_error_t* error) {
+    for (const auto& d : error->diagnostics) {
+      if (d.code == "COMMAND_REJECTED") std::cerr << "rdtf-pd-controller: command rejected: " << d.message << "\n";
+    }
+  }
+
+  void report_revision() const {
+    std::cerr << "rdtf-pd-controller: following " << model_id_ << " revision " << controller_.revision()
+              << ", targets:";
+    for (const auto& [joint, value] : controller_.targets()) std::cerr << " " << joint << "=" << value;
+    std::cerr << "\n";
+    for (const auto& [joint, value] : controller_.unknown_targets()) {
+      std::cerr << "rdtf-pd-controller: revision " << controller_.revision() << " has no joint '" << joint
+                << "': target ignored\n";
+    }
+  }
+
+  lcm::LCM& lcm_;
+  std::string prefix_;
+  std::string model_id_;
+  std::string command_channel_;
+  rdtf::controller::PdController controller_;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"rdtf-pd-controller: holds a model of rdtfd's live simulation at a target pose (PD)"};
+  rdtf::controller::PdOptions options;
+  std::string url;
+  std::string prefix = "RDTF";
+  std::string mode = "position";
+  std::vector<std::string> targets;
+  double duration = 0;
+  app.add_option("--model", options.model_id, "Model id (its channel name, e.g. arm3.gltf)")->required();
+  app.add_option("--target", targets,
+                 "joint=value in rad or m (repeatable); joints without one hold their first state");
+  app.add_option("--kp", options.gains.kp, "Position gain, N m/rad (N/m)")->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--kd", options.gains.kd, "Velocity gain, N m s/rad (N s/m)")->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--mode", mode, "position: rdtfd applies the PD law every step; torque: computed here")
+      ->capture_default_str()->check(CLI::IsMember({"position", "torque"}));
+  app.add_option("--lcm-url", url, "LCM URL (default: LCM_DEFAULT_URL, else LCM's default)");
+  app.add_option("--channel-prefix", prefix, "rdtfd's channel prefix")->capture_default_str();
+  app.add_option("--duration", duration, "Stop after this many seconds (0: run until SIGINT/SIGTERM)")
+      ->check(CLI::NonNegativeNumber);
+  CLI11_PARSE(app, argc, argv);
+  for (const auto& target : targets) {
+    if (const std::string error = parse_target(target, options.targets); !error.empty()) {
+      std::cerr << "rdtf-pd-controller: --target: " << error << "\n";
+      return 2;
+    }
+  }
+  options.mode = mode == "torque" ? rdtf::controller::Mode::kTorque : rdtf::controller::Mode::kPosition;
+
+  lcm::LCM lcm(url);
+  if (!lcm.good()) {
+    std::cerr << "rdtf-pd-controller: cannot open LCM" << (url.empty() ? "" : " at " + url) << "\n";
+    return 1;
+  }
+  ControllerNode node(lcm, prefix, options);
+  std::signal(SIGINT, on_signal);
+  std::signal(SIGTERM, on_signal);
+  const auto start = std::chrono::steady_clock::now();
+  const auto out_of_time = [&] {
+    return duration > 0 && std::chrono::steady_clock::now() - start >= std::chrono::duration<double>(duration);
+  };
+  while (!g_stop && !out_of_time()) {
+    if (lcm.handleTimeout(50) < 0) {
+      std::cerr << "rdtf-pd-controller: LCM failed\n";
+      return 1;
+    }
+  }
+  return 0;
+}

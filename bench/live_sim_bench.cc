@@ -35,6 +35,7 @@ struct StreamCounts {
   std::map<std::string, long> first_seen;  // Models streaming (value unused).
   std::map<std::string, long> received;    // In the window.
   std::map<std::string, double> first_sim_time, last_sim_time;  // In the window.
+  std::vector<double> sim_time_steps_ms;  // Simulated time between consecutive states of a model.
 };
 
 void BM_JointStateStream(benchmark::State& state) {
@@ -53,7 +54,11 @@ void BM_JointStateStream(benchmark::State& state) {
     if (!counts.counting) return;
     rdtf::joint_state_t message;
     if (message.decode(buffer.data, 0, static_cast<int>(buffer.data_size)) < 0) return;
-    if (++counts.received[id] == 1) counts.first_sim_time[id] = message.sim_time;
+    if (++counts.received[id] == 1) {
+      counts.first_sim_time[id] = message.sim_time;
+    } else {
+      counts.sim_time_steps_ms.push_back(1e3 * (message.sim_time - counts.last_sim_time[id]));
+    }
     counts.last_sim_time[id] = message.sim_time;
   });
   Daemon daemon(watch, output, live_config(rate_hz));
@@ -74,7 +79,9 @@ void BM_JointStateStream(benchmark::State& state) {
     const double expected = rate_hz * seconds;
     std::vector<double> ratios, sim_speed;
     long total = 0;
+    std::vector<double> sim_steps;
     subscriber.locked([&] {
+      sim_steps = counts.sim_time_steps_ms;
       for (const auto& [id, n] : counts.received) {
         ratios.push_back(static_cast<double>(n) / expected);
         sim_speed.push_back((counts.last_sim_time[id] - counts.first_sim_time[id]) / seconds);
@@ -89,6 +96,9 @@ void BM_JointStateStream(benchmark::State& state) {
     state.counters["mean_received_ratio"] = mean(ratios);
     state.counters["max_received_ratio"] = ratios.empty() ? 0 : quantile(ratios, 1.0);
     state.counters["sim_s_per_wall_s"] = mean(sim_speed);
+    // 1 ms apart when every step's state is sent; 2 ms: every other one.
+    state.counters["p50_sim_ms_between_states"] = quantile(sim_steps, 0.5);
+    state.counters["p99_sim_ms_between_states"] = quantile(sim_steps, 0.99);
     state.counters["udp_rcvbuf_drops"] = static_cast<double>(after.receive_buffer_errors - before.receive_buffer_errors);
     state.counters["udp_in_errors"] = static_cast<double>(after.in_errors - before.in_errors);
     state.counters["udp_datagrams_in"] = static_cast<double>(after.in_datagrams - before.in_datagrams);

@@ -34,7 +34,8 @@ std::string base64(const std::string& bytes) {
   return out;
 }
 
-// A 0.1 m cube mesh (12 triangles wound outwards), embedded.
+// A 0.1 m cube mesh (12 triangles wound outwards), embedded: mesh 0; mesh 1 is the same cube
+// without its last face (open).
 json cube_parts() {
   std::string bin;
   const auto put = [&](const auto value) { bin.append(reinterpret_cast<const char*>(&value), sizeof(value)); };
@@ -47,11 +48,16 @@ json cube_parts() {
   for (const auto& q : quads) {
     for (int v : {q[0], q[1], q[2], q[0], q[2], q[3]}) put(static_cast<std::uint16_t>(v));
   }
-  return {{"meshes", {{{"primitives", {{{"attributes", {{"POSITION", 0}}}, {"indices", 1}}}}}}},
+  const auto mesh = [](int indices) {
+    const json primitive = {{"attributes", {{"POSITION", 0}}}, {"indices", indices}};
+    return json{{"primitives", json::array({primitive})}};
+  };
+  return {{"meshes", json::array({mesh(1), mesh(2)})},
           {"accessors",
            {{{"bufferView", 0}, {"componentType", 5126}, {"count", 8}, {"type", "VEC3"},
              {"min", {-0.05, -0.05, -0.05}}, {"max", {0.05, 0.05, 0.05}}},
-            {{"bufferView", 1}, {"componentType", 5123}, {"count", 36}, {"type", "SCALAR"}}}},
+            {{"bufferView", 1}, {"componentType", 5123}, {"count", 36}, {"type", "SCALAR"}},
+            {{"bufferView", 1}, {"componentType", 5123}, {"count", 30}, {"type", "SCALAR"}}}},
           {"bufferViews",
            {{{"buffer", 0}, {"byteOffset", 0}, {"byteLength", 96}, {"target", 34962}},
             {{"buffer", 0}, {"byteOffset", 96}, {"byteLength", 72}, {"target", 34963}}}},
@@ -60,14 +66,15 @@ json cube_parts() {
 
 // Nodes: 0 "base" (cube, extras `base_extras`), its child 1 "arm" (cube, 0.3 m along +X, extras
 // `arm_extras`: the joint between them, as Blender exports custom properties).
-std::filesystem::path write_two_boxes(const testing::TempDir& folder, const json& base_extras, const json& arm_extras) {
+std::filesystem::path write_two_boxes(const testing::TempDir& folder, const json& base_extras, const json& arm_extras,
+                                      int arm_mesh = 0) {
   json document = cube_parts();
   document["asset"] = {{"version", "2.0"}};
   document["scene"] = 0;
   document["scenes"] = {{{"nodes", {0}}}};
   json base = {{"name", "base"}, {"mesh", 0}, {"children", {1}}};
   if (!base_extras.empty()) base["extras"] = base_extras;
-  json arm = {{"name", "arm"}, {"mesh", 0}, {"translation", {0.3, 0.0, 0.0}}};
+  json arm = {{"name", "arm"}, {"mesh", arm_mesh}, {"translation", {0.3, 0.0, 0.0}}};
   if (!arm_extras.empty()) arm["extras"] = arm_extras;
   document["nodes"] = {base, arm};
   const auto path = folder / "two_boxes.gltf";
@@ -119,6 +126,17 @@ TEST(ValidateCli, JointErrorsInNodeExtrasFailWithExitTwo) {
   run = validate(quoted(write_two_boxes(folder, {}, zero_axis)));
   EXPECT_EQ(run.exit_code, 2) << run.out << run.err;
   EXPECT_NE(run.err.find("two_boxes.gltf:/nodes/1/extras/rdtf_axis: error JOINT_AXIS_ZERO"), std::string::npos)
+      << run.err;
+}
+
+// An open mesh is named with its node (a warning: its volume, and so its mass, is unreliable; the
+// converter still counts it, so the model still simulates).
+TEST(ValidateCli, OpenMeshIsNamed) {
+  testing::TempDir folder;
+  const auto run = validate(quoted(write_two_boxes(folder, {}, kHinge, 1)));
+  EXPECT_EQ(run.exit_code, 0) << run.out << run.err;
+  EXPECT_NE(run.err.find("/nodes/6: warning MESH_OPEN: mesh of 'arm_mesh' is not closed (4 boundary edges"),
+            std::string::npos)
       << run.err;
 }
 

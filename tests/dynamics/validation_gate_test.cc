@@ -194,6 +194,32 @@ TEST(DynamicsGate, LimitViolationFails) {
   EXPECT_NEAR(report.worst_limit_violation, 0.95, 0.01);
 }
 
+// A chain of `links` 0.5 kg boxes on hinges about Z, each 0.12 m below the last, under a massless
+// root: `links` bodies.
+Robot hanging_chain(int links) {
+  RobotBuilder b;
+  int parent = b.root("top", MassProperties{});
+  for (int i = 0; i < links; ++i) {
+    parent = b.child(parent, "hinge_" + std::to_string(i), JointKind::kContinuous,
+                     dynamics_test::translation(0, i == 0 ? 0 : -0.12, 0), Eigen::Vector3d::UnitZ(),
+                     "box_" + std::to_string(i), box_inertial(0.5, {0.03, 0.1, 0.03}, {0, -0.05, 0}));
+  }
+  return b.robot();
+}
+
+// kAuto: dWorldStep below 15 bodies, QuickStep from 15 on; a swinging chain passes with either.
+TEST(DynamicsGate, StepperFollowsTheBodyCount) {
+  for (const int links : {14, 15}) {
+    ValidationOptions options;
+    options.initial_positions = {{"hinge_0", 0.5}};
+    const ValidationReport report = validate_dynamics(hanging_chain(links), options);
+    EXPECT_TRUE(report.passed) << links << "\n" << all_text(report.diagnostics);
+    EXPECT_EQ(report.bodies, links);
+    EXPECT_EQ(report.stepper, links < 15 ? "dWorldStep" : "dWorldQuickStep");
+    std::printf("%d-link chain: %s\n", links, validation_summary_line(report).c_str());
+  }
+}
+
 TEST(DynamicsGate, ReportJsonHasTheDocumentedFields) {
   RobotBuilder b = arm_builder();
   b.joint(1).axis.setZero();

@@ -1,8 +1,12 @@
 #include "rdtf/mesh_checks.h"
 
+#include <algorithm>
+#include <array>
 #include <bit>
 #include <cstdint>
 #include <cstring>
+#include <memory>
+#include <span>
 #include <vector>
 
 namespace rdtf {
@@ -24,51 +28,131 @@ std::uint64_t mix(std::uint64_t x) {  // splitmix64's finaliser
 }
 
 // Welds vertices by exact position with an open-addressing table: one id per distinct position.
+// Each slot keeps 32 bits of the position's hash beside its id, so that probing past other
+// positions rarely has to read them (those reads are cache misses: they were half the time of
+// the surface check on a million-triangle mesh).
 class Welder {
  public:
   explicit Welder(std::size_t expected) {
     std::size_t capacity = 16;
     while (capacity < 2 * expected) capacity *= 2;
     slots_.assign(capacity, kEmpty);
+    first_.reserve(expected);
   }
   std::uint32_t id(const Eigen::Vector3d& p) {
     const std::uint64_t x = bits_of(p.x()), y = bits_of(p.y()), z = bits_of(p.z());
-    std::size_t slot = mix(x ^ mix(y ^ mix(z))) & (slots_.size() - 1);
-    for (;;) {
-      const std::uint32_t found = slots_[slot];
-      if (found == kEmpty) {
-        slots_[slot] = static_cast<std::uint32_t>(positions_.size());
-        positions_.push_back({x, y, z});
-        return slots_[slot];
+    const std::uint64_t hash = mix(x ^ (y * 0x9e3779b97f4a7c15ull) ^ (z * 0xc2b2ae3d27d4eb4full));
+    const std::uint64_t tag = hash & 0xffffffff00000000ull;
+    for (std::size_t slot = hash & (slots_.size() - 1);; slot = (slot + 1) & (slots_.size() - 1)) {
+      const std::uint64_t entry = slots_[slot];
+      if (entry == kEmpty) {
+        const auto fresh = static_cast<std::uint32_t>(first_.size());
+        slots_[slot] = tag | fresh;
+        first_.push_back(&p);
+        return fresh;
       }
-      const auto& q = positions_[found];
-      if (q[0] == x && q[1] == y && q[2] == z) return found;
-      slot = (slot + 1) & (slots_.size() - 1);
+      if ((entry & 0xffffffff00000000ull) != tag) continue;
+      const auto found = static_cast<std::uint32_t>(entry);
+      const Eigen::Vector3d& q = *first_[found];
+      if (bits_of(q.x()) == x && bits_of(q.y()) == y && bits_of(q.z()) == z) return found;
     }
   }
+  std::size_t size() const { return first_.size(); }
 
  private:
-  static constexpr std::uint32_t kEmpty = 0xffffffffu;
-  std::vector<std::uint32_t> slots_;
-  std::vector<std::array<std::uint64_t, 3>> positions_;
+  // No id reaches 2^32 - 1 (vertex counts are capped far below), so this is never a real entry.
+  static constexpr std::uint64_t kEmpty = ~std::uint64_t{0};
+  std::vector<std::uint64_t> slots_;                // hash tag << 32 | id
+  std::vector<const Eigen::Vector3d*> first_;  // The first vertex seen at each position.
 };
 
-// LSD radix sort of 64-bit keys, 16 bits a pass: much faster than comparison sorting for the
-// millions of edges of a large mesh.
-void radix_sort(std::vector<std::uint64_t>& keys) {
-  std::vector<std::uint64_t> scratch(keys.size());
-  std::vector<std::size_t> counts(1 << 16);
-  for (int shift = 0; shift < 64; shift += 16) {
-    std::fill(counts.begin(), counts.end(), 0);
-    for (std::uint64_t k : keys) ++counts[(k >> shift) & 0xffff];
-    std::size_t total = 0;
-    for (auto& c : counts) {
-      const std::size_t n = c;
-      c = total;
-      total += n;
+// Every directed edge of the welded surface, grouped by the vertex it leaves (compressed rows):
+// the edges leaving v go to targets[begin[v] .. begin[v + 1]), sorted. Built by counting, which
+// costs two passes over the triangles instead of sorting millions of edge keys.
+struct DirectedEdges {
+  std::vector<std::uint32_t> begin;
+  std::unique_ptr<std::uint32_t[]> targets;  // Not zeroed first: every entry is written.
+
+  std::span<const std::uint32_t> from(std::uint32_t v) const {
+    return {targets.get() + begin[v], targets.get() + begin[v + 1]};
+  }
+  // How many edges go from v to w.
+  std::size_t count(std::uint32_t v, std::uint32_t w) const {
+    const auto out = from(v);
+    if (out.size() <= 16) return static_cast<std::size_t>(std::count(out.begin(), out.end(), w));
+    const auto [lo, hi] = std::equal_range(out.begin(), out.end(), w);
+    return static_cast<std::size_t>(hi - lo);
+  }
+};
+
+// Most vertices have about six edges: insertion sort beats std::sort's set-up there.
+void sort_small(std::uint32_t* first, std::uint32_t* last) {
+  if (last - first > 16) {
+    std::sort(first, last);
+    return;
+  }
+  for (std::uint32_t* i = first + 1; i < last; ++i) {
+    const std::uint32_t value = *i;
+    std::uint32_t* j = i;
+    for (; j > first && *(j - 1) > value; --j) *j = *(j - 1);
+    *j = value;
+  }
+}
+
+// The pieces with their vertices welded: welded[offset[p] + i] is vertex i of piece p's id.
+struct WeldedPieces {
+  std::span<const TriangleMesh> pieces;
+  std::vector<std::size_t> offset;
+  std::vector<std::uint32_t> welded;
+  std::size_t distinct = 0;
+
+  // Calls f(v0, v1, v2) with the welded corners of every triangle whose corners differ.
+  template <typename F>
+  void for_each_proper_triangle(F&& f) const {
+    for (std::size_t p = 0; p < pieces.size(); ++p) {
+      const std::uint32_t* ids = welded.data() + offset[p];
+      for (const auto& t : pieces[p].triangles) {
+        const std::uint32_t v0 = ids[t[0]], v1 = ids[t[1]], v2 = ids[t[2]];
+        if (v0 != v1 && v1 != v2 && v0 != v2) f(v0, v1, v2);
+      }
     }
-    for (std::uint64_t k : keys) scratch[counts[(k >> shift) & 0xffff]++] = k;
-    keys.swap(scratch);
+  }
+};
+
+DirectedEdges directed_edges(const WeldedPieces& mesh) {
+  DirectedEdges edges;
+  // Count the edges leaving each vertex (each corner leaves by one), then turn the counts into
+  // end offsets and place every edge by decrementing: begin[v] ends at v's first edge.
+  edges.begin.assign(mesh.distinct + 1, 0);
+  mesh.for_each_proper_triangle([&](std::uint32_t v0, std::uint32_t v1, std::uint32_t v2) {
+    ++edges.begin[v0];
+    ++edges.begin[v1];
+    ++edges.begin[v2];
+  });
+  std::uint32_t total = 0;
+  for (auto& b : edges.begin) b = total += b;
+  edges.targets.reset(new std::uint32_t[total]);
+  std::uint32_t* targets = edges.targets.get();
+  mesh.for_each_proper_triangle([&](std::uint32_t v0, std::uint32_t v1, std::uint32_t v2) {
+    targets[--edges.begin[v0]] = v1;
+    targets[--edges.begin[v1]] = v2;
+    targets[--edges.begin[v2]] = v0;
+  });
+  for (std::size_t v = 0; v < mesh.distinct; ++v) {
+    sort_small(targets + edges.begin[v], targets + edges.begin[v + 1]);
+  }
+  return edges;
+}
+
+// Classifies every undirected edge by its uses: `forward` times one way, `backward` the other.
+void classify(std::size_t forward, std::size_t backward, SurfaceTopology& topology) {
+  const std::size_t uses = forward + backward;
+  if (uses == 1) {
+    ++topology.boundary_edges;
+  } else if (uses > 2) {
+    ++topology.nonmanifold_edges;
+  } else if (forward != 1) {
+    ++topology.misoriented_edges;  // Both uses go the same way.
   }
 }
 
@@ -76,49 +160,34 @@ void radix_sort(std::vector<std::uint64_t>& keys) {
 
 SurfaceTopology analyze_surface(std::span<const TriangleMesh> pieces) {
   SurfaceTopology topology;
+  WeldedPieces mesh{pieces, {}, {}, 0};
   std::size_t vertices = 0;
-  std::size_t triangles = 0;
   for (const TriangleMesh& piece : pieces) {
+    mesh.offset.push_back(vertices);
     vertices += piece.positions.size();
-    triangles += piece.triangles.size();
   }
   Welder welder(vertices);
-  // Each directed edge as one key: (low id << 33) | (high id << 1) | (goes high -> low). Sorting
-  // brings the uses of one undirected edge together, with their directions. Ids fit 31 bits: the
-  // accessor limits keep vertex counts far below 2^31.
-  std::vector<std::uint64_t> edges;
-  edges.reserve(3 * triangles);
-  for (const TriangleMesh& piece : pieces) {
-    std::vector<std::uint32_t> welded(piece.positions.size());
-    for (std::size_t i = 0; i < piece.positions.size(); ++i) welded[i] = welder.id(piece.positions[i]);
-    for (const auto& t : piece.triangles) {
-      ++topology.triangles;
-      const std::uint64_t v[3] = {welded[t[0]], welded[t[1]], welded[t[2]]};
-      if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2]) {
-        ++topology.degenerate_triangles;
-        continue;
-      }
-      for (int k = 0; k < 3; ++k) {
-        const std::uint64_t from = v[k];
-        const std::uint64_t to = v[(k + 1) % 3];
-        edges.push_back(from < to ? (from << 33 | to << 1) : (to << 33 | from << 1 | 1));
-      }
+  mesh.welded.resize(vertices);
+  for (std::size_t p = 0; p < pieces.size(); ++p) {
+    for (std::size_t i = 0; i < pieces[p].positions.size(); ++i) {
+      mesh.welded[mesh.offset[p] + i] = welder.id(pieces[p].positions[i]);
     }
   }
-  radix_sort(edges);
-  for (std::size_t i = 0; i < edges.size();) {
-    std::size_t j = i;
-    std::size_t backward = 0;
-    while (j < edges.size() && (edges[j] >> 1) == (edges[i] >> 1)) backward += edges[j++] & 1;
-    const std::size_t uses = j - i;
-    if (uses == 1) {
-      ++topology.boundary_edges;
-    } else if (uses > 2) {
-      ++topology.nonmanifold_edges;
-    } else if (backward != 1) {
-      ++topology.misoriented_edges;
+  mesh.distinct = welder.size();
+  const DirectedEdges edges = directed_edges(mesh);
+  for (const TriangleMesh& piece : pieces) topology.triangles += piece.triangles.size();
+  // Three directed edges for every triangle with three distinct corners.
+  topology.degenerate_triangles = topology.triangles - edges.begin.back() / 3;
+  // Each undirected edge {v, w} once: from v when v < w or when nothing goes back from w.
+  for (std::uint32_t v = 0; v < mesh.distinct; ++v) {
+    const auto out = edges.from(v);
+    for (std::size_t i = 0; i < out.size();) {
+      const std::uint32_t w = out[i];
+      std::size_t forward = 0;
+      while (i < out.size() && out[i] == w) ++forward, ++i;
+      const std::size_t backward = edges.count(w, v);
+      if (backward == 0 || v < w) classify(forward, backward, topology);
     }
-    i = j;
   }
   return topology;
 }

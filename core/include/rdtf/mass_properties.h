@@ -26,8 +26,9 @@ struct VolumeIntegrals {
 // Integrals over the solid bounded by the triangles of `pieces` (together one closed surface, as
 // the primitives of one glTF mesh are), after mapping every vertex by X. A negative
 // det(X.linear()) mirrors the solid and so flips its winding; that sign is corrected, so a valid
-// mesh stays positive and an inside-out one comes out negative. Sums about the centre of the
-// mapped vertices' bounding box, so that a mesh far from the origin keeps its precision.
+// mesh stays positive and an inside-out one comes out negative. Sums in the mesh's own frame
+// about the centre of its vertices' bounding box, so that a mesh far from the origin (in its
+// vertices or through X) keeps its precision, then maps the sums by X once (exact for affine X).
 VolumeIntegrals integrate_solid(std::span<const TriangleMesh> pieces, const Eigen::Affine3d& X);
 
 struct MassProperties {

@@ -1,8 +1,12 @@
 #include "conversion.h"
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <openssl/evp.h>
 
-#include <fstream>
+#include <cerrno>
 #include <memory>
 
 #include "rdtf/write.h"
@@ -10,17 +14,56 @@
 namespace rdtf::daemon {
 namespace {
 
+// Reads a regular file of at most max_bytes. Opened without blocking (a FIFO put where a model
+// was must not hang a worker) and checked with fstat on the open descriptor, so a file swapped
+// for a FIFO or a directory between a check and the open is still refused.
+// With `folder`, the file's real location (through /proc, after every symlink) must lie inside it:
+// even the content hash never reads a file the loader would refuse.
 std::optional<std::vector<std::uint8_t>> read_bytes(const std::filesystem::path& path,
-                                                    std::uint64_t max_bytes) {
-  std::error_code ec;
-  const auto size = std::filesystem::file_size(path, ec);
-  if (ec || size > max_bytes || !std::filesystem::is_regular_file(path, ec)) return std::nullopt;
-  std::ifstream in(path, std::ios::binary);
-  std::vector<std::uint8_t> bytes(size);
-  if (!in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(size))) {
-    return std::nullopt;
+                                                    std::uint64_t max_bytes,
+                                                    const std::filesystem::path* folder = nullptr) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK | O_NOCTTY);
+  if (fd < 0) return std::nullopt;
+  struct stat info {};
+  std::optional<std::vector<std::uint8_t>> result;
+  bool inside = true;
+  if (folder != nullptr) {
+    std::error_code ec;
+    const auto real = std::filesystem::read_symlink("/proc/self/fd/" + std::to_string(fd), ec);
+    const auto relative = real.lexically_relative(*folder);
+    inside = !ec && !relative.empty() && *relative.begin() != "..";
   }
-  return bytes;
+  if (inside && ::fstat(fd, &info) == 0 && S_ISREG(info.st_mode) &&
+      static_cast<std::uint64_t>(info.st_size) <= max_bytes) {
+    std::vector<std::uint8_t> bytes(static_cast<std::size_t>(info.st_size));
+    std::size_t done = 0;
+    for (;;) {
+      if (done == bytes.size()) {
+        result = std::move(bytes);
+        break;
+      }
+      const ssize_t n = ::read(fd, bytes.data() + done, bytes.size() - done);
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) break;  // An error, or the file shrank while read: the writer's next event follows.
+      done += static_cast<std::size_t>(n);
+    }
+  }
+  ::close(fd);
+  return result;
+}
+
+// The model is gone for us: deleted, or a directory (or a symlink to one) stands in its place.
+bool model_gone(const std::filesystem::path& source) {
+  std::error_code ec;
+  const auto status = std::filesystem::status(source, ec);
+  return !std::filesystem::exists(status) || std::filesystem::is_directory(status);
+}
+
+bool has_code(const Diagnostics& diag, const char* code) {
+  for (const Diagnostic& d : diag.all()) {
+    if (d.severity == Severity::kError && d.code == code) return true;
+  }
+  return false;
 }
 
 std::string to_hex(const unsigned char* digest, unsigned int length) {
@@ -70,16 +113,17 @@ ConversionOutcome run_conversion(const ConversionJob& job) {
   };
 
   std::error_code ec;
-  if (!std::filesystem::exists(job.source, ec)) {
+  if (model_gone(job.source)) {
     outcome.kind = ConversionOutcome::Kind::kVanished;
     return finish();
   }
   const auto model_bytes = read_bytes(job.source, job.options.limits.max_file_bytes);
   if (!model_bytes) {
-    if (!std::filesystem::exists(job.source, ec)) {
+    if (model_gone(job.source)) {
       outcome.kind = ConversionOutcome::Kind::kVanished;
     } else {
-      outcome.diagnostics.error("IO_ERROR", "", "cannot read the model (too large, or not a regular file)");
+      outcome.diagnostics.error("IO_ERROR", "",
+                                "cannot read the model (too large, unreadable, or not a regular file)");
     }
     return finish();
   }
@@ -89,7 +133,7 @@ ConversionOutcome run_conversion(const ConversionJob& job) {
   // The content hash covers the model and every file it refers to, so a new .bin alone counts.
   std::vector<std::vector<std::uint8_t>> referenced;
   for (const auto& file : outcome.dependencies) {
-    referenced.push_back(read_bytes(file, job.options.limits.max_file_bytes).value_or(std::vector<std::uint8_t>{}));
+    referenced.push_back(read_bytes(file, job.options.limits.max_file_bytes, &folder).value_or(std::vector<std::uint8_t>{}));
   }
   std::vector<const std::vector<std::uint8_t>*> parts{&*model_bytes};
   for (const auto& bytes : referenced) parts.push_back(&bytes);
@@ -106,6 +150,11 @@ ConversionOutcome run_conversion(const ConversionJob& job) {
   if (!conversion) return finish();
 
   std::filesystem::create_directories(job.output_dir, ec);
+  if (ec) {
+    outcome.diagnostics.error("WRITE_FAILED", "", "cannot create " + job.output_dir.string() + ": " + ec.message());
+    outcome.retry = true;
+    return finish();
+  }
   ConvertedModel converted;
   converted.content_hash = outcome.content_hash;
   converted.output_path = job.output_dir / (job.source.stem().string() + ".rdtf.gltf");
@@ -113,6 +162,7 @@ ConversionOutcome run_conversion(const ConversionJob& job) {
   if (!write_rdtf(conversion->asset, converted.output_path, OutputFormat::kGltf, write_diag,
                   &converted.rdtf_json)) {
     outcome.diagnostics.append(write_diag);
+    outcome.retry = has_code(write_diag, "WRITE_FAILED");
     return finish();
   }
   outcome.diagnostics.append(write_diag);
@@ -122,6 +172,11 @@ ConversionOutcome run_conversion(const ConversionJob& job) {
     const auto urdf_dir = job.output_dir / "urdf";
     if (write_urdf(*conversion, urdf_dir, *job.urdf, urdf_diag, &converted.urdf)) {
       converted.urdf_path = urdf_dir / "robot.urdf";
+    } else if (has_code(urdf_diag, "WRITE_FAILED")) {
+      // The disk, not the model: fail the revision and try again, so no output is left behind.
+      outcome.diagnostics.append(urdf_diag);
+      outcome.retry = true;
+      return finish();
     } else {
       for (const Diagnostic& d : urdf_diag.all()) {
         outcome.diagnostics.warning("URDF_NOT_WRITTEN", d.pointer, d.message);

@@ -61,6 +61,9 @@ struct ConversionOutcome {
   Diagnostics diagnostics;                   // Errors for kRejected; warnings otherwise.
   std::vector<std::filesystem::path> dependencies;  // Files the model refers to.
   std::chrono::microseconds duration{0};
+  // The failure was the environment's, not the model's (an output could not be written: disk
+  // full, read-only folder): the daemon tries the same content again after a back-off.
+  bool retry = false;
 };
 
 ConversionOutcome run_conversion(const ConversionJob& job);

@@ -5,10 +5,12 @@
 #include <sys/signalfd.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <csignal>
 #include <cstring>
 #include <ctime>
 #include <iostream>
+#include <regex>
 
 #include <rdtf/status_t.hpp>
 
@@ -20,6 +22,11 @@ namespace {
 // LCM channel names are at most 63 characters: "<prefix>/<id>/DESCRIPTION_CHUNK" must fit.
 constexpr std::size_t kMaxChannelLength = 63;
 constexpr std::size_t kLongestKind = sizeof("/DESCRIPTION_CHUNK") - 1;
+
+// How often folders that could not be watched are tried again; the back-off of failed writes.
+constexpr std::chrono::milliseconds kWatchRetryPeriod{1000};
+constexpr std::chrono::milliseconds kFirstRetryDelay{200};
+constexpr std::chrono::milliseconds kLongestRetryDelay{3000};
 
 std::string milliseconds(std::chrono::microseconds duration) {
   char text[32];
@@ -74,6 +81,7 @@ bool Daemon::connect_lcm(std::string& error) {
   lcm->subscribe(config_.channel_prefix + "/REQUEST", &Daemon::on_request, this);
   lcm->subscribe(config_.channel_prefix + "/.*/JOINT_COMMAND", &Daemon::on_command, this);
   publisher_ = std::make_unique<Publisher>(*lcm, config_.chunk_rate_bytes_per_s, 128 * 1024);
+  publisher_->on_event([this](const PublisherEvent& event) { on_publisher_event(event); });
   lcm_ = std::move(lcm);
   return true;
 }
@@ -95,6 +103,7 @@ bool Daemon::start(std::string& error) {
     error = std::string("signalfd/eventfd: ") + std::strerror(errno);
     return false;
   }
+  remove_stale_temporaries();
   for (int i = 0; i < config_.workers; ++i) workers_.emplace_back([this] { worker_loop(); });
   start_simulation_host();
   rescan("start");
@@ -106,6 +115,99 @@ bool Daemon::start(std::string& error) {
            "; LCM " + (config_.lcm_url.empty() ? std::string("default URL") : config_.lcm_url) +
            "; channels " + config_.channel_prefix + "/...");
   return true;
+}
+
+// Temporary files of write_file_atomically (".<name>.<pid>-<random>.tmp") whose writer is gone:
+// left by a daemon killed mid-write. Files of a live process (another rdtfd) are left alone.
+void Daemon::remove_stale_temporaries() {
+  static const std::regex kTemporary(R"(\..+\.([0-9]+)-[0-9]+\.tmp)");
+  std::error_code ec;
+  int removed = 0;
+  for (std::filesystem::recursive_directory_iterator it(config_.output, ec), end; !ec && it != end; it.increment(ec)) {
+    std::error_code type_error;
+    if (!it->is_regular_file(type_error)) continue;
+    const std::string name = it->path().filename().string();
+    std::smatch match;
+    if (!std::regex_match(name, match, kTemporary)) continue;
+    const long pid = std::stol(match[1].str());
+    const bool writer_alive = pid > 0 && pid != ::getpid() && (::kill(static_cast<pid_t>(pid), 0) == 0 || errno == EPERM);
+    if (writer_alive) continue;
+    std::error_code remove_error;
+    if (std::filesystem::remove(it->path(), remove_error)) ++removed;
+  }
+  if (removed > 0) {
+    log_line("removed " + std::to_string(removed) + " temporary files left in " + config_.output.string() +
+             " by an earlier run");
+  }
+}
+
+// An error that belongs to no one model (a folder that cannot be watched, LCM sends that failed):
+// a model_error_t with an empty model_id on <prefix>/ERROR.
+void Daemon::publish_daemon_error(const std::string& code, const std::string& file, const std::string& message) {
+  Diagnostics diag(file);
+  diag.error(code, "", message);
+  rdtf::model_error_t error;
+  error.utime = now_utime();
+  error.source_path = file;
+  error.live_revision = 0;
+  error.diagnostics = to_messages(diag);
+  error.num_diagnostics = static_cast<std::int32_t>(error.diagnostics.size());
+  publisher_->publish(config_.channel_prefix + "/ERROR", error);
+}
+
+void Daemon::on_publisher_event(const PublisherEvent& event) {
+  log_line(event.text);
+  // While sends fail nothing can be told over LCM; once they work, the outage is reported.
+  if (event.kind == PublisherEvent::Kind::kSendRecovered) publish_daemon_error("LCM_SEND_FAILED", "", event.text);
+}
+
+void Daemon::schedule_retry(const ConversionOutcome& outcome, ModelRecord& record) {
+  Retry& retry = retries_[record.source];
+  retry.delay = retry.attempts == 0 ? Clock::duration(kFirstRetryDelay)
+                                    : std::min<Clock::duration>(retry.delay * 2, kLongestRetryDelay);
+  retry.due = Clock::now() + retry.delay;
+  ++retry.attempts;
+  log_line("could not write the outputs of " + record.id + ": " + first_error(outcome.diagnostics) +
+           "; trying again in " + std::to_string(std::chrono::duration_cast<std::chrono::milliseconds>(retry.delay).count()) +
+           " ms (attempt " + std::to_string(retry.attempts) + ")");
+  // One ERROR per outage, not one per attempt.
+  if (retry.attempts == 1) {
+    publisher_->publish(channel(record.id, "ERROR"), make_model_error(record, outcome.content_hash, outcome.diagnostics));
+  }
+}
+
+void Daemon::retry_due(Clock::time_point now) {
+  for (auto it = retries_.begin(); it != retries_.end(); ++it) {
+    if (it->second.due > now) continue;
+    it->second.due = Clock::time_point::max();  // Until the outcome of this attempt.
+    settle_.touch(it->first.string(), now);
+  }
+}
+
+// Folders that could not be watched (inotify's max_user_watches reached) are reported once and
+// tried again every second; when every folder is watched again, a rescan catches what changed.
+void Daemon::check_watches(Clock::time_point now) {
+  const auto& unwatched = watcher_.unwatched();
+  if (unwatched.empty()) {
+    if (watches_failing_) log_line("every folder is watched again");
+    watches_failing_ = false;
+    return;
+  }
+  if (!watches_failing_) {
+    watches_failing_ = true;
+    next_watch_retry_ = now + kWatchRetryPeriod;
+    for (const auto& folder : unwatched) {
+      publish_daemon_error("WATCH_FAILED", folder.string(),
+                           "cannot watch " + folder.string() +
+                               ": inotify watches exhausted (raise /proc/sys/fs/inotify/max_user_watches); "
+                               "its models were converted once, and the folder is tried again every second");
+    }
+    return;
+  }
+  if (now >= next_watch_retry_) {
+    next_watch_retry_ = now + kWatchRetryPeriod;
+    rescan("retrying folders that could not be watched");
+  }
 }
 
 bool Daemon::ignored(const std::filesystem::path& path) const {
@@ -180,6 +282,7 @@ void Daemon::drop_model(const std::filesystem::path& source) {
   if (record->live) publisher_->publish(channel(record->id, "REMOVED"), make_model_removed(*record));
   if (simulation_) simulation_->remove(record->id);
   settle_.forget(source.string());
+  retries_.erase(source);
   registry_.erase(source);
 }
 
@@ -189,8 +292,9 @@ void Daemon::rescan(const char* why) {
   // Models outside every watched folder (after a reload changed them) are gone from our view.
   std::vector<std::filesystem::path> outside;
   for (const auto& [source, record] : registry_.all()) {
-    const bool watched = std::any_of(config_.watch.begin(), config_.watch.end(), [&](const auto& root) {
-      const auto relative = source.lexically_relative(root);
+    // An init-capture: clang 14 cannot capture a structured binding (P1091 came in clang 16).
+    const bool watched = std::any_of(config_.watch.begin(), config_.watch.end(), [&model = source](const auto& root) {
+      const auto relative = model.lexically_relative(root);
       return !relative.empty() && *relative.begin() != "..";
     });
     if (!watched) outside.push_back(source);
@@ -340,6 +444,7 @@ void Daemon::apply(ConversionOutcome outcome) {
                             make_model_error(*record, outcome.content_hash, candidate.validation->diagnostics));
         break;
       }
+      retries_.erase(record->source);
       ++counters_.conversions;
       ++record->revisions;
       record->last_hash = outcome.content_hash;
@@ -357,11 +462,17 @@ void Daemon::apply(ConversionOutcome outcome) {
       break;
     }
     case ConversionOutcome::Kind::kUnchanged:
+      retries_.erase(record->source);
       ++counters_.skipped_unchanged;
       record->dependencies = outcome.dependencies;
       break;
     case ConversionOutcome::Kind::kRejected:
       ++counters_.rejections;
+      if (outcome.retry) {
+        schedule_retry(outcome, *record);  // last_hash kept: the same content is converted again.
+        break;
+      }
+      retries_.erase(record->source);
       record->last_hash = outcome.content_hash;
       record->dependencies = outcome.dependencies;
       log_line("rejected " + id + " in " + milliseconds(outcome.duration) + ": " +
@@ -374,8 +485,9 @@ void Daemon::apply(ConversionOutcome outcome) {
       }
       break;
     case ConversionOutcome::Kind::kVanished: {
+      retries_.erase(outcome.source);
       std::error_code ec;
-      if (std::filesystem::exists(outcome.source, ec)) {
+      if (std::filesystem::is_regular_file(outcome.source, ec)) {
         // Recreated while its conversion found it gone: convert the new file.
         settle_.touch(outcome.source.string(), Clock::now());
         return;
@@ -419,6 +531,7 @@ void Daemon::publish_status() {
     if (record.live) status.model_ids.push_back(record.id);
     if (record.in_flight) ++pending;
   }
+  pending += static_cast<std::int32_t>(retries_.size());
   status.pending = pending;
   status.num_models = static_cast<std::int32_t>(status.model_ids.size());
   status.num_model_ids = status.num_models;
@@ -500,6 +613,8 @@ void Daemon::step(std::chrono::milliseconds max_wait) {
   if (auto deadline = settle_.next_deadline()) wake = std::min(wake, *deadline);
   if (auto send = publisher_->drain(now)) wake = std::min(wake, *send);
   if (config_.republish_period.count() > 0) wake = std::min(wake, next_republish_);
+  for (const auto& [source, retry] : retries_) wake = std::min(wake, retry.due);
+  if (watches_failing_) wake = std::min(wake, next_watch_retry_);
   wake = std::min(wake, next_status_);
   const auto timeout = std::chrono::duration_cast<std::chrono::milliseconds>(wake - now).count();
 
@@ -513,6 +628,8 @@ void Daemon::step(std::chrono::milliseconds max_wait) {
     if (fds[1].revents & POLLIN) lcm_->handleTimeout(0);
   }
   now = Clock::now();
+  check_watches(now);
+  retry_due(now);
   dispatch_due();
   if (config_.republish_period.count() > 0 && now >= next_republish_) {
     publish_all();

@@ -51,7 +51,20 @@ class Daemon {
     std::int64_t rescans = 0;
   };
 
+  // A conversion that failed for the environment's sake (disk full) is tried again later.
+  struct Retry {
+    Clock::time_point due;
+    Clock::duration delay{};
+    int attempts = 0;
+  };
+
   void handle_file_events();
+  void remove_stale_temporaries();
+  void publish_daemon_error(const std::string& code, const std::string& file, const std::string& message);
+  void on_publisher_event(const PublisherEvent& event);
+  void schedule_retry(const ConversionOutcome& outcome, ModelRecord& record);
+  void retry_due(Clock::time_point now);
+  void check_watches(Clock::time_point now);
   void handle_signals();
   void rescan(const char* why);
   void drop_model(const std::filesystem::path& source);  // Announces REMOVED and forgets it.
@@ -90,6 +103,9 @@ class Daemon {
   Clock::time_point started_ = Clock::now();
   Clock::time_point next_republish_;
   Clock::time_point next_status_;
+  std::map<std::filesystem::path, Retry> retries_;
+  bool watches_failing_ = false;         // Some folder could not be watched (inotify limit).
+  Clock::time_point next_watch_retry_;
 
   // Shared with the workers.
   std::mutex mutex_;

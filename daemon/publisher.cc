@@ -1,10 +1,75 @@
 #include "publisher.h"
 
-namespace rdtf::daemon {
+#include <cerrno>
+#include <cstring>
 
-std::optional<std::chrono::steady_clock::time_point> Publisher::drain(
-    std::chrono::steady_clock::time_point now) {
-  if (last_ != std::chrono::steady_clock::time_point{}) {
+namespace rdtf::daemon {
+namespace {
+
+constexpr std::chrono::milliseconds kFirstBackoff{20};
+constexpr std::chrono::milliseconds kLongestBackoff{500};
+
+}  // namespace
+
+Publisher::Publisher(lcm::LCM& lcm, double bytes_per_second, std::size_t burst_bytes)
+    : Publisher(
+          [&lcm](const std::string& channel, const std::uint8_t* data, unsigned int size) {
+            return lcm.publish(channel, data, size);
+          },
+          bytes_per_second, burst_bytes) {}
+
+Publisher::Publisher(SendFunction send, double bytes_per_second, std::size_t burst_bytes)
+    : send_(std::move(send)), rate_(bytes_per_second), burst_(burst_bytes) {}
+
+void Publisher::report(PublisherEvent::Kind kind, std::string text) {
+  if (on_event_) on_event_(PublisherEvent{kind, std::move(text)});
+}
+
+void Publisher::enqueue(std::string channel, std::vector<std::uint8_t> bytes) {
+  if (queue_.size() >= kMaxQueued) {
+    // Only when LCM has refused every send for a long time: the oldest message goes, and says so.
+    ++dropped_;
+    report(PublisherEvent::Kind::kDropped,
+           "LCM send queue full (" + std::to_string(kMaxQueued) + " messages): dropped one on " +
+               queue_.front().channel);
+    queue_.pop_front();
+  }
+  queue_.push_back({std::move(channel), std::move(bytes)});
+}
+
+// Sends the head of the queue; false (message kept, retry scheduled) when LCM refuses it.
+bool Publisher::send_front(Clock::time_point now) {
+  const Pending& next = queue_.front();
+  errno = 0;
+  if (send_(next.channel, next.bytes.data(), static_cast<unsigned int>(next.bytes.size())) != 0) {
+    const int error = errno;
+    ++send_failures_;
+    if (failures_in_a_row_++ == 0) {
+      failing_since_ = now;
+      backoff_ = kFirstBackoff;
+      report(PublisherEvent::Kind::kSendFailing,
+             "LCM send failed on " + next.channel + ": " +
+                 (error != 0 ? std::strerror(error) : "refused") + "; " + std::to_string(queue_.size()) +
+                 " messages kept, retrying");
+    } else {
+      backoff_ = std::min<Clock::duration>(backoff_ * 2, kLongestBackoff);
+    }
+    retry_at_ = now + backoff_;
+    return false;
+  }
+  if (failures_in_a_row_ > 0) {
+    const auto down = std::chrono::duration_cast<std::chrono::milliseconds>(now - failing_since_);
+    report(PublisherEvent::Kind::kSendRecovered,
+           "LCM sending works again after " + std::to_string(failures_in_a_row_) + " failed attempts over " +
+               std::to_string(down.count()) + " ms; every queued message is being sent");
+    failures_in_a_row_ = 0;
+  }
+  return true;
+}
+
+std::optional<Publisher::Clock::time_point> Publisher::drain(Clock::time_point now) {
+  if (failures_in_a_row_ > 0 && now < retry_at_) return retry_at_;
+  if (last_ != Clock::time_point{}) {
     allowance_ += rate_ * std::chrono::duration<double>(now - last_).count();
   } else {
     allowance_ = static_cast<double>(burst_);
@@ -15,17 +80,14 @@ std::optional<std::chrono::steady_clock::time_point> Publisher::drain(
     const auto size = static_cast<double>(queue_.front().bytes.size());
     // A message larger than the burst goes alone once the allowance is full.
     if (size > allowance_ && allowance_ < static_cast<double>(burst_)) break;
-    const Pending& next = queue_.front();
-    if (lcm_.publish(next.channel, next.bytes.data(), static_cast<unsigned int>(next.bytes.size())) != 0) {
-      ++send_failures_;  // Reported in the status message; periodic republishing recovers.
-    }
+    if (!send_front(now)) return retry_at_;
     allowance_ -= size;
     queue_.pop_front();
   }
   if (queue_.empty()) return std::nullopt;
   const double missing = std::min(static_cast<double>(queue_.front().bytes.size()),
                                   static_cast<double>(burst_)) - allowance_;
-  return now + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+  return now + std::chrono::duration_cast<Clock::duration>(
                    std::chrono::duration<double>(std::max(missing, 0.0) / rate_));
 }
 

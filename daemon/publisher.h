@@ -1,11 +1,16 @@
 // Sends LCM messages without ever blocking the event loop on a burst: everything goes through one
 // queue, drained at a byte rate that a subscriber with the kernel's default receive buffer keeps
 // up with (facts.md: back-to-back fragments of 1 MB messages were lost). Order is kept.
+//
+// A send that LCM refuses (no route, no buffer space) is not dropped: the message stays at the
+// head of the queue and is tried again after a back-off, so nothing is lost once sending works
+// again. The first failure and the recovery are reported through `on_event`.
 #pragma once
 
 #include <chrono>
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -14,37 +19,63 @@
 
 namespace rdtf::daemon {
 
+// One LCM send: 0 on success, as lcm::LCM::publish. A seam for tests of the publisher itself.
+using SendFunction = std::function<int(const std::string& channel, const std::uint8_t* data, unsigned int size)>;
+
+struct PublisherEvent {
+  enum class Kind { kSendFailing, kSendRecovered, kDropped };
+  Kind kind;
+  std::string text;  // One line for the log, naming the channel and the error.
+};
+
 class Publisher {
  public:
-  Publisher(lcm::LCM& lcm, double bytes_per_second, std::size_t burst_bytes)
-      : lcm_(lcm), rate_(bytes_per_second), burst_(burst_bytes) {}
+  using Clock = std::chrono::steady_clock;
+  static constexpr std::size_t kMaxQueued = 100000;  // Beyond this (LCM down for long) the oldest go.
+
+  Publisher(lcm::LCM& lcm, double bytes_per_second, std::size_t burst_bytes);
+  Publisher(SendFunction send, double bytes_per_second, std::size_t burst_bytes);
 
   template <typename Message>
   void publish(const std::string& channel, const Message& message) {
     std::vector<std::uint8_t> bytes(static_cast<std::size_t>(message.getEncodedSize()));
     message.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
-    queue_.push_back({channel, std::move(bytes)});
+    enqueue(channel, std::move(bytes));
   }
 
   // Sends what the rate allows now; returns when the next message may go (or nothing queued).
-  std::optional<std::chrono::steady_clock::time_point> drain(std::chrono::steady_clock::time_point now);
+  std::optional<Clock::time_point> drain(Clock::time_point now);
 
   std::size_t queued() const { return queue_.size(); }
   std::uint64_t send_failures() const { return send_failures_; }
+  std::uint64_t dropped() const { return dropped_; }
+  bool failing() const { return failures_in_a_row_ > 0; }
   void set_rate(double bytes_per_second) { rate_ = bytes_per_second; }
+  void on_event(std::function<void(const PublisherEvent&)> handler) { on_event_ = std::move(handler); }
 
  private:
   struct Pending {
     std::string channel;
     std::vector<std::uint8_t> bytes;
   };
-  lcm::LCM& lcm_;
+  void enqueue(std::string channel, std::vector<std::uint8_t> bytes);
+  bool send_front(Clock::time_point now);
+  void report(PublisherEvent::Kind kind, std::string text);
+
+  SendFunction send_;
   double rate_;
   std::size_t burst_;
   double allowance_ = 0;
-  std::chrono::steady_clock::time_point last_{};
+  Clock::time_point last_{};
   std::deque<Pending> queue_;
   std::uint64_t send_failures_ = 0;
+  std::uint64_t dropped_ = 0;
+  // The current run of failed sends: how many, since when, and when to try again.
+  std::uint64_t failures_in_a_row_ = 0;
+  Clock::time_point failing_since_{};
+  Clock::time_point retry_at_{};
+  Clock::duration backoff_{};
+  std::function<void(const PublisherEvent&)> on_event_;
 };
 
 }  // namespace rdtf::daemon

@@ -4,7 +4,10 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <optional>
+#include <cstdlib>
 #include <cstring>
+#include <fstream>
 
 namespace rdtf::daemon {
 namespace {
@@ -22,7 +25,28 @@ std::string watch_error(const std::filesystem::path& folder) {
   return text;
 }
 
+// Test seam: when RDTFD_TEST_INOTIFY_LIMIT_FILE names a file holding a number N, at most N
+// folders are watched and further inotify_add_watch calls fail with ENOSPC, as when the kernel's
+// max_user_watches is reached (that limit is system-wide here, so tests must not lower it).
+// Without the file, no limit is applied: deleting it "raises the limit".
+std::optional<std::size_t> injected_watch_limit() {
+  const char* file = std::getenv("RDTFD_TEST_INOTIFY_LIMIT_FILE");
+  if (file == nullptr) return std::nullopt;
+  std::ifstream in(file);
+  std::size_t limit = 0;
+  if (!(in >> limit)) return std::nullopt;
+  return limit;
+}
+
 }  // namespace
+
+int InotifyWatcher::add_watch(const std::filesystem::path& folder) {
+  if (const auto limit = injected_watch_limit(); limit && folders_.size() >= *limit) {
+    errno = ENOSPC;
+    return -1;
+  }
+  return ::inotify_add_watch(fd_, folder.c_str(), kFolderMask);
+}
 
 InotifyWatcher::InotifyWatcher() : fd_(::inotify_init1(IN_NONBLOCK | IN_CLOEXEC)) {}
 
@@ -33,18 +57,21 @@ InotifyWatcher::~InotifyWatcher() {
 void InotifyWatcher::clear() {
   for (const auto& [wd, folder] : folders_) ::inotify_rm_watch(fd_, wd);
   folders_.clear();
+  unwatched_.clear();
 }
 
 void InotifyWatcher::add_folder(const std::filesystem::path& folder,
                                 std::vector<std::filesystem::path>& files, std::string& error) {
   // Watch first, then list: a file created in between shows up in both, never in neither.
-  const int wd = ::inotify_add_watch(fd_, folder.c_str(), kFolderMask);
+  const int wd = add_watch(folder);
   if (wd < 0) {
     if (!error.empty()) error += "; ";
     error += watch_error(folder);
-    return;
+    // Still list it: its models are converted now, and seen again when a retry can watch it.
+    unwatched_.push_back(folder);
+  } else {
+    folders_[wd] = folder;
   }
-  folders_[wd] = folder;
   std::error_code ec;
   for (std::filesystem::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
     std::error_code type_error;

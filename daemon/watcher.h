@@ -42,13 +42,18 @@ class InotifyWatcher {
   std::vector<FileEvent> read_events(std::string& error);
 
   std::size_t watch_count() const { return folders_.size(); }
+  // Folders found since the last clear() that could not be watched (their files were still
+  // listed): changes there go unseen until a later watch_tree succeeds.
+  const std::vector<std::filesystem::path>& unwatched() const { return unwatched_; }
 
  private:
   void add_folder(const std::filesystem::path& folder, std::vector<std::filesystem::path>& files,
                   std::string& error);
+  int add_watch(const std::filesystem::path& folder);
 
   int fd_ = -1;
   std::map<int, std::filesystem::path> folders_;  // watch descriptor -> folder
+  std::vector<std::filesystem::path> unwatched_;
 };
 
 }  // namespace rdtf::daemon

@@ -609,6 +609,8 @@ struct DaemonOptions {
   Json config = Json::object();  // Config file keys, over the defaults of write_config().
   std::vector<std::string> extra_args;
   bool folders_on_command_line = true;  // false: "watch" and "output" come from `config` only.
+  fs::path working_directory;  // The daemon's; empty: the test's. "/" is what systemd gives.
+  std::vector<std::string> environment;  // "NAME=value" entries added to the test's environment.
 
   DaemonOptions& with_settle(int ms) { settle_ms = ms; return *this; }
   DaemonOptions& with_republish(int ms) { republish_ms = ms; return *this; }
@@ -617,6 +619,8 @@ struct DaemonOptions {
   DaemonOptions& with(const std::string& key, Json value) { config[key] = std::move(value); return *this; }
   DaemonOptions& with_args(std::vector<std::string> args) { extra_args = std::move(args); return *this; }
   DaemonOptions& with_folders_in_config() { folders_on_command_line = false; return *this; }
+  DaemonOptions& in_directory(fs::path folder) { working_directory = std::move(folder); return *this; }
+  DaemonOptions& with_env(std::string entry) { environment.push_back(std::move(entry)); return *this; }
 };
 
 class DaemonProcess {
@@ -638,6 +642,7 @@ class DaemonProcess {
   DaemonProcess& operator=(const DaemonProcess&) = delete;
 
   pid_t pid() const { return pid_; }
+  pid_t last_pid() const { return last_pid_; }  // Still known after it exited.
   const fs::path& config_path() const { return config_path_; }
   std::string log() const {
     std::ifstream in(log_path_);
@@ -658,6 +663,12 @@ class DaemonProcess {
   std::optional<int> stop(Clock::duration timeout = 5s) {
     signal(SIGTERM);
     return wait_exit(timeout);
+  }
+  // Starts the daemon again with the same options (after it exited or was killed); the log
+  // continues in the same file.
+  void restart() {
+    if (running()) throw std::runtime_error("restart: rdtfd is still running");
+    start();
   }
   // Waits until the log contains `text` (for events that send no message).
   bool wait_log(const std::string& text, Clock::duration timeout = 5s) const {
@@ -705,9 +716,18 @@ class DaemonProcess {
     posix_spawn_file_actions_addopen(&actions, 1, log_path_.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
     posix_spawn_file_actions_adddup2(&actions, 1, 2);
     posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
-    const int error = posix_spawn(&pid_, RDTFD_PATH, &actions, nullptr, argv.data(), environ);
+    if (!options_.working_directory.empty()) {
+      posix_spawn_file_actions_addchdir_np(&actions, options_.working_directory.c_str());
+    }
+    std::vector<std::string> environment = options_.environment;
+    for (char** entry = environ; *entry != nullptr; ++entry) environment.emplace_back(*entry);
+    std::vector<char*> envp;
+    for (auto& entry : environment) envp.push_back(entry.data());
+    envp.push_back(nullptr);
+    const int error = posix_spawn(&pid_, RDTFD_PATH, &actions, nullptr, argv.data(), envp.data());
     posix_spawn_file_actions_destroy(&actions);
     if (error != 0) throw std::runtime_error(std::string("cannot start rdtfd: ") + std::strerror(error));
+    last_pid_ = pid_;
   }
 
   DaemonOptions options_;
@@ -715,6 +735,7 @@ class DaemonProcess {
   fs::path config_path_;
   fs::path log_path_;
   pid_t pid_ = -1;
+  pid_t last_pid_ = -1;
   int exit_code_ = -1;
 };
 

@@ -126,6 +126,29 @@ bool skip_image(tinygltf::Image*, const int, std::string*, std::string*, int, in
   return true;  // Images are never decoded: the converter needs none, and decoding is slow.
 }
 
+// Caps each embedded buffer before anything decodes it: a data URI's payload (base64, 3 bytes per
+// 4 characters) may not hold more than max_buffer_bytes, whatever byteLength claims.
+bool data_uris_within_cap(const Json& document, const LoadLimits& limits, Diagnostics& diag) {
+  if (!document.contains("buffers") || !document["buffers"].is_array()) return true;
+  const Json& buffers = document["buffers"];
+  bool ok = true;
+  for (std::size_t i = 0; i < buffers.size(); ++i) {
+    if (!buffers[i].is_object() || !buffers[i].contains("uri") || !buffers[i]["uri"].is_string()) continue;
+    const std::string& uri = buffers[i]["uri"].get_ref<const std::string&>();
+    if (!internal::is_data_uri(uri)) continue;
+    const auto comma = uri.find(',');
+    const std::uint64_t payload = comma == std::string::npos ? 0 : uri.size() - comma - 1;
+    const std::uint64_t decoded = payload / 4 * 3;
+    if (decoded > limits.max_buffer_bytes) {
+      diag.error("LIMIT_EXCEEDED", json_pointer("/buffers", i) + "/uri",
+                 "the data URI holds about " + std::to_string(decoded) + " bytes, over the limit of " +
+                     std::to_string(limits.max_buffer_bytes) + " bytes (max_buffer_bytes)");
+      ok = false;
+    }
+  }
+  return ok;
+}
+
 // Checks every external URI (buffers and images) and prepares the document tinygltf loads: only
 // the buffers, each external one renamed to a token that maps to a checked path.
 std::optional<Json> prepare_buffers(const Json& document, bool binary, const LoadLimits& limits,
@@ -236,6 +259,7 @@ std::optional<GltfAsset> load_gltf_from_memory(const std::vector<std::uint8_t>& 
   }
   auto document = parse_json(json_text, diag);
   if (!document) return std::nullopt;
+  if (!data_uris_within_cap(*document, limits, diag)) return std::nullopt;
   validate_document(*document, limits, diag);
   if (diag.has_errors()) return std::nullopt;
 

@@ -1,4 +1,5 @@
 // URDF -> RDTF: a glTF whose every node is typed in extras.RDTF, then the ordinary conversion.
+#include <cmath>
 #include <fstream>
 #include <map>
 
@@ -226,6 +227,25 @@ class Builder {
     return out;
   }
 
+  // urdfdom reads any number as a mass: a negative (or not finite) one is an error here, naming
+  // the element, before it becomes a glTF the user never wrote.
+  bool valid_inertial(const urdf::Inertial& in, const XmlLink& xml) {
+    const std::string at = "line " + std::to_string(xml.inertial_row) + ": link '" + xml.name + "' ";
+    const std::string pointer = link_pointer(xml.name) + "/inertial";
+    if (!std::isfinite(in.mass) || in.mass < 0) {
+      diag.error("URDF_INVALID_INERTIAL", pointer,
+                 at + "has mass " + exact_number(in.mass) + " kg; a mass is zero or positive");
+      return false;
+    }
+    for (double value : {in.ixx, in.ixy, in.ixz, in.iyy, in.iyz, in.izz}) {
+      if (!std::isfinite(value)) {
+        diag.error("URDF_INVALID_INERTIAL", pointer, at + "has an inertia that is not a finite number");
+        return false;
+      }
+    }
+    return true;
+  }
+
   Json inertial_json(const urdf::Inertial& in) {
     Eigen::Matrix3d I;
     I << in.ixx, in.ixy, in.ixz, in.ixy, in.iyy, in.iyz, in.ixz, in.iyz, in.izz;
@@ -283,7 +303,9 @@ std::optional<Conversion> import_urdf(const fs::path& urdf, const UrdfImportOpti
       joint_children.emplace_back(joint_node, joint.child);
     }
     for (auto it = joints.rbegin(); it != joints.rend(); ++it) stack.emplace_back(xml->joints[*it].child, &xml->joints[*it]);
-    if (link->inertial) {
+    if (link->inertial && !b.valid_inertial(*link->inertial, xml->links[xml_link.at(name)])) {
+      b.ok = false;
+    } else if (link->inertial) {
       children.push_back(b.add_node(Json{{"name", name + "_inertial"}}, "inertial", b.inertial_json(*link->inertial)));
     } else {
       diag.info("URDF_NO_INERTIAL", link_pointer(name),

@@ -20,6 +20,7 @@ struct XmlLink {
   int row = 0;
   std::vector<int> visual_rows;     // Line of each <visual>, in order.
   std::vector<int> collision_rows;  // Line of each <collision>, in order.
+  int inertial_row = 0;             // Line of its <inertial>, 0 when it has none.
 };
 
 struct XmlJoint {

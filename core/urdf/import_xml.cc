@@ -126,7 +126,7 @@ std::optional<XmlRobot> scan_urdf_xml(const std::string& text, Diagnostics& diag
   bool ok = true;
   std::set<std::string> link_names, joint_names;
   for (const TiXmlElement* e = robot_element->FirstChildElement("link"); e; e = e->NextSiblingElement("link")) {
-    XmlLink link{attribute(e, "name"), e->Row(), {}, {}};
+    XmlLink link{attribute(e, "name"), e->Row(), {}, {}, 0};
     if (link.name.empty()) {
       diag.error("URDF_INVALID", "/robot/link", line(e->Row()) + "a <link> has no name");
       ok = false;
@@ -144,6 +144,7 @@ std::optional<XmlRobot> scan_urdf_xml(const std::string& text, Diagnostics& diag
     for (const TiXmlElement* c = e->FirstChildElement("collision"); c; c = c->NextSiblingElement("collision")) {
       link.collision_rows.push_back(c->Row());
     }
+    if (const TiXmlElement* inertial = e->FirstChildElement("inertial")) link.inertial_row = inertial->Row();
     robot.links.push_back(std::move(link));
   }
   for (const TiXmlElement* e = robot_element->FirstChildElement("joint"); e; e = e->NextSiblingElement("joint")) {

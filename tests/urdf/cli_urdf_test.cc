@@ -1,0 +1,71 @@
+// `rdtf urdf IN -o DIR` and `rdtf import robot.urdf -o robot.gltf` as a user runs them.
+#include "urdf/urdf_test_support.h"
+
+namespace rdtf {
+namespace {
+
+using namespace urdf_test;
+namespace fs = std::filesystem;
+
+testing::CommandResult rdtf_cli(const std::string& arguments) {
+  return testing::run_command("'" + testing::cli_path() + "' " + arguments);
+}
+
+std::string quoted(const fs::path& path) { return "'" + path.string() + "'"; }
+
+TEST(UrdfCli, ExportWritesRobotUrdfAndMeshesThatCheckUrdfAccepts) {
+  TempDir dir;
+  const auto run = rdtf_cli("urdf " + quoted(testing::data_dir() / "blender/arm3.gltf") + " -o " + quoted(dir / "arm3"));
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.err.find("wrote " + (dir / "arm3/robot.urdf").string()), std::string::npos) << run.err;
+  for (const char* link : {"base_link", "upper_arm", "forearm"}) {
+    EXPECT_TRUE(fs::is_regular_file(dir / "arm3/meshes" / (std::string(link) + ".stl"))) << link;
+  }
+  expect_check_urdf_passes(dir / "arm3/robot.urdf");
+  // The elbow's missing limits are reported (a warning, printed without --verbose).
+  EXPECT_NE(run.err.find("URDF_REVOLUTE_WITHOUT_LIMITS"), std::string::npos) << run.err;
+
+  // And back: the URDF imports to a glTF the Khronos validator accepts.
+  const auto back = rdtf_cli("import " + quoted(dir / "arm3/robot.urdf") + " -o " + quoted(dir / "arm3.gltf"));
+  ASSERT_EQ(back.exit_code, 0) << back.err;
+  const auto report = testing::khronos_report(dir / "arm3.gltf");
+  EXPECT_EQ(report["issues"]["numErrors"].get<int>(), 0) << report["issues"].dump(1);
+  const auto glb = rdtf_cli("import " + quoted(dir / "arm3/robot.urdf") + " -o " + quoted(dir / "arm3.glb"));
+  ASSERT_EQ(glb.exit_code, 0) << glb.err;
+  EXPECT_EQ(testing::khronos_report(dir / "arm3.glb")["issues"]["numErrors"].get<int>(), 0);
+}
+
+TEST(UrdfCli, OptionsForRosAndYUp) {
+  TempDir dir;
+  const auto run = rdtf_cli("urdf " + quoted(testing::data_dir() / "blender/two_cylinder.gltf") + " -o " +
+                            quoted(dir.path()) + " --y-up --no-mujoco --mesh-prefix package://my_robot/urdf/");
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const std::string text = testing::read_file(dir / "robot.urdf");
+  EXPECT_EQ(text.find("<mujoco"), std::string::npos);
+  EXPECT_NE(text.find(R"(filename="package://my_robot/urdf/meshes/arm.stl")"), std::string::npos) << text;
+  const auto model = parse_with_urdfdom(text);
+  // Y kept up: the arm sits along +y of the base.
+  const auto& origin = model->getJoint("base_arm_joint")->parent_to_joint_origin_transform.position;
+  EXPECT_EQ(origin.z, 0.0);
+  EXPECT_GT(origin.y, 0.3);
+}
+
+TEST(UrdfCli, ModelUrdfCannotSayIsExitTwoAndWritesNothing) {
+  GltfBuilder b;
+  const int mesh = b.box_mesh(Eigen::Vector3f(0.2f, 0.2f, 0.2f));
+  const int base = b.node("base", -1, Json{{"mesh", mesh}});
+  const int joint = b.node("hip", base, Json{{"extras", {{"rdtf_joint", "ball"}}}});
+  b.link_with_mesh("leg", joint, mesh);
+  TempDir dir;
+  const auto glb = b.glb();
+  testing::write_file(dir / "ball.glb", std::string(glb.begin(), glb.end()));
+  const auto run = rdtf_cli("urdf " + quoted(dir / "ball.glb") + " -o " + quoted(dir / "out"));
+  EXPECT_EQ(run.exit_code, 2) << run.err;
+  EXPECT_NE(run.err.find((dir / "ball.glb").string() + ":/nodes/" + std::to_string(joint) + ": error URDF_BALL_JOINT"),
+            std::string::npos)
+      << run.err;
+  EXPECT_FALSE(fs::exists(dir / "out/robot.urdf"));
+}
+
+}  // namespace
+}  // namespace rdtf

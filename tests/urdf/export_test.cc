@@ -1,0 +1,291 @@
+// URDF export against closed forms: a box's inertia permuted to Z up, an authored full tensor
+// written digit for digit, a thin plate whose A + B >= C survives only at full precision, joints
+// with every URDF field, names, meshes in the link frame, and what URDF cannot say.
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+
+#include "rdtf/mass_properties.h"
+#include "urdf/urdf_test_support.h"
+
+namespace rdtf {
+namespace {
+
+using namespace urdf_test;
+
+// float32 corner coordinates that are exact, so the closed form is exact too.
+constexpr double kA = 0.5, kB = 0.25, kC = 2.0;  // Box edges along glTF x, y, z (m).
+constexpr double kDensity = 1000.0;              // The default density (kg/m^3).
+// Double maths on exact inputs (the project's standard).
+constexpr double kRelative = 1e-9;
+
+// One box link, centred at `center` in a root link node translated to (1, 2, 3).
+Conversion box_model(const Eigen::Vector3f& center, Diagnostics& diag) {
+  GltfBuilder b;
+  const int mesh = b.box_mesh(Eigen::Vector3f(kA, kB, kC), center);
+  b.node("box", -1, Json{{"mesh", mesh}, {"translation", {1.0, 2.0, 3.0}}});
+  return b.convert(diag);
+}
+
+const urdf::Inertial& inertial_of(const urdf::ModelInterface& model, const std::string& link) {
+  const auto found = model.getLink(link);
+  if (!found || !found->inertial) throw std::runtime_error("no inertial on link " + link);
+  return *found->inertial;
+}
+
+TEST(UrdfExport, BoxInertiaIsTheClosedFormPermutedToZUp) {
+  Diagnostics diag;
+  const Conversion conversion = box_model(Eigen::Vector3f(0.125f, 0.25f, -0.5f), diag);
+  const MassProperties& ours = conversion.robot.links.at(0).inertial;
+  const double m = kDensity * kA * kB * kC;
+  // Closed form in glTF axes, then in URDF axes: (x, y, z) -> (x, -z, y) swaps the y and z
+  // extents, so the URDF's iyy is the glTF izz and the other way round.
+  const Eigen::Vector3d I_gltf = m / 12 * Eigen::Vector3d(kB * kB + kC * kC, kA * kA + kC * kC, kA * kA + kB * kB);
+  ASSERT_NEAR(ours.mass, m, kRelative * m);
+  EXPECT_LE(relative_error(ours.inertia, Eigen::Matrix3d(I_gltf.asDiagonal())), kRelative);
+
+  TempDir dir;
+  const auto model = parse_with_urdfdom(export_to(conversion, dir.path()));
+  expect_check_urdf_passes(dir / "robot.urdf");
+  const urdf::Inertial& in = inertial_of(*model, "box");
+  // Every number is ours, permuted and negated exactly (a change of axes by 0 and +-1).
+  EXPECT_EQ(in.mass, ours.mass);
+  EXPECT_EQ(in.origin.position.x, ours.center_of_mass.x());
+  EXPECT_EQ(in.origin.position.y, -ours.center_of_mass.z());
+  EXPECT_EQ(in.origin.position.z, ours.center_of_mass.y());
+  EXPECT_EQ(in.ixx, ours.inertia(0, 0));
+  EXPECT_EQ(in.iyy, ours.inertia(2, 2));
+  EXPECT_EQ(in.izz, ours.inertia(1, 1));
+  EXPECT_EQ(in.ixy, -ours.inertia(0, 2));
+  EXPECT_EQ(in.ixz, ours.inertia(0, 1));
+  EXPECT_EQ(in.iyz, -ours.inertia(1, 2));
+  EXPECT_EQ(rotation_of(in.origin.rotation), Eigen::Matrix3d::Identity());
+  // And against the closed form in URDF axes: the centroid (0.125, 0.25, -0.5) is (0.125, 0.5, 0.25).
+  EXPECT_NEAR(in.ixx, I_gltf.x(), kRelative * I_gltf.x());
+  EXPECT_NEAR(in.iyy, I_gltf.z(), kRelative * I_gltf.z());
+  EXPECT_NEAR(in.izz, I_gltf.y(), kRelative * I_gltf.y());
+  EXPECT_LE(relative_error(vector_of(in.origin.position), Eigen::Vector3d(0.125, 0.5, 0.25)), kRelative);
+}
+
+TEST(UrdfExport, AuthoredFullTensorIsWrittenDigitForDigit) {
+  GltfBuilder b;
+  const int mesh = b.box_mesh(Eigen::Vector3f(0.5f, 0.5f, 0.5f));
+  const int link = b.node("body", -1, Json{{"mesh", mesh}});
+  const int inertial = b.node("body_inertial", link);
+  b.rdtf_entry(Json{{"node", link}, {"type", "link"}});
+  b.rdtf_entry(Json{{"node", inertial},
+                    {"type", "inertial"},
+                    {"inertial",
+                     {{"mass", 1.2345678901234567},
+                      {"gravityCenter", {0.1, 0.2, 0.3}},
+                      {"inertia", {0.5, 0.01, 0.02, 0.4, 0.03, 0.3}},
+                      {"frame", "link"}}}});
+  Diagnostics diag;
+  const Conversion conversion = b.convert(diag);
+  ASSERT_EQ(conversion.robot.links.at(0).inertial_source, InertialSource::kAuthored);
+  TempDir dir;
+  const std::string text = export_to(conversion, dir.path());
+  // urdfdom alone would print mass 1.23457. Z up: ixy' = -ixz, ixz' = ixy, iyz' = -iyz, and
+  // iyy and izz swap.
+  EXPECT_NE(text.find(R"(<mass value="1.2345678901234567")"), std::string::npos) << text;
+  EXPECT_NE(text.find(R"(<origin xyz="0.1 -0.3 0.2" rpy="0 0 0")"), std::string::npos) << text;
+  EXPECT_NE(text.find(R"(<inertia ixx="0.5" ixy="-0.02" ixz="0.01" iyy="0.3" iyz="-0.03" izz="0.4")"),
+            std::string::npos)
+      << text;
+  expect_check_urdf_passes(dir / "robot.urdf");
+
+  // With Y kept up, the authored numbers come out as given.
+  TempDir y_up;
+  UrdfOptions options;
+  options.y_up = true;
+  const std::string kept = export_to(conversion, y_up.path(), options);
+  EXPECT_NE(kept.find(R"(<origin xyz="0.1 0.2 0.3" rpy="0 0 0")"), std::string::npos) << kept;
+  EXPECT_NE(kept.find(R"(<inertia ixx="0.5" ixy="0.01" ixz="0.02" iyy="0.4" iyz="0.03" izz="0.3")"),
+            std::string::npos)
+      << kept;
+}
+
+// A plate 1 m x 1 m, 0.1 mm thick: principal moments A = B = m/12 (1 + t^2), C = m/12 * 2, so
+// A + B - C = m t^2 / 6, 1e-8 of C: six significant digits (urdfdom's own printing) lose it.
+TEST(UrdfExport, ThinPlateKeepsTriangleInequalityOnlyAtFullPrecision) {
+  GltfBuilder b;
+  const int mesh = b.box_mesh(Eigen::Vector3f(1.0f, 1e-4f, 1.0f));
+  b.node("plate", -1, Json{{"mesh", mesh}});
+  Diagnostics diag;
+  const Conversion conversion = b.convert(diag);
+  TempDir dir;
+  const auto model = parse_with_urdfdom(export_to(conversion, dir.path()));
+  expect_check_urdf_passes(dir / "robot.urdf");
+  const urdf::Inertial& in = inertial_of(*model, "plate");
+  // Thin along glTF y, so along URDF z.
+  EXPECT_GE(in.ixx + in.iyy, in.izz);
+  const double t = static_cast<double>(1e-4f);
+  EXPECT_NEAR(in.ixx + in.iyy - in.izz, in.mass * t * t / 6, 1e-6 * in.mass * t * t / 6);
+  auto six_digits = [](double value) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.6g", value);
+    return std::strtod(text, nullptr);
+  };
+  EXPECT_LT(six_digits(in.ixx) + six_digits(in.iyy), six_digits(in.izz))
+      << "six digits would have broken A + B >= C";
+}
+
+// base -> (joint node "slider", turned 90 degrees about glTF y) -> arm, every joint key set.
+Conversion slider_model(Diagnostics& diag) {
+  GltfBuilder b;
+  const int mesh = b.box_mesh(Eigen::Vector3f(0.2f, 0.2f, 0.2f));
+  const int base = b.node("base", -1, Json{{"mesh", mesh}});
+  const double h = std::sqrt(0.5);
+  const int slider = b.node("slider", base,
+                            Json{{"translation", {0.1, 0.2, 0.3}},
+                                 {"rotation", {0.0, h, 0.0, h}},
+                                 {"extras",
+                                  {{"rdtf_joint", "prismatic"}, {"rdtf_axis", {0, 0, 1}},
+                                   {"rdtf_lower", -0.1}, {"rdtf_upper", 0.2}, {"rdtf_effort", 50.0},
+                                   {"rdtf_velocity", 1.5}, {"rdtf_damping", 0.7}, {"rdtf_friction", 0.3}}}});
+  b.link_with_mesh("arm", slider, mesh);
+  return b.convert(diag);
+}
+
+TEST(UrdfExport, JointHasOriginAxisLimitsAndDynamicsInZUpAxes) {
+  Diagnostics diag;
+  const Conversion conversion = slider_model(diag);
+  ASSERT_EQ(conversion.robot.joints.size(), 1u);
+  const Joint& ours = conversion.robot.joints[0];
+  ASSERT_EQ(ours.kind, JointKind::kPrismatic);
+  TempDir dir;
+  const auto model = parse_with_urdfdom(export_to(conversion, dir.path()));
+  expect_check_urdf_passes(dir / "robot.urdf");
+  const auto joint = model->getJoint("slider");
+  ASSERT_TRUE(joint);
+  EXPECT_EQ(joint->type, urdf::Joint::PRISMATIC);
+  EXPECT_EQ(joint->parent_link_name, "base");
+  EXPECT_EQ(joint->child_link_name, "arm");
+  const Eigen::Matrix3d C = gltf_to_urdf_axes();
+  // Translation and axis: exact (entries 0 and +-1). glTF (0.1, 0.2, 0.3) is (0.1, -0.3, 0.2).
+  EXPECT_EQ(vector_of(joint->parent_to_joint_origin_transform.position), Eigen::Vector3d(0.1, -0.3, 0.2));
+  EXPECT_EQ(vector_of(joint->axis), Eigen::Vector3d(C * ours.axis));
+  // The axis is the joint node's z, which the 90 degree turn about y made the parent's x; in the
+  // child frame (the joint node's frame) it stays z: (0, 0, 1) in glTF, (0, -1, 0) in URDF.
+  EXPECT_EQ(vector_of(joint->axis), Eigen::Vector3d(0, -1, 0));
+  // Rotation: through roll-pitch-yaw and a quaternion, a few ulps of sin and cos.
+  const Eigen::Matrix3d R = rotation_of(joint->parent_to_joint_origin_transform.rotation);
+  EXPECT_LE(relative_error(R, Eigen::Matrix3d(C * ours.X_PJ.linear() * C.transpose())), 1e-15);
+  ASSERT_TRUE(joint->limits);
+  EXPECT_EQ(joint->limits->lower, -0.1);
+  EXPECT_EQ(joint->limits->upper, 0.2);
+  EXPECT_EQ(joint->limits->effort, 50.0);
+  EXPECT_EQ(joint->limits->velocity, 1.5);
+  ASSERT_TRUE(joint->dynamics);
+  EXPECT_EQ(joint->dynamics->damping, 0.7);
+  EXPECT_EQ(joint->dynamics->friction, 0.3);
+}
+
+std::vector<Diagnostic> with_code(const Diagnostics& diag, const std::string& code) {
+  std::vector<Diagnostic> found;
+  for (const Diagnostic& d : diag.all()) {
+    if (d.code == code) found.push_back(d);
+  }
+  return found;
+}
+
+TEST(UrdfExport, NamesAreMadeValidAndUniqueAndEveryChangeIsReported) {
+  GltfBuilder b;
+  const int mesh = b.box_mesh(Eigen::Vector3f(0.2f, 0.2f, 0.2f));
+  const int base = b.node("base/link", -1, Json{{"mesh", mesh}});
+  b.node("arm link", base, Json{{"mesh", mesh}, {"translation", {0.0, 1.0, 0.0}}});
+  b.node("arm_link", base, Json{{"mesh", mesh}, {"translation", {0.0, 2.0, 0.0}}});
+  Diagnostics diag;
+  const Conversion conversion = b.convert(diag);
+  Diagnostics export_diag;
+  const auto exported = export_urdf(conversion, UrdfOptions{}, export_diag);
+  ASSERT_TRUE(exported);
+  EXPECT_EQ(exported->link_names, (std::vector<std::string>{"base_link", "arm_link", "arm_link_2"}));
+  EXPECT_EQ(exported->joint_names,
+            (std::vector<std::string>{"base_link_arm_link_joint", "base_link_arm_link_joint_2"}));
+  const auto changed = with_code(export_diag, "URDF_NAME_CHANGED");
+  ASSERT_EQ(changed.size(), 5u);  // Three links (the third collides) and both joints.
+  EXPECT_EQ(changed[0].severity, Severity::kWarning);
+  EXPECT_EQ(changed[0].pointer, "/nodes/0");
+  EXPECT_NE(changed[0].message.find("'base/link' is named 'base_link'"), std::string::npos) << changed[0].message;
+  EXPECT_EQ(changed[2].pointer, "/nodes/2");
+  EXPECT_NE(changed[2].message.find("'arm_link' is named 'arm_link_2'"), std::string::npos) << changed[2].message;
+  const auto model = parse_with_urdfdom(exported->text);
+  EXPECT_EQ(model->links_.size(), 3u);
+  EXPECT_EQ(model->getRoot()->name, "base_link");
+  // Each mesh file carries its link's URDF name.
+  ASSERT_EQ(exported->meshes.size(), 3u);
+  EXPECT_EQ(exported->meshes[2].path, "meshes/arm_link_2.stl");
+}
+
+// Each link's STL holds its solids in the link frame with URDF's axes: their volume is the link's
+// and their centroid its centre of mass (uniform density). STL stores float32, so they agree to
+// float32 precision (1e-6 relative), not bit for bit.
+TEST(UrdfExport, MeshesAreOutwardStlInTheLinkFrame) {
+  const Conversion conversion = convert_fixture("transforms.gltf");
+  TempDir dir;
+  const auto model = parse_with_urdfdom(export_to(conversion, dir.path()));
+  const Eigen::Matrix3d C = gltf_to_urdf_axes();
+  for (const Link& link : conversion.robot.links) {
+    SCOPED_TRACE(link.name);
+    const auto urdf_link = model->getLink(link.name);
+    ASSERT_TRUE(urdf_link && urdf_link->visual && urdf_link->collision);
+    const auto& visual = static_cast<const urdf::Mesh&>(*urdf_link->visual->geometry);
+    const auto& collision = static_cast<const urdf::Mesh&>(*urdf_link->collision->geometry);
+    EXPECT_EQ(visual.filename, "meshes/" + link.name + ".stl");
+    EXPECT_EQ(collision.filename, visual.filename);
+    const std::string bytes = testing::read_file(dir / visual.filename);
+    std::string why;
+    const auto mesh = parse_stl(std::vector<std::uint8_t>(bytes.begin(), bytes.end()), why);
+    ASSERT_TRUE(mesh) << why;
+    const VolumeIntegrals solid = integrate_solid(std::span<const TriangleMesh>(&*mesh, 1), Eigen::Affine3d::Identity());
+    EXPECT_NEAR(solid.volume, link.inertial.volume, 1e-6 * link.inertial.volume);
+    const Eigen::Vector3d com = C * link.inertial.center_of_mass;
+    EXPECT_LE((solid.centroid - com).norm(), 1e-6 * std::cbrt(link.inertial.volume)) << solid.centroid.transpose();
+    EXPECT_LE((solid.centroid - vector_of(urdf_link->inertial->origin.position)).norm(),
+              1e-6 * std::cbrt(link.inertial.volume));
+  }
+}
+
+TEST(UrdfExport, MeshPathsAndMujocoElementFollowTheOptions) {
+  const Conversion conversion = convert_fixture("two_cylinder.gltf");
+  TempDir plain;
+  const std::string text = export_to(conversion, plain.path());
+  EXPECT_NE(text.find(R"(<compiler meshdir="meshes" fusestatic="false" inertiafromgeom="false")"), std::string::npos) << text;
+  EXPECT_NE(text.find(R"(<mesh filename="meshes/base.stl")"), std::string::npos) << text;
+
+  TempDir ros;
+  UrdfOptions options;
+  options.mesh_uri_prefix = "package://my_robot/urdf/";
+  options.mujoco_compiler = false;
+  const std::string ros_text = export_to(conversion, ros.path(), options);
+  EXPECT_EQ(ros_text.find("<mujoco"), std::string::npos) << ros_text;
+  EXPECT_NE(ros_text.find(R"(<mesh filename="package://my_robot/urdf/meshes/base.stl")"), std::string::npos) << ros_text;
+  EXPECT_TRUE(std::filesystem::is_regular_file(ros / "meshes/base.stl"));
+  EXPECT_TRUE(std::filesystem::is_regular_file(ros / "meshes/arm.stl"));
+  expect_check_urdf_passes(ros / "robot.urdf");
+}
+
+TEST(UrdfExport, BallJointAndPrismaticWithoutLimitsAreRefusedAndNothingIsWritten) {
+  for (const char* kind : {"ball", "prismatic"}) {
+    SCOPED_TRACE(kind);
+    GltfBuilder b;
+    const int mesh = b.box_mesh(Eigen::Vector3f(0.2f, 0.2f, 0.2f));
+    const int base = b.node("base", -1, Json{{"mesh", mesh}});
+    const int joint = b.node("hip", base, Json{{"extras", {{"rdtf_joint", kind}}}});
+    b.link_with_mesh("leg", joint, mesh);
+    Diagnostics diag;
+    const Conversion conversion = b.convert(diag);
+    TempDir dir;
+    Diagnostics export_diag;
+    EXPECT_FALSE(write_urdf(conversion, dir / "out", UrdfOptions{}, export_diag));
+    const auto errors = with_code(export_diag, std::string(kind) == "ball" ? "URDF_BALL_JOINT" : "URDF_PRISMATIC_WITHOUT_LIMITS");
+    ASSERT_EQ(errors.size(), 1u);
+    EXPECT_EQ(errors[0].pointer, "/nodes/" + std::to_string(joint));
+    EXPECT_NE(errors[0].message.find("'hip'"), std::string::npos) << errors[0].message;
+    EXPECT_FALSE(std::filesystem::exists(dir / "out"));
+  }
+}
+
+}  // namespace
+}  // namespace rdtf

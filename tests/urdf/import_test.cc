@@ -1,0 +1,327 @@
+// URDF -> RDTF: the ROS tutorial robots, primitives measured against closed forms, STL meshes by
+// every path form, glTF that the Khronos validator accepts, and the round trip
+// URDF -> RDTF -> URDF keeping tree, kinds, axes, limits, origins and inertials.
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <numbers>
+
+#include "rdtf/write.h"
+#include "urdf/urdf_test_support.h"
+
+namespace rdtf {
+namespace {
+
+using namespace urdf_test;
+namespace fs = std::filesystem;
+
+constexpr double kRelative = 1e-9;  // Double maths on exact inputs.
+
+fs::path tutorial(const std::string& name) { return testing::data_dir() / "urdf" / "urdf_tutorial" / name; }
+
+Conversion import_or_fail(const fs::path& urdf, Diagnostics& diag, const UrdfImportOptions& options = {}) {
+  auto conversion = import_urdf(urdf, options, diag);
+  if (!conversion) {
+    std::string all;
+    for (const Diagnostic& d : diag.all()) all += format(d) + "\n";
+    ADD_FAILURE() << urdf << " not imported:\n" << all;
+    throw std::runtime_error("import failed");
+  }
+  return std::move(*conversion);
+}
+
+// Writes the import as .gltf and runs the Khronos validator on it: no errors.
+void expect_valid_gltf(const Conversion& conversion, const fs::path& path) {
+  Diagnostics diag;
+  ASSERT_TRUE(write_rdtf(conversion.asset, path, path.extension() == ".glb" ? OutputFormat::kGlb : OutputFormat::kGltf, diag));
+  const auto report = testing::khronos_report(path);
+  EXPECT_EQ(report["issues"]["numErrors"].get<int>(), 0) << report["issues"].dump(1);
+}
+
+const char* kind_name(int type) {
+  switch (type) {
+    case urdf::Joint::FIXED: return "fixed";
+    case urdf::Joint::REVOLUTE: return "revolute";
+    case urdf::Joint::CONTINUOUS: return "continuous";
+    case urdf::Joint::PRISMATIC: return "prismatic";
+    case urdf::Joint::FLOATING: return "floating";
+    case urdf::Joint::PLANAR: return "planar";
+    default: return "unknown";
+  }
+}
+
+TEST(UrdfImport, TutorialRobotsBecomeValidRdtf) {
+  for (const char* name : {"01-myfirst.urdf", "02-multipleshapes.urdf", "03-origins.urdf", "04-materials.urdf",
+                           "05-visual.urdf", "06-flexible.urdf", "07-physics.urdf"}) {
+    SCOPED_TRACE(name);
+    Diagnostics diag;
+    const Conversion conversion = import_or_fail(tutorial(name), diag);
+    const auto original = parse_with_urdfdom(testing::read_file(tutorial(name)));
+    // Every link and joint, by name, with its kind, parent and child.
+    ASSERT_EQ(conversion.robot.links.size(), original->links_.size());
+    for (const Link& link : conversion.robot.links) EXPECT_TRUE(original->getLink(link.name)) << link.name;
+    ASSERT_EQ(conversion.robot.joints.size(), original->joints_.size());
+    for (const Joint& joint : conversion.robot.joints) {
+      const auto theirs = original->getJoint(joint.name);
+      ASSERT_TRUE(theirs) << joint.name;
+      EXPECT_STREQ(to_string(joint.kind), kind_name(theirs->type)) << joint.name;
+      EXPECT_EQ(conversion.robot.links[joint.parent_link].name, theirs->parent_link_name);
+      EXPECT_EQ(conversion.robot.links[joint.child_link].name, theirs->child_link_name);
+    }
+    EXPECT_EQ(conversion.robot.links[conversion.robot.root_links.at(0)].name, original->getRoot()->name);
+    TempDir dir;
+    expect_valid_gltf(conversion, dir / "robot.gltf");
+  }
+}
+
+TEST(UrdfImport, AuthoredInertialsAreKeptAndColladaMeshesSkippedWithAWarning) {
+  Diagnostics diag;
+  const Conversion conversion = import_or_fail(tutorial("07-physics.urdf"), diag);
+  const auto original = parse_with_urdfdom(testing::read_file(tutorial("07-physics.urdf")));
+  const Eigen::Matrix3d C = gltf_to_urdf_axes();
+  for (const Link& link : conversion.robot.links) {
+    SCOPED_TRACE(link.name);
+    const auto& in = *original->getLink(link.name)->inertial;
+    EXPECT_EQ(link.inertial_source, InertialSource::kAuthored);
+    EXPECT_EQ(link.inertial.mass, in.mass);
+    // Diagonal tensors at the link origin: the change of axes permutes them exactly.
+    EXPECT_EQ(Eigen::Matrix3d(C * link.inertial.inertia * C.transpose()), tensor_of(in));
+    EXPECT_EQ(Eigen::Vector3d(C * link.inertial.center_of_mass), vector_of(in.origin.position));
+  }
+  bool skipped = false;
+  for (const Diagnostic& d : diag.all()) {
+    if (d.code != "URDF_MESH_FORMAT_UNSUPPORTED") continue;
+    skipped = true;
+    EXPECT_EQ(d.severity, Severity::kWarning);
+    EXPECT_NE(d.message.find("l_finger"), std::string::npos) << d.message;
+    EXPECT_EQ(d.pointer.rfind("/robot/link[@name='", 0), 0u) << d.pointer;
+  }
+  EXPECT_TRUE(skipped);
+}
+
+// Links without <inertial> get their mass from the generated primitives at the default density:
+// the box exactly, the cylinder's polygon and the sphere's polyhedron scaled to the true volume.
+TEST(UrdfImport, PrimitivesHaveTheClosedFormVolumesAndBoxInertia) {
+  TempDir dir;
+  testing::write_file(dir / "shapes.urdf", R"(<?xml version="1.0"?>
+<robot name="shapes">
+  <link name="box"><visual><geometry><box size="0.6 0.1 0.2"/></geometry></visual></link>
+  <link name="cylinder"><visual><geometry><cylinder radius="0.2" length="0.6"/></geometry></visual></link>
+  <link name="sphere"><visual><geometry><sphere radius="0.3"/></geometry></visual></link>
+  <joint name="j1" type="fixed"><parent link="box"/><child link="cylinder"/><origin xyz="1 0 0"/></joint>
+  <joint name="j2" type="fixed"><parent link="box"/><child link="sphere"/><origin xyz="0 1 0"/></joint>
+</robot>)");
+  Diagnostics diag;
+  const Conversion conversion = import_or_fail(dir / "shapes.urdf", diag);
+  const double pi = std::numbers::pi;
+  const std::map<std::string, double> volumes{
+      {"box", 0.6 * 0.1 * 0.2}, {"cylinder", pi * 0.2 * 0.2 * 0.6}, {"sphere", 4.0 / 3.0 * pi * 0.3 * 0.3 * 0.3}};
+  for (const Link& link : conversion.robot.links) {
+    SCOPED_TRACE(link.name);
+    EXPECT_EQ(link.inertial_source, InertialSource::kComputed);
+    // Generated vertices are stored as float32 in the glTF: 1e-6 relative.
+    EXPECT_NEAR(link.inertial.volume, volumes.at(link.name), 1e-6 * volumes.at(link.name));
+    EXPECT_NEAR(link.inertial.mass, 1000 * volumes.at(link.name), 1e-6 * 1000 * volumes.at(link.name));
+  }
+  // The box in URDF axes: I = m/12 diag(y^2 + z^2, x^2 + z^2, x^2 + y^2).
+  const Link& box = conversion.robot.links.at(0);
+  ASSERT_EQ(box.name, "box");
+  const Eigen::Matrix3d C = gltf_to_urdf_axes();
+  const double m = box.inertial.mass;
+  const Eigen::Vector3d expected = m / 12 * Eigen::Vector3d(0.01 + 0.04, 0.36 + 0.04, 0.36 + 0.01);
+  EXPECT_LE(relative_error(Eigen::Matrix3d(C * box.inertial.inertia * C.transpose()), Eigen::Matrix3d(expected.asDiagonal())),
+            1e-6);
+  expect_valid_gltf(conversion, dir / "shapes.glb");
+}
+
+TEST(UrdfImport, StlMeshesAreFoundByRelativeAbsoluteFileAndPackagePaths) {
+  TempDir dir;
+  fs::create_directories(dir / "my_pkg" / "meshes");
+  fs::create_directories(dir / "my_pkg" / "urdf");
+  TriangleMesh cube;
+  for (int i = 0; i < 8; ++i) cube.positions.emplace_back((i & 1) ? 0.1 : -0.1, (i & 2) ? 0.1 : -0.1, (i & 4) ? 0.1 : -0.1);
+  cube.triangles = {{0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6}, {0, 1, 5}, {0, 5, 4},
+                    {2, 6, 7}, {2, 7, 3}, {0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5}};
+  const auto stl = stl_bytes(cube, "cube");
+  testing::write_file(dir / "my_pkg" / "meshes" / "cube.stl", std::string(stl.begin(), stl.end()));
+  const std::string absolute = (dir / "my_pkg" / "meshes" / "cube.stl").string();
+  for (const std::string& filename : {std::string("../meshes/cube.stl"), absolute, "file://" + absolute,
+                                      std::string("package://my_pkg/meshes/cube.stl")}) {
+    SCOPED_TRACE(filename);
+    testing::write_file(dir / "my_pkg" / "urdf" / "robot.urdf",
+                        "<robot name=\"r\"><link name=\"cube\"><visual><geometry><mesh filename=\"" + filename +
+                            "\" scale=\"2 1 1\"/></geometry></visual></link></robot>");
+    Diagnostics diag;
+    const Conversion conversion = import_or_fail(dir / "my_pkg" / "urdf" / "robot.urdf", diag);
+    // 0.2 m cube, float32 corners, scaled 2x along one axis.
+    EXPECT_NEAR(conversion.robot.links.at(0).inertial.volume, 0.016, 1e-6 * 0.016);
+  }
+}
+
+// ---- Round trip: URDF -> RDTF -> URDF ----
+
+// Every joint kind URDF has but floating, rotated origins, an oblique axis, limits with effort
+// and velocity, dynamics, and an inertial turned by rpy with a full tensor.
+constexpr const char* kRichUrdf = R"(<?xml version="1.0"?>
+<robot name="rich">
+  <link name="base">
+    <visual><origin xyz="0 0 0.05" rpy="0.1 0 0"/><geometry><box size="0.4 0.3 0.1"/></geometry></visual>
+    <inertial><origin xyz="0.01 -0.02 0.03" rpy="0.3 -0.2 0.1"/><mass value="3.25"/>
+      <inertia ixx="0.031" ixy="0.0012" ixz="-0.0007" iyy="0.045" iyz="0.0009" izz="0.052"/></inertial>
+  </link>
+  <link name="shoulder">
+    <visual><geometry><cylinder radius="0.05" length="0.3"/></geometry></visual>
+    <inertial><origin xyz="0 0 0.15"/><mass value="1.1"/>
+      <inertia ixx="0.0089" ixy="0" ixz="0" iyy="0.0089" iyz="0" izz="0.0014"/></inertial>
+  </link>
+  <link name="slide">
+    <visual><geometry><sphere radius="0.04"/></geometry></visual>
+    <inertial><mass value="0.3"/><inertia ixx="0.0002" ixy="0" ixz="0" iyy="0.0002" iyz="0" izz="0.0002"/></inertial>
+  </link>
+  <link name="wheel">
+    <inertial><origin xyz="0 0.001 0" rpy="1.5707963267948966 0 0"/><mass value="0.7"/>
+      <inertia ixx="0.0011" ixy="0" ixz="0" iyy="0.0011" iyz="0" izz="0.002"/></inertial>
+  </link>
+  <link name="sensor">
+    <inertial><mass value="0.05"/><inertia ixx="1e-5" ixy="0" ixz="0" iyy="2e-5" iyz="0" izz="2.5e-5"/></inertial>
+  </link>
+  <link name="puck">
+    <inertial><mass value="0.2"/><inertia ixx="1e-4" ixy="0" ixz="0" iyy="1e-4" iyz="0" izz="1.5e-4"/></inertial>
+  </link>
+  <joint name="shoulder_joint" type="revolute">
+    <parent link="base"/><child link="shoulder"/>
+    <origin xyz="0.1 0.2 0.3" rpy="0.4 -0.5 0.6"/><axis xyz="0.6 0.8 0"/>
+    <limit lower="-1.25" upper="2.5" effort="40" velocity="3.5"/>
+    <dynamics damping="0.25" friction="0.125"/>
+  </joint>
+  <joint name="slide_joint" type="prismatic">
+    <parent link="shoulder"/><child link="slide"/>
+    <origin xyz="0 0 0.3" rpy="0 1.5707963267948966 0"/><axis xyz="0 0 1"/>
+    <limit lower="-0.05" upper="0.1" effort="100" velocity="0.2"/>
+    <dynamics damping="1.5" friction="0.5"/>
+  </joint>
+  <joint name="wheel_joint" type="continuous">
+    <parent link="base"/><child link="wheel"/>
+    <origin xyz="-0.2 0.15 0" rpy="0 0 3.0"/><axis xyz="0 1 0"/>
+    <dynamics damping="0.01"/>
+  </joint>
+  <joint name="sensor_mount" type="fixed">
+    <parent link="shoulder"/><child link="sensor"/><origin xyz="0.05 0 0.1" rpy="-1 0.5 2"/>
+  </joint>
+  <joint name="puck_joint" type="planar">
+    <parent link="base"/><child link="puck"/><origin xyz="0 -0.15 0.05"/><axis xyz="0 0 1"/>
+  </joint>
+</robot>
+)";
+
+// Worst relative difference between the original URDF and its round trip, over all tests.
+double& worst_round_trip() {
+  static double worst = 0;
+  return worst;
+}
+
+void expect_close(const std::string& what, double error, double tolerance) {
+  EXPECT_LE(error, tolerance) << what;
+  worst_round_trip() = std::max(worst_round_trip(), error);
+}
+
+Eigen::Matrix3d tensor_in_link_frame(const urdf::Inertial& in) {
+  const Eigen::Matrix3d R = rotation_of(in.origin.rotation);
+  return R * tensor_of(in) * R.transpose();
+}
+
+// Both URDFs say the same robot: tree, joint kinds, axes, limits, dynamics, origins, inertials.
+void expect_same_robot(const urdf::ModelInterface& a, const urdf::ModelInterface& b) {
+  EXPECT_EQ(b.getName(), a.getName());
+  EXPECT_EQ(b.getRoot()->name, a.getRoot()->name);
+  ASSERT_EQ(b.links_.size(), a.links_.size());
+  ASSERT_EQ(b.joints_.size(), a.joints_.size());
+  for (const auto& [name, theirs] : a.joints_) {
+    SCOPED_TRACE("joint " + name);
+    const auto ours = b.getJoint(name);
+    ASSERT_TRUE(ours);
+    EXPECT_EQ(ours->type, theirs->type);
+    EXPECT_EQ(ours->parent_link_name, theirs->parent_link_name);
+    EXPECT_EQ(ours->child_link_name, theirs->child_link_name);
+    const urdf::Pose& pa = theirs->parent_to_joint_origin_transform;
+    const urdf::Pose& pb = ours->parent_to_joint_origin_transform;
+    expect_close(name + " origin xyz", relative_error(vector_of(pb.position), vector_of(pa.position)), kRelative);
+    expect_close(name + " origin rotation", relative_error(rotation_of(pb.rotation), rotation_of(pa.rotation)), kRelative);
+    if (theirs->type != urdf::Joint::FIXED && theirs->type != urdf::Joint::FLOATING) {
+      const Eigen::Vector3d axis = vector_of(theirs->axis).normalized();
+      expect_close(name + " axis", relative_error(vector_of(ours->axis), axis), kRelative);
+    }
+    ASSERT_EQ(!ours->limits, !theirs->limits);
+    if (theirs->limits) {
+      EXPECT_EQ(ours->limits->lower, theirs->limits->lower);
+      EXPECT_EQ(ours->limits->upper, theirs->limits->upper);
+      EXPECT_EQ(ours->limits->effort, theirs->limits->effort);
+      EXPECT_EQ(ours->limits->velocity, theirs->limits->velocity);
+    }
+    if (theirs->dynamics) {
+      ASSERT_TRUE(ours->dynamics);
+      EXPECT_EQ(ours->dynamics->damping, theirs->dynamics->damping);
+      EXPECT_EQ(ours->dynamics->friction, theirs->dynamics->friction);
+    }
+  }
+  for (const auto& [name, theirs] : a.links_) {
+    SCOPED_TRACE("link " + name);
+    const auto ours = b.getLink(name);
+    ASSERT_TRUE(ours);
+    if (!theirs->inertial) continue;  // Computed from geometry on import.
+    ASSERT_TRUE(ours->inertial);
+    const urdf::Inertial& ia = *theirs->inertial;
+    const urdf::Inertial& ib = *ours->inertial;
+    expect_close(name + " mass", std::abs(ib.mass - ia.mass) / ia.mass, kRelative);
+    // The centre of mass relative to the link's size (a zero component has no scale of its own).
+    const double com_scale = std::max(vector_of(ia.origin.position).norm(), 1e-3);
+    expect_close(name + " com", (vector_of(ib.origin.position) - vector_of(ia.origin.position)).norm() / com_scale, kRelative);
+    expect_close(name + " inertia", relative_error(tensor_in_link_frame(ib), tensor_in_link_frame(ia)), kRelative);
+  }
+}
+
+void round_trip(const fs::path& urdf) {
+  Diagnostics diag;
+  const Conversion conversion = import_or_fail(urdf, diag);
+  TempDir dir;
+  expect_valid_gltf(conversion, dir / "robot.gltf");
+  const std::string text = export_to(conversion, dir / "again");
+  expect_check_urdf_passes(dir / "again" / "robot.urdf");
+  const auto original = parse_with_urdfdom(testing::read_file(urdf));
+  expect_same_robot(*original, *parse_with_urdfdom(text));
+  // And once more through the written glTF: the file keeps what the import made.
+  Diagnostics again_diag;
+  auto reread = convert_file(dir / "robot.gltf", ConvertOptions{}, again_diag);
+  ASSERT_TRUE(reread);
+  expect_same_robot(*original, *parse_with_urdfdom(export_to(*reread, dir / "third")));
+  std::printf("round trip %s: worst relative difference so far %.3g\n", urdf.filename().c_str(), worst_round_trip());
+}
+
+TEST(UrdfImport, RoundTripOfTheTutorialPhysicsRobot) { round_trip(tutorial("07-physics.urdf")); }
+
+TEST(UrdfImport, RoundTripOfEveryJointKindAndRotatedInertial) {
+  TempDir dir;
+  testing::write_file(dir / "rich.urdf", kRichUrdf);
+  round_trip(dir / "rich.urdf");
+}
+
+TEST(UrdfImport, ZUpOptionKeepsUrdfAxes) {
+  TempDir dir;
+  testing::write_file(dir / "rich.urdf", kRichUrdf);
+  UrdfImportOptions options;
+  options.z_up = true;
+  Diagnostics diag;
+  const Conversion conversion = import_or_fail(dir / "rich.urdf", diag, options);
+  const Joint& shoulder = conversion.robot.joints.at(0);
+  ASSERT_EQ(shoulder.name, "shoulder_joint");
+  EXPECT_EQ(shoulder.X_PJ.translation(), Eigen::Vector3d(0.1, 0.2, 0.3));
+  EXPECT_LE(relative_error(shoulder.axis, Eigen::Vector3d(0.6, 0.8, 0).normalized()), kRelative);
+  UrdfOptions keep;
+  keep.y_up = true;  // Export without turning either: the URDF's own numbers again.
+  TempDir out;
+  const auto original = parse_with_urdfdom(kRichUrdf);
+  expect_same_robot(*original, *parse_with_urdfdom(export_to(conversion, out.path(), keep)));
+}
+
+}  // namespace
+}  // namespace rdtf

@@ -3,7 +3,9 @@
 //
 // Each run returns what happened; `contract_violation` says what broke the project's rule for bad
 // input ("a clear error, never a crash"): a refusal without an error diagnostic, a diagnostic
-// without a code, or a converted model whose output no longer loads.
+// without a code, diagnostics or a robot summary that cannot be written as JSON (what
+// `rdtf validate --json`, `rdtf inspect --json` and the daemon print), or a converted model whose
+// output no longer loads.
 #pragma once
 
 #include <cstdint>
@@ -17,6 +19,7 @@
 #include "rdtf/convert.h"
 #include "rdtf/glb.h"
 #include "rdtf/gltf.h"
+#include "rdtf/summary.h"
 #include "rdtf/urdf.h"
 #include "rdtf/write.h"
 
@@ -25,7 +28,8 @@ namespace rdtf::fuzz {
 struct RunResult {
   bool succeeded = false;
   Diagnostics diag;
-  std::string output;  // The RDTF JSON text (or the GLB JSON chunk) when it succeeded.
+  std::string output;   // The RDTF JSON text (or the GLB JSON chunk) when it succeeded.
+  std::string summary;  // robot_summary as JSON text, for a converted robot.
 };
 
 inline std::vector<std::uint8_t> to_bytes(const std::string& text) {
@@ -43,7 +47,24 @@ inline std::string contract_violation(const RunResult& run) {
     if (d.code.empty()) return "a diagnostic without a code: " + format(d);
   }
   if (!run.succeeded && !run.diag.has_errors()) return "refused without an error diagnostic";
+  if (run.diag.contains("FUZZ_SUMMARY_NOT_JSON")) return "the robot summary cannot be written as JSON";
+  try {
+    diagnostics_json(run.diag).dump();
+  } catch (const Json::exception& error) {
+    return std::string("the diagnostics cannot be written as JSON: ") + error.what();
+  }
   return {};
+}
+
+// `rdtf inspect --json` and the plain table: what a reader of a converted robot gets.
+inline std::string summary_text(const Conversion& conversion, Diagnostics& diag) {
+  robot_table(conversion.robot, diag);
+  try {
+    return robot_summary(conversion.robot, conversion.asset.document, diag).dump();
+  } catch (const Json::exception& error) {
+    diag.error("FUZZ_SUMMARY_NOT_JSON", "", error.what());
+    return {};
+  }
 }
 
 // Load (confined to `folder`), convert, and write the RDTF JSON in memory: the pipeline of
@@ -58,6 +79,7 @@ inline RunResult convert_bytes(const std::vector<std::uint8_t>& bytes,
   auto conversion = convert(std::move(*asset), options, run.diag);
   if (!conversion) return run;
   run.output = document_text(conversion->asset.document);
+  run.summary = summary_text(*conversion, run.diag);
   run.succeeded = true;
   if (kept != nullptr) *kept = std::move(*conversion);
   return run;
@@ -147,6 +169,7 @@ inline RunResult import_urdf_bytes(const std::vector<std::uint8_t>& bytes,
   auto conversion = import_urdf(urdf, options, run.diag);
   if (!conversion) return run;
   run.output = document_text(conversion->asset.document);
+  run.summary = summary_text(*conversion, run.diag);
   run.succeeded = true;
   return run;
 }

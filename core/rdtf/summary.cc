@@ -2,6 +2,7 @@
 
 #include <cstdio>
 #include <sstream>
+#include <string_view>
 
 #include "rdtf/rdtf_extras.h"
 
@@ -16,6 +17,54 @@ std::string fixed(double value, int precision = 6) {
 
 std::string vector_text(const Eigen::Vector3d& v) {
   return "(" + fixed(v.x()) + ", " + fixed(v.y()) + ", " + fixed(v.z()) + ")";
+}
+
+// Length of the well-formed UTF-8 sequence at text[i] (RFC 3629: no overlong forms, no
+// surrogates, nothing past U+10FFFF), or 0 if there is none.
+std::size_t utf8_sequence_length(std::string_view text, std::size_t i) {
+  const auto byte = [&](std::size_t k) { return static_cast<unsigned char>(text[k]); };
+  const unsigned char lead = byte(i);
+  if (lead < 0x80) return 1;
+  std::size_t length = 0;
+  unsigned char low = 0x80;
+  unsigned char high = 0xBF;  // Range of the second byte.
+  if (lead >= 0xC2 && lead <= 0xDF) {
+    length = 2;
+  } else if (lead >= 0xE0 && lead <= 0xEF) {
+    length = 3;
+    if (lead == 0xE0) low = 0xA0;
+    if (lead == 0xED) high = 0x9F;
+  } else if (lead >= 0xF0 && lead <= 0xF4) {
+    length = 4;
+    if (lead == 0xF0) low = 0x90;
+    if (lead == 0xF4) high = 0x8F;
+  } else {
+    return 0;
+  }
+  if (text.size() - i < length) return 0;
+  if (byte(i + 1) < low || byte(i + 1) > high) return 0;
+  for (std::size_t k = 2; k < length; ++k) {
+    if (byte(i + k) < 0x80 || byte(i + k) > 0xBF) return 0;
+  }
+  return length;
+}
+
+// Text that JSON can carry: file names are bytes on Linux and a parse error quotes the input as
+// it is, so a byte that is not UTF-8 becomes U+FFFD instead of making the JSON writer throw.
+std::string json_safe(std::string_view text) {
+  std::string out;
+  out.reserve(text.size());
+  for (std::size_t i = 0; i < text.size();) {
+    const std::size_t length = utf8_sequence_length(text, i);
+    if (length == 0) {
+      out += "\xEF\xBF\xBD";
+      ++i;
+    } else {
+      out.append(text, i, length);
+      i += length;
+    }
+  }
+  return out;
 }
 
 Json pose_json(const Eigen::Isometry3d& X) {
@@ -41,8 +90,9 @@ RobotTotals robot_totals(const Robot& robot) {
 Json diagnostics_json(const Diagnostics& diag) {
   Json out = Json::array();
   for (const Diagnostic& d : diag.all()) {
-    Json item = {{"severity", to_string(d.severity)}, {"code", d.code}, {"file", d.file},
-                 {"pointer", d.pointer}, {"message", d.message}};
+    Json item = {{"severity", to_string(d.severity)}, {"code", json_safe(d.code)},
+                 {"file", json_safe(d.file)}, {"pointer", json_safe(d.pointer)},
+                 {"message", json_safe(d.message)}};
     if (d.byte_offset) item["byteOffset"] = *d.byte_offset;
     out.push_back(std::move(item));
   }
@@ -57,7 +107,7 @@ Json robot_summary(const Robot& robot, const Json& document, const Diagnostics& 
     for (const LinkMesh& mesh : link.meshes) {
       meshes.push_back({{"node", mesh.node}, {"volume", mesh.volume}, {"density", mesh.density}});
     }
-    links.push_back({{"name", link.name},
+    links.push_back({{"name", json_safe(link.name)},
                      {"node", link.node},
                      {"parentJoint", link.parent_joint},
                      {"pose", pose_json(link.X_SL)},
@@ -70,11 +120,11 @@ Json robot_summary(const Robot& robot, const Json& document, const Diagnostics& 
   }
   Json joints = Json::array();
   for (const Joint& joint : robot.joints) {
-    Json item = {{"name", joint.name},
+    Json item = {{"name", json_safe(joint.name)},
                  {"node", joint.node},
                  {"type", to_string(joint.kind)},
-                 {"parent", robot.links[joint.parent_link].name},
-                 {"child", robot.links[joint.child_link].name},
+                 {"parent", json_safe(robot.links[joint.parent_link].name)},
+                 {"child", json_safe(robot.links[joint.child_link].name)},
                  {"origin", pose_json(joint.X_PJ)},
                  {"axis", vector_to_json(joint.axis)},
                  {"damping", joint.damping},
@@ -87,7 +137,7 @@ Json robot_summary(const Robot& robot, const Json& document, const Diagnostics& 
     joints.push_back(std::move(item));
   }
   const RobotTotals totals = robot_totals(robot);
-  return {{"robot", robot.name},
+  return {{"robot", json_safe(robot.name)},
           {"frames", "inertial values are in each link's frame; poses in the scene frame (glTF: Y up, metres)"},
           {"links", links},
           {"joints", joints},

@@ -83,6 +83,56 @@ TEST(Pendulum, CompoundPendulumPeriodMatchesClosedForm) {
               -p.m * kG * p.d() * std::cos(theta0), 1e-3 * p.m * kG * p.d() * (1 - std::cos(theta0)));
 }
 
+// The same bar on a ball joint, its rest pose tilted by theta0 about Z (a ball joint has no position
+// to set): it swings in the XY plane with the hinge's period (same error budget as above).
+TEST(Pendulum, BallJointSwingsWithTheSamePeriod) {
+  const CompoundPendulum p;
+  const double theta0 = 0.01;
+  const double T = 2 * std::numbers::pi * std::sqrt(p.I_pivot() / (p.m * kG * p.d())) *
+                   (1 + theta0 * theta0 / 16 + 11 * std::pow(theta0, 4) / 3072);
+  RobotBuilder b;
+  const int root = b.root("frame", MassProperties{});
+  const Eigen::Isometry3d tilted(Eigen::AngleAxisd(theta0, Eigen::Vector3d::UnitZ()));
+  b.child(root, "socket", JointKind::kBall, tilted, Eigen::Vector3d::UnitX(), "bar",
+          box_inertial(p.m, {p.w, p.L, p.w}, {0, -p.d(), 0}));
+  auto sim = simulate(b.robot(), {});
+  // The bar's angle from the downward vertical, from its -Y axis in the scene.
+  const auto angle = [&] {
+    const Eigen::Vector3d down = sim->link_pose("bar")->X_SL.linear() * -Eigen::Vector3d::UnitY();
+    return std::atan2(down.x(), -down.y());
+  };
+  EXPECT_NEAR(angle(), theta0, 1e-15);
+  std::vector<double> crossings;
+  double t0 = 0, a0 = angle();
+  while (sim->time() < 6.5 * T) {
+    sim->step();
+    const double a1 = angle();
+    if (a0 < 0 && a1 >= 0) crossings.push_back(t0 + (sim->time() - t0) * (-a0) / (a1 - a0));
+    t0 = sim->time();
+    a0 = a1;
+    ASSERT_NEAR(sim->link_pose("bar")->X_SL.translation().z(), 0.0, 1e-12);  // stays in its plane
+  }
+  ASSERT_GE(crossings.size(), 6u);
+  const double measured = (crossings.back() - crossings.front()) / static_cast<double>(crossings.size() - 1);
+  std::printf("ball joint pendulum: relative period error %.3g\n", std::abs(measured - T) / T);
+  EXPECT_LT(std::abs(measured - T) / T, 1e-5);
+}
+
+// A box on a floating joint below a base held by the world falls freely (exactly as ODE's
+// semi-implicit Euler gives it, see below); the base does not move.
+TEST(DynamicsClosedForm, FloatingJointChildFallsFreely) {
+  RobotBuilder b;
+  const int base = b.root("base", box_inertial(5.0, {0.2, 0.2, 0.2}));
+  b.child(base, "free", JointKind::kFloating, translation(0, -0.5, 0), Eigen::Vector3d::UnitX(), "payload",
+          box_inertial(1.0, {0.1, 0.1, 0.1}));
+  auto sim = simulate(b.robot(), {});
+  const double h = 1e-3;
+  for (int n = 1; n <= 500; ++n) sim->step(h);
+  EXPECT_NEAR(sim->link_pose("payload")->X_SL.translation().y(), -0.5 - kG * h * h * 500 * 501 / 2, 1e-12);
+  EXPECT_LT(sim->link_pose("base")->X_SL.translation().norm(), 1e-9);  // held by the world
+  EXPECT_TRUE(sim->joint_states().empty());  // no one-degree-of-freedom joint
+}
+
 // A floating box (centre of mass 0.1 m off its link origin) falls from rest. ODE's semi-implicit
 // Euler gives exactly y_n = y0 - g h^2 n (n + 1) / 2 = y0 - g t^2 / 2 - g h t / 2 and a total energy
 // that falls by m g^2 h t / 2: both checked to rounding, and against the continuous y0 - g t^2 / 2.

@@ -1,9 +1,127 @@
+#include <cctype>
 #include <iostream>
+#include <string>
+#include <system_error>
 
 #include "commands.h"
 #include "rdtf/write.h"
 
 namespace rdtf::cli {
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr const char* kOutputInvalid = "OUTPUT_PATH_INVALID";
+
+std::string file_type_name(fs::file_type type) {
+  switch (type) {
+    case fs::file_type::directory: return "a folder";
+    case fs::file_type::fifo: return "a FIFO";
+    case fs::file_type::socket: return "a socket";
+    case fs::file_type::block:
+    case fs::file_type::character: return "a device";
+    default: return "not a regular file";
+  }
+}
+
+// `path` without a trailing '/' ("out/" -> "out"), so that parent_path() climbs.
+fs::path without_trailing_slash(fs::path path) {
+  while (!path.empty() && path.filename().empty() && path != path.root_path()) path = path.parent_path();
+  return path;
+}
+
+// The nearest existing folder above `path` (itself included) must be a folder for anything to be
+// created below it; a file there is an error naming it.
+bool can_be_created_in(const fs::path& folder, Diagnostics& diag) {
+  for (fs::path at = without_trailing_slash(folder); !at.empty(); at = at.parent_path()) {
+    std::error_code error;
+    const fs::file_status status = fs::status(at, error);
+    if (status.type() == fs::file_type::not_found) {
+      if (at == at.parent_path()) break;
+      continue;
+    }
+    // A folder, or one we may not look into: the write says so (an environment error) if it fails.
+    if (error || fs::is_directory(status)) return true;
+    const std::string type = fs::is_regular_file(status) ? "a file" : file_type_name(status.type());
+    diag.error(kOutputInvalid, "", at.string() + " is " + type + ", not a folder: nothing can be written below it");
+    return false;
+  }
+  return true;
+}
+
+// A file about to be written over must be a regular file (or nothing): renaming onto a folder
+// fails, and onto a device would replace the device.
+bool can_be_written_over(const fs::path& path, const char* what, Diagnostics& diag) {
+  std::error_code error;
+  const fs::file_status status = fs::status(path, error);
+  if (status.type() == fs::file_type::not_found || fs::is_regular_file(status) || error) return true;
+  diag.error(kOutputInvalid, "", std::string(what) + " " + path.string() + " is " + file_type_name(status.type()) +
+                                     ": a file cannot be written there");
+  return false;
+}
+
+// A relative URI as the writer resolves it below the output's folder (percent-decoded, "." and
+// ".." folded); nothing for a data: URI, a scheme, an absolute path or one climbing out, which
+// the loader refused already.
+std::optional<fs::path> relative_uri(const std::string& uri) {
+  if (uri.rfind("data:", 0) == 0 || uri.empty()) return std::nullopt;
+  const auto colon = uri.find(':');
+  if (colon != std::string::npos && colon < uri.find('/')) return std::nullopt;
+  std::string decoded;
+  for (std::size_t i = 0; i < uri.size(); ++i) {
+    if (uri[i] == '%' && i + 2 < uri.size() && std::isxdigit(static_cast<unsigned char>(uri[i + 1])) &&
+        std::isxdigit(static_cast<unsigned char>(uri[i + 2]))) {
+      decoded += static_cast<char>(std::stoi(uri.substr(i + 1, 2), nullptr, 16));
+      i += 2;
+    } else {
+      decoded += uri[i];
+    }
+  }
+  if (decoded.front() == '/') return std::nullopt;
+  fs::path relative;
+  int depth = 0;
+  for (std::size_t start = 0; start <= decoded.size();) {
+    const std::size_t end = std::min(decoded.find('/', start), decoded.size());
+    const std::string segment = decoded.substr(start, end - start);
+    if (segment == "..") {
+      if (depth-- == 0) return std::nullopt;
+      relative = relative.parent_path();
+    } else if (!segment.empty() && segment != ".") {
+      relative /= segment;
+      ++depth;
+    }
+    start = end + 1;
+  }
+  if (depth <= 0) return std::nullopt;
+  return relative;
+}
+
+// The files write_rdtf puts beside a .gltf without content-addressed names (rdtf/write.h): each
+// external buffer and image under its relative URI, a buffer without URI as <stem>.bin,
+// <stem>_1.bin, ...
+std::vector<fs::path> companion_files(const Json& document, const fs::path& target) {
+  std::vector<fs::path> files;
+  const fs::path folder = target.parent_path();
+  if (document.contains("buffers")) {
+    const Json& buffers = document["buffers"];
+    for (std::size_t i = 0; i < buffers.size(); ++i) {
+      if (!buffers[i].contains("uri")) {
+        files.push_back(folder / (target.stem().string() + (i == 0 ? "" : "_" + std::to_string(i)) + ".bin"));
+      } else if (const auto relative = relative_uri(buffers[i]["uri"].get<std::string>())) {
+        files.push_back(folder / *relative);
+      }
+    }
+  }
+  if (document.contains("images")) {
+    for (const Json& image : document["images"]) {
+      if (!image.contains("uri")) continue;
+      if (const auto relative = relative_uri(image["uri"].get<std::string>())) files.push_back(folder / *relative);
+    }
+  }
+  return files;
+}
+
+}  // namespace
 
 void add_conversion_options(CLI::App& command, ConvertOptions& options) {
   command.add_option("--density", options.default_density,
@@ -37,13 +155,109 @@ void report_failure(const std::string& input, const char* verb, const Diagnostic
             << (diag.error_count() == 1 ? "" : "s") << ")\n";
 }
 
-int write_conversion(const Conversion& conversion, const std::filesystem::path& target, bool glb,
+bool check_output_file(const fs::path& target, const std::string& example, Diagnostics& diag) {
+  const std::string name = target.filename().string();
+  if (target.empty()) {
+    diag.error(kOutputInvalid, "", "the output path is empty");
+    return false;
+  }
+  std::error_code error;
+  const fs::file_status status = fs::status(target, error);
+  if (name.empty() || name == "." || name == ".." || fs::is_directory(status)) {
+    const fs::path folder = without_trailing_slash(target);
+    diag.error(kOutputInvalid, "",
+               std::string(fs::is_directory(status) ? "is a folder" : "names a folder (it ends in '/')") +
+                   ", not a file: give the file to write, e.g. " + (folder / example).string());
+    return false;
+  }
+  return can_be_written_over(target, "the output", diag) && can_be_created_in(target.parent_path(), diag);
+}
+
+bool check_output_folder(const fs::path& dir, const std::vector<std::string>& files, Diagnostics& diag) {
+  std::error_code error;
+  const fs::file_status status = fs::status(dir, error);
+  if (fs::exists(status) && !fs::is_directory(status)) {
+    diag.error(kOutputInvalid, "",
+               "is " + (fs::is_regular_file(status) ? std::string("a file") : file_type_name(status.type())) +
+                   ", not a folder: give the folder to write into");
+    return false;
+  }
+  if (!can_be_created_in(dir, diag)) return false;
+  // The first problem only: a file named meshes would otherwise be reported once per mesh.
+  for (const std::string& file : files) {
+    if (!can_be_created_in((dir / file).parent_path(), diag) || !can_be_written_over(dir / file, "the output", diag)) {
+      return false;
+    }
+  }
+  return true;
+}
+
+void OutputFiles::will_write(const fs::path& path) {
+  std::error_code error;
+  if (!fs::exists(fs::symlink_status(path, error))) new_files_.push_back(path);
+}
+
+bool OutputFiles::make_folder(const fs::path& folder, Diagnostics& diag) {
+  const fs::path normal = without_trailing_slash(folder);
+  if (normal.empty()) return true;
+  std::vector<fs::path> missing;  // Deepest first.
+  for (fs::path at = normal; !at.empty(); at = at.parent_path()) {
+    std::error_code error;
+    if (fs::exists(fs::symlink_status(at, error)) || at == at.parent_path()) break;
+    missing.push_back(at);
+  }
+  std::error_code error;
+  fs::create_directories(normal, error);
+  new_folders_.insert(new_folders_.end(), missing.begin(), missing.end());
+  if (error) {
+    diag.error("WRITE_FAILED", "", "cannot create the folder " + normal.string() + ": " + error.message());
+    return false;
+  }
+  return true;
+}
+
+void OutputFiles::roll_back() {
+  std::error_code error;
+  for (const fs::path& file : new_files_) fs::remove(file, error);
+  // Only empty folders go (fs::remove leaves a folder that holds anything).
+  for (const fs::path& folder : new_folders_) fs::remove(folder, error);
+}
+
+int write_conversion(const Conversion& conversion, const fs::path& target, bool glb,
                      const Diagnostics& diag, bool verbose) {
   Diagnostics write_diag(target.string());
-  const bool written = write_rdtf(conversion.asset, target,
-                                  glb ? OutputFormat::kGlb : OutputFormat::kGltf, write_diag);
+  // Every file of the output checked before the first is written: a folder where the .bin goes
+  // would otherwise fail after the .bin beside it was written.
+  const std::vector<fs::path> companions =
+      glb ? std::vector<fs::path>{} : companion_files(conversion.asset.document, target);
+  bool usable = true;
+  for (const fs::path& file : companions) {
+    if (file.lexically_normal() == target.lexically_normal()) {
+      write_diag.error(kOutputInvalid, "",
+                       "the output would be written over by its own buffer or image " + file.filename().string() +
+                           ": name the output .gltf (or .glb)");
+      usable = false;
+    } else {
+      usable = can_be_created_in(file.parent_path(), write_diag) &&
+               can_be_written_over(file, "the buffer or image", write_diag) && usable;
+    }
+  }
   print_diagnostics(diag, verbose);
-  print_diagnostics(write_diag, verbose);
+  if (!usable) {
+    print_diagnostics(write_diag, true);
+    return kExitInvalidInput;
+  }
+  OutputFiles output;
+  bool written = output.make_folder(target.parent_path(), write_diag);
+  for (const fs::path& file : companions) {
+    written = written && output.make_folder(file.parent_path(), write_diag);
+    output.will_write(file);
+  }
+  output.will_write(target);
+  written = written && write_rdtf(conversion.asset, target, glb ? OutputFormat::kGlb : OutputFormat::kGltf, write_diag);
+  // No partial output: what this write created goes when any of it failed.
+  if (!written) output.roll_back();
+  print_diagnostics(write_diag, verbose || !written);
   if (!written) return kExitInternalError;
   std::cerr << "wrote " << target.string() << ": " << conversion.robot.links.size() << " links, "
             << conversion.robot.joints.size() << " joints\n";

@@ -18,13 +18,20 @@ std::filesystem::path default_output(const std::filesystem::path& input, bool gl
 }
 
 int run_convert(ConvertArguments& args) {
-  Diagnostics diag(args.input);
-  auto conversion = convert_or_report(args.input, args.options, diag);
-  if (!conversion) return kExitInvalidInput;
   bool glb = args.glb;
   if (!args.output.empty() && std::filesystem::path(args.output).extension() == ".glb") glb = true;
   const std::filesystem::path target = args.output.empty() ? default_output(args.input, glb)
                                                            : std::filesystem::path(args.output);
+  // The output first: a folder given as the output would fail only after the .bin was written.
+  Diagnostics output_diag(target.string());
+  if (!check_output_file(target, default_output(std::filesystem::path(args.input).filename(), glb).string(),
+                         output_diag)) {
+    report_failure(args.input, "converted", output_diag);
+    return kExitInvalidInput;
+  }
+  Diagnostics diag(args.input);
+  auto conversion = convert_or_report(args.input, args.options, diag);
+  if (!conversion) return kExitInvalidInput;
   return write_conversion(*conversion, target, glb, diag, args.verbose);
 }
 
@@ -36,7 +43,7 @@ void add_convert_command(CLI::App& app, int& exit_code) {
   command->add_option("input", args->input, "The glTF model")->required();
   command->add_option("-o,--output", args->output,
                       "Where to write (default: beside the input, NAME.rdtf.gltf or .glb); a "
-                      ".glb name implies --glb");
+                      ".glb name implies --glb; its folder is created when missing");
   command->add_flag("--glb", args->glb, "Write a binary .glb with every buffer and image embedded");
   command->add_flag("-v,--verbose", args->verbose, "Also print info diagnostics");
   add_conversion_options(*command, args->options);

@@ -13,14 +13,20 @@ struct ImportArguments {
 };
 
 int run_import(ImportArguments& args) {
+  const std::filesystem::path target(args.output);
+  const bool glb = args.glb || target.extension() == ".glb";
+  // The output first: a folder given as the output would fail only after the .bin was written.
+  Diagnostics output_diag(target.string());
+  if (!check_output_file(target, glb ? "robot.glb" : "robot.gltf", output_diag)) {
+    report_failure(args.input, "imported", output_diag);
+    return kExitInvalidInput;
+  }
   Diagnostics diag(args.input);
   auto conversion = import_urdf(args.input, args.options, diag);
   if (!conversion) {
     report_failure(args.input, "imported", diag);
     return kExitInvalidInput;
   }
-  const std::filesystem::path target(args.output);
-  const bool glb = args.glb || target.extension() == ".glb";
   return write_conversion(*conversion, target, glb, diag, args.verbose);
 }
 
@@ -31,7 +37,8 @@ void add_import_command(CLI::App& app, int& exit_code) {
   CLI::App* command = app.add_subcommand(
       "import", "Import a URDF as RDTF (glTF + extras.RDTF); STL, box, cylinder and sphere geometry");
   command->add_option("input", args->input, "The URDF file")->required();
-  command->add_option("-o,--output", args->output, "The .gltf or .glb to write")->required();
+  command->add_option("-o,--output", args->output, "The .gltf or .glb to write (its folder is created when missing)")
+      ->required();
   command->add_flag("--glb", args->glb, "Write a binary .glb (implied by a .glb name)");
   command->add_flag("--z-up", args->options.z_up,
                     "Keep URDF's Z-up axes (default: turn them to glTF's Y up, (x,y,z) -> (x,z,-y))");

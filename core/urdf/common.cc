@@ -4,6 +4,7 @@
 
 #include <console_bridge/console.h>
 
+#include "import_internal.h"
 #include "urdf_internal.h"
 
 namespace rdtf::urdf_internal {
@@ -77,18 +78,18 @@ class Capture : public console_bridge::OutputHandler {
  public:
   void log(const std::string& text, console_bridge::LogLevel level, const char*, int) override {
     if (level < console_bridge::CONSOLE_BRIDGE_LOG_WARN) return;
-    if (!messages.empty()) messages += "\n";
-    messages += text;
+    (level >= console_bridge::CONSOLE_BRIDGE_LOG_ERROR ? messages.errors : messages.warnings).push_back(text);
+    all.push_back(text);
   }
-  std::string messages;
+  ConsoleMessages messages;
+  std::vector<std::string> all;  // Warnings and errors in the order logged.
 };
 
-}  // namespace
-
-std::string with_console_captured(const std::function<void()>& body) {
+// Runs `body` with console_bridge's output going to `capture` (one lock for the whole process:
+// console_bridge's handler is global).
+void run_captured(const std::function<void()>& body, Capture& capture) {
   static std::mutex mutex;
   const std::lock_guard<std::mutex> lock(mutex);
-  Capture capture;
   const auto level = console_bridge::getLogLevel();
   console_bridge::setLogLevel(console_bridge::CONSOLE_BRIDGE_LOG_WARN);
   console_bridge::useOutputHandler(&capture);
@@ -101,7 +102,22 @@ std::string with_console_captured(const std::function<void()>& body) {
   }
   console_bridge::restorePreviousOutputHandler();
   console_bridge::setLogLevel(level);
-  return capture.messages;
+}
+
+}  // namespace
+
+std::string with_console_captured(const std::function<void()>& body) {
+  Capture capture;
+  run_captured(body, capture);
+  std::string text;
+  for (const std::string& message : capture.all) text += (text.empty() ? "" : "\n") + message;
+  return text;
+}
+
+ConsoleMessages capture_console(const std::function<void()>& body) {
+  Capture capture;
+  run_captured(body, capture);
+  return std::move(capture.messages);
 }
 
 }  // namespace rdtf::urdf_internal

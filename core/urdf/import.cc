@@ -1,10 +1,12 @@
 // URDF -> RDTF: a glTF whose every node is typed in extras.RDTF, then the ordinary conversion.
+#include <algorithm>
+#include <cctype>
 #include <cmath>
-#include <fstream>
 #include <map>
 
 #include <urdf_parser/urdf_parser.h>
 
+#include "../gltf/confined_files.h"
 #include "import_internal.h"
 #include "rdtf/glb.h"
 #include "rdtf/rdtf_extras.h"
@@ -17,23 +19,49 @@ namespace {
 using namespace urdf_internal;
 namespace fs = std::filesystem;
 
+// The bytes of a file, or an error saying why not in the user's terms: no such file, a folder,
+// not a regular file, over the size limit, or what the system says (permission denied). Read
+// without blocking on a FIFO put in its place meanwhile.
 std::optional<std::string> read_text(const fs::path& path, std::uint64_t max_bytes, Diagnostics& diag) {
-  std::error_code error;
-  if (!fs::is_regular_file(path, error)) {
-    diag.error("URDF_READ_FAILED", "", "cannot read " + path.string() + ": not a regular file");
+  auto refuse = [&](const std::string& why) {
+    diag.error("URDF_READ_FAILED", "", "cannot read " + path.string() + ": " + why);
     return std::nullopt;
+  };
+  std::error_code error;
+  const fs::file_status status = fs::status(path, error);
+  if (status.type() == fs::file_type::not_found) {
+    std::error_code link_error;
+    return refuse(fs::is_symlink(fs::symlink_status(path, link_error)) ? "no such file (a symbolic link to nothing)"
+                                                                      : "no such file");
   }
-  if (fs::file_size(path, error) > max_bytes) {
+  if (error) return refuse(error.message());  // E.g. a folder on the way that may not be entered.
+  switch (status.type()) {
+    case fs::file_type::regular:
+      break;
+    case fs::file_type::directory:
+      return refuse("it is a folder, not a file");
+    case fs::file_type::fifo:
+      return refuse("it is a FIFO, not a regular file");
+    case fs::file_type::socket:
+      return refuse("it is a socket, not a regular file");
+    case fs::file_type::block:
+    case fs::file_type::character:
+      return refuse("it is a device, not a regular file");
+    default:
+      return refuse("not a regular file");
+  }
+  if (const auto size = fs::file_size(path, error); !error && size > max_bytes) {
     diag.error("FILE_TOO_LARGE", "", path.string() + " is larger than " + std::to_string(max_bytes) + " bytes");
     return std::nullopt;
   }
-  std::ifstream in(path, std::ios::binary);
-  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (!in && !in.eof()) {
-    diag.error("URDF_READ_FAILED", "", "cannot read " + path.string());
-    return std::nullopt;
+  std::vector<std::uint8_t> bytes;
+  std::string why;
+  if (!internal::read_regular_file(path, max_bytes, bytes, why)) {
+    // strerror's "Permission denied" reads as the rest of the sentence.
+    if (!why.empty()) why[0] = static_cast<char>(std::tolower(static_cast<unsigned char>(why[0])));
+    return refuse(why);
   }
-  return text;
+  return std::string(bytes.begin(), bytes.end());
 }
 
 Eigen::Isometry3d to_isometry(const urdf::Pose& pose) {
@@ -107,22 +135,15 @@ class Builder {
     };
     scale = Eigen::Vector3d::Ones();
     switch (g.type) {
-      case urdf::Geometry::BOX: {
-        const auto& box = static_cast<const urdf::Box&>(g);
-        const Eigen::Vector3d size = to_eigen(box.dim);
-        if (!(size.minCoeff() > 0)) return skip("box size is not positive");
-        return box_mesh(size);
-      }
+      // Sizes were checked in the XML (scan_urdf_xml): finite and above 0.
+      case urdf::Geometry::BOX:
+        return box_mesh(to_eigen(static_cast<const urdf::Box&>(g).dim));
       case urdf::Geometry::CYLINDER: {
         const auto& cylinder = static_cast<const urdf::Cylinder&>(g);
-        if (!(cylinder.radius > 0 && cylinder.length > 0)) return skip("cylinder radius or length is not positive");
         return cylinder_mesh(cylinder.radius, cylinder.length);
       }
-      case urdf::Geometry::SPHERE: {
-        const auto& sphere = static_cast<const urdf::Sphere&>(g);
-        if (!(sphere.radius > 0)) return skip("sphere radius is not positive");
-        return sphere_mesh(sphere.radius);
-      }
+      case urdf::Geometry::SPHERE:
+        return sphere_mesh(static_cast<const urdf::Sphere&>(g).radius);
       case urdf::Geometry::MESH:
         break;
     }
@@ -227,25 +248,6 @@ class Builder {
     return out;
   }
 
-  // urdfdom reads any number as a mass: a negative (or not finite) one is an error here, naming
-  // the element, before it becomes a glTF the user never wrote.
-  bool valid_inertial(const urdf::Inertial& in, const XmlLink& xml) {
-    const std::string at = "line " + std::to_string(xml.inertial_row) + ": link '" + xml.name + "' ";
-    const std::string pointer = link_pointer(xml.name) + "/inertial";
-    if (!std::isfinite(in.mass) || in.mass < 0) {
-      diag.error("URDF_INVALID_INERTIAL", pointer,
-                 at + "has mass " + exact_number(in.mass) + " kg; a mass is zero or positive");
-      return false;
-    }
-    for (double value : {in.ixx, in.ixy, in.ixz, in.iyy, in.iyz, in.izz}) {
-      if (!std::isfinite(value)) {
-        diag.error("URDF_INVALID_INERTIAL", pointer, at + "has an inertia that is not a finite number");
-        return false;
-      }
-    }
-    return true;
-  }
-
   Json inertial_json(const urdf::Inertial& in) {
     Eigen::Matrix3d I;
     I << in.ixx, in.ixy, in.ixz, in.ixy, in.iyy, in.iyz, in.ixz, in.iyz, in.izz;
@@ -257,6 +259,54 @@ class Builder {
   }
 };
 
+// urdfdom's refusal, at the element its messages name ("... for joint [elbow]", "... for Link
+// [arm]", "material 'red' is not unique") with that element's line, else at <robot>; its
+// messages are included.
+void report_urdfdom_failure(const XmlRobot& xml, const ConsoleMessages& messages, Diagnostics& diag) {
+  std::map<std::string, int> link_rows, joint_rows;
+  for (const XmlLink& link : xml.links) link_rows[link.name] = link.row;
+  for (const XmlJoint& joint : xml.joints) joint_rows[joint.name] = joint.row;
+  struct Marker {
+    const char* text;  // Lower case, before the name.
+    char close;        // After the name.
+    const std::map<std::string, int>& rows;
+    std::string (*pointer)(const std::string&);
+  };
+  const Marker markers[] = {
+      {"joint [", ']', joint_rows, joint_pointer},
+      {"joint  [", ']', joint_rows, joint_pointer},
+      {"link [", ']', link_rows, link_pointer},
+      {"material '", '\'', xml.material_rows,
+       [](const std::string& name) { return "/robot/material[@name='" + name + "']"; }},
+  };
+  std::string pointer = "/robot";
+  int row = xml.row;
+  bool placed = false;
+  for (const std::string& message : messages.errors) {
+    std::string lower = message;
+    for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    for (const Marker& marker : markers) {
+      const auto found = lower.find(marker.text);
+      if (found == std::string::npos) continue;
+      const auto open = found + std::string(marker.text).size();
+      const auto close = message.find(marker.close, open);
+      if (close == std::string::npos) continue;
+      const std::string name = message.substr(open, close - open);
+      if (const auto known = marker.rows.find(name); known != marker.rows.end()) {
+        pointer = marker.pointer(name);
+        row = known->second;
+        placed = true;
+        break;
+      }
+    }
+    if (placed) break;
+  }
+  std::string said;
+  for (const std::string& message : messages.errors) said += (said.empty() ? "" : "; ") + message;
+  if (said.empty()) said = "it gives no reason";
+  diag.error("URDF_PARSE_FAILED", pointer, "line " + std::to_string(row) + ": urdfdom cannot read it: " + said);
+}
+
 }  // namespace
 
 std::optional<Conversion> import_urdf(const fs::path& urdf, const UrdfImportOptions& options,
@@ -267,9 +317,14 @@ std::optional<Conversion> import_urdf(const fs::path& urdf, const UrdfImportOpti
   const auto xml = scan_urdf_xml(*text, diag);
   if (!xml) return std::nullopt;
   urdf::ModelInterfaceSharedPtr model;
-  const std::string messages = with_console_captured([&] { model = urdf::parseURDF(*text); });
-  if (!model) {
-    diag.error("URDF_PARSE_FAILED", "/robot", "urdfdom cannot read it: " + messages);
+  const ConsoleMessages messages = capture_console([&] { model = urdf::parseURDF(*text); });
+  // urdfdom 3.0 keeps a link whose <inertial>, <visual> or <collision> it could not read (without
+  // it): that is a failure too. The scan above catches what we know of first.
+  const bool link_incomplete = std::any_of(messages.errors.begin(), messages.errors.end(), [](const std::string& m) {
+    return m.find("for Link [") != std::string::npos;
+  });
+  if (!model || link_incomplete) {
+    report_urdfdom_failure(*xml, messages, diag);
     return std::nullopt;
   }
 
@@ -303,9 +358,7 @@ std::optional<Conversion> import_urdf(const fs::path& urdf, const UrdfImportOpti
       joint_children.emplace_back(joint_node, joint.child);
     }
     for (auto it = joints.rbegin(); it != joints.rend(); ++it) stack.emplace_back(xml->joints[*it].child, &xml->joints[*it]);
-    if (link->inertial && !b.valid_inertial(*link->inertial, xml->links[xml_link.at(name)])) {
-      b.ok = false;
-    } else if (link->inertial) {
+    if (link->inertial) {  // Checked in the XML: a finite mass of 0 or more, a finite tensor.
       children.push_back(b.add_node(Json{{"name", name + "_inertial"}}, "inertial", b.inertial_json(*link->inertial)));
     } else {
       diag.info("URDF_NO_INERTIAL", link_pointer(name),

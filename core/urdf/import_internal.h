@@ -3,6 +3,8 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -20,7 +22,6 @@ struct XmlLink {
   int row = 0;
   std::vector<int> visual_rows;     // Line of each <visual>, in order.
   std::vector<int> collision_rows;  // Line of each <collision>, in order.
-  int inertial_row = 0;             // Line of its <inertial>, 0 when it has none.
 };
 
 struct XmlJoint {
@@ -30,14 +31,30 @@ struct XmlJoint {
 
 // The robot's structure in document order, checked: a <robot> root; named, unique links and
 // joints; known joint types; parents and children that exist; a tree (one parent per link, no
-// loops, one root).
+// loops, one root). And every attribute import uses, read from the XML as urdfdom reads it (urdfdom
+// 3.0 keeps a link whose <inertial> or geometry it cannot read, with a zero mass or without the
+// geometry): present where urdfdom requires it; numbers that are finite and in range (sizes and
+// radii above 0, mass, effort, velocity, damping and friction 0 or more, no zero axis or scale,
+// colours in 0..1, lower not above upper). Each problem is an error at the attribute
+// ("/robot/link[@name='a']/inertial/mass/@value") with the element's line: URDF_INVALID_NUMBER,
+// URDF_INVALID_INERTIAL inside <inertial>, URDF_INVALID for a missing element or attribute.
 struct XmlRobot {
   std::vector<XmlLink> links;
   std::vector<XmlJoint> joints;
-  std::size_t root = 0;  // Index into links.
+  std::size_t root = 0;                      // Index into links.
+  int row = 0;                               // Line of <robot>.
+  std::map<std::string, int> material_rows;  // Line of the last top-level <material> of each name.
 };
 
 std::optional<XmlRobot> scan_urdf_xml(const std::string& text, Diagnostics& diag);
+
+// urdfdom's console messages while `body` runs, errors apart from warnings (the same lock as
+// with_console_captured: console_bridge's handler is global).
+struct ConsoleMessages {
+  std::vector<std::string> errors;
+  std::vector<std::string> warnings;
+};
+ConsoleMessages capture_console(const std::function<void()>& body);
 
 // "/robot/link[@name='base']", the place an import diagnostic points at.
 std::string link_pointer(const std::string& name);

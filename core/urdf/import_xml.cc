@@ -1,12 +1,20 @@
-// The structural pre-check of a URDF, so that bad input gets an error naming the element and
-// its line (urdfdom only logs a sentence, and accepts some broken trees: a link with two parents,
-// a loop beside a proper tree).
+// The pre-check of a URDF, so that bad input gets an error naming the element, the attribute and
+// its line. urdfdom only logs a sentence, accepts some broken trees (a link with two parents, a
+// loop beside a proper tree), and (3.0) keeps a link whose <inertial>, <visual> or <collision> it
+// could not read, with a zero mass or without that geometry. So every attribute import depends on
+// is read here, as urdfdom reads it, and checked: present where urdfdom requires it, numbers where
+// numbers are due, finite, and in the range that means something.
+#include <cctype>
+#include <charconv>
+#include <cmath>
 #include <map>
 #include <set>
+#include <string_view>
 
 #include <tinyxml.h>
 
 #include "import_internal.h"
+#include "urdf_internal.h"
 
 namespace rdtf::urdf_internal {
 namespace {
@@ -28,6 +36,323 @@ std::string attribute(const TiXmlElement* e, const char* name) {
 std::string link_reference(const TiXmlElement* joint, const char* which) {
   const TiXmlElement* e = joint->FirstChildElement(which);
   return e != nullptr ? attribute(e, "link") : "";
+}
+
+// An attribute's text in a message: control characters escaped, and cut short when long.
+std::string shown(std::string_view text) {
+  constexpr std::size_t kLongest = 80;
+  std::string out;
+  for (std::size_t i = 0; i < text.size() && i < kLongest; ++i) {
+    const auto c = static_cast<unsigned char>(text[i]);
+    if (c == '\t') {
+      out += "\\t";
+    } else if (c == '\n') {
+      out += "\\n";
+    } else if (c < 0x20 || c == 0x7f) {
+      static const char* const kHex = "0123456789abcdef";
+      out += std::string("\\x") + kHex[c >> 4] + kHex[c & 15];
+    } else {
+      out += static_cast<char>(c);
+    }
+  }
+  if (text.size() > kLongest) out += "...";
+  return out;
+}
+
+// Whether a decimal number that is beyond double's range is tiny (an underflow) rather than huge:
+// its order of magnitude (digits before the point, or minus the zeros after it, plus the exponent)
+// is not above 0.
+bool underflows(std::string_view text) {
+  std::size_t i = (!text.empty() && (text[0] == '-' || text[0] == '+')) ? 1 : 0;
+  long long order = 0;
+  bool nonzero = false, after_point = false;
+  for (; i < text.size() && text[i] != 'e' && text[i] != 'E'; ++i) {
+    if (text[i] == '.') {
+      after_point = true;
+    } else if (nonzero) {
+      if (!after_point) ++order;  // A further digit before the point.
+    } else if (text[i] != '0') {
+      nonzero = true;
+      if (!after_point) ++order;  // The first significant digit, before the point.
+    } else if (after_point) {
+      --order;  // A zero between the point and the first significant digit.
+    }
+  }
+  long long exponent = 0;
+  bool negative = false;
+  if (i < text.size()) ++i;
+  if (i < text.size() && (text[i] == '-' || text[i] == '+')) negative = text[i++] == '-';
+  for (; i < text.size(); ++i) exponent = std::min<long long>(exponent * 10 + (text[i] - '0'), 1'000'000'000);
+  return order + (negative ? -exponent : exponent) <= 0;
+}
+
+enum class NumberError { kNone, kNotANumber, kNotFinite, kBeyondDouble };
+
+// One number as urdfdom reads it (C locale, an optional sign, digits, a fraction, an exponent).
+// Like urdfdom, a number too small for a double reads as 0; too large is an error.
+NumberError parse_number(std::string_view text, double& value) {
+  if (!text.empty() && text[0] == '+') {
+    text.remove_prefix(1);
+    if (!text.empty() && (text[0] == '+' || text[0] == '-')) return NumberError::kNotANumber;
+  }
+  const char* end = text.data() + text.size();
+  const auto [stop, error] = std::from_chars(text.data(), end, value);
+  if (error == std::errc::invalid_argument || stop != end || text.empty()) return NumberError::kNotANumber;
+  if (error == std::errc::result_out_of_range) {
+    if (!underflows(text)) return NumberError::kBeyondDouble;
+    value = 0;
+  }
+  return std::isfinite(value) ? NumberError::kNone : NumberError::kNotFinite;
+}
+
+enum class Range { kAny, kNonNegative, kPositive, kUnit, kNonZero };
+
+// What an attribute holds: how many numbers, their range, and what one is ("a mass") for messages.
+struct Rule {
+  std::size_t count;
+  Range range;
+  const char* what;
+};
+
+constexpr const char* kInvalidNumber = "URDF_INVALID_NUMBER";
+constexpr const char* kInvalidInertial = "URDF_INVALID_INERTIAL";
+
+// Reads and checks attributes, reporting each problem (every one, not only the first) with the
+// attribute's pointer ("/robot/joint[@name='elbow']/limit/@effort") and the element's line.
+class Checker {
+ public:
+  explicit Checker(Diagnostics& diag) : diag_(diag) {}
+  bool ok() const { return ok_; }
+
+  void error(const char* code, const std::string& pointer, int row, const std::string& message) {
+    diag_.error(code, pointer, line(row) + message);
+    ok_ = false;
+  }
+
+  // The `rule.count` numbers of attribute `name` of `e` (several are separated by spaces, as
+  // urdfdom splits them), each finite and in range; nothing (and an error under `code`) when they
+  // are not, or when the attribute is missing and `required` (URDF_INVALID, or
+  // URDF_INVALID_INERTIAL inside an <inertial>).
+  std::optional<std::vector<double>> numbers(const TiXmlElement* e, const std::string& pointer, const char* name,
+                                             const Rule& rule, bool required, const char* code = kInvalidNumber) {
+    const char* value = e->Attribute(name);
+    const std::string element = "<" + std::string(e->Value());
+    if (value == nullptr) {
+      if (required) {
+        error(code == kInvalidInertial ? kInvalidInertial : "URDF_INVALID", pointer, e->Row(),
+              element + "> has no " + name + " attribute, which URDF requires");
+      }
+      return std::nullopt;
+    }
+    const std::string at = pointer + "/@" + name;
+    const std::string said = element + " " + name + "=\"" + shown(value) + "\">: ";
+    std::vector<std::string_view> pieces;
+    std::string_view text(value);
+    if (rule.count == 1) {
+      // urdfdom skips leading white space before a single number, not trailing.
+      while (!text.empty() && std::isspace(static_cast<unsigned char>(text.front()))) text.remove_prefix(1);
+      pieces.push_back(text);
+    } else {
+      for (std::size_t start = 0; start <= text.size();) {
+        const std::size_t space = std::min(text.find(' ', start), text.size());
+        if (space > start) pieces.push_back(text.substr(start, space - start));
+        start = space + 1;
+      }
+    }
+    if (pieces.size() != rule.count) {
+      error(code, at, e->Row(),
+            said + std::to_string(rule.count) + " numbers separated by spaces expected, " +
+                std::to_string(pieces.size()) + " found");
+      return std::nullopt;
+    }
+    std::vector<double> out;
+    for (const std::string_view piece : pieces) {
+      const std::string quoted = "'" + shown(piece) + "'";
+      double number = 0;
+      switch (parse_number(piece, number)) {
+        case NumberError::kNotANumber:
+          error(code, at, e->Row(), said + quoted + " is not a number");
+          return std::nullopt;
+        case NumberError::kNotFinite:
+          error(code, at, e->Row(), said + quoted + " is not a finite number");
+          return std::nullopt;
+        case NumberError::kBeyondDouble:
+          error(code, at, e->Row(), said + quoted + " is beyond the range of a double");
+          return std::nullopt;
+        case NumberError::kNone:
+          break;
+      }
+      std::string why;
+      switch (rule.range) {
+        case Range::kAny:
+          break;
+        case Range::kNonNegative:
+          if (number < 0) why = " is negative: " + std::string(rule.what) + " is 0 or more";
+          break;
+        case Range::kPositive:
+          if (!(number > 0)) why = " is not positive: " + std::string(rule.what) + " is greater than 0";
+          break;
+        case Range::kUnit:
+          if (number < 0 || number > 1) why = " is outside 0..1: " + std::string(rule.what) + " is between 0 and 1";
+          break;
+        case Range::kNonZero:
+          if (number == 0) why = " is zero: " + std::string(rule.what) + " of 0 flattens the shape";
+          break;
+      }
+      if (!why.empty()) {
+        error(code, at, e->Row(), said + quoted + why);
+        return std::nullopt;
+      }
+      out.push_back(number);
+    }
+    return out;
+  }
+
+ private:
+  Diagnostics& diag_;
+  bool ok_ = true;
+};
+
+const Rule kPosition{3, Range::kAny, "a position"};
+const Rule kAngles{3, Range::kAny, "an angle"};
+const Rule kAnyNumber{1, Range::kAny, "a number"};
+
+void check_origin(Checker& c, const TiXmlElement* parent, const std::string& pointer, const char* code) {
+  if (const TiXmlElement* origin = parent->FirstChildElement("origin")) {
+    c.numbers(origin, pointer + "/origin", "xyz", kPosition, false, code);
+    c.numbers(origin, pointer + "/origin", "rpy", kAngles, false, code);
+  }
+}
+
+// <inertial>: what urdfdom needs (a <mass value>, an <inertia> with all six terms) and import
+// uses; urdfdom 3.0 would otherwise keep the link with a zero mass and tensor.
+void check_inertial(Checker& c, const TiXmlElement* inertial, const std::string& pointer) {
+  check_origin(c, inertial, pointer, kInvalidInertial);
+  if (const TiXmlElement* mass = inertial->FirstChildElement("mass")) {
+    c.numbers(mass, pointer + "/mass", "value", {1, Range::kNonNegative, "a mass"}, true, kInvalidInertial);
+  } else {
+    c.error(kInvalidInertial, pointer, inertial->Row(), "<inertial> has no <mass value=\"...\"/>");
+  }
+  if (const TiXmlElement* inertia = inertial->FirstChildElement("inertia")) {
+    for (const char* term : {"ixx", "ixy", "ixz", "iyy", "iyz", "izz"}) {
+      c.numbers(inertia, pointer + "/inertia", term, {1, Range::kAny, "an inertia term"}, true, kInvalidInertial);
+    }
+  } else {
+    c.error(kInvalidInertial, pointer, inertial->Row(),
+            "<inertial> has no <inertia ixx=... ixy=... ixz=... iyy=... iyz=... izz=.../>");
+  }
+}
+
+// A <visual> or <collision>: its origin, its one shape and the shape's sizes (a generated solid
+// needs sizes above 0; a mesh scale of 0 would flatten it); a visual's material colour.
+void check_geometry(Checker& c, const TiXmlElement* holder, const std::string& pointer) {
+  check_origin(c, holder, pointer, kInvalidNumber);
+  const std::string holder_name = holder->Value();
+  const TiXmlElement* geometry = holder->FirstChildElement("geometry");
+  if (geometry == nullptr) {
+    c.error("URDF_INVALID", pointer, holder->Row(), "<" + holder_name + "> has no <geometry>");
+    return;
+  }
+  const TiXmlElement* shape = geometry->FirstChildElement();
+  if (shape == nullptr) {
+    c.error("URDF_INVALID", pointer + "/geometry", geometry->Row(),
+            "<geometry> holds no shape: give it a <box>, <cylinder>, <sphere> or <mesh>");
+    return;
+  }
+  const std::string kind = shape->Value();
+  const std::string at = pointer + "/geometry/" + kind;
+  if (kind == "box") {
+    c.numbers(shape, at, "size", {3, Range::kPositive, "a box size"}, true);
+  } else if (kind == "cylinder") {
+    c.numbers(shape, at, "radius", {1, Range::kPositive, "a cylinder radius"}, true);
+    c.numbers(shape, at, "length", {1, Range::kPositive, "a cylinder length"}, true);
+  } else if (kind == "sphere") {
+    c.numbers(shape, at, "radius", {1, Range::kPositive, "a sphere radius"}, true);
+  } else if (kind == "mesh") {
+    if (shape->Attribute("filename") == nullptr) {
+      c.error("URDF_INVALID", at, shape->Row(), "<mesh> has no filename attribute");
+    }
+    c.numbers(shape, at, "scale", {3, Range::kNonZero, "a mesh scale"}, false);
+  } else {
+    c.error("URDF_INVALID", at, shape->Row(),
+            "<" + shown(kind) + "> is no URDF shape: the shapes are <box>, <cylinder>, <sphere> and <mesh>");
+  }
+  if (holder_name != "visual") return;
+  if (const TiXmlElement* material = holder->FirstChildElement("material")) {
+    if (material->Attribute("name") == nullptr) {
+      c.error("URDF_INVALID", pointer + "/material", material->Row(), "<material> in a <visual> has no name attribute");
+    }
+    if (const TiXmlElement* color = material->FirstChildElement("color")) {
+      c.numbers(color, pointer + "/material/color", "rgba", {4, Range::kUnit, "a colour component"}, false);
+    }
+  }
+}
+
+// A joint's numbers as import uses them, and the elements urdfdom requires (a <limit> with effort
+// and velocity on revolute and prismatic joints; without it urdfdom refuses the whole file).
+void check_joint(Checker& c, const TiXmlElement* e, const XmlJoint& joint, const std::string& pointer) {
+  check_origin(c, e, pointer, kInvalidNumber);
+  // urdfdom reads <axis> of these kinds only (fixed and floating joints have none).
+  const bool has_axis = joint.type == "revolute" || joint.type == "continuous" || joint.type == "prismatic" ||
+                        joint.type == "planar";
+  if (const TiXmlElement* axis = e->FirstChildElement("axis"); axis != nullptr && has_axis) {
+    if (axis->Attribute("xyz") == nullptr) {
+      c.error("URDF_INVALID", pointer + "/axis", axis->Row(),
+              "<axis> has no xyz attribute (urdfdom then takes the zero vector, which is no direction)");
+    } else if (const auto xyz = c.numbers(axis, pointer + "/axis", "xyz", {3, Range::kAny, "an axis"}, true)) {
+      if ((*xyz)[0] == 0 && (*xyz)[1] == 0 && (*xyz)[2] == 0) {
+        c.error(kInvalidNumber, pointer + "/axis/@xyz", axis->Row(),
+                "<axis xyz=\"" + shown(axis->Attribute("xyz")) +
+                    "\">: the zero vector is no direction; give the axis the joint turns about or slides along");
+      }
+    }
+  }
+  if (const TiXmlElement* limit = e->FirstChildElement("limit")) {
+    const std::string at = pointer + "/limit";
+    const auto lower = c.numbers(limit, at, "lower", {1, Range::kAny, "a limit"}, false);
+    const auto upper = c.numbers(limit, at, "upper", {1, Range::kAny, "a limit"}, false);
+    c.numbers(limit, at, "effort", {1, Range::kNonNegative, "an effort limit"}, true);
+    c.numbers(limit, at, "velocity", {1, Range::kNonNegative, "a velocity limit"}, true);
+    // A missing bound is 0 (urdfdom's default); one that is not a number is reported above.
+    const bool lower_read = lower || limit->Attribute("lower") == nullptr;
+    const bool upper_read = upper || limit->Attribute("upper") == nullptr;
+    const double low = lower ? (*lower)[0] : 0, high = upper ? (*upper)[0] : 0;
+    if (lower_read && upper_read && low > high) {
+      c.error(kInvalidNumber, at, limit->Row(),
+              "<limit>: lower " + exact_number(low) + " is above upper " + exact_number(high));
+    }
+  } else if (joint.type == "revolute" || joint.type == "prismatic") {
+    c.error("URDF_INVALID", pointer, e->Row(),
+            "joint '" + joint.name + "' is " + joint.type +
+                " and has no <limit lower upper effort velocity/>, which URDF requires for that kind");
+  }
+  if (const TiXmlElement* dynamics = e->FirstChildElement("dynamics")) {
+    const std::string at = pointer + "/dynamics";
+    if (dynamics->Attribute("damping") == nullptr && dynamics->Attribute("friction") == nullptr) {
+      c.error("URDF_INVALID", at, dynamics->Row(), "<dynamics> has neither damping nor friction");
+    }
+    c.numbers(dynamics, at, "damping", {1, Range::kNonNegative, "damping"}, false);
+    c.numbers(dynamics, at, "friction", {1, Range::kNonNegative, "friction"}, false);
+  }
+  // Not imported, but urdfdom refuses the whole file when they are not numbers.
+  if (const TiXmlElement* safety = e->FirstChildElement("safety_controller")) {
+    const std::string at = pointer + "/safety_controller";
+    for (const char* name : {"soft_lower_limit", "soft_upper_limit", "k_position"}) {
+      c.numbers(safety, at, name, kAnyNumber, false);
+    }
+    c.numbers(safety, at, "k_velocity", kAnyNumber, true);
+  }
+  if (const TiXmlElement* calibration = e->FirstChildElement("calibration")) {
+    for (const char* name : {"rising", "falling"}) {
+      c.numbers(calibration, pointer + "/calibration", name, kAnyNumber, false);
+    }
+  }
+  if (const TiXmlElement* mimic = e->FirstChildElement("mimic")) {
+    if (mimic->Attribute("joint") == nullptr) {
+      c.error("URDF_INVALID", pointer + "/mimic", mimic->Row(), "<mimic> has no joint attribute");
+    }
+    for (const char* name : {"multiplier", "offset"}) c.numbers(mimic, pointer + "/mimic", name, kAnyNumber, false);
+  }
 }
 
 bool check_tree(XmlRobot& robot, Diagnostics& diag) {
@@ -123,10 +448,20 @@ std::optional<XmlRobot> scan_urdf_xml(const std::string& text, Diagnostics& diag
     return std::nullopt;
   }
   XmlRobot robot;
+  robot.row = robot_element->Row();
   bool ok = true;
+  Checker checker(diag);
   std::set<std::string> link_names, joint_names;
+  for (const TiXmlElement* m = robot_element->FirstChildElement("material"); m; m = m->NextSiblingElement("material")) {
+    const char* name = m->Attribute("name");
+    const std::string pointer = name != nullptr ? "/robot/material[@name='" + std::string(name) + "']" : "/robot/material";
+    if (name != nullptr) robot.material_rows[name] = m->Row();
+    if (const TiXmlElement* color = m->FirstChildElement("color")) {
+      checker.numbers(color, pointer + "/color", "rgba", {4, Range::kUnit, "a colour component"}, false);
+    }
+  }
   for (const TiXmlElement* e = robot_element->FirstChildElement("link"); e; e = e->NextSiblingElement("link")) {
-    XmlLink link{attribute(e, "name"), e->Row(), {}, {}, 0};
+    XmlLink link{attribute(e, "name"), e->Row(), {}, {}};
     if (link.name.empty()) {
       diag.error("URDF_INVALID", "/robot/link", line(e->Row()) + "a <link> has no name");
       ok = false;
@@ -138,13 +473,19 @@ std::optional<XmlRobot> scan_urdf_xml(const std::string& text, Diagnostics& diag
       ok = false;
       continue;
     }
+    const std::string pointer = link_pointer(link.name);
     for (const TiXmlElement* v = e->FirstChildElement("visual"); v; v = v->NextSiblingElement("visual")) {
       link.visual_rows.push_back(v->Row());
+      check_geometry(checker, v, pointer + "/visual[" + std::to_string(link.visual_rows.size()) + "]");
     }
     for (const TiXmlElement* c = e->FirstChildElement("collision"); c; c = c->NextSiblingElement("collision")) {
       link.collision_rows.push_back(c->Row());
+      check_geometry(checker, c, pointer + "/collision[" + std::to_string(link.collision_rows.size()) + "]");
     }
-    if (const TiXmlElement* inertial = e->FirstChildElement("inertial")) link.inertial_row = inertial->Row();
+    // urdfdom reads the first <inertial> only.
+    if (const TiXmlElement* inertial = e->FirstChildElement("inertial")) {
+      check_inertial(checker, inertial, pointer + "/inertial");
+    }
     robot.links.push_back(std::move(link));
   }
   for (const TiXmlElement* e = robot_element->FirstChildElement("joint"); e; e = e->NextSiblingElement("joint")) {
@@ -166,6 +507,8 @@ std::optional<XmlRobot> scan_urdf_xml(const std::string& text, Diagnostics& diag
                  line(e->Row()) + "joint '" + joint.name + "' has type '" + joint.type +
                      "'; URDF's types are fixed, revolute, continuous, prismatic, floating and planar");
       ok = false;
+    } else {
+      check_joint(checker, e, joint, pointer);
     }
     for (const auto& [which, link] : {std::pair<const char*, const std::string&>{"parent", joint.parent},
                                       std::pair<const char*, const std::string&>{"child", joint.child}}) {
@@ -191,7 +534,7 @@ std::optional<XmlRobot> scan_urdf_xml(const std::string& text, Diagnostics& diag
     diag.error("URDF_INVALID", "/robot", "the robot has no <link>");
     return std::nullopt;
   }
-  if (!ok || !check_tree(robot, diag)) return std::nullopt;
+  if (!ok || !check_tree(robot, diag) || !checker.ok()) return std::nullopt;
   return robot;
 }
 

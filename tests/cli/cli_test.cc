@@ -1,6 +1,8 @@
 // The rdtf command line as users and scripts run it.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include <nlohmann/json.hpp>
 
 #include "support/test_support.h"
@@ -86,6 +88,70 @@ TEST(Cli, MissingInputFileExits2) {
   const auto run = testing::run_command(cli() + " inspect /nonexistent/model.gltf");
   EXPECT_EQ(run.exit_code, 2);
   EXPECT_NE(run.err.find("/nonexistent/model.gltf"), std::string::npos) << run.err;
+}
+
+// Every path below `dir`, relative, sorted: what a command left behind.
+std::vector<std::string> contents(const std::filesystem::path& dir) {
+  std::vector<std::string> found;
+  for (const auto& entry : std::filesystem::recursive_directory_iterator(dir)) {
+    found.push_back(std::filesystem::relative(entry.path(), dir).string());
+  }
+  std::sort(found.begin(), found.end());
+  return found;
+}
+
+// Outputs that cannot be written are refused before anything is: a folder (its .bin used to be
+// written as '.bin' before the JSON failed, exit 1), a path below a file, a .bin that is a folder,
+// an output its own buffer would overwrite.
+TEST(Cli, ConvertOntoUnwritablePlacesIsExitTwoAndWritesNothing) {
+  testing::TempDir folder;
+  std::filesystem::create_directories(folder / "out");
+  std::filesystem::create_directories(folder / "binfolder/arm3.bin");
+  testing::write_file(folder / "afile", "");
+  const std::vector<std::string> before = contents(folder.path());
+  const std::string out = (folder / "out").string();
+  const std::pair<std::string, std::string> cases[] = {
+      {out + "/", "is a folder, not a file: give the file to write, e.g. " + out + "/arm3.rdtf.gltf"},
+      {(folder / "new/").string(), "names a folder (it ends in '/'), not a file: give the file to write, e.g. " +
+                                       (folder / "new/arm3.rdtf.gltf").string()},
+      {out, "is a folder, not a file: give the file to write, e.g. " + out + "/arm3.rdtf.gltf"},
+      {(folder / "afile/x.gltf").string(), (folder / "afile").string() + " is a file, not a folder"},
+      // arm3.gltf's buffer is arm3.bin: it goes beside the output.
+      {(folder / "binfolder/x.gltf").string(),
+       "the buffer or image " + (folder / "binfolder/arm3.bin").string() + " is a folder"},
+      {(folder / "arm3.bin").string(), "the output would be written over by its own buffer or image arm3.bin"},
+  };
+  for (const auto& [output, says] : cases) {
+    const auto run = testing::run_command(cli() + " convert " + fixture("arm3.gltf") + " -o '" + output + "'");
+    EXPECT_EQ(run.exit_code, 2) << output << "\n" << run.err;
+    EXPECT_NE(run.err.find(output + ": error OUTPUT_PATH_INVALID: " + says), std::string::npos) << run.err;
+    EXPECT_EQ(contents(folder.path()), before) << output;
+  }
+}
+
+// Folders that do not exist yet are made, for .gltf and .glb alike (a .glb there failed).
+TEST(Cli, ConvertCreatesTheOutputFolder) {
+  testing::TempDir folder;
+  for (const char* output : {"new/dir/x.glb", "other/dir/x.gltf"}) {
+    const auto run = testing::run_command(cli() + " convert " + fixture("arm3.gltf") + " -o '" +
+                                          (folder / output).string() + "'");
+    EXPECT_EQ(run.exit_code, 0) << output << "\n" << run.err;
+    EXPECT_TRUE(std::filesystem::is_regular_file(folder / output)) << output;
+  }
+  EXPECT_TRUE(std::filesystem::is_regular_file(folder / "other/dir/arm3.bin"));
+}
+
+// A write that fails takes back what it made: here the folder it created for the output. (A
+// name of 245 characters is a valid file name, but the temporary file written first, named
+// ".<name>.<pid>-<random>.tmp", is over the 255 the file system allows.)
+TEST(Cli, FailedWriteLeavesNothingBehind) {
+  testing::TempDir folder;
+  const std::filesystem::path output = folder / "new" / (std::string(245, 'a') + ".gltf");
+  const auto run = testing::run_command(cli() + " convert " + fixture("arm3.gltf") + " -o '" + output.string() + "'");
+  EXPECT_EQ(run.exit_code, 1) << run.err;
+  EXPECT_NE(run.err.find("error WRITE_FAILED: cannot write " + (folder / "new").string() + "/aaaa"), std::string::npos)
+      << run.err;
+  EXPECT_TRUE(contents(folder.path()).empty());
 }
 
 }  // namespace

@@ -1,4 +1,6 @@
 // `rdtf urdf IN -o DIR` and `rdtf import robot.urdf -o robot.gltf` as a user runs them.
+#include <algorithm>
+
 #include "urdf/urdf_test_support.h"
 
 namespace rdtf {
@@ -65,6 +67,85 @@ TEST(UrdfCli, ModelUrdfCannotSayIsExitTwoAndWritesNothing) {
             std::string::npos)
       << run.err;
   EXPECT_FALSE(fs::exists(dir / "out/robot.urdf"));
+}
+
+// Every path below `dir`, relative, sorted: what a command left behind.
+std::vector<std::string> contents(const fs::path& dir) {
+  std::vector<std::string> found;
+  for (const auto& entry : fs::recursive_directory_iterator(dir)) found.push_back(fs::relative(entry.path(), dir).string());
+  std::sort(found.begin(), found.end());
+  return found;
+}
+
+const char* const kBoxUrdf =
+    "<robot name=\"r\"><link name=\"a\"><visual><geometry><box size=\"0.1 0.2 0.3\"/></geometry></visual>"
+    "</link></robot>\n";
+
+// -o into folders that do not exist yet: created, as `rdtf convert` creates them (import used to
+// fail with exit 1 for a .glb there).
+TEST(UrdfCli, ImportCreatesTheOutputFolder) {
+  TempDir dir;
+  testing::write_file(dir / "t.urdf", kBoxUrdf);
+  for (const char* output : {"new/dir/x.glb", "other/dir/x.gltf"}) {
+    const auto run = rdtf_cli("import " + quoted(dir / "t.urdf") + " -o " + quoted(dir / output));
+    EXPECT_EQ(run.exit_code, 0) << output << "\n" << run.err;
+    EXPECT_TRUE(fs::is_regular_file(dir / output)) << output;
+  }
+  EXPECT_TRUE(fs::is_regular_file(dir / "other/dir/x.bin"));
+}
+
+// A folder as the output (ending in '/', or an existing one): exit 2 naming it, and nothing
+// written (a stray '.bin' was left there and the exit code was 1).
+TEST(UrdfCli, ImportOntoAFolderIsExitTwoAndWritesNothing) {
+  TempDir dir;
+  testing::write_file(dir / "t.urdf", kBoxUrdf);
+  fs::create_directory(dir / "imp");
+  testing::write_file(dir / "afile", "");
+  const std::vector<std::string> before = contents(dir.path());
+  const std::pair<std::string, std::string> cases[] = {
+      {(dir / "imp/").string(), "is a folder, not a file: give the file to write, e.g. " + (dir / "imp/robot.gltf").string()},
+      {(dir / "imp").string(), "is a folder, not a file: give the file to write, e.g. " + (dir / "imp/robot.gltf").string()},
+      {(dir / "new/").string(), "names a folder (it ends in '/'), not a file: give the file to write, e.g. " +
+                                    (dir / "new/robot.gltf").string()},
+      {(dir / "afile/x.gltf").string(), (dir / "afile").string() + " is a file, not a folder"},
+  };
+  for (const auto& [output, says] : cases) {
+    const auto run = rdtf_cli("import " + quoted(dir / "t.urdf") + " -o '" + output + "'");
+    EXPECT_EQ(run.exit_code, 2) << output << "\n" << run.err;
+    EXPECT_NE(run.err.find(output + ": error OUTPUT_PATH_INVALID: " + says), std::string::npos) << run.err;
+    EXPECT_EQ(contents(dir.path()), before) << output;
+  }
+}
+
+// `rdtf urdf` onto places where robot.urdf or the meshes cannot go: refused before any mesh is
+// written (meshes/*.stl used to stay behind when robot.urdf was a folder).
+TEST(UrdfCli, ExportOntoUnwritablePlacesIsExitTwoAndWritesNothing) {
+  const fs::path model = testing::data_dir() / "blender/arm3.gltf";
+  TempDir dir;
+  fs::create_directories(dir / "urdf_is_folder/robot.urdf");
+  fs::create_directories(dir / "meshes_is_file");
+  testing::write_file(dir / "meshes_is_file/meshes", "");
+  fs::create_directories(dir / "mesh_is_folder/meshes/forearm.stl");
+  testing::write_file(dir / "afile", "");
+  const std::vector<std::string> before = contents(dir.path());
+  const std::pair<fs::path, std::string> cases[] = {
+      {dir / "urdf_is_folder", "the output " + (dir / "urdf_is_folder/robot.urdf").string() + " is a folder"},
+      {dir / "meshes_is_file", (dir / "meshes_is_file/meshes").string() + " is a file, not a folder"},
+      {dir / "mesh_is_folder", "the output " + (dir / "mesh_is_folder/meshes/forearm.stl").string() + " is a folder"},
+      {dir / "afile", "is a file, not a folder: give the folder to write into"},
+      {dir / "afile/sub", (dir / "afile").string() + " is a file, not a folder"},
+  };
+  for (const auto& [output, says] : cases) {
+    const auto run = rdtf_cli("urdf " + quoted(model) + " -o " + quoted(output));
+    EXPECT_EQ(run.exit_code, 2) << output << "\n" << run.err;
+    EXPECT_NE(run.err.find(output.string() + ": error OUTPUT_PATH_INVALID: " + says), std::string::npos) << run.err;
+    EXPECT_EQ(contents(dir.path()), before) << output;
+  }
+  // And a folder that does not exist yet is made, with its parents.
+  const auto run = rdtf_cli("urdf " + quoted(model) + " -o " + quoted(dir / "new/nested/"));
+  EXPECT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_TRUE(fs::is_regular_file(dir / "new/nested/robot.urdf"));
+  EXPECT_TRUE(fs::is_regular_file(dir / "new/nested/meshes/forearm.stl"));
 }
 
 }  // namespace

@@ -1,5 +1,8 @@
 // Bad URDF input: each gets one clear error naming the file, the element and what is wrong; the
 // CLI exits 2 and writes nothing.
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <cctype>
 
 #include "urdf/urdf_test_support.h"
@@ -11,12 +14,32 @@ using namespace urdf_test;
 namespace fs = std::filesystem;
 
 struct BadUrdf {
-  const char* label;
-  const char* text;
-  const char* code;
-  const char* pointer;  // The element the error points at.
-  const char* says;     // A piece of the message.
+  std::string label;
+  std::string text;
+  std::string code;
+  std::string pointer;  // The element (or attribute) the error points at: the pointer starts with it.
+  std::string says;     // A piece of the message.
 };
+
+// A robot of one link 'a' whose <link> holds `elements` on line 3.
+std::string link_urdf(const std::string& elements) {
+  return "<robot name=\"r\">\n<link name=\"a\">\n" + elements + "\n</link>\n</robot>\n";
+}
+
+// Links 'a' and 'b' joined by joint 'j' of `type`, whose <joint> holds `elements` on line 5.
+std::string joint_urdf(const std::string& elements, const std::string& type = "revolute") {
+  return "<robot name=\"r\">\n<link name=\"a\"/>\n<link name=\"b\"/>\n<joint name=\"j\" type=\"" + type +
+         "\"><parent link=\"a\"/><child link=\"b\"/>\n" + elements + "\n</joint>\n</robot>\n";
+}
+
+const std::string kLimit = "<limit lower=\"-1\" upper=\"1\" effort=\"10\" velocity=\"2\"/>";
+const std::string kInertia = "<inertia ixx=\"1\" ixy=\"0\" ixz=\"0\" iyy=\"1\" iyz=\"0\" izz=\"1\"/>";
+
+std::string inertial(const std::string& mass, const std::string& inertia = kInertia) {
+  return "<inertial><mass value=\"" + mass + "\"/>" + inertia + "</inertial>";
+}
+
+std::string visual(const std::string& shape) { return "<visual><geometry>" + shape + "</geometry></visual>"; }
 
 const BadUrdf kBadUrdfs[] = {
     {"missing mesh",
@@ -50,10 +73,94 @@ const BadUrdf kBadUrdfs[] = {
      "URDF_UNKNOWN_LINK", "/robot/joint[@name='j']", "names parent link 'ghost', which no <link> defines"},
     {"duplicate link names", "<robot name=\"r\">\n<link name=\"a\"/>\n<link name=\"a\"/>\n</robot>\n",
      "URDF_DUPLICATE_NAME", "/robot/link[@name='a']", "line 3: a second link is named 'a'"},
-    {"negative mass",
-     "<robot name=\"r\">\n<link name=\"a\">\n<inertial><mass value=\"-2\"/>"
-     "<inertia ixx=\"1\" ixy=\"0\" ixz=\"0\" iyy=\"1\" iyz=\"0\" izz=\"1\"/></inertial>\n</link>\n</robot>\n",
-     "URDF_INVALID_INERTIAL", "/robot/link[@name='a']/inertial", "mass -2"},
+    // Numbers urdfdom reads leniently (a mass of "abc" became 0, a box with "abc" vanished): each
+    // is read from the XML and refused at its attribute, with its line.
+    {"negative mass", link_urdf(inertial("-2")), "URDF_INVALID_INERTIAL", "/robot/link[@name='a']/inertial/mass/@value",
+     "line 3: <mass value=\"-2\">: '-2' is negative: a mass is 0 or more"},
+    {"mass not a number", link_urdf(inertial("abc")), "URDF_INVALID_INERTIAL",
+     "/robot/link[@name='a']/inertial/mass/@value", "line 3: <mass value=\"abc\">: 'abc' is not a number"},
+    {"mass nan", link_urdf(inertial("nan")), "URDF_INVALID_INERTIAL", "/robot/link[@name='a']/inertial/mass/@value",
+     "line 3: <mass value=\"nan\">: 'nan' is not a finite number"},
+    {"mass inf", link_urdf(inertial("inf")), "URDF_INVALID_INERTIAL", "/robot/link[@name='a']/inertial/mass/@value",
+     "'inf' is not a finite number"},
+    {"mass beyond double", link_urdf(inertial("1e999")), "URDF_INVALID_INERTIAL",
+     "/robot/link[@name='a']/inertial/mass/@value", "'1e999' is beyond the range of a double"},
+    {"mass with trailing garbage", link_urdf(inertial("2kg")), "URDF_INVALID_INERTIAL",
+     "/robot/link[@name='a']/inertial/mass/@value", "'2kg' is not a number"},
+    {"inertia not finite",
+     link_urdf(inertial("1", "<inertia ixx=\"inf\" ixy=\"0\" ixz=\"0\" iyy=\"1\" iyz=\"0\" izz=\"1\"/>")),
+     "URDF_INVALID_INERTIAL", "/robot/link[@name='a']/inertial/inertia/@ixx", "line 3: <inertia ixx=\"inf\">"},
+    {"inertia term missing", link_urdf(inertial("1", "<inertia ixx=\"1\" ixy=\"0\" ixz=\"0\" iyy=\"1\" iyz=\"0\"/>")),
+     "URDF_INVALID_INERTIAL", "/robot/link[@name='a']/inertial/inertia", "<inertia> has no izz attribute"},
+    {"inertial without mass", link_urdf("<inertial>" + kInertia + "</inertial>"), "URDF_INVALID_INERTIAL",
+     "/robot/link[@name='a']/inertial", "line 3: <inertial> has no <mass"},
+    {"inertial origin not finite",
+     link_urdf("<inertial><origin xyz=\"0 nan 0\"/><mass value=\"1\"/>" + kInertia + "</inertial>"),
+     "URDF_INVALID_INERTIAL", "/robot/link[@name='a']/inertial/origin/@xyz", "'nan' is not a finite number"},
+    {"box size not a number", link_urdf(visual("<box size=\"0.1 abc 0.1\"/>")), "URDF_INVALID_NUMBER",
+     "/robot/link[@name='a']/visual[1]/geometry/box/@size", "line 3: <box size=\"0.1 abc 0.1\">: 'abc' is not a number"},
+    {"box size of two numbers", link_urdf(visual("<box size=\"0.1 0.1\"/>")), "URDF_INVALID_NUMBER",
+     "/robot/link[@name='a']/visual[1]/geometry/box/@size", "3 numbers separated by spaces expected, 2 found"},
+    {"box size zero", link_urdf(visual("<box size=\"0.1 0 0.1\"/>")), "URDF_INVALID_NUMBER",
+     "/robot/link[@name='a']/visual[1]/geometry/box/@size", "'0' is not positive: a box size is greater than 0"},
+    {"box without size", link_urdf(visual("<box/>")), "URDF_INVALID",
+     "/robot/link[@name='a']/visual[1]/geometry/box", "<box> has no size attribute"},
+    {"cylinder radius negative", link_urdf(visual("<cylinder radius=\"-0.1\" length=\"1\"/>")),
+     "URDF_INVALID_NUMBER", "/robot/link[@name='a']/visual[1]/geometry/cylinder/@radius", "'-0.1' is not positive"},
+    {"sphere radius nan", link_urdf(visual("<sphere radius=\"nan\"/>")), "URDF_INVALID_NUMBER",
+     "/robot/link[@name='a']/visual[1]/geometry/sphere/@radius", "'nan' is not a finite number"},
+    {"mesh scale zero", link_urdf(visual("<mesh filename=\"junk.stl\" scale=\"1 0 1\"/>")), "URDF_INVALID_NUMBER",
+     "/robot/link[@name='a']/visual[1]/geometry/mesh/@scale", "'0' is zero"},
+    {"second collision bad",
+     link_urdf("<collision><geometry><box size=\"1 1 1\"/></geometry></collision>"
+               "<collision><origin rpy=\"0 abc 0\"/><geometry><box size=\"1 1 1\"/></geometry></collision>"),
+     "URDF_INVALID_NUMBER", "/robot/link[@name='a']/collision[2]/origin/@rpy", "'abc' is not a number"},
+    {"unknown shape", link_urdf(visual("<capsule radius=\"1\" length=\"1\"/>")), "URDF_INVALID",
+     "/robot/link[@name='a']/visual[1]/geometry/capsule", "<capsule> is no URDF shape"},
+    {"empty geometry", link_urdf(visual("")), "URDF_INVALID", "/robot/link[@name='a']/visual[1]/geometry",
+     "<geometry> holds no shape"},
+    {"colour out of range",
+     link_urdf("<visual><geometry><box size=\"1 1 1\"/></geometry><material name=\"m\"><color rgba=\"2 0 0 1\"/>"
+               "</material></visual>"),
+     "URDF_INVALID_NUMBER", "/robot/link[@name='a']/visual[1]/material/color/@rgba", "'2' is outside 0..1"},
+    {"top-level colour of three numbers",
+     "<robot name=\"r\">\n<material name=\"red\"><color rgba=\"1 0 0\"/></material>\n<link name=\"a\"/>\n</robot>\n",
+     "URDF_INVALID_NUMBER", "/robot/material[@name='red']/color/@rgba", "line 2: <color rgba=\"1 0 0\">"},
+    // Joints (urdfdom refused these with a message pointing at /robot and no line).
+    {"joint origin nan", joint_urdf("<origin xyz=\"nan 0 0\"/>" + kLimit), "URDF_INVALID_NUMBER",
+     "/robot/joint[@name='j']/origin/@xyz", "line 5: <origin xyz=\"nan 0 0\">: 'nan' is not a finite number"},
+    {"axis nan", joint_urdf("<axis xyz=\"0 0 nan\"/>" + kLimit), "URDF_INVALID_NUMBER",
+     "/robot/joint[@name='j']/axis/@xyz", "line 5: <axis xyz=\"0 0 nan\">: 'nan' is not a finite number"},
+    {"axis zero", joint_urdf("<axis xyz=\"0 0 0\"/>" + kLimit), "URDF_INVALID_NUMBER",
+     "/robot/joint[@name='j']/axis/@xyz", "line 5: <axis xyz=\"0 0 0\">: the zero vector is no direction"},
+    {"axis without xyz", joint_urdf("<axis/>", "continuous"), "URDF_INVALID", "/robot/joint[@name='j']/axis",
+     "<axis> has no xyz attribute"},
+    {"lower not a number",
+     joint_urdf("<limit lower=\"abc\" upper=\"1\" effort=\"1\" velocity=\"1\"/>"), "URDF_INVALID_NUMBER",
+     "/robot/joint[@name='j']/limit/@lower", "line 5: <limit lower=\"abc\">: 'abc' is not a number"},
+    {"effort negative", joint_urdf("<limit lower=\"-1\" upper=\"1\" effort=\"-5\" velocity=\"1\"/>"),
+     "URDF_INVALID_NUMBER", "/robot/joint[@name='j']/limit/@effort", "'-5' is negative: an effort limit is 0 or more"},
+    {"velocity infinite", joint_urdf("<limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"inf\"/>"),
+     "URDF_INVALID_NUMBER", "/robot/joint[@name='j']/limit/@velocity", "'inf' is not a finite number"},
+    {"limits inverted", joint_urdf("<limit lower=\"1\" upper=\"-1\" effort=\"1\" velocity=\"1\"/>"),
+     "URDF_INVALID_NUMBER", "/robot/joint[@name='j']/limit", "line 5: <limit>: lower 1 is above upper -1"},
+    {"limit without effort", joint_urdf("<limit lower=\"-1\" upper=\"1\" velocity=\"1\"/>"), "URDF_INVALID",
+     "/robot/joint[@name='j']/limit", "line 5: <limit> has no effort attribute"},
+    {"revolute without limit", joint_urdf("<axis xyz=\"0 0 1\"/>"), "URDF_INVALID", "/robot/joint[@name='j']",
+     "line 4: joint 'j' is revolute and has no <limit"},
+    {"negative damping", joint_urdf(kLimit + "<dynamics damping=\"-1\"/>"), "URDF_INVALID_NUMBER",
+     "/robot/joint[@name='j']/dynamics/@damping", "'-1' is negative: damping is 0 or more"},
+    {"negative friction", joint_urdf("<dynamics friction=\"-0.5\"/>", "continuous"), "URDF_INVALID_NUMBER",
+     "/robot/joint[@name='j']/dynamics/@friction", "'-0.5' is negative: friction is 0 or more"},
+    {"mimic multiplier not a number", joint_urdf(kLimit + "<mimic joint=\"j\" multiplier=\"x\"/>"),
+     "URDF_INVALID_NUMBER", "/robot/joint[@name='j']/mimic/@multiplier", "'x' is not a number"},
+    // What urdfdom alone refuses: its message, at the element it names, with the line.
+    {"material named twice",
+     "<robot name=\"r\">\n<material name=\"m\"><color rgba=\"1 0 0 1\"/></material>\n"
+     "<material name=\"m\"><color rgba=\"1 0 0 1\"/></material>\n<link name=\"a\"/>\n</robot>\n",
+     "URDF_PARSE_FAILED", "/robot/material[@name='m']", "line 3: urdfdom cannot read it: material 'm' is not unique"},
+    {"robot without a name", "<robot>\n<link name=\"a\"/>\n</robot>\n", "URDF_PARSE_FAILED", "/robot",
+     "line 1: urdfdom cannot read it: No name given for the robot"},
 };
 
 class UrdfImportErrors : public ::testing::TestWithParam<BadUrdf> {};
@@ -75,6 +182,10 @@ TEST_P(UrdfImportErrors, ClearErrorAndNoOutput) {
   EXPECT_EQ(found->severity, Severity::kError);
   EXPECT_EQ(found->file, urdf.string());
   EXPECT_EQ(found->pointer.rfind(bad.pointer, 0), 0u) << found->pointer;
+  // Exactly the attribute where one is named (the table gives whole attribute pointers).
+  if (bad.pointer.find("/@") != std::string::npos) {
+    EXPECT_EQ(found->pointer, bad.pointer);
+  }
   EXPECT_NE(found->message.find(bad.says), std::string::npos) << found->message;
 
   // The CLI: exit code 2, the error on stderr with the file and element, no output file.
@@ -95,14 +206,74 @@ INSTANTIATE_TEST_SUITE_P(BadInput, UrdfImportErrors, ::testing::ValuesIn(kBadUrd
                            return name;
                          });
 
-TEST(UrdfImportErrorsCli, MissingInputFileIsExitTwoNamingIt) {
+// Why the URDF cannot be read, in the user's terms: missing, a folder, unreadable (it used to say
+// "not a regular file" for all of them).
+void expect_read_failure(const fs::path& urdf, const std::string& why) {
+  Diagnostics diag;
+  EXPECT_FALSE(import_urdf(urdf, UrdfImportOptions{}, diag));
+  ASSERT_EQ(diag.all().size(), 1u);
+  EXPECT_EQ(diag.all()[0].code, "URDF_READ_FAILED");
+  EXPECT_EQ(diag.all()[0].message, "cannot read " + urdf.string() + ": " + why);
+
+  TempDir out;
+  const testing::CommandResult run = testing::run_command("'" + testing::cli_path() + "' import '" + urdf.string() +
+                                                          "' -o '" + (out / "out.gltf").string() + "'");
+  EXPECT_EQ(run.exit_code, 2) << run.err;
+  EXPECT_NE(run.err.find(urdf.string() + ": error URDF_READ_FAILED: cannot read " + urdf.string() + ": " + why),
+            std::string::npos)
+      << run.err;
+  EXPECT_TRUE(fs::is_empty(out.path()));
+}
+
+TEST(UrdfImportErrorsCli, MissingInputFileIsNoSuchFile) {
   TempDir dir;
-  const testing::CommandResult run = testing::run_command("'" + testing::cli_path() + "' import '" +
-                                                          (dir / "nope.urdf").string() + "' -o '" +
-                                                          (dir / "out.gltf").string() + "'");
-  EXPECT_EQ(run.exit_code, 2);
-  EXPECT_NE(run.err.find((dir / "nope.urdf").string()), std::string::npos) << run.err;
-  EXPECT_FALSE(fs::exists(dir / "out.gltf"));
+  expect_read_failure(dir / "nope.urdf", "no such file");
+}
+
+TEST(UrdfImportErrorsCli, DanglingSymbolicLinkIsNoSuchFile) {
+  TempDir dir;
+  fs::create_symlink(dir / "gone.urdf", dir / "robot.urdf");
+  expect_read_failure(dir / "robot.urdf", "no such file (a symbolic link to nothing)");
+}
+
+TEST(UrdfImportErrorsCli, FolderIsNotAFile) {
+  TempDir dir;
+  fs::create_directory(dir / "robot.urdf");
+  expect_read_failure(dir / "robot.urdf", "it is a folder, not a file");
+}
+
+TEST(UrdfImportErrorsCli, FifoIsRefusedWithoutBlocking) {
+  TempDir dir;
+  ASSERT_EQ(::mkfifo((dir / "robot.urdf").c_str(), 0600), 0);
+  expect_read_failure(dir / "robot.urdf", "it is a FIFO, not a regular file");
+}
+
+TEST(UrdfImportErrorsCli, UnreadableFileSaysPermissionDenied) {
+  // root reads any file, so only an ordinary user can see the refusal.
+  if (::geteuid() == 0) GTEST_SKIP() << "running as root: permissions are not enforced";
+  TempDir dir;
+  testing::write_file(dir / "robot.urdf", "<robot name=\"r\"><link name=\"a\"/></robot>\n");
+  fs::permissions(dir / "robot.urdf", fs::perms::none);
+  expect_read_failure(dir / "robot.urdf", "permission denied");
+}
+
+// Every bad number is reported, not only the first, each at its own attribute and line.
+TEST(UrdfImportErrors, EveryBadNumberIsReported) {
+  TempDir dir;
+  testing::write_file(dir / "robot.urdf", joint_urdf("<axis xyz=\"0 0 0\"/>\n<limit lower=\"x\" upper=\"1\" effort=\"-1\" "
+                                                     "velocity=\"1\"/>\n<dynamics damping=\"-2\" friction=\"nan\"/>"));
+  Diagnostics diag;
+  EXPECT_FALSE(import_urdf(dir / "robot.urdf", UrdfImportOptions{}, diag));
+  std::vector<std::string> places;
+  for (const Diagnostic& d : diag.all()) places.push_back(d.code + " " + d.pointer + " " + d.message.substr(0, 7));
+  const std::vector<std::string> expected{
+      "URDF_INVALID_NUMBER /robot/joint[@name='j']/axis/@xyz line 5:",
+      "URDF_INVALID_NUMBER /robot/joint[@name='j']/limit/@lower line 6:",
+      "URDF_INVALID_NUMBER /robot/joint[@name='j']/limit/@effort line 6:",
+      "URDF_INVALID_NUMBER /robot/joint[@name='j']/dynamics/@damping line 7:",
+      "URDF_INVALID_NUMBER /robot/joint[@name='j']/dynamics/@friction line 7:",
+  };
+  EXPECT_EQ(places, expected);
 }
 
 }  // namespace

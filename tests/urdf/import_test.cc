@@ -323,5 +323,47 @@ TEST(UrdfImport, ZUpOptionKeepsUrdfAxes) {
   expect_same_robot(*original, *parse_with_urdfdom(export_to(conversion, out.path(), keep)));
 }
 
+// The checks of the numbers refuse only what urdfdom cannot read or what means nothing: every form
+// urdfdom reads (a sign, a leading space, no digit before or after the point, an exponent, several
+// spaces between numbers, a number too small for a double as 0) still imports, with its value; a
+// zero mass is a massless link; a fixed joint's axis is not read (urdfdom ignores it).
+TEST(UrdfImport, NumbersInEveryFormUrdfdomReadsAreImported) {
+  TempDir dir;
+  testing::write_file(dir / "forms.urdf", R"(<robot name="forms">
+  <link name="a">
+    <inertial><origin xyz="  .5   0 5. " rpy="0 0 0"/><mass value="+2.5e0"/>
+      <inertia ixx=" 1" ixy="-0" ixz="0" iyy="1E0" iyz="1e-400" izz="1"/></inertial>
+    <visual><geometry><box size="0.1 +0.2 3e-1"/></geometry></visual>
+  </link>
+  <link name="b"><inertial><mass value="0"/><inertia ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"/></inertial></link>
+  <link name="c"/>
+  <joint name="slide" type="prismatic"><parent link="a"/><child link="b"/><axis xyz="0 0 +1"/>
+    <limit lower="-.25" upper="0.25" effort="1e-400" velocity="+3"/><dynamics damping="0.5"/></joint>
+  <joint name="weld" type="fixed"><parent link="a"/><child link="c"/><axis xyz="0 0 0"/></joint>
+</robot>
+)");
+  UrdfImportOptions options;
+  options.z_up = true;  // The URDF's own numbers.
+  Diagnostics diag;
+  const Conversion conversion = import_or_fail(dir / "forms.urdf", diag, options);
+  const Link& a = conversion.robot.links.at(0);
+  ASSERT_EQ(a.name, "a");
+  EXPECT_EQ(a.inertial.mass, 2.5);
+  EXPECT_EQ(a.inertial.center_of_mass, Eigen::Vector3d(0.5, 0, 5));
+  EXPECT_EQ(a.inertial.inertia, Eigen::Matrix3d::Identity());
+  ASSERT_EQ(a.meshes.size(), 1u);  // The box is there.
+  EXPECT_EQ(conversion.robot.links.at(1).inertial.mass, 0.0);
+  const Joint& slide = conversion.robot.joints.at(0);
+  ASSERT_EQ(slide.name, "slide");
+  EXPECT_EQ(slide.axis, Eigen::Vector3d(0, 0, 1));
+  ASSERT_TRUE(slide.limits);
+  EXPECT_EQ(slide.limits->lower, -0.25);
+  EXPECT_EQ(slide.limits->upper, 0.25);
+  EXPECT_EQ(slide.limits->effort, 0.0);
+  EXPECT_EQ(slide.limits->velocity, 3.0);
+  EXPECT_EQ(slide.damping, 0.5);
+  EXPECT_EQ(conversion.robot.joints.at(1).kind, JointKind::kFixed);
+}
+
 }  // namespace
 }  // namespace rdtf

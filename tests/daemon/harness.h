@@ -838,7 +838,17 @@ struct Session {
   }
   bool wait_revision(const std::string& id, std::int64_t revision, const std::string& hash,
                      Clock::duration timeout = 5s) {
-    return wait_for([&](const auto& all) { return has_revision(all, id, revision, hash); }, timeout);
+    // The INERTIA too: it follows the DESCRIPTION, and a test that reads it next must not see the
+    // previous revision's table.
+    return wait_for(
+        [&](const auto& all) {
+          if (!has_revision(all, id, revision, hash)) return false;
+          for (const auto& t : decoded<rdtf::inertia_table_t>(all, "INERTIA", id)) {
+            if (t.revision == revision && t.content_hash == hash) return true;
+          }
+          return false;
+        },
+        timeout);
   }
 
   // Waits until the daemon is idle: `quiet` consecutive STATUS messages, all received after

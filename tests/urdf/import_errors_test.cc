@@ -1,7 +1,11 @@
 // Bad URDF input: each gets one clear error naming the file, the element and what is wrong; the
 // CLI exits 2 and writes nothing.
+#include <grp.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
+
+#include <cstdio>
 
 #include <cctype>
 
@@ -20,6 +24,9 @@ struct BadUrdf {
   std::string pointer;  // The element (or attribute) the error points at: the pointer starts with it.
   std::string says;     // A piece of the message.
 };
+
+// gtest names each case by its label, not by the bytes of the struct.
+void PrintTo(const BadUrdf& bad, std::ostream* out) { *out << bad.label; }
 
 // A robot of one link 'a' whose <link> holds `elements` on line 3.
 std::string link_urdf(const std::string& elements) {
@@ -249,12 +256,31 @@ TEST(UrdfImportErrorsCli, FifoIsRefusedWithoutBlocking) {
 }
 
 TEST(UrdfImportErrorsCli, UnreadableFileSaysPermissionDenied) {
-  // root reads any file, so only an ordinary user can see the refusal.
-  if (::geteuid() == 0) GTEST_SKIP() << "running as root: permissions are not enforced";
   TempDir dir;
   testing::write_file(dir / "robot.urdf", "<robot name=\"r\"><link name=\"a\"/></robot>\n");
   fs::permissions(dir / "robot.urdf", fs::perms::none);
-  expect_read_failure(dir / "robot.urdf", "permission denied");
+  if (::geteuid() != 0) {
+    expect_read_failure(dir / "robot.urdf", "permission denied");
+    return;
+  }
+  // root reads any file (CI runs as root): the check runs in a child that has become the user
+  // nobody, its failures printed there and reported here through its exit status.
+  fs::permissions(dir.path(), fs::perms::owner_all | fs::perms::group_read | fs::perms::group_exec |
+                                  fs::perms::others_read | fs::perms::others_exec);
+  std::fflush(nullptr);
+  const pid_t child = ::fork();
+  ASSERT_NE(child, -1);
+  if (child == 0) {
+    constexpr uid_t kNobody = 65534;
+    if (::setgroups(0, nullptr) != 0 || ::setgid(kNobody) != 0 || ::setuid(kNobody) != 0) ::_exit(3);
+    expect_read_failure(dir / "robot.urdf", "permission denied");
+    std::fflush(nullptr);
+    ::_exit(::testing::Test::HasFailure() ? 1 : 0);
+  }
+  int status = 0;
+  ASSERT_EQ(::waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0) << "the check as user nobody failed (3: could not become nobody)";
 }
 
 // Every bad number is reported, not only the first, each at its own attribute and line.

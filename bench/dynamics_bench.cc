@@ -1,6 +1,7 @@
 // Issue 4, dynamics without the daemon: wall time of the validation run that gates every revision
-// (physical checks + 3 s of simulated time in ODE), and raw simulation steps per second with each
-// of ODE's steppers, for the arm3 fixture, a 30-link chain and a 100-link tree.
+// (physical checks + 3 s of simulated time in ODE) for the arm3 fixture, chains of 20, 30 and 40
+// links and a 100-link tree, healthy and with one link's inertia scaled by 1e-6; raw simulation
+// steps per second with each of ODE's steppers, and where QuickStep becomes the cheaper one.
 #include <benchmark/benchmark.h>
 
 #include <functional>
@@ -18,15 +19,19 @@ const Robot& model(int which) {
   static const Robot arm3 = rdtf::bench::arm3_robot();
   static const Robot chain = rdtf::bench::chain_robot(30);
   static const Robot tree = rdtf::bench::tree_robot(100);
+  static const Robot chain20 = rdtf::bench::chain_robot(20);
+  static const Robot chain40 = rdtf::bench::chain_robot(40);
   switch (which) {
     case 0: return arm3;
     case 1: return chain;
-    default: return tree;
+    case 2: return tree;
+    case 3: return chain20;
+    default: return chain40;
   }
 }
 
 const char* model_name(int which) {
-  static const char* const kNames[] = {"arm3", "chain30", "tree100"};
+  static const char* const kNames[] = {"arm3", "chain30", "tree100", "chain20", "chain40"};
   return kNames[which];
 }
 
@@ -37,13 +42,20 @@ std::string first_error(const rdtf::ValidationReport& report) {
   return "";
 }
 
-// The gate from a bent start pose. range(1) 0: as rdtfd runs it (default options: 3 s, 1 ms steps,
-// dWorldStep below 15 bodies and QuickStep from 15); 1: dWorldStep whatever the size.
+// The gate as rdtfd runs it: default options (3 s, 1 ms steps, dWorldStep below 27 bodies and
+// QuickStep from 27), except the start: these models hang at an equilibrium, where a passive run
+// from rest barely moves, so every revolute joint starts 0.3 rad from rest
+// (start_offset_angular, rdtfd's validation_start_offset_rad) and the run does real work. range(1): 0 the defaults,
+// 1 dWorldStep whatever the size, 2 QuickStep whatever the size. range(2) 1: the broken variant,
+// the middle link's inertia scaled by 1e-6 (facts.md), which must fail.
 void BM_Validate(benchmark::State& state) {
-  const Robot& robot = model(static_cast<int>(state.range(0)));
+  const int which = static_cast<int>(state.range(0));
+  Robot robot = model(which);
+  if (state.range(2) == 1) robot.links[robot.links.size() / 2].inertial.inertia *= 1e-6;
   rdtf::ValidationOptions options;
+  options.start_offset_angular = kStartAngle;
   if (state.range(1) == 1) options.simulation.stepper = rdtf::Stepper::kWorldStep;
-  options.initial_positions = rdtf::bench::bent_pose(robot, kStartAngle);
+  if (state.range(1) == 2) options.simulation.stepper = rdtf::Stepper::kQuickStep;
   rdtf::ValidationReport report;
   for (auto _ : state) {
     report = rdtf::validate_dynamics(robot, options);
@@ -55,12 +67,19 @@ void BM_Validate(benchmark::State& state) {
   state.counters["energy_drift"] = report.energy_drift;
   state.counters["worst_misalignment_rad"] = report.worst_joint_misalignment;
   state.counters["worst_separation_m"] = report.worst_joint_error;
-  state.SetLabel(std::string(model_name(static_cast<int>(state.range(0)))) + " " + report.stepper +
+  state.counters["misalignment_warning"] = report.diagnostics.contains("SIM_JOINT_MISALIGNMENT") ? 1 : 0;
+  state.SetLabel(std::string(model_name(which)) + (state.range(2) == 1 ? " x1e-6 " : " ") + report.stepper +
                  (report.passed ? " passed" : " FAILED" + first_error(report)));
 }
-BENCHMARK(BM_Validate)->Args({0, 0})->Args({1, 0})->Args({2, 0})->Args({1, 1})->Unit(benchmark::kMillisecond);
-// dWorldStep on 100 bodies: about 5 ms of CPU per step, 15 s per run: one run.
-BENCHMARK(BM_Validate)->Args({2, 1})->Iterations(1)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Validate)
+    ->ArgsProduct({{0, 1, 2, 3, 4}, {0}, {0, 1}})
+    ->Args({1, 1, 0})
+    ->Args({1, 1, 1})
+    ->Args({3, 2, 0})
+    ->Args({4, 1, 0})
+    ->Unit(benchmark::kMillisecond);
+// dWorldStep on 100 bodies: about 4.4 ms of CPU per step, 13 s per run: one run each.
+BENCHMARK(BM_Validate)->Args({2, 1, 0})->Args({2, 1, 1})->Iterations(1)->Unit(benchmark::kMillisecond);
 
 // One 1 ms step of the whole model; the simulation is rebuilt (untimed) every 3000 steps so that
 // every sample covers the same kind of motion as the validation run.
@@ -69,7 +88,7 @@ void BM_Step(benchmark::State& state) {
   const Robot& robot = model(which);
   rdtf::SimulationOptions options;
   options.stepper = state.range(1) == 0 ? rdtf::Stepper::kWorldStep : rdtf::Stepper::kQuickStep;
-  const auto pose = rdtf::bench::bent_pose(robot, kStartAngle);
+  const auto pose = rdtf::bench::bent_pose(robot, kStartAngle);  // as the gate starts
   auto build = [&] {
     rdtf::Diagnostics diag;
     auto simulation = rdtf::Simulation::create(robot, options, pose, diag);
@@ -90,6 +109,26 @@ void BM_Step(benchmark::State& state) {
   state.SetLabel(std::string(model_name(which)) + " " + std::string(simulation->stepper_name()));
 }
 BENCHMARK(BM_Step)->ArgsProduct({{0, 1, 2}, {0, 1}})->Unit(benchmark::kMicrosecond);
+
+// Where QuickStep becomes the cheaper stepper (SimulationOptions::quickstep_min_bodies): one 1 ms
+// step of a chain of range(0) links with each stepper.
+void BM_StepChain(benchmark::State& state) {
+  const Robot robot = rdtf::bench::chain_robot(static_cast<int>(state.range(0)));
+  rdtf::SimulationOptions options;
+  options.stepper = state.range(1) == 0 ? rdtf::Stepper::kWorldStep : rdtf::Stepper::kQuickStep;
+  rdtf::Diagnostics diag;
+  auto simulation = rdtf::Simulation::create(robot, options, rdtf::bench::bent_pose(robot, kStartAngle), diag);
+  for (auto _ : state) {
+    simulation->step();
+    if (simulation->steps() == 3000) {
+      state.PauseTiming();
+      simulation = rdtf::Simulation::create(robot, options, rdtf::bench::bent_pose(robot, kStartAngle), diag);
+      state.ResumeTiming();
+    }
+  }
+  state.SetLabel(std::string(simulation->stepper_name()));
+}
+BENCHMARK(BM_StepChain)->ArgsProduct({{10, 15, 20, 25, 27, 30, 35, 40, 50}, {0, 1}})->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 

@@ -8,6 +8,10 @@
 //   of alternating sign so the arm stays near rest); the time from publishing the JOINT_COMMAND to
 //   the first JOINT_STATE whose elbow effort equals the commanded value. p50 / p99.
 #include <benchmark/benchmark.h>
+#include <unistd.h>
+
+#include <fstream>
+#include <sstream>
 
 #include <rdtf/joint_command_t.hpp>
 #include <rdtf/joint_state_t.hpp>
@@ -18,6 +22,19 @@ namespace {
 
 using namespace rdtf::bench;
 using namespace std::chrono_literals;
+
+// CPU time (user + system) rdtfd has used so far, s: fields 14 and 15 of /proc/<pid>/stat.
+double process_cpu_seconds(pid_t pid) {
+  std::ifstream file("/proc/" + std::to_string(pid) + "/stat");
+  std::string text((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+  std::istringstream fields(text.substr(text.rfind(')') + 2));  // after "pid (comm) "
+  std::string field;
+  double ticks = 0;
+  for (int i = 3; i <= 15 && fields >> field; ++i) {
+    if (i >= 14) ticks += std::stod(field);
+  }
+  return ticks / static_cast<double>(sysconf(_SC_CLK_TCK));
+}
 
 void copy_arm3(const fs::path& folder) {
   const fs::path source = fs::path(RDTF_BENCH_DATA_DIR) / "blender";
@@ -68,12 +85,15 @@ void BM_JointStateStream(benchmark::State& state) {
   }
   for (auto _ : state) {
     const UdpCounters before = udp_counters();
+    const double cpu_before = process_cpu_seconds(daemon.pid());
     subscriber.locked([&] { counts.counting = true; });
     const Clock::time_point start = Clock::now();
     std::this_thread::sleep_for(window);  // The measurement window itself, not a synchronisation.
     subscriber.locked([&] { counts.counting = false; });
     const double seconds = ms_between(start, Clock::now()) / 1e3;
     const UdpCounters after = udp_counters();
+    // rdtfd's share of a core while it steps and publishes (the other threads are idle then).
+    state.counters["rdtfd_cpu_per_wall_s"] = (process_cpu_seconds(daemon.pid()) - cpu_before) / seconds;
     state.SetIterationTime(seconds);
 
     const double expected = rate_hz * seconds;

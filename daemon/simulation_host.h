@@ -6,9 +6,12 @@
 
 #include <atomic>
 #include <chrono>
+#include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -21,13 +24,66 @@
 
 namespace rdtf::daemon {
 
+using Clock = std::chrono::steady_clock;
+
 struct SimulationHostOptions {
   std::string lcm_url;
   std::string channel_prefix = "RDTF";
   SimulationOptions simulation;
-  double state_rate_hz = 100;      // Joint-state messages per second and model.
+  // Joint-state messages per wall-clock second and model (while the simulation keeps real time),
+  // at most one per step: 1 / time_step x real_time_factor.
+  double state_rate_hz = 100;
   double real_time_factor = 1.0;   // Simulated seconds per wall-clock second.
 };
+
+// The live simulation's timing, apart from threads, LCM and the clock so that a test can drive it
+// with times of its own (tests/dynamics/live_schedule_test.cc).
+//
+// Steps keep real time: step k is due at start + k x time_step / real_time_factor. A wake-up takes
+// every step due, at most kMaxCatchUp at once; after a longer stall the schedule restarts from
+// the wake-up (the simulation falls behind instead of spiralling).
+class StepClock {
+ public:
+  static constexpr int kMaxCatchUp = 50;
+  StepClock(double time_step, double real_time_factor, Clock::time_point start);
+  int take_due(Clock::time_point now);  // The steps to take now.
+  Clock::time_point next_due() const { return next_; }
+  void restart(Clock::time_point now) { next_ = now; }
+
+ private:
+  Clock::duration tick_;
+  Clock::time_point next_;
+};
+
+// Joint states follow simulated time, not the wall clock: state n (1, 2, ...) of a model is due at
+// simulated time n x period (period = real_time_factor / state_rate_hz) and goes out right after the step
+// nearest to it, so no state is skipped however late the thread wakes (steps taken to catch up
+// each send theirs), and consecutive states are a period of simulated time apart. Counted in the
+// host's steps, so that a simulation ODE stopped (its time frozen) still reports its state.
+class StateSchedule {
+ public:
+  StateSchedule(double period, double time_step) : period_(period), time_step_(time_step) {}
+  bool after_step();  // Call after each step; true when a state is due now.
+
+ private:
+  double period_;     // s of simulated time
+  double time_step_;  // s
+  std::uint64_t steps_ = 0;
+  std::uint64_t next_ = 1;  // Index of the next state due.
+};
+
+struct LiveModel {
+  std::int64_t revision = 0;
+  std::string content_hash;
+  std::unique_ptr<Simulation> simulation;
+  std::optional<StateSchedule> states;
+};
+using LiveModels = std::map<std::string, std::unique_ptr<LiveModel>>;
+
+// One pass of the simulation thread at wall time `now`: every step due on `clock`, every model in
+// lockstep, and `publish` for each state due after each step.
+void advance_live_models(StepClock& clock, LiveModels& models, Clock::time_point now, double time_step,
+                         const std::function<void(const std::string&, LiveModel&)>& publish);
 
 class SimulationHost {
  public:
@@ -50,12 +106,6 @@ class SimulationHost {
   std::size_t model_count() const;
 
  private:
-  struct LiveModel {
-    std::int64_t revision = 0;
-    std::string content_hash;
-    std::unique_ptr<Simulation> simulation;
-    std::chrono::steady_clock::time_point next_state{};
-  };
   struct Inbox {
     std::vector<std::pair<std::string, std::unique_ptr<LiveModel>>> loads;
     std::vector<std::string> removals;
@@ -73,7 +123,7 @@ class SimulationHost {
   mutable std::mutex mutex_;
   Inbox inbox_;
   std::map<std::string, Robot> pending_robots_;  // Under mutex_: robots of inbox_.loads.
-  std::map<std::string, std::unique_ptr<LiveModel>> models_;  // Owned by the host thread.
+  LiveModels models_;                                         // Owned by the host thread.
   std::size_t model_count_ = 0;                               // Under mutex_.
   std::atomic<bool> stop_{false};
   std::thread thread_;

@@ -54,6 +54,10 @@ void add_validate_command(CLI::App& app, int& exit_code) {
   command->add_option("--seconds", args->validation.duration, "Simulated time of the passive run")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
+  command->add_option("--start-offset", args->validation.start_offset_angular,
+                      "Start every unnamed revolute joint this far (rad) from rest; default: the rest pose")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   command->add_option("--time-step", args->validation.simulation.time_step, "ODE time step (s)")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();

@@ -223,6 +223,7 @@ void add_joint(Simulation::Model& model, int j, const Eigen::Isometry3d& X_SJ, D
       if (jm.limited && jm.lower > -std::numbers::pi && jm.upper < std::numbers::pi) {
         dJointSetHingeParam(jm.id, dParamLoStop, jm.lower);
         dJointSetHingeParam(jm.id, dParamHiStop, jm.upper);
+        jm.stops = true;
       } else if (jm.limited) {
         diag.warning("ODE_LIMIT_NOT_ENFORCED", where,
                      name + "ODE enforces hinge limits inside (-pi, pi) only; [" + number(jm.lower) +
@@ -236,6 +237,7 @@ void add_joint(Simulation::Model& model, int j, const Eigen::Isometry3d& X_SJ, D
       if (jm.limited) {
         dJointSetSliderParam(jm.id, dParamLoStop, jm.lower);
         dJointSetSliderParam(jm.id, dParamHiStop, jm.upper);
+        jm.stops = true;
       }
       break;
     case JointKind::kBall:
@@ -282,6 +284,20 @@ Eigen::Isometry3d body_pose(dBodyID body) {
   X.linear() = Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized().toRotationMatrix();
   X.translation() = Eigen::Vector3d(p[0], p[1], p[2]);
   return X;
+}
+
+void read_frames(Simulation::Model& model) {
+  model.frames.resize(model.bodies.size());
+  for (std::size_t b = 0; b < model.bodies.size(); ++b) {
+    const dBodyID id = model.bodies[b].id;
+    const dReal* p = dBodyGetPosition(id);
+    const dReal* q = dBodyGetQuaternion(id);
+    const dReal* w = dBodyGetAngularVel(id);
+    BodyFrame& frame = model.frames[b];
+    frame.R = Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized().toRotationMatrix();
+    frame.p = Eigen::Vector3d(p[0], p[1], p[2]);
+    frame.w = Eigen::Vector3d(w[0], w[1], w[2]);
+  }
 }
 
 std::vector<std::string> take_ode_messages() {
@@ -360,6 +376,7 @@ std::unique_ptr<Simulation::Model> build_model(const Robot& robot, const Simulat
     if (model->links[l].body == kWorld) model->links[l].X_BL = start[l];
   }
   prime_joint_states(*model);
+  read_frames(*model);
   for (std::size_t j = 0; j < robot.joints.size(); ++j) {
     if (model->joints[j].dof && model->joints[j].kind != JointKind::kPrismatic) model->joints[j].q = q[j];
     model->joint_index.emplace(robot.joints[j].name, static_cast<int>(j));

@@ -22,6 +22,9 @@ inline constexpr double kInfinity = std::numeric_limits<double>::infinity();
 // that blew up this far is meaningless, and stepping it further overflows into NaN, on which ODE
 // asserts and aborts the process.
 inline constexpr double kStateBound = 1e100;
+// A step resolves a body's rotation while it turns by less than this many radians (|w| h): the
+// errors an exact step makes (Simulation::step) are allowed only then.
+inline constexpr double kResolvedTurn = 1.0;
 
 std::string number(double value);  // "%.6g"
 std::string vector_text(const Eigen::Vector3d& v);
@@ -66,6 +69,14 @@ struct BodyModel {
   int root_link = -1;
 };
 
+// A body's pose and angular velocity in the scene frame, read from ODE once per step for the health
+// measurements and the exact-step errors (quaternion to matrix once, not once per use).
+struct BodyFrame {
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d p = Eigen::Vector3d::Zero();
+  Eigen::Vector3d w = Eigen::Vector3d::Zero();
+};
+
 struct LinkModel {
   int body = kWorld;  // Index into bodies, or kWorld.
   Eigen::Isometry3d X_BL = Eigen::Isometry3d::Identity();  // In its body (X_SL for the world)
@@ -89,8 +100,20 @@ struct JointModel {
   double qdot = 0;
   double ode_angle = 0;   // ODE's (wrapped) hinge angle after the last step
   bool limited = false;
+  bool stops = false;  // ODE enforces the limits (hinge limits inside (-pi, pi); sliders)
   double lower = 0;
   double upper = 0;
+  // What an exact step leaves, for the health bounds (updated by Simulation::step):
+  // `drift` (rad), the misalignment that integrating each body's rotation over a step adds (a
+  // second-order term, 1/2 h^2 |w_parent x w_child| across the axis) and ERP removes at the rate
+  // erp per step; `stop_overshoot` (rad or m), how far past a stop the joint may be, since ODE's
+  // stop acts once the joint is past it: its travel while past the stop, taken back at erp per step.
+  // `separation_drift` (m): likewise for the anchor points, which an exact step leaves
+  // h^2/2 |w_c x (w_c x r_c) - w_p x (w_p x r_p)| apart (r: the anchor from each body's centre of
+  // mass; across the axis for a slider).
+  double drift = 0;
+  double separation_drift = 0;
+  double stop_overshoot = 0;
   double effort_limit = 0;  // 0: none
   double damping = 0;
   double stiffness = 0;
@@ -111,6 +134,7 @@ struct Simulation::Model {
   // corrupt it ("ODE INTERNAL ERROR ... ReleaseAJob").
   dThreadingImplementationID threading = nullptr;
   std::vector<dynamics_internal::BodyModel> bodies;
+  std::vector<dynamics_internal::BodyFrame> frames;   // bodies order, as of the last step
   std::vector<dynamics_internal::LinkModel> links;    // robot.links order
   std::vector<dynamics_internal::JointModel> joints;  // robot.joints order
   std::vector<int> root_links;
@@ -143,6 +167,7 @@ std::unique_ptr<Simulation::Model> build_model(const Robot& robot, const Simulat
                                                Diagnostics& diag);
 
 Eigen::Isometry3d body_pose(dBodyID body);  // X_SB
+void read_frames(Simulation::Model& model);  // model.frames from ODE's bodies
 // Reads back the ODE state of the one-dof joints without unwrapping (after set-up).
 void prime_joint_states(Simulation::Model& model);
 // The ODE messages the calling thread received since the last call.

@@ -193,6 +193,16 @@ TEST(ValidateCli, OptionsChangeTheRun) {
   const json report = json::parse(run.out);
   EXPECT_EQ(report["steps"], 250);
   EXPECT_EQ(report["timeStep"], 0.002);
+  EXPECT_EQ(report["startPose"], json::object());  // the rest pose
+}
+
+// --start-offset bends every revolute joint without a named start (arm3: shoulder and elbow, whose
+// limits allow +0.3 rad) and the report says where the run started.
+TEST(ValidateCli, StartOffsetBendsTheRevoluteJoints) {
+  const auto run = validate("--json --seconds 0.2 --start-offset 0.3 " + quoted(testing::data_dir() / "blender" / "arm3.gltf"));
+  ASSERT_EQ(run.exit_code, 0) << run.out << run.err;
+  const json report = json::parse(run.out);
+  EXPECT_EQ(report["startPose"], (json{{"shoulder", 0.3}, {"elbow", 0.3}})) << report.dump(1);
 }
 
 }  // namespace

@@ -77,7 +77,10 @@ struct SimulationOptions {
   bool floating_root = false;  // Default: every root link is fixed to the world.
   double time_step = 1e-3;     // s; step() without an argument.
   Stepper stepper = Stepper::kAuto;
-  int quickstep_min_bodies = 15;  // kAuto: dWorldStep below this many bodies, QuickStep from it.
+  // kAuto: dWorldStep below this many bodies, QuickStep from it. 27 is where QuickStep (50
+  // iterations) became the cheaper of the two per step, for chains and trees alike
+  // (docs/dynamics.md); below it dWorldStep is both cheaper and exact.
+  int quickstep_min_bodies = 27;
   int quickstep_iterations = 50;  // Gazebo's defaults.
   double quickstep_sor = 1.3;
   double erp = 0.2;
@@ -116,12 +119,16 @@ struct JointCommand {
   double kd = 0;        // N m s/rad or N s/m
 };
 
-// What counts as a limit violated or a body out of its region, for SimulationHealth's ranking.
+// What counts as a limit violated, a joint apart or out of line or a body out of its region, for
+// SimulationHealth's ranking. The limit, separation and misalignment tolerances are floors: each
+// joint's bound adds the error an exact step of ODE makes at its current speeds (docs/dynamics.md).
 struct HealthTolerances {
   double limit_angular = 1e-2;           // rad
   double limit_linear = 1e-3;            // m
   double region_margin_relative = 0.1;   // of each body's reach bound
   double region_margin_absolute = 0.01;  // m
+  double misalignment = 1e-2;            // rad
+  double separation = 1e-3;              // m
 };
 
 // The state's physics, for watching a run (validation, or a live model).
@@ -133,10 +140,26 @@ struct SimulationHealth {
   double actuator_work = 0;             // J: work of the commands so far
   double worst_joint_separation = 0;    // m between a joint's anchor points on its two bodies
   int worst_separation_joint = -1;      // robot.joints index
+  // The joint furthest apart relative to its bound: separation / (tolerances.separation + the
+  // drift an exact step makes at its speeds), > 1: beyond it. Its separation and bound.
+  double worst_separation_ratio = 0;
+  double separation_at_worst_ratio = 0;  // m
+  double separation_bound = 0;           // m
+  int worst_separation_ratio_joint = -1;
   double worst_joint_misalignment = 0;  // rad: axis (hinge) or relative rotation (fixed, slider)
   int worst_misalignment_joint = -1;
+  // The joint furthest out of line relative to its bound: misalignment / (tolerances.misalignment
+  // + the drift an exact step makes at its speeds), > 1: beyond it. Its misalignment and bound.
+  double worst_misalignment_ratio = 0;
+  double misalignment_at_worst_ratio = 0;  // rad
+  double misalignment_bound = 0;           // rad
+  int worst_misalignment_ratio_joint = -1;
   double worst_limit_violation = 0;     // rad or m beyond a limit: the joint furthest beyond
-  double worst_limit_ratio = 0;         // its limit relative to its tolerance (> 1: violated)
+  // Its violation relative to its bound (> 1: violated): the tolerance, plus for a stop ODE
+  // enforces the joint's travel while past it (ODE's stops act once a joint is past them),
+  // decaying at the stop's ERP.
+  double worst_limit_ratio = 0;
+  double limit_bound = 0;               // rad or m
   int worst_limit_joint = -1;
   // A body's centre of mass cannot get further from its root link's origin than its reach bound
   // (joint offsets, centre-of-mass offset and prismatic travel along its path) plus the margins.
@@ -198,13 +221,22 @@ struct ValidationOptions {
   PhysicalCheckOptions checks;      // checks.floating_root is taken from simulation.floating_root.
   SimulationOptions simulation;
   double duration = 3.0;            // s of simulated time from the start pose, passive.
-  std::map<std::string, double> initial_positions;  // Default: the rest pose.
+  // By joint name; joints not named start at rest. With start_offset_angular > 0, a revolute or
+  // continuous joint not named starts that far from rest instead (within its limits), so that the
+  // run moves: from an equilibrium (a chain hanging straight) a passive run tests little. The
+  // default is the rest pose, as the model was drawn.
+  std::map<std::string, double> initial_positions;
+  double start_offset_angular = 0;  // rad
   // Failure thresholds.
   double energy_tolerance = 0.01;   // relative rise of kinetic + potential + dissipated energy
-  // Joints may come apart by the larger of these (ODE's error grows with speed and size).
+  // Joints may come apart by the larger of these (ODE's error grows with speed and size), plus,
+  // per joint and step, the drift an exact step makes at its speeds.
   double joint_separation_tolerance = 1e-3;   // m
   double joint_separation_relative = 1e-3;    // of the model's size (its largest reach bound)
+  // Plus, per joint and step, the drift an exact step makes at the joint's speeds; with
+  // dWorldQuickStep a misalignment beyond that is the iterative solver's error and only a warning.
   double joint_misalignment_tolerance = 1e-2; // rad
+  // Plus, for stops ODE enforces, the joint's travel while past the stop (ERP-decayed).
   double limit_tolerance_angular = 1e-2;      // rad
   double limit_tolerance_linear = 1e-3;       // m
   double region_margin_relative = 0.1;        // of each body's reach bound
@@ -231,7 +263,13 @@ struct ValidationReport {
   double worst_limit_violation = 0;      // rad or m beyond a limit
   std::string worst_limit_joint;
   double wall_time = 0;                  // s, checks + model + run
+  std::map<std::string, double> start_pose;  // rad or m by joint name; joints not listed start at rest
 };
+
+// The run's start pose: options.initial_positions, and every other revolute or continuous joint
+// options.start_offset_angular from rest (or minus that, whichever its limits allow; else the
+// middle of its limits). Prismatic joints stay at rest.
+std::map<std::string, double> validation_start_pose(const Robot& robot, const ValidationOptions& options);
 
 // Physical checks, then (when the ODE model can be built) the run.
 ValidationReport validate_dynamics(const Robot& robot, const ValidationOptions& options,
@@ -242,7 +280,8 @@ ValidationReport validate_dynamics(const Conversion& conversion, const Validatio
 
 // {"passed", "simulated", "simulatedTime", "steps", "stepper", "bodies", "timeStep",
 //  "energyDrift", "finalEnergyDrift", "worstJointError", "worstJoint", "worstJointMisalignment",
-//  "worstLimitViolation", "worstLimitJoint", "wallTime", "diagnostics": [...]}
+//  "worstLimitViolation", "worstLimitJoint", "wallTime", "startPose": {joint: position},
+//  "diagnostics": [...]}
 Json validation_report_json(const ValidationReport& report);
 // One line: "PASS|FAIL: 3 s simulated in 3000 steps (dWorldStep, 3 bodies), ...".
 std::string validation_summary_line(const ValidationReport& report);

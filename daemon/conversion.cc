@@ -78,6 +78,10 @@ std::string to_hex(const unsigned char* digest, unsigned int length) {
 
 }  // namespace
 
+std::string output_digest(std::span<const std::uint8_t> bytes) {
+  return sha256_hex(std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
+}
+
 std::string sha256_hex(const std::vector<const std::vector<std::uint8_t>*>& parts) {
   std::unique_ptr<EVP_MD_CTX, decltype(&EVP_MD_CTX_free)> context(EVP_MD_CTX_new(), EVP_MD_CTX_free);
   EVP_DigestInit_ex(context.get(), EVP_sha256(), nullptr);
@@ -159,8 +163,9 @@ ConversionOutcome run_conversion(const ConversionJob& job) {
   converted.content_hash = outcome.content_hash;
   converted.output_path = job.output_dir / (job.source.stem().string() + ".rdtf.gltf");
   Diagnostics write_diag(converted.output_path.string());
-  if (!write_rdtf(conversion->asset, converted.output_path, OutputFormat::kGltf, write_diag,
-                  &converted.rdtf_json)) {
+  WriteOptions write_options;
+  write_options.content_digest = output_digest;
+  if (!write_rdtf(conversion->asset, converted.output_path, write_options, write_diag, &converted.rdtf_json)) {
     outcome.diagnostics.append(write_diag);
     outcome.retry = has_code(write_diag, "WRITE_FAILED");
     return finish();
@@ -170,7 +175,9 @@ ConversionOutcome run_conversion(const ConversionJob& job) {
     // URDF is a second output: a model URDF cannot express (a ball joint) still converts.
     Diagnostics urdf_diag(converted.output_path.string());
     const auto urdf_dir = job.output_dir / "urdf";
-    if (write_urdf(*conversion, urdf_dir, *job.urdf, urdf_diag, &converted.urdf)) {
+    UrdfOptions urdf_options = *job.urdf;
+    urdf_options.mesh_digest = output_digest;
+    if (write_urdf(*conversion, urdf_dir, urdf_options, urdf_diag, &converted.urdf)) {
       converted.urdf_path = urdf_dir / "robot.urdf";
     } else if (has_code(urdf_diag, "WRITE_FAILED")) {
       // The disk, not the model: fail the revision and try again, so no output is left behind.

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <filesystem>
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -73,5 +74,10 @@ ConversionOutcome run_conversion(const ConversionJob& job);
 std::string sha256_hex(const std::vector<const std::vector<std::uint8_t>*>& parts);
 // Plain hex SHA-256 of a text (e.g. rdtf_json_sha256, checkable with sha256sum).
 std::string sha256_hex(std::string_view text);
+
+// The digest that names the files beside the daemon's outputs (plain SHA-256, as sha256sum
+// prints it): the .bin of a .rdtf.gltf and the meshes of a robot.urdf are content-addressed, so
+// that renaming the primary file into place commits the whole set (docs/daemon.md, "Outputs").
+std::string output_digest(std::span<const std::uint8_t> bytes);
 
 }  // namespace rdtf::daemon

@@ -9,12 +9,18 @@
 #include <csignal>
 #include <cstring>
 #include <ctime>
+#include <fstream>
 #include <iostream>
+#include <optional>
 #include <regex>
+#include <set>
 
 #include <rdtf/status_t.hpp>
 
 #include "messages.h"
+#include "rdtf/atomic_file.h"
+#include "rdtf/gltf.h"
+#include "rdtf/urdf.h"
 
 namespace rdtf::daemon {
 namespace {
@@ -32,6 +38,39 @@ std::string milliseconds(std::chrono::microseconds duration) {
   char text[32];
   std::snprintf(text, sizeof(text), "%.1f ms", static_cast<double>(duration.count()) / 1000.0);
   return text;
+}
+
+std::optional<std::string> read_text(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return std::nullopt;
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+bool is_gltf_output(const std::string& name) {
+  return name.size() > 10 && name.compare(name.size() - 10, 10, ".rdtf.gltf") == 0;
+}
+
+// The files a primary output (a .rdtf.gltf or a robot.urdf) refers to, canonical; none for any
+// other file; nothing when they cannot be known (unreadable file or folder).
+std::optional<std::set<std::filesystem::path>> files_referenced_by(const std::filesystem::path& path) {
+  const std::string name = path.filename().string();
+  if (!is_gltf_output(name) && name != "robot.urdf") return std::set<std::filesystem::path>{};
+  std::error_code ec;
+  const auto folder = std::filesystem::canonical(path.parent_path(), ec);
+  const auto text = read_text(path);
+  if (ec || !text) return std::nullopt;
+  std::set<std::filesystem::path> files;
+  if (is_gltf_output(name)) {
+    for (auto& file : referenced_files(std::vector<std::uint8_t>(text->begin(), text->end()), folder)) {
+      files.insert(file.lexically_normal());
+    }
+  } else {
+    // write_urdf puts every mesh in <folder>/meshes, whatever prefix its filename has.
+    for (const auto& filename : urdf_mesh_filenames(*text)) {
+      files.insert(folder / "meshes" / std::filesystem::path(filename).filename());
+    }
+  }
+  return files;
 }
 
 std::string first_error(const Diagnostics& diag) {
@@ -104,6 +143,7 @@ bool Daemon::start(std::string& error) {
     return false;
   }
   remove_stale_temporaries();
+  remove_unreferenced_outputs();
   for (int i = 0; i < config_.workers; ++i) workers_.emplace_back([this] { worker_loop(); });
   start_simulation_host();
   rescan("start");
@@ -138,6 +178,37 @@ void Daemon::remove_stale_temporaries() {
   if (removed > 0) {
     log_line("removed " + std::to_string(removed) + " temporary files left in " + config_.output.string() +
              " by an earlier run");
+  }
+}
+
+// Content-addressed files (docs/daemon.md, "Outputs") that no primary output refers to: written by
+// a conversion killed before it renamed its primary file into place. Every model is converted
+// again after a start, so what the primary files on disk refer to is all a reader can need.
+void Daemon::remove_unreferenced_outputs() {
+  std::set<std::filesystem::path> referenced;
+  std::vector<std::filesystem::path> addressed;
+  std::error_code ec;
+  for (std::filesystem::recursive_directory_iterator it(config_.output, ec), end; !ec && it != end; it.increment(ec)) {
+    std::error_code path_error;
+    // Regular files only, never through a symlink: a link is no output of ours to follow or remove.
+    if (!std::filesystem::is_regular_file(it->symlink_status(path_error))) continue;
+    if (is_content_addressed_name(it->path().filename().string())) {
+      const auto folder = std::filesystem::canonical(it->path().parent_path(), path_error);
+      if (!path_error) addressed.push_back(folder / it->path().filename());
+      continue;
+    }
+    const auto files = files_referenced_by(it->path());
+    if (!files) return;  // Leftovers harm no one; removing a file an output needs would.
+    referenced.insert(files->begin(), files->end());
+  }
+  int removed = 0;
+  for (const auto& path : addressed) {
+    std::error_code remove_error;
+    if (referenced.count(path) == 0 && std::filesystem::remove(path, remove_error)) ++removed;
+  }
+  if (removed > 0) {
+    log_line("removed " + std::to_string(removed) + " files no output refers to from " + config_.output.string() +
+             " (written by an earlier run killed before it finished those outputs)");
   }
 }
 

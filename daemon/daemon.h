@@ -60,6 +60,7 @@ class Daemon {
 
   void handle_file_events();
   void remove_stale_temporaries();
+  void remove_unreferenced_outputs();
   void publish_daemon_error(const std::string& code, const std::string& file, const std::string& message);
   void on_publisher_event(const PublisherEvent& event);
   void schedule_retry(const ConversionOutcome& outcome, ModelRecord& record);

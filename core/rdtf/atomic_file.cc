@@ -3,9 +3,12 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <random>
+#include <stdexcept>
+#include <vector>
 
 namespace rdtf {
 namespace {
@@ -24,6 +27,20 @@ bool write_all(int fd, const std::uint8_t* data, std::size_t size, std::string& 
     size -= static_cast<std::size_t>(n);
   }
   return true;
+}
+
+constexpr std::size_t kNameDigits = 16;
+
+bool is_name_digits(std::string_view text) {
+  return text.size() == kNameDigits && std::all_of(text.begin(), text.end(), [](char c) {
+           return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f');
+         });
+}
+
+// "<at least one character>.<16 hex digits>"
+bool ends_with_name_digits(std::string_view text) {
+  return text.size() > kNameDigits + 1 && text[text.size() - kNameDigits - 1] == '.' &&
+         is_name_digits(text.substr(text.size() - kNameDigits));
 }
 
 }  // namespace
@@ -71,6 +88,43 @@ bool write_file_atomically(const std::filesystem::path& path, std::string_view t
   return write_file_atomically(
       path, std::span<const std::uint8_t>(reinterpret_cast<const std::uint8_t*>(text.data()), text.size()),
       why);
+}
+
+std::string content_addressed_name(std::string_view stem, std::string_view extension,
+                                   std::span<const std::uint8_t> bytes, const ContentDigest& digest) {
+  const std::string hex = digest(bytes);
+  if (hex.size() < kNameDigits || !is_name_digits(std::string_view(hex).substr(0, kNameDigits))) {
+    throw std::invalid_argument("content digest '" + hex + "' does not start with " +
+                                std::to_string(kNameDigits) + " lowercase hex digits");
+  }
+  if (ends_with_name_digits(stem)) stem.remove_suffix(kNameDigits + 1);
+  return std::string(stem) + "." + hex.substr(0, kNameDigits) + std::string(extension);
+}
+
+bool is_content_addressed_name(std::string_view file_name) {
+  if (ends_with_name_digits(file_name)) return true;
+  const auto dot = file_name.rfind('.');
+  return dot != std::string_view::npos && dot + 1 < file_name.size() &&
+         ends_with_name_digits(file_name.substr(0, dot));
+}
+
+int remove_unreferenced(const std::filesystem::path& folder, const std::set<std::string>& keep) {
+  std::vector<std::filesystem::path> unreferenced;
+  std::error_code error;
+  for (std::filesystem::directory_iterator it(folder, error), end; !error && it != end; it.increment(error)) {
+    std::error_code type_error;
+    const std::string name = it->path().filename().string();
+    if (std::filesystem::is_regular_file(it->symlink_status(type_error)) && is_content_addressed_name(name) &&
+        keep.count(name) == 0) {
+      unreferenced.push_back(it->path());
+    }
+  }
+  int removed = 0;
+  for (const auto& path : unreferenced) {
+    std::error_code remove_error;
+    if (std::filesystem::remove(path, remove_error)) ++removed;
+  }
+  return removed;
 }
 
 }  // namespace rdtf

@@ -1,5 +1,8 @@
 #include "rdtf/write.h"
 
+#include <deque>
+#include <limits>
+#include <set>
 #include <system_error>
 
 #include "../gltf/confined_files.h"
@@ -66,53 +69,134 @@ std::string mime_type_for(const std::string& uri) {
   return "application/octet-stream";
 }
 
-bool write_gltf(const GltfAsset& asset, const std::filesystem::path& output, Diagnostics& diag,
-                std::string* written_json) {
+// A file beside a .gltf's JSON.
+struct Resource {
+  std::string pointer;                  // "/buffers/0", "/images/2"
+  std::filesystem::path name;           // Relative to the output's folder.
+  std::filesystem::path source;         // The file it was read from, never overwritten with itself.
+  std::span<const std::uint8_t> bytes;
+};
+
+// With a digest, `relative` becomes a content-addressed name directly in the output's folder.
+std::filesystem::path resource_name(const std::filesystem::path& relative, std::span<const std::uint8_t> bytes,
+                                    const WriteOptions& options) {
+  if (!options.content_digest) return relative;
+  return content_addressed_name(relative.stem().string(), relative.extension().string(), bytes,
+                                options.content_digest);
+}
+
+// The external buffers of `document` (data: URIs stay embedded); their URIs are set to where they
+// go when that is a new name.
+void external_buffers(const GltfAsset& asset, Json& document, const std::filesystem::path& output,
+                      const WriteOptions& options, std::vector<Resource>& resources) {
+  if (!document.contains("buffers")) return;
+  Json& buffers = document["buffers"];
+  for (std::size_t i = 0; i < buffers.size(); ++i) {
+    Resource resource{json_pointer("/buffers", i), {}, {}, asset.buffers[i]};
+    const bool has_uri = buffers[i].contains("uri");
+    if (!has_uri) {
+      resource.name = output.stem().string() + (i == 0 ? "" : "_" + std::to_string(i)) + ".bin";
+    } else {
+      const std::string uri = buffers[i]["uri"].get<std::string>();
+      if (internal::is_data_uri(uri)) continue;
+      std::string why;
+      const auto source = internal::resolve_uri(asset.folder, uri, why);
+      const auto relative = internal::resolve_uri(std::filesystem::path("/"), uri, why);
+      if (!source || !relative) continue;  // The loader refused these already.
+      resource.name = relative->relative_path();
+      resource.source = *source;
+    }
+    resource.name = resource_name(resource.name, resource.bytes, options);
+    if (!has_uri || options.content_digest) buffers[i]["uri"] = percent_encode(resource.name.string());
+    resources.push_back(std::move(resource));
+  }
+}
+
+// The external images of `document`, read again from the model's folder into `read`.
+void external_images(const GltfAsset& asset, Json& document, const WriteOptions& options,
+                     std::deque<std::vector<std::uint8_t>>& read, std::vector<Resource>& resources,
+                     Diagnostics& diag) {
+  if (!document.contains("images")) return;
+  Json& images = document["images"];
+  for (std::size_t i = 0; i < images.size(); ++i) {
+    if (!images[i].contains("uri")) continue;
+    const std::string uri = images[i]["uri"].get<std::string>();
+    if (internal::is_data_uri(uri)) continue;
+    Resource resource{json_pointer("/images", i), {}, {}, {}};
+    auto bytes = read_image(asset, uri, resource.source);
+    std::string why;
+    const auto relative = internal::resolve_uri(std::filesystem::path("/"), uri, why);
+    if (!bytes || !relative) {
+      diag.warning("IMAGE_NOT_COPIED", json_pointer("/images", i) + "/uri",
+                   "image '" + uri + "' could not be read, so it is missing beside the output");
+      continue;
+    }
+    resource.bytes = read.emplace_back(std::move(*bytes));
+    resource.name = resource_name(relative->relative_path(), resource.bytes, options);
+    if (options.content_digest) images[i]["uri"] = percent_encode(resource.name.string());
+    resources.push_back(std::move(resource));
+  }
+}
+
+// Writes each resource into `folder`; `created` receives those that were not there before.
+bool write_resources(const std::vector<Resource>& resources, const std::filesystem::path& folder,
+                     Diagnostics& diag, std::vector<std::filesystem::path>& created) {
+  bool ok = true;
+  for (const Resource& resource : resources) {
+    const auto target = folder / resource.name;
+    if (!resource.source.empty() && same_file(resource.source, target)) continue;
+    std::error_code error;
+    const bool existed = std::filesystem::exists(target, error);
+    if (!write_bytes(target, resource.bytes, resource.pointer, diag)) {
+      ok = false;
+    } else if (!existed) {
+      created.push_back(target);
+    }
+  }
+  return ok;
+}
+
+// The names of the files the .gltf at `path` refers to (none when there is no such file).
+std::set<std::string> names_referenced_by(const std::filesystem::path& path) {
+  std::set<std::string> names;
+  std::vector<std::uint8_t> bytes;
+  std::string why;
+  if (!internal::read_regular_file(path, std::numeric_limits<std::uint64_t>::max(), bytes, why)) return names;
+  std::error_code error;
+  const auto folder = std::filesystem::canonical(path.has_parent_path() ? path.parent_path() : ".", error);
+  if (error) return names;
+  for (const auto& file : referenced_files(bytes, folder)) names.insert(file.filename().string());
+  return names;
+}
+
+// After the JSON's rename: files that neither it nor the JSON it replaced refers to go. After a
+// failure: the files this write created go, since no JSON refers to them.
+void tidy_content_addressed(const std::filesystem::path& folder, bool committed, const std::vector<Resource>& resources,
+                            std::set<std::string> keep, const std::vector<std::filesystem::path>& created) {
+  if (!committed) {
+    for (const auto& path : created) {
+      std::error_code error;
+      std::filesystem::remove(path, error);
+    }
+    return;
+  }
+  for (const Resource& resource : resources) keep.insert(resource.name.filename().string());
+  remove_unreferenced(folder, keep);
+}
+
+bool write_gltf(const GltfAsset& asset, const std::filesystem::path& output, const WriteOptions& options,
+                Diagnostics& diag, std::string* written_json) {
   Json document = asset.document;
   const std::filesystem::path folder = output.has_parent_path() ? output.parent_path() : ".";
-  bool ok = true;
-  if (document.contains("buffers")) {
-    Json& buffers = document["buffers"];
-    for (std::size_t i = 0; i < buffers.size(); ++i) {
-      const std::string pointer = json_pointer("/buffers", i);
-      std::filesystem::path target;
-      if (!buffers[i].contains("uri")) {
-        const std::string name = output.stem().string() + (i == 0 ? "" : "_" + std::to_string(i)) + ".bin";
-        buffers[i]["uri"] = percent_encode(name);
-        target = folder / name;
-      } else {
-        const std::string uri = buffers[i]["uri"].get<std::string>();
-        if (internal::is_data_uri(uri)) continue;
-        std::string why;
-        const auto source = internal::resolve_uri(asset.folder, uri, why);
-        const auto relative = internal::resolve_uri(std::filesystem::path("/"), uri, why);
-        if (!source || !relative) continue;  // The loader refused these already.
-        target = folder / relative->relative_path();
-        if (same_file(*source, target)) continue;
-      }
-      ok &= write_bytes(target, asset.buffers[i], pointer, diag);
-    }
-  }
-  if (document.contains("images")) {
-    const Json& images = document["images"];
-    for (std::size_t i = 0; i < images.size(); ++i) {
-      if (!images[i].contains("uri")) continue;
-      const std::string uri = images[i]["uri"].get<std::string>();
-      if (internal::is_data_uri(uri)) continue;
-      std::filesystem::path source;
-      const auto bytes = read_image(asset, uri, source);
-      std::string why;
-      const auto relative = internal::resolve_uri(std::filesystem::path("/"), uri, why);
-      if (!bytes || !relative) {
-        diag.warning("IMAGE_NOT_COPIED", json_pointer("/images", i) + "/uri",
-                     "image '" + uri + "' could not be read, so it is missing beside the output");
-        continue;
-      }
-      const auto target = folder / relative->relative_path();
-      if (same_file(source, target)) continue;
-      ok &= write_bytes(target, *bytes, json_pointer("/images", i), diag);
-    }
-  }
+  std::vector<Resource> resources;
+  std::deque<std::vector<std::uint8_t>> images;
+  external_buffers(asset, document, output, options, resources);
+  external_images(asset, document, options, images, resources, diag);
+  std::vector<std::filesystem::path> created;
+  bool ok = write_resources(resources, folder, diag, created);
+  const bool addressed = static_cast<bool>(options.content_digest);
+  // Read before the JSON is replaced: its files stay for a reader that has just opened it.
+  const auto previous = addressed ? names_referenced_by(output) : std::set<std::string>{};
   // The JSON last: whoever sees it finds its resources already in place.
   const std::string text = document_text(document);
   if (written_json != nullptr) *written_json = text;
@@ -121,6 +205,7 @@ bool write_gltf(const GltfAsset& asset, const std::filesystem::path& output, Dia
     diag.error("WRITE_FAILED", "", "cannot write " + output.string() + ": " + why);
     ok = false;
   }
+  if (addressed) tidy_content_addressed(folder, ok, resources, previous, created);
   return ok;
 }
 
@@ -187,11 +272,18 @@ bool write_glb(const GltfAsset& asset, const std::filesystem::path& output, Diag
 
 std::string document_text(const Json& document) { return document.dump(2) + "\n"; }
 
-bool write_rdtf(const GltfAsset& asset, const std::filesystem::path& output, OutputFormat format,
+bool write_rdtf(const GltfAsset& asset, const std::filesystem::path& output, const WriteOptions& options,
                 Diagnostics& diag, std::string* written_json) {
   diag.set_file(output.string());
-  return format == OutputFormat::kGlb ? write_glb(asset, output, diag, written_json)
-                                      : write_gltf(asset, output, diag, written_json);
+  return options.format == OutputFormat::kGlb ? write_glb(asset, output, diag, written_json)
+                                              : write_gltf(asset, output, options, diag, written_json);
+}
+
+bool write_rdtf(const GltfAsset& asset, const std::filesystem::path& output, OutputFormat format,
+                Diagnostics& diag, std::string* written_json) {
+  WriteOptions options;
+  options.format = format;
+  return write_rdtf(asset, output, options, diag, written_json);
 }
 
 }  // namespace rdtf

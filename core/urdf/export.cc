@@ -1,6 +1,8 @@
 // RDTF -> URDF with urdfdom's own model types and exporter. docs/urdf.md describes the mapping.
+#include <fstream>
 #include <map>
 #include <memory>
+#include <set>
 
 #include <urdf_parser/urdf_parser.h>
 
@@ -114,6 +116,64 @@ urdf::LinkSharedPtr make_link(const std::string& name, const Link* link, const L
   return out;
 }
 
+std::string mesh_file_name(const std::string& link, std::span<const std::uint8_t> stl, const UrdfOptions& options) {
+  return options.mesh_digest ? content_addressed_name(link, ".stl", stl, options.mesh_digest) : link + ".stl";
+}
+
+void collect_mesh_filenames(const TiXmlElement* element, std::vector<std::string>& names) {
+  for (; element != nullptr; element = element->NextSiblingElement()) {
+    if (element->ValueStr() == "mesh" && element->Attribute("filename") != nullptr) {
+      names.emplace_back(element->Attribute("filename"));
+    }
+    collect_mesh_filenames(element->FirstChildElement(), names);
+  }
+}
+
+// The file names (without folder) of the meshes the URDF in `path` refers to; none without one.
+std::set<std::string> mesh_names_referenced_by(const std::filesystem::path& path) {
+  std::set<std::string> names;
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(path, error)) return names;
+  std::ifstream in(path, std::ios::binary);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  for (const auto& filename : urdf_mesh_filenames(text)) {
+    names.insert(std::filesystem::path(filename).filename().string());
+  }
+  return names;
+}
+
+// Writes the meshes into `dir`; `created` receives those that were not there before.
+bool write_meshes(const UrdfExport& exported, const std::filesystem::path& dir, Diagnostics& diag,
+                  std::vector<std::filesystem::path>& created) {
+  std::string why;
+  for (const UrdfMeshFile& mesh : exported.meshes) {
+    const auto target = dir / mesh.path;
+    std::error_code error;
+    const bool existed = std::filesystem::exists(target, error);
+    if (!write_file_atomically(target, mesh.bytes, why)) {
+      diag.error("WRITE_FAILED", "", "cannot write " + target.string() + ": " + why);
+      return false;
+    }
+    if (!existed) created.push_back(target);
+  }
+  return true;
+}
+
+// After robot.urdf's rename: meshes that neither it nor the URDF it replaced names go. After a
+// failure: the meshes this write created go, since no URDF names them.
+void tidy_meshes(const std::filesystem::path& meshes, bool committed, const UrdfExport& exported,
+                 std::set<std::string> keep, const std::vector<std::filesystem::path>& created) {
+  if (!committed) {
+    for (const auto& path : created) {
+      std::error_code error;
+      std::filesystem::remove(path, error);
+    }
+    return;
+  }
+  for (const UrdfMeshFile& mesh : exported.meshes) keep.insert(std::filesystem::path(mesh.path).filename().string());
+  remove_unreferenced(meshes, keep);
+}
+
 std::string vector_text(const urdf::Vector3& v) {
   return exact_number(v.x) + " " + exact_number(v.y) + " " + exact_number(v.z);
 }
@@ -195,10 +255,12 @@ std::optional<UrdfExport> export_urdf(const Conversion& conversion, const UrdfOp
   for (std::size_t l = 0; l < robot.links.size(); ++l) {
     const Link& link = robot.links[l];
     const std::string& name = result.link_names[l];
-    const std::string file = "meshes/" + name + ".stl";
+    auto bytes = surfaces[l].mesh.triangles.empty() ? std::vector<std::uint8_t>{}
+                                                     : stl_bytes(surfaces[l].mesh, "rdtf: link " + name);
+    const std::string file = "meshes/" + mesh_file_name(name, bytes, options);
     model->links_[name] = make_link(name, &link, &surfaces[l], C, options.mesh_uri_prefix + file);
     if (!surfaces[l].mesh.triangles.empty()) {
-      result.meshes.push_back({file, stl_bytes(surfaces[l].mesh, "rdtf: link " + name)});
+      result.meshes.push_back({file, std::move(bytes)});
       if (!surfaces[l].closed) {
         diag.info("URDF_VISUAL_ONLY", node_pointer(link.node),
                   "link '" + name + "': a mesh of it is open or has no volume, so it is visual "
@@ -321,6 +383,14 @@ std::optional<UrdfExport> export_urdf(const Conversion& conversion, const UrdfOp
   return result;
 }
 
+std::vector<std::string> urdf_mesh_filenames(const std::string& urdf_text) {
+  std::vector<std::string> names;
+  TiXmlDocument document;
+  document.Parse(urdf_text.c_str());
+  if (!document.Error()) collect_mesh_filenames(document.RootElement(), names);
+  return names;
+}
+
 bool write_urdf(const Conversion& conversion, const std::filesystem::path& dir,
                 const UrdfOptions& options, Diagnostics& diag, std::string* urdf_text) {
   auto exported = export_urdf(conversion, options, diag);
@@ -331,17 +401,20 @@ bool write_urdf(const Conversion& conversion, const std::filesystem::path& dir,
     diag.error("WRITE_FAILED", "", "cannot create " + (dir / "meshes").string() + ": " + error.message());
     return false;
   }
+  const bool addressed = static_cast<bool>(options.mesh_digest);
+  const auto urdf = dir / "robot.urdf";
+  std::vector<std::filesystem::path> created;
+  // Meshes first: the URDF refers to them.
+  bool ok = write_meshes(*exported, dir, diag, created);
+  // Read before the URDF is replaced: its meshes stay for a reader that has just opened it.
+  const auto previous = addressed ? mesh_names_referenced_by(urdf) : std::set<std::string>{};
   std::string why;
-  for (const UrdfMeshFile& mesh : exported->meshes) {  // Meshes first: the URDF refers to them.
-    if (!write_file_atomically(dir / mesh.path, mesh.bytes, why)) {
-      diag.error("WRITE_FAILED", "", "cannot write " + (dir / mesh.path).string() + ": " + why);
-      return false;
-    }
+  if (ok && !write_file_atomically(urdf, exported->text, why)) {
+    diag.error("WRITE_FAILED", "", "cannot write " + urdf.string() + ": " + why);
+    ok = false;
   }
-  if (!write_file_atomically(dir / "robot.urdf", exported->text, why)) {
-    diag.error("WRITE_FAILED", "", "cannot write " + (dir / "robot.urdf").string() + ": " + why);
-    return false;
-  }
+  if (addressed) tidy_meshes(dir / "meshes", ok, *exported, previous, created);
+  if (!ok) return false;
   if (urdf_text != nullptr) *urdf_text = std::move(exported->text);
   return true;
 }

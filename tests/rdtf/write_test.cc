@@ -2,6 +2,10 @@
 // its input, converting an output again gives it back unchanged, and .glb outputs are complete.
 #include <gtest/gtest.h>
 
+#include <set>
+#include <stdexcept>
+
+#include "conversion.h"  // rdtfd's output_digest: the SHA-256 the daemon names its files with.
 #include "rdtf/convert.h"
 #include "rdtf/write.h"
 #include "support/test_support.h"
@@ -139,6 +143,171 @@ TEST(WriteRdtfFiles, UnwritableTargetIsAnErrorAndLeavesNoTemporaryFile) {
   std::size_t entries = 0;
   for ([[maybe_unused]] const auto& entry : std::filesystem::directory_iterator(out.path())) ++entries;
   EXPECT_EQ(entries, 1u) << "only the directory that was already there";
+}
+
+// ---- Content-addressed names (the daemon's outputs: docs/daemon.md, "Outputs") ----
+
+std::vector<std::uint8_t> bytes_of(const std::string& text) { return {text.begin(), text.end()}; }
+
+// "<stem>.<first 16 hex digits of SHA-256(bytes)><extension>", computed here from the bytes.
+std::string addressed(const std::string& stem, const std::vector<std::uint8_t>& bytes, const std::string& extension) {
+  return stem + "." + daemon::output_digest(bytes).substr(0, 16) + extension;
+}
+
+std::set<std::string> names_in(const std::filesystem::path& folder) {
+  std::set<std::string> names;
+  for (const auto& entry : std::filesystem::directory_iterator(folder)) names.insert(entry.path().filename().string());
+  return names;
+}
+
+WriteOptions content_addressed() {
+  WriteOptions options;
+  options.content_digest = daemon::output_digest;
+  return options;
+}
+
+TEST(WriteContentAddressedName, IsTheStemThenSixteenHexDigitsOfTheDigestThenTheExtension) {
+  // SHA-256("abc") = ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad (FIPS 180-2).
+  const auto abc = bytes_of("abc");
+  EXPECT_EQ(content_addressed_name("m6", ".bin", abc, daemon::output_digest), "m6.ba7816bf8f01cfea.bin");
+  EXPECT_EQ(content_addressed_name("my robot", "", abc, daemon::output_digest), "my robot.ba7816bf8f01cfea");
+  // An output converted again keeps one digest in its name, not two.
+  EXPECT_EQ(content_addressed_name("m6.0123456789abcdef", ".bin", abc, daemon::output_digest),
+            "m6.ba7816bf8f01cfea.bin");
+  EXPECT_THROW(content_addressed_name("m6", ".bin", abc, [](auto) { return std::string("0123"); }),
+               std::invalid_argument);
+  EXPECT_THROW(content_addressed_name("m6", ".bin", abc, [](auto) { return std::string("0123456789ABCDEF"); }),
+               std::invalid_argument);
+}
+
+TEST(WriteContentAddressedName, PatternMatchesOnlyNamesOfThatForm) {
+  for (const char* name : {"m6.ba7816bf8f01cfea.bin", "my robot.ba7816bf8f01cfea", "base.0123456789abcdef.stl",
+                           "a.b.0123456789abcdef.png"}) {
+    EXPECT_TRUE(is_content_addressed_name(name)) << name;
+  }
+  for (const char* name : {"m6.bin", "m6.rdtf.gltf", "robot.urdf", "base.stl", ".0123456789abcdef.bin",
+                           "m6.0123456789ABCDEF.bin", "m6.0123456789abcde.bin", "m6.0123456789abcdef0.bin",
+                           "m6.0123456789abcdef.rdtf.gltf", "m6.0123456789abcdef.bin.tmp",
+                           ".m6.0123456789abcdef.bin.4242-123456.tmp"}) {
+    EXPECT_FALSE(is_content_addressed_name(name)) << name;
+  }
+}
+
+TEST(WriteRdtfContentAddressed, BufferIsNamedAfterItsContentAndTheJsonRefersToIt) {
+  testing::TempDir out;
+  Diagnostics diag;
+  auto conversion = convert_file(testing::data_dir() / "blender" / "arm3.gltf", ConvertOptions{}, diag);
+  ASSERT_TRUE(conversion);
+  std::string json;
+  ASSERT_TRUE(write_rdtf(conversion->asset, out / "arm3.rdtf.gltf", content_addressed(), diag, &json));
+  const std::string bin = addressed("arm3", conversion->asset.buffers[0], ".bin");
+  EXPECT_EQ(names_in(out.path()), (std::set<std::string>{"arm3.rdtf.gltf", bin}));
+  EXPECT_EQ(testing::read_file(out / bin), testing::read_file(testing::data_dir() / "blender" / "arm3.bin"));
+  EXPECT_EQ(testing::read_file(out / "arm3.rdtf.gltf"), json);
+  EXPECT_EQ(Json::parse(json)["buffers"][0]["uri"], bin);
+  Diagnostics load_diag;
+  EXPECT_TRUE(load_gltf(out / "arm3.rdtf.gltf", LoadLimits{}, load_diag));
+}
+
+TEST(WriteRdtfContentAddressed, GlbChunkAndImagesGetContentNamesWithEncodedUris) {
+  testing::TempDir in;
+  testing::TempDir out;
+  // arm3 with a texture image in a subfolder (images are copied, never decoded).
+  std::filesystem::copy_file(testing::data_dir() / "blender" / "arm3.bin", in / "arm3.bin");
+  Json document = Json::parse(testing::read_file(testing::data_dir() / "blender" / "arm3.gltf"));
+  document["images"] = Json::array({Json{{"uri", "tex/wood%20grain.png"}}});
+  std::filesystem::create_directories(in / "tex");
+  testing::write_file(in / "tex" / "wood grain.png", "not really a PNG");
+  testing::write_file(in / "arm3.gltf", document.dump());
+  Diagnostics diag;
+  auto conversion = convert_file(in / "arm3.gltf", ConvertOptions{}, diag);
+  ASSERT_TRUE(conversion);
+  ASSERT_TRUE(write_rdtf(conversion->asset, out / "my robot.gltf", content_addressed(), diag));
+  const std::string bin = addressed("arm3", conversion->asset.buffers[0], ".bin");
+  const std::string png = addressed("wood grain", bytes_of("not really a PNG"), ".png");
+  EXPECT_EQ(names_in(out.path()), (std::set<std::string>{"my robot.gltf", bin, png}));
+  const auto written = Json::parse(testing::read_file(out / "my robot.gltf"));
+  EXPECT_EQ(written["images"][0]["uri"], "wood%20grain." + png.substr(11));
+  EXPECT_EQ(testing::read_file(out / png), "not really a PNG");
+
+  // A GLB's binary chunk: "<output stem>.<digest>.bin".
+  Diagnostics glb_diag;
+  auto glb = convert_file(testing::data_dir() / "blender" / "arm3.glb", ConvertOptions{}, glb_diag);
+  ASSERT_TRUE(glb);
+  testing::TempDir glb_out;
+  ASSERT_TRUE(write_rdtf(glb->asset, glb_out / "my robot.gltf", content_addressed(), glb_diag));
+  const std::string chunk = addressed("my robot", glb->asset.buffers[0], ".bin");
+  EXPECT_EQ(names_in(glb_out.path()), (std::set<std::string>{"my robot.gltf", chunk}));
+  EXPECT_EQ(Json::parse(testing::read_file(glb_out / "my robot.gltf"))["buffers"][0]["uri"],
+            "my%20robot." + chunk.substr(9));
+}
+
+// arm3 whose buffer carries `padding` zero bytes more (counted in byteLength): a new revision.
+GltfAsset arm3_revision(const GltfAsset& asset, std::size_t padding) {
+  GltfAsset revision = asset;
+  revision.buffers[0].resize(revision.buffers[0].size() + padding, 0);
+  revision.document["buffers"][0]["byteLength"] = revision.buffers[0].size();
+  return revision;
+}
+
+TEST(WriteRdtfContentAddressed, EachWriteKeepsThePreviousGenerationAndRemovesWhatNoneRefersTo) {
+  testing::TempDir out;
+  Diagnostics diag;
+  auto conversion = convert_file(testing::data_dir() / "blender" / "arm3.gltf", ConvertOptions{}, diag);
+  ASSERT_TRUE(conversion);
+  const auto output = out / "arm3.rdtf.gltf";
+  // Left by writes that never committed (a killed daemon), and files that are no one's to remove.
+  const std::string orphan = "arm3.0123456789abcdef.bin";
+  testing::write_file(out / orphan, "orphan");
+  testing::write_file(out / "arm3.bin", "not content-addressed");
+  std::filesystem::create_directories(out / "urdf.0123456789abcdef");
+  // A link is nothing of ours: neither it nor what it points to goes.
+  testing::TempDir elsewhere;
+  testing::write_file(elsewhere / "precious", "not the writer's");
+  std::filesystem::create_symlink(elsewhere / "precious", out / "arm3.7777777777777777.bin");
+  const std::set<std::string> others{"arm3.rdtf.gltf", "arm3.bin", "urdf.0123456789abcdef", "arm3.7777777777777777.bin"};
+
+  std::vector<std::string> bins;
+  for (std::size_t padding : {0, 4, 8}) {
+    const GltfAsset revision = arm3_revision(conversion->asset, padding);
+    ASSERT_TRUE(write_rdtf(revision, output, content_addressed(), diag));
+    bins.push_back(addressed("arm3", revision.buffers[0], ".bin"));
+    // The first write has no previous JSON: only its own .bin stays; later ones keep one before.
+    std::set<std::string> expected = others;
+    expected.insert(bins.back());
+    if (bins.size() > 1) expected.insert(bins[bins.size() - 2]);
+    EXPECT_EQ(names_in(out.path()), expected);
+    EXPECT_EQ(std::filesystem::file_size(out / bins.back()), revision.buffers[0].size());
+  }
+  // The same content again: the same name, and the generation before it is now the same files.
+  ASSERT_TRUE(write_rdtf(arm3_revision(conversion->asset, 8), output, content_addressed(), diag));
+  std::set<std::string> expected = others;
+  expected.insert(bins[2]);
+  EXPECT_EQ(names_in(out.path()), expected);
+  EXPECT_EQ(testing::read_file(elsewhere / "precious"), "not the writer's");
+}
+
+TEST(WriteRdtfContentAddressed, FailedWriteLeavesNoFileItCreatedAndKeepsTheCommittedOutput) {
+  testing::TempDir out;
+  Diagnostics diag;
+  auto conversion = convert_file(testing::data_dir() / "blender" / "arm3.gltf", ConvertOptions{}, diag);
+  ASSERT_TRUE(conversion);
+  const auto output = out / "arm3.rdtf.gltf";
+  ASSERT_TRUE(write_rdtf(conversion->asset, output, content_addressed(), diag));
+  const std::string committed = testing::read_file(output);
+  const std::string bin = addressed("arm3", conversion->asset.buffers[0], ".bin");
+
+  // The JSON cannot be replaced (a directory took its place): the new revision's .bin goes again.
+  const GltfAsset revision = arm3_revision(conversion->asset, 4);
+  std::filesystem::rename(output, out / "saved.json");
+  std::filesystem::create_directories(output / "occupied");
+  Diagnostics write_diag;
+  EXPECT_FALSE(write_rdtf(revision, output, content_addressed(), write_diag));
+  ASSERT_TRUE(write_diag.contains("WRITE_FAILED"));
+  const std::string error = format(write_diag.all().front());
+  EXPECT_NE(error.find(output.string()), std::string::npos) << error;
+  EXPECT_EQ(names_in(out.path()), (std::set<std::string>{"arm3.rdtf.gltf", "saved.json", bin}));
+  EXPECT_EQ(testing::read_file(out / "saved.json"), committed);
 }
 
 }  // namespace

@@ -1,10 +1,15 @@
 // URDF export against closed forms: a box's inertia permuted to Z up, an authored full tensor
 // written digit for digit, a thin plate whose A + B >= C survives only at full precision, joints
 // with every URDF field, names, meshes in the link frame, and what URDF cannot say.
+#include <mujoco/mujoco.h>
+
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <memory>
+#include <set>
 
+#include "conversion.h"  // rdtfd's output_digest: the SHA-256 the daemon names its files with.
 #include "rdtf/mass_properties.h"
 #include "urdf/urdf_test_support.h"
 
@@ -285,6 +290,156 @@ TEST(UrdfExport, BallJointAndPrismaticWithoutLimitsAreRefusedAndNothingIsWritten
     EXPECT_NE(errors[0].message.find("'hip'"), std::string::npos) << errors[0].message;
     EXPECT_FALSE(std::filesystem::exists(dir / "out"));
   }
+}
+
+// ---- Content-addressed mesh names (the daemon's URDF: docs/urdf.md, "Mesh files in rdtfd") ----
+
+UrdfOptions content_addressed() {
+  UrdfOptions options;
+  options.mesh_digest = daemon::output_digest;
+  return options;
+}
+
+// "<link>.<first 16 hex digits of SHA-256(stl)>.stl", computed here from the bytes.
+std::string addressed(const std::string& link, const std::vector<std::uint8_t>& stl) {
+  return link + "." + daemon::output_digest(stl).substr(0, 16) + ".stl";
+}
+
+std::set<std::string> names_in(const std::filesystem::path& folder) {
+  std::set<std::string> names;
+  for (const auto& entry : std::filesystem::directory_iterator(folder)) names.insert(entry.path().filename().string());
+  return names;
+}
+
+std::set<std::string> file_names(const std::vector<std::string>& paths) {
+  std::set<std::string> names;
+  for (const auto& path : paths) names.insert(std::filesystem::path(path).filename().string());
+  return names;
+}
+
+std::set<std::string> mesh_names(const UrdfExport& exported) {
+  std::vector<std::string> paths;
+  for (const UrdfMeshFile& mesh : exported.meshes) paths.push_back(mesh.path);
+  return file_names(paths);
+}
+
+// base -> continuous "hinge" -> arm, both boxes of edge `size`.
+Conversion two_boxes(float size) {
+  GltfBuilder b;
+  const int mesh = b.box_mesh(Eigen::Vector3f(size, size, size));
+  const int base = b.node("base", -1, Json{{"mesh", mesh}});
+  const int hinge = b.node("hinge", base, Json{{"translation", {0.0, 1.0, 0.0}},
+                                               {"extras", {{"rdtf_joint", "continuous"}, {"rdtf_axis", {1, 0, 0}}}}});
+  b.link_with_mesh("arm", hinge, mesh);
+  Diagnostics diag;
+  return b.convert(diag);
+}
+
+TEST(UrdfExport, ContentAddressedMeshesAreNamedAfterLinkAndContentAndTheUrdfRefersToThem) {
+  const Conversion conversion = convert_fixture("two_cylinder.gltf");
+  Diagnostics diag;
+  const auto exported = export_urdf(conversion, content_addressed(), diag);
+  ASSERT_TRUE(exported);
+  ASSERT_EQ(exported->meshes.size(), conversion.robot.links.size());  // Every link has a mesh.
+  std::set<std::string> expected;
+  for (std::size_t l = 0; l < exported->meshes.size(); ++l) {
+    const UrdfMeshFile& mesh = exported->meshes[l];
+    EXPECT_EQ(mesh.path, "meshes/" + addressed(exported->link_names[l], mesh.bytes));
+    EXPECT_NE(exported->text.find("<mesh filename=\"" + mesh.path + "\""), std::string::npos) << exported->text;
+    expected.insert(addressed(exported->link_names[l], mesh.bytes));
+  }
+  // <visual> and <collision> of each link name its one file, and nothing else is named.
+  EXPECT_EQ(urdf_mesh_filenames(exported->text).size(), 2 * expected.size());
+  EXPECT_EQ(file_names(urdf_mesh_filenames(exported->text)), expected);
+
+  TempDir dir;
+  EXPECT_EQ(export_to(conversion, dir.path(), content_addressed()), exported->text);
+  EXPECT_EQ(testing::read_file(dir / "robot.urdf"), exported->text);
+  EXPECT_EQ(names_in(dir / "meshes"), expected);
+  for (const UrdfMeshFile& mesh : exported->meshes) {
+    const std::string written = testing::read_file(dir / mesh.path);
+    EXPECT_EQ(std::vector<std::uint8_t>(written.begin(), written.end()), mesh.bytes) << mesh.path;
+  }
+  expect_check_urdf_passes(dir / "robot.urdf");
+}
+
+// MuJoCo looks a URDF mesh up by its file name in meshdir and names the mesh after the file
+// without its last extension: "<link>.<digest>" is a mesh name like any other.
+TEST(UrdfExport, MujocoFindsContentAddressedMeshesInItsMeshdir) {
+  const Conversion conversion = convert_fixture("arm3.gltf");
+  Diagnostics diag;
+  const auto exported = export_urdf(conversion, content_addressed(), diag);
+  ASSERT_TRUE(exported);
+  TempDir dir;
+  export_to(conversion, dir.path(), content_addressed());
+  char error[1000] = "";
+  const std::unique_ptr<mjModel, void (*)(mjModel*)> m(
+      mj_loadXML((dir / "robot.urdf").c_str(), nullptr, error, sizeof error), mj_deleteModel);
+  ASSERT_TRUE(m) << "MuJoCo refused the export: " << error;
+  EXPECT_STREQ(error, "");
+  EXPECT_EQ(m->nbody, static_cast<int>(conversion.robot.links.size()) + 1);
+  ASSERT_EQ(m->nmesh, static_cast<int>(exported->meshes.size()));
+  for (const UrdfMeshFile& mesh : exported->meshes) {
+    const std::string name = std::filesystem::path(mesh.path).stem().string();
+    const int id = mj_name2id(m.get(), mjOBJ_MESH, name.c_str());
+    ASSERT_GE(id, 0) << name;
+    std::string why;
+    const auto ours = parse_stl(mesh.bytes, why);
+    ASSERT_TRUE(ours) << why;
+    EXPECT_EQ(m->mesh_facenum[id], static_cast<int>(ours->triangles.size())) << name;
+  }
+}
+
+TEST(UrdfExport, ContentAddressedWritesKeepThePreviousGenerationOfMeshesAndRemoveOlderOnes) {
+  TempDir dir;
+  const auto meshes = dir / "meshes";
+  std::filesystem::create_directories(meshes);
+  // Left by a write that never committed (a killed daemon), and a file that is no one's to remove.
+  testing::write_file(meshes / "base.0123456789abcdef.stl", "left by a killed write");
+  testing::write_file(meshes / "base.stl", "not content-addressed");
+  std::vector<std::set<std::string>> generations;
+  for (float size : {0.2f, 0.3f, 0.4f}) {
+    SCOPED_TRACE(size);
+    const Conversion conversion = two_boxes(size);
+    Diagnostics diag;
+    const auto exported = export_urdf(conversion, content_addressed(), diag);
+    ASSERT_TRUE(exported);
+    generations.push_back(mesh_names(*exported));
+    ASSERT_EQ(generations.back().size(), 2u);
+    export_to(conversion, dir.path(), content_addressed());
+    std::set<std::string> expected = generations.back();
+    expected.insert("base.stl");
+    if (generations.size() > 1) {
+      const auto& before = generations[generations.size() - 2];
+      expected.insert(before.begin(), before.end());
+    }
+    EXPECT_EQ(names_in(meshes), expected);
+    EXPECT_EQ(file_names(urdf_mesh_filenames(testing::read_file(dir / "robot.urdf"))), generations.back());
+  }
+}
+
+TEST(UrdfExport, FailedContentAddressedWriteLeavesNoMeshItCreated) {
+  TempDir dir;
+  export_to(two_boxes(0.2f), dir.path(), content_addressed());
+  const auto committed = names_in(dir / "meshes");
+  // robot.urdf cannot be replaced (a directory took its place): the new meshes go again.
+  std::filesystem::rename(dir / "robot.urdf", dir / "saved.urdf");
+  std::filesystem::create_directories(dir / "robot.urdf" / "occupied");
+  Diagnostics diag;
+  EXPECT_FALSE(write_urdf(two_boxes(0.3f), dir.path(), content_addressed(), diag));
+  const auto errors = with_code(diag, "WRITE_FAILED");
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_NE(errors[0].message.find((dir / "robot.urdf").string()), std::string::npos) << errors[0].message;
+  EXPECT_EQ(names_in(dir / "meshes"), committed);
+}
+
+TEST(UrdfExport, MeshFilenamesOfAnUrdfText) {
+  EXPECT_EQ(urdf_mesh_filenames(R"(<robot name="r"><link name="a"><visual><geometry><mesh filename="meshes/a.stl"/>)"
+                                R"(</geometry></visual><collision><geometry>)"
+                                R"(<mesh filename="package://p/b.stl" scale="1 1 1"/></geometry></collision></link>)"
+                                R"(<link name="c"><visual><geometry><box size="1 1 1"/></geometry></visual></link></robot>)"),
+            (std::vector<std::string>{"meshes/a.stl", "package://p/b.stl"}));
+  EXPECT_TRUE(urdf_mesh_filenames("not XML <").empty());
 }
 
 }  // namespace

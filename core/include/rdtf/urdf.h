@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "rdtf/atomic_file.h"
 #include "rdtf/convert.h"
 #include "rdtf/diagnostics.h"
 
@@ -29,10 +30,17 @@ struct UrdfOptions {
   // Add <mujoco><compiler meshdir="meshes" fusestatic="false" inertiafromgeom="false"/></mujoco>
   // so that MuJoCo finds the meshes and keeps one body per link with our inertials.
   bool mujoco_compiler = true;
+  // How mesh files are named. Empty (`rdtf urdf`): "meshes/<link>.stl", overwritten in place.
+  // Given (rdtfd): content-addressed, "meshes/<link>.<16 hex digits of the digest>.stl"
+  // (atomic_file.h): write_urdf writes them before robot.urdf, whose rename commits them all,
+  // then removes every content-addressed file of DIR/meshes that neither the new nor the replaced
+  // robot.urdf refers to (a reader that opened the previous URDF a moment ago still finds its
+  // meshes). DIR is taken to hold this one URDF.
+  ContentDigest mesh_digest;
 };
 
 struct UrdfMeshFile {
-  std::string path;                 // Relative to the URDF's folder: "meshes/<link>.stl".
+  std::string path;                 // Relative to the URDF's folder: "meshes/<link>[.<hash>].stl".
   std::vector<std::uint8_t> bytes;  // Binary STL.
 };
 
@@ -49,9 +57,13 @@ std::optional<UrdfExport> export_urdf(const Conversion& conversion, const UrdfOp
                                       Diagnostics& diag);
 
 // export_urdf, then DIR/robot.urdf and DIR/meshes/<link>.stl, each written atomically (meshes
-// first). `urdf_text`, when given, receives the URDF.
+// first). `urdf_text`, when given, receives the URDF. With content-addressed names
+// (UrdfOptions::mesh_digest) no mesh file this call created is left behind when it fails.
 bool write_urdf(const Conversion& conversion, const std::filesystem::path& dir,
                 const UrdfOptions& options, Diagnostics& diag, std::string* urdf_text = nullptr);
+
+// The filename of every <mesh> in a URDF's text, as written (empty when the text is no XML).
+std::vector<std::string> urdf_mesh_filenames(const std::string& urdf_text);
 
 // Binary STL of triangles (little endian, float32, facet normals from the winding).
 std::vector<std::uint8_t> stl_bytes(const TriangleMesh& mesh, const std::string& header);

@@ -2,7 +2,9 @@
 #pragma once
 
 #include <filesystem>
+#include <string>
 
+#include "rdtf/atomic_file.h"
 #include "rdtf/diagnostics.h"
 #include "rdtf/gltf.h"
 
@@ -10,12 +12,28 @@ namespace rdtf {
 
 enum class OutputFormat { kGltf, kGlb };
 
-// .gltf: the JSON, and every external buffer and image copied beside it under the same relative
-// URI (a GLB's binary chunk becomes "<name>.bin"); data: URIs stay embedded.
+struct WriteOptions {
+  OutputFormat format = OutputFormat::kGltf;
+  // How the files beside a .gltf are named (a .glb has none).
+  // Empty (`rdtf convert`): under the input's relative URI (a GLB's binary chunk as
+  // "<name>.bin"), overwriting what is there.
+  // Given (rdtfd): content-addressed, "<stem>.<16 hex digits of the digest>.<ext>" directly in the
+  // output's folder (atomic_file.h), written before the JSON, whose rename commits them all. Once
+  // the JSON is in place, every content-addressed file of the folder that neither it nor the JSON
+  // it replaced refers to is removed: a reader that opened the previous JSON a moment ago still
+  // finds its files. The folder is taken to hold this one output (the daemon's per-model folder).
+  ContentDigest content_digest;
+};
+
+// .gltf: the JSON, and every external buffer and image copied beside it (named as
+// WriteOptions says; data: URIs stay embedded).
 // .glb: every buffer merged into the binary chunk and every external image embedded through a
-// buffer view. Each file is written atomically. False (and errors) if anything could not be
-// written; files already written stay valid on their own.
+// buffer view. Each file is written atomically, the JSON last. False (and errors) if anything
+// could not be written; files already written stay valid on their own, and with content-addressed
+// names no file this call created is left behind.
 // `written_json`, when given, receives the JSON text as written (for .glb, the JSON chunk).
+bool write_rdtf(const GltfAsset& asset, const std::filesystem::path& output, const WriteOptions& options,
+                Diagnostics& diag, std::string* written_json = nullptr);
 bool write_rdtf(const GltfAsset& asset, const std::filesystem::path& output, OutputFormat format,
                 Diagnostics& diag, std::string* written_json = nullptr);
 

@@ -312,7 +312,9 @@ void report_urdfdom_failure(const XmlRobot& xml, const ConsoleMessages& messages
 std::optional<Conversion> import_urdf(const fs::path& urdf, const UrdfImportOptions& options,
                                       Diagnostics& diag) {
   diag.set_file(urdf.string());
-  const auto text = read_text(urdf, options.convert.limits.max_file_bytes, diag);
+  const auto file_text = read_text(urdf, options.convert.limits.max_file_bytes, diag);
+  if (!file_text) return std::nullopt;
+  const auto text = urdf_text_as_utf8(*file_text, diag);
   if (!text) return std::nullopt;
   const auto xml = scan_urdf_xml(*text, diag);
   if (!xml) return std::nullopt;
@@ -330,6 +332,23 @@ std::optional<Conversion> import_urdf(const fs::path& urdf, const UrdfImportOpti
 
   Builder b(urdf, options, diag,
             options.z_up ? Eigen::Matrix3d::Identity() : Eigen::Matrix3d(y_up_to_z_up().transpose()));
+
+  // The scan and urdfdom must agree on every name (they read the same UTF-8 text); should they
+  // ever not, that is an error here rather than a lookup of something urdfdom never made.
+  bool agreed = true;
+  for (const XmlLink& link : xml->links) {
+    if (model->getLink(link.name)) continue;
+    diag.error("URDF_PARSE_FAILED", link_pointer(link.name),
+               "line " + std::to_string(link.row) + ": urdfdom reads no link named '" + link.name + "'");
+    agreed = false;
+  }
+  for (const XmlJoint& joint : xml->joints) {
+    if (model->getJoint(joint.name)) continue;
+    diag.error("URDF_PARSE_FAILED", joint_pointer(joint.name),
+               "line " + std::to_string(joint.row) + ": urdfdom reads no joint named '" + joint.name + "'");
+    agreed = false;
+  }
+  if (!agreed) return std::nullopt;
 
   // Links depth first from the root, children in document order.
   std::map<std::string, std::size_t> xml_link;

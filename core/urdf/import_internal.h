@@ -7,6 +7,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <Eigen/Core>
@@ -16,6 +17,12 @@
 #include "rdtf/triangle_mesh.h"
 
 namespace rdtf::urdf_internal {
+
+// The URDF's text checked to be UTF-8 throughout, with numeric character references beyond ASCII
+// ("&#xE9;") written out as UTF-8, so that urdfdom (TinyXML's legacy encoding, which would make
+// one byte of them) and the scan below read the same names. URDF_NOT_UTF8 at the line and column
+// of a byte that is not UTF-8 or a reference to no Unicode character (a surrogate).
+std::optional<std::string> urdf_text_as_utf8(std::string_view text, Diagnostics& diag);
 
 struct XmlLink {
   std::string name;

@@ -1,10 +1,12 @@
-// Every reproducer the fuzz targets found, fed through the entry point of the target that found
-// it (fuzz/fuzz_pipeline.h, the same code the fuzzers run): each must be refused with the error
-// tests/data/fuzz-regressions/expected.json names, and keep the bad-input contract (no crash,
-// diagnostics that can be written as JSON).
+// Every reproducer the fuzz targets found, fed through run_target (fuzz/fuzz_pipeline.h), the
+// very code the fuzz target that found it runs on each input: tests/data/fuzz-regressions/
+// <target>/<file>. Each must keep the bad-input contract (no crash, an error diagnostic with a
+// code for every refusal, diagnostics and summaries that can be written as JSON, output that
+// converts again) and end as tests/data/fuzz-regressions/expected.json says: refused with the
+// error code named there, or converted when it says "OK" (a valid input that used to crash).
 #include <gtest/gtest.h>
 
-#include <set>
+#include <algorithm>
 
 #include "../../fuzz/fuzz_pipeline.h"
 #include "rdtf/summary.h"
@@ -21,43 +23,84 @@ nlohmann::json expected_codes() {
   return nlohmann::json::parse(testing::read_file(regressions_dir() / "expected.json"));
 }
 
-// The entry point of the fuzz target a reproducer's folder is named after.
-fuzz::RunResult run_reproducer(const std::string& target, const std::vector<std::uint8_t>& bytes,
-                               const fs::path& folder) {
-  if (target == "convert_gltf" || target == "convert_glb") return fuzz::convert_bytes(bytes, folder);
-  std::string roundtrip_failure;
-  if (target == "glb") return fuzz::parse_glb_bytes(bytes, roundtrip_failure);
-  ADD_FAILURE() << "no entry point for target '" << target << "'";
-  return fuzz::RunResult();
+// The target a reproducer belongs to: its folder.
+std::string target_of(const std::string& name) {
+  const fs::path path(name);
+  return path.has_parent_path() ? path.begin()->string() : std::string();
 }
 
-TEST(FuzzRegressions, EveryReproducerIsRefusedWithItsError) {
+TEST(FuzzRegressions, EveryReproducerEndsAsExpected) {
   const nlohmann::json expected = expected_codes();
   std::size_t checked = 0;
   for (const auto& [name, code] : expected.items()) {
     if (name == "comment") continue;
     SCOPED_TRACE(name);
-    const fs::path file = regressions_dir() / name;
     testing::TempDir folder;
-    const fuzz::RunResult run =
-        run_reproducer(fs::path(name).parent_path().string(), fuzz::read_bytes(file), folder.path());
-    EXPECT_FALSE(run.succeeded);
-    EXPECT_TRUE(run.diag.contains(code.get<std::string>())) << "expected " << code;
-    EXPECT_EQ(fuzz::contract_violation(run), "");
+    const fuzz::Workspace workspace = fuzz::make_workspace(folder.path(), testing::data_dir());
+    const fuzz::TargetRun result =
+        fuzz::run_target(target_of(name), fuzz::read_bytes(regressions_dir() / name), workspace);
+    EXPECT_FALSE(result.not_for_target) << "the target skips this input";
+    EXPECT_EQ(result.violation, "");
+    if (code == "OK") {
+      EXPECT_TRUE(result.run.succeeded);
+      for (const Diagnostic& d : result.run.diag.all()) {
+        if (d.severity == Severity::kError) ADD_FAILURE() << format(d);
+      }
+    } else {
+      EXPECT_FALSE(result.run.succeeded);
+      EXPECT_TRUE(result.run.diag.contains(code.get<std::string>())) << "expected " << code;
+      if (!result.run.diag.contains(code.get<std::string>())) {
+        for (const Diagnostic& d : result.run.diag.all()) ADD_FAILURE() << format(d);
+      }
+    }
     ++checked;
   }
   EXPECT_GE(checked, 2u);
 }
 
-// A reproducer nobody listed would never run: every file below a target folder must be listed.
+// A reproducer nobody listed would never run: every file below a target folder must be listed,
+// with an error code or "OK", and every target folder must be a target.
 TEST(FuzzRegressions, EveryReproducerIsListed) {
   const nlohmann::json expected = expected_codes();
   for (const auto& entry : fs::recursive_directory_iterator(regressions_dir())) {
     if (!entry.is_regular_file()) continue;
     const std::string name = fs::relative(entry.path(), regressions_dir()).generic_string();
-    if (name == "expected.json" || name.rfind("pending/", 0) == 0) continue;
+    if (name == "expected.json") continue;
     EXPECT_TRUE(expected.contains(name)) << name << " is not in expected.json";
   }
+  for (const auto& [name, code] : expected.items()) {
+    if (name == "comment") continue;
+    EXPECT_TRUE(fs::is_regular_file(regressions_dir() / name)) << name << " is listed but missing";
+    EXPECT_TRUE(code.is_string() && !code.get<std::string>().empty()) << name;
+    const std::string target = target_of(name);
+    EXPECT_TRUE(std::find(std::begin(fuzz::kTargets), std::end(fuzz::kTargets), target) !=
+                std::end(fuzz::kTargets))
+        << name << ": '" << target << "' is not a fuzz target";
+  }
+}
+
+// The regression tests and the fuzzers share run_target: a reproducer replayed here is the input
+// the fuzzer ran. One input per target that must convert (or parse), through the same call.
+TEST(FuzzRegressions, EveryTargetRunsAValidInput) {
+  testing::TempDir folder;
+  const fuzz::Workspace workspace = fuzz::make_workspace(folder.path(), testing::data_dir());
+  const auto khronos = fuzz::read_bytes(testing::data_dir() / "khronos/Box.gltf");
+  const auto arm3_glb = fuzz::read_bytes(testing::data_dir() / "blender/arm3.glb");
+  const auto urdf = fuzz::read_bytes(testing::data_dir() / "urdf/urdf_tutorial/02-multipleshapes.urdf");
+  const std::pair<std::string_view, std::vector<std::uint8_t>> inputs[] = {
+      {"convert_gltf", khronos}, {"convert_glb", arm3_glb}, {"glb", arm3_glb},
+      {"extras", fuzz::to_bytes(R"({"version":"1.0"})")}, {"urdf_import", urdf}};
+  for (const auto& [target, bytes] : inputs) {
+    SCOPED_TRACE(std::string(target));
+    const fuzz::TargetRun result = fuzz::run_target(target, bytes, workspace);
+    EXPECT_FALSE(result.not_for_target);
+    EXPECT_TRUE(result.run.succeeded);
+    EXPECT_EQ(result.violation, "");
+  }
+  EXPECT_TRUE(fuzz::run_target("convert_gltf", arm3_glb, workspace).not_for_target);
+  EXPECT_TRUE(fuzz::run_target("convert_glb", khronos, workspace).not_for_target);
+  EXPECT_TRUE(fuzz::run_target("extras", fuzz::to_bytes("{"), workspace).not_for_target);
+  EXPECT_NE(fuzz::run_target("no_such_target", khronos, workspace).violation, "");
 }
 
 // The parse error quotes the bytes it stopped at: not UTF-8, so the JSON of the diagnostics

@@ -168,6 +168,17 @@ const BadUrdf kBadUrdfs[] = {
      "URDF_PARSE_FAILED", "/robot/material[@name='m']", "line 3: urdfdom cannot read it: material 'm' is not unique"},
     {"robot without a name", "<robot>\n<link name=\"a\"/>\n</robot>\n", "URDF_PARSE_FAILED", "/robot",
      "line 1: urdfdom cannot read it: No name given for the robot"},
+    // Names become glTF names, which JSON needs in UTF-8 (found by fuzzing: a crash, then an
+    // internal error).
+    {"name_not_utf8", "<robot name=\"r\">\n<link name=\"a\x92"
+                      "b\"/>\n</robot>\n", "URDF_NOT_UTF8", "",
+     "line 2, column 14 (byte 31): byte 0x92 is not UTF-8"},
+    {"truncated_utf8_sequence", "<robot name=\"r\">\n<link name=\"caf\xC3\"/>\n</robot>\n", "URDF_NOT_UTF8", "",
+     "line 2, column 16 (byte 33): byte 0xC3 is not UTF-8"},
+    {"surrogate_character_reference", "<robot name=\"r\">\n<link name=\"a&#xD800;\"/>\n</robot>\n", "URDF_NOT_UTF8",
+     "", "line 2, column 14 (byte 31): the character reference '&#xD800;' is not a Unicode character"},
+    {"character_reference_beyond_unicode", "<robot name=\"r\">\n<link name=\"a&#1114112;\"/>\n</robot>\n",
+     "URDF_NOT_UTF8", "", "the character reference '&#1114112;' is not a Unicode character"},
 };
 
 class UrdfImportErrors : public ::testing::TestWithParam<BadUrdf> {};

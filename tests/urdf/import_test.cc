@@ -74,6 +74,24 @@ TEST(UrdfImport, TutorialRobotsBecomeValidRdtf) {
   }
 }
 
+// A numeric character reference is the character itself: "caf&#xE9;" and "caf&#233;" name the
+// link and joint "café" (found by fuzzing: urdfdom's TinyXML made one byte of it, and import
+// crashed looking up a link by the other reading).
+TEST(UrdfImport, CharacterReferencesInNamesAreTheirCharacters) {
+  TempDir dir;
+  testing::write_file(dir / "robot.urdf",
+                      "<robot name=\"r&#x1F916;\">\n<link name=\"caf&#xE9;\"/>\n<link name=\"b\"/>\n"
+                      "<joint name=\"caf&#233;_j\" type=\"fixed\"><parent link=\"caf&#xE9;\"/><child link=\"b\"/></joint>\n"
+                      "</robot>\n");
+  Diagnostics diag;
+  const Conversion conversion = import_or_fail(dir / "robot.urdf", diag);
+  std::vector<std::string> names;
+  for (const auto& node : conversion.asset.document["nodes"]) names.push_back(node.value("name", ""));
+  EXPECT_NE(std::find(names.begin(), names.end(), "caf\xC3\xA9"), names.end()) << ::testing::PrintToString(names);
+  EXPECT_NE(std::find(names.begin(), names.end(), "caf\xC3\xA9_j"), names.end()) << ::testing::PrintToString(names);
+  expect_valid_gltf(conversion, dir / "robot.gltf");
+}
+
 TEST(UrdfImport, AuthoredInertialsAreKeptAndColladaMeshesSkippedWithAWarning) {
   Diagnostics diag;
   const Conversion conversion = import_or_fail(tutorial("07-physics.urdf"), diag);

@@ -1,7 +1,8 @@
 #include "config.h"
 
-#include <cstdlib>
 #include <algorithm>
+#include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <type_traits>
 
@@ -66,6 +67,19 @@ bool read_ms(const nlohmann::json& json, const char* key, std::chrono::milliseco
 
 }  // namespace
 
+const std::vector<std::string>& config_keys() {
+  static const std::vector<std::string> keys{
+      "watch", "output", "lcm_url", "channel_prefix", "settle_ms", "max_open_wait_ms",
+      "republish_period_ms", "status_period_ms", "workers", "max_chunk_bytes",
+      "chunk_rate_bytes_per_s", "default_density", "max_file_bytes", "max_buffer_bytes",
+      "max_accessor_count", "max_triangles", "validate", "validation_seconds", "publish_failed",
+      "simulate", "state_rate_hz", "real_time_factor", "floating_root", "gravity", "time_step",
+      "stepper", "max_mass_ratio", "validation_start_offset_rad", "energy_tolerance",
+      "joint_separation_tolerance_m", "limit_tolerance_rad", "limit_tolerance_m", "urdf",
+      "urdf_y_up"};
+  return keys;
+}
+
 DaemonConfig default_config() {
   DaemonConfig config;
   config.watch = {xdg_folder("XDG_DATA_HOME", ".local/share") / "rdtf" / "models"};
@@ -91,21 +105,23 @@ std::optional<DaemonConfig> load_config(const std::filesystem::path& path, Daemo
     error = path.string() + ": the config must be a JSON object";
     return std::nullopt;
   }
-  static const char* const kKeys[] = {
-      "watch", "output", "lcm_url", "channel_prefix", "settle_ms", "max_open_wait_ms",
-      "republish_period_ms", "status_period_ms", "workers", "max_chunk_bytes",
-      "chunk_rate_bytes_per_s", "default_density", "max_file_bytes", "max_buffer_bytes",
-      "max_accessor_count", "max_triangles", "validate", "validation_seconds", "publish_failed",
-      "simulate", "state_rate_hz", "real_time_factor", "floating_root", "gravity", "urdf",
-      "urdf_y_up", "_comment"};
+  // Relative folders are relative to the config file's folder.
+  auto applied = apply_config_json(json, path.has_parent_path() ? path.parent_path() : std::filesystem::path("."),
+                                   std::move(config), error);
+  if (!applied) error = path.string() + ": " + error;
+  return applied;
+}
+
+std::optional<DaemonConfig> apply_config_json(const nlohmann::json& json, const std::filesystem::path& base,
+                                              DaemonConfig config, std::string& error) {
+
+  const auto& keys = config_keys();
   for (const auto& [key, value] : json.items()) {
-    if (std::find(std::begin(kKeys), std::end(kKeys), key) == std::end(kKeys)) {
-      error = path.string() + ": unknown key \"" + key + "\"";
+    if (key != "_comment" && std::find(keys.begin(), keys.end(), key) == keys.end()) {
+      error = "unknown key \"" + key + "\"";
       return std::nullopt;
     }
   }
-  // Relative folders are relative to the config file's folder.
-  const auto base = path.has_parent_path() ? path.parent_path() : std::filesystem::path(".");
   std::vector<std::string> watch;
   std::string output;
   bool ok = read_key(json, "watch", watch, error) && read_key(json, "output", output, error) &&
@@ -130,6 +146,13 @@ std::optional<DaemonConfig> load_config(const std::filesystem::path& path, Daemo
             read_key(json, "state_rate_hz", config.state_rate_hz, error) &&
             read_key(json, "real_time_factor", config.real_time_factor, error) &&
             read_key(json, "floating_root", config.floating_root, error) &&
+            read_key(json, "time_step", config.time_step, error) &&
+            read_key(json, "max_mass_ratio", config.max_mass_ratio, error) &&
+            read_key(json, "validation_start_offset_rad", config.validation_start_offset_rad, error) &&
+            read_key(json, "energy_tolerance", config.energy_tolerance, error) &&
+            read_key(json, "joint_separation_tolerance_m", config.joint_separation_tolerance_m, error) &&
+            read_key(json, "limit_tolerance_rad", config.limit_tolerance_rad, error) &&
+            read_key(json, "limit_tolerance_m", config.limit_tolerance_m, error) &&
             read_key(json, "urdf", config.urdf, error) &&
             read_key(json, "urdf_y_up", config.urdf_y_up, error);
   if (ok && json.contains("gravity")) {
@@ -141,10 +164,20 @@ std::optional<DaemonConfig> load_config(const std::filesystem::path& path, Daemo
     }
     if (ok) config.gravity = Eigen::Vector3d(gravity[0], gravity[1], gravity[2]);
   }
-  if (!ok) {
-    error = path.string() + ": " + error;
-    return std::nullopt;
+  if (ok && json.contains("stepper")) {
+    std::string stepper;
+    ok = read_key(json, "stepper", stepper, error);
+    if (ok) {
+      const auto parsed = parse_stepper(stepper);
+      if (parsed) {
+        config.stepper = *parsed;
+      } else {
+        error = "\"stepper\" must be \"auto\", \"world_step\" or \"quick_step\", not \"" + stepper + "\"";
+        ok = false;
+      }
+    }
   }
+  if (!ok) return std::nullopt;
   if (json.contains("watch")) {
     config.watch.clear();
     for (const auto& folder : watch) config.watch.push_back(base / folder);
@@ -177,6 +210,16 @@ bool check_config(DaemonConfig& config, std::string& error) {
     error = "validation_seconds, state_rate_hz and real_time_factor must be > 0";
     return false;
   }
+  // Written so that NaN fails too; infinities are out (JSON has none, the command line does).
+  const auto positive = [](double v) { return v > 0 && std::isfinite(v); };
+  if (!positive(config.time_step) || config.time_step > 0.1 || !(config.max_mass_ratio >= 1) ||
+      !positive(config.energy_tolerance) || !positive(config.joint_separation_tolerance_m) ||
+      !positive(config.limit_tolerance_rad) || !positive(config.limit_tolerance_m) ||
+      !std::isfinite(config.validation_start_offset_rad) || !config.gravity.allFinite()) {
+    error = "time_step must be in (0, 0.1] s, max_mass_ratio >= 1, the tolerances finite and > 0, "
+            "validation_start_offset_rad and gravity finite";
+    return false;
+  }
   for (const auto& folder : config.watch) {
     // An output folder that contains a watched folder would hide every save in it.
     const auto relative = folder.lexically_relative(config.output);
@@ -198,6 +241,36 @@ bool check_config(DaemonConfig& config, std::string& error) {
     return false;
   }
   return true;
+}
+
+
+std::optional<Stepper> parse_stepper(std::string_view name) {
+  if (name == "auto") return Stepper::kAuto;
+  if (name == "world_step") return Stepper::kWorldStep;
+  if (name == "quick_step") return Stepper::kQuickStep;
+  return std::nullopt;
+}
+
+SimulationOptions simulation_options(const DaemonConfig& config) {
+  SimulationOptions simulation;
+  simulation.gravity = config.gravity;
+  simulation.floating_root = config.floating_root;
+  simulation.time_step = config.time_step;
+  simulation.stepper = config.stepper;
+  return simulation;
+}
+
+ValidationOptions validation_options(const DaemonConfig& config) {
+  ValidationOptions validation;
+  validation.simulation = simulation_options(config);
+  validation.duration = config.validation_seconds;
+  validation.checks.max_mass_ratio = config.max_mass_ratio;
+  validation.start_offset_angular = config.validation_start_offset_rad;
+  validation.energy_tolerance = config.energy_tolerance;
+  validation.joint_separation_tolerance = config.joint_separation_tolerance_m;
+  validation.limit_tolerance_angular = config.limit_tolerance_rad;
+  validation.limit_tolerance_linear = config.limit_tolerance_m;
+  return validation;
 }
 
 }  // namespace rdtf::daemon

@@ -6,11 +6,14 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <Eigen/Core>
+#include <nlohmann/json.hpp>
 
 #include "rdtf/convert.h"
+#include "rdtf/dynamics.h"
 
 namespace rdtf::daemon {
 
@@ -37,11 +40,30 @@ struct DaemonConfig {
   double real_time_factor = 1.0;
   bool floating_root = false;             // Default: root links are fixed to the world.
   Eigen::Vector3d gravity{0, -9.80665, 0};  // Scene frame; glTF is Y up. Z-up content: {0, 0, -9.80665}.
+  double time_step = 1e-3;                // s, of the validation run and the live simulation.
+  Stepper stepper = Stepper::kAuto;       // "auto", "world_step" or "quick_step".
+  // The gate's checks and thresholds (ValidationOptions in core/include/rdtf/dynamics.h).
+  double max_mass_ratio = 1e3;            // Across a joint.
+  double validation_start_offset_rad = 0; // Revolute joints start this far from rest (0: rest pose).
+  double energy_tolerance = 0.01;         // Relative rise of the total energy.
+  double joint_separation_tolerance_m = 1e-3;
+  double limit_tolerance_rad = 1e-2;
+  double limit_tolerance_m = 1e-3;
 
   // URDF beside each RDTF output (docs/urdf.md), and its text in the description.
   bool urdf = true;
   bool urdf_y_up = false;                 // Keep glTF's Y up instead of ROS's Z up.
 };
+
+// "auto", "world_step" or "quick_step"; nothing for another name.
+std::optional<Stepper> parse_stepper(std::string_view name);
+
+// The dynamics settings as the core library takes them: the gate's, and the live simulation's.
+ValidationOptions validation_options(const DaemonConfig& config);
+SimulationOptions simulation_options(const DaemonConfig& config);
+
+// Every key a config object may have ("_comment" is allowed too, and ignored).
+const std::vector<std::string>& config_keys();
 
 // Built-in defaults: watch $XDG_DATA_HOME/rdtf/models (~/.local/share/rdtf/models), write to
 // $XDG_STATE_HOME/rdtf/output (~/.local/state/rdtf/output).
@@ -50,6 +72,11 @@ DaemonConfig default_config();
 // Reads a config file over `base`. Unknown keys and wrong types are errors naming the key.
 std::optional<DaemonConfig> load_config(const std::filesystem::path& path, DaemonConfig base,
                                         std::string& error);
+
+// The keys of a config object (as in the file) over `config`; relative folders are relative to
+// `base`. What load_config does after parsing, and what `rdtfd --set KEY=VALUE` does.
+std::optional<DaemonConfig> apply_config_json(const nlohmann::json& json, const std::filesystem::path& base,
+                                              DaemonConfig config, std::string& error);
 
 // Checks the settings make sense (folders exist or can be made, positive periods). Creates
 // missing watch and output folders and makes every folder absolute and canonical.

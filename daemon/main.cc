@@ -1,8 +1,10 @@
 // rdtfd: watches model folders, converts every saved glTF to RDTF and publishes it over LCM.
 // `rdtfd --help` lists the options; config/rdtfd.json documents the config file.
 #include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
 
 #include <cstdlib>
+#include <filesystem>
 #include <iostream>
 
 #include "daemon.h"
@@ -25,7 +27,25 @@ struct Overrides {
   bool no_urdf = false;
   bool publish_failed = false;
   bool floating_root = false;
+  std::vector<std::string> settings;  // --set KEY=VALUE: any key of the config file.
 };
+
+// "--set KEY=VALUE" as the config file's {"KEY": VALUE}: VALUE is read as JSON (a number, true,
+// [0, 0, -9.8]) and otherwise taken as a string, so that paths and URLs need no quotes.
+std::optional<nlohmann::json> settings_json(const std::vector<std::string>& settings, std::string& error) {
+  nlohmann::json json = nlohmann::json::object();
+  for (const std::string& setting : settings) {
+    const auto equals = setting.find('=');
+    if (equals == std::string::npos || equals == 0) {
+      error = "--set " + setting + ": expected KEY=VALUE";
+      return std::nullopt;
+    }
+    const std::string key = setting.substr(0, equals);
+    const std::string value = setting.substr(equals + 1);
+    json[key] = nlohmann::json::accept(value) ? nlohmann::json::parse(value) : nlohmann::json(value);
+  }
+  return json;
+}
 
 std::optional<rdtf::daemon::DaemonConfig> load(const std::string& config_file,
                                                const Overrides& overrides, std::string& error) {
@@ -37,6 +57,16 @@ std::optional<rdtf::daemon::DaemonConfig> load(const std::string& config_file,
   }
   if (const char* url = std::getenv("LCM_DEFAULT_URL"); url != nullptr && config.lcm_url.empty()) {
     config.lcm_url = url;
+  }
+  if (!overrides.settings.empty()) {
+    const auto settings = settings_json(overrides.settings, error);
+    if (!settings) return std::nullopt;
+    auto applied = rdtf::daemon::apply_config_json(*settings, std::filesystem::current_path(), std::move(config), error);
+    if (!applied) {
+      error = "--set: " + error;
+      return std::nullopt;
+    }
+    config = std::move(*applied);
   }
   if (!overrides.watch.empty()) {
     config.watch.assign(overrides.watch.begin(), overrides.watch.end());
@@ -95,6 +125,10 @@ int main(int argc, char** argv) {
   app.add_flag("--publish-failed", overrides.publish_failed,
                "Publish revisions that fail the dynamics check (marked failed) instead of keeping the last good one");
   app.add_flag("--floating-root", overrides.floating_root, "Root links float instead of being fixed to the world");
+  app.add_option("--set", overrides.settings,
+                 "KEY=VALUE: any key of the config file (config/rdtfd.json), VALUE as JSON or a plain string; "
+                 "repeatable; applied over the file, under the options above")
+      ->type_name("KEY=VALUE");
   CLI11_PARSE(app, argc, argv);
 
   std::string error;

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <functional>
 
@@ -295,6 +296,109 @@ TEST(DaemonConfig, DefaultsFollowXdgFolders) {
   EXPECT_EQ(config.republish_period, 5000ms);
   EXPECT_EQ(config.lcm_url, "");
   EXPECT_EQ(config.channel_prefix, "RDTF");
+}
+
+// The shipped file is the reference a user copies: it names every key, and apart from the folders
+// it sets for scripts/run.sh, each with the built-in default.
+TEST(DaemonConfig, RepositoryConfigFileListsEveryKeyWithItsDefault) {
+  const fs::path file = testing::data_dir() / ".." / ".." / "config" / "rdtfd.json";
+  const nlohmann::json json = nlohmann::json::parse(testing::read_file(file));
+  for (const std::string& key : config_keys()) EXPECT_TRUE(json.contains(key)) << key << " missing from " << file;
+  for (const auto& [key, value] : json.items()) {
+    EXPECT_TRUE(key == "_comment" || std::find(config_keys().begin(), config_keys().end(), key) != config_keys().end())
+        << key;
+  }
+  std::string error;
+  const auto loaded = load_config(file, default_config(), error);
+  ASSERT_TRUE(loaded) << error;
+  DaemonConfig expected = default_config();
+  expected.watch = loaded->watch;
+  expected.output = loaded->output;
+  // Every setting but the folders, compared through the config object the file gives back.
+  const auto as_json = [](const DaemonConfig& c) {
+    return nlohmann::json{{"lcm_url", c.lcm_url}, {"channel_prefix", c.channel_prefix},
+                          {"settle", c.settle.count()}, {"max_open_wait", c.max_open_wait.count()},
+                          {"republish", c.republish_period.count()}, {"status", c.status_period.count()},
+                          {"workers", c.workers}, {"chunk", c.max_chunk_bytes}, {"rate", c.chunk_rate_bytes_per_s},
+                          {"density", c.convert.default_density}, {"file", c.convert.limits.max_file_bytes},
+                          {"buffer", c.convert.limits.max_buffer_bytes},
+                          {"accessors", c.convert.limits.max_accessor_count},
+                          {"triangles", c.convert.limits.max_triangles}, {"validate", c.validate},
+                          {"seconds", c.validation_seconds}, {"publish_failed", c.publish_failed},
+                          {"time_step", c.time_step}, {"stepper", static_cast<int>(c.stepper)},
+                          {"ratio", c.max_mass_ratio}, {"offset", c.validation_start_offset_rad},
+                          {"energy", c.energy_tolerance}, {"separation", c.joint_separation_tolerance_m},
+                          {"limit_rad", c.limit_tolerance_rad}, {"limit_m", c.limit_tolerance_m},
+                          {"simulate", c.simulate}, {"state_rate", c.state_rate_hz},
+                          {"real_time", c.real_time_factor}, {"floating", c.floating_root},
+                          {"gravity", {c.gravity.x(), c.gravity.y(), c.gravity.z()}}, {"urdf", c.urdf},
+                          {"urdf_y_up", c.urdf_y_up}};
+  };
+  EXPECT_EQ(as_json(*loaded), as_json(expected));
+}
+
+TEST(DaemonConfig, DynamicsKeysReachTheGateAndTheLiveSimulation) {
+  testing::TempDir folder;
+  std::string error;
+  auto config = load_text(folder, R"({
+    "time_step": 0.002, "stepper": "quick_step", "max_mass_ratio": 50, "validation_start_offset_rad": 0.25,
+    "energy_tolerance": 0.05, "joint_separation_tolerance_m": 0.002, "limit_tolerance_rad": 0.03,
+    "limit_tolerance_m": 0.004, "validation_seconds": 1.5, "floating_root": true, "gravity": [0, 0, -9.81]})",
+                          error);
+  ASSERT_TRUE(config) << error;
+  const ValidationOptions v = validation_options(*config);
+  EXPECT_EQ(v.simulation.time_step, 0.002);
+  EXPECT_EQ(v.simulation.stepper, Stepper::kQuickStep);
+  EXPECT_TRUE(v.simulation.floating_root);
+  EXPECT_EQ(v.simulation.gravity, Eigen::Vector3d(0, 0, -9.81));
+  EXPECT_EQ(v.checks.max_mass_ratio, 50);
+  EXPECT_EQ(v.start_offset_angular, 0.25);
+  EXPECT_EQ(v.energy_tolerance, 0.05);
+  EXPECT_EQ(v.joint_separation_tolerance, 0.002);
+  EXPECT_EQ(v.limit_tolerance_angular, 0.03);
+  EXPECT_EQ(v.limit_tolerance_linear, 0.004);
+  EXPECT_EQ(v.duration, 1.5);
+  const SimulationOptions live = simulation_options(*config);
+  EXPECT_EQ(live.time_step, 0.002);
+  EXPECT_EQ(live.stepper, Stepper::kQuickStep);
+  EXPECT_TRUE(live.floating_root);
+  // Defaults are the core library's.
+  EXPECT_EQ(validation_options(default_config()).checks.max_mass_ratio, ValidationOptions{}.checks.max_mass_ratio);
+  EXPECT_EQ(validation_options(default_config()).start_offset_angular, ValidationOptions{}.start_offset_angular);
+  EXPECT_EQ(validation_options(default_config()).energy_tolerance, ValidationOptions{}.energy_tolerance);
+  EXPECT_EQ(simulation_options(default_config()).stepper, SimulationOptions{}.stepper);
+}
+
+TEST(DaemonConfig, BadDynamicsSettingsAreRefused) {
+  testing::TempDir folder;
+  std::string error;
+  EXPECT_FALSE(load_text(folder, R"({"stepper": "fast"})", error));
+  EXPECT_NE(error.find("\"stepper\" must be \"auto\", \"world_step\" or \"quick_step\", not \"fast\""),
+            std::string::npos)
+      << error;
+  EXPECT_NE(error.find("rdtfd.json"), std::string::npos) << error;
+  for (const char* bad : {R"({"time_step": 0})", R"({"time_step": 0.5})", R"({"max_mass_ratio": 0.5})",
+                          R"({"energy_tolerance": 0})", R"({"limit_tolerance_m": -1})"}) {
+    auto config = load_text(folder, bad, error);
+    ASSERT_TRUE(config) << bad << ": " << error;
+    config->watch = {folder.path()};
+    config->output = folder / "out";
+    EXPECT_FALSE(check_config(*config, error)) << bad;
+    EXPECT_NE(error.find("time_step must be in (0, 0.1] s"), std::string::npos) << error;
+  }
+}
+
+// What `rdtfd --set KEY=VALUE` applies: the file's keys, folders relative to the given base.
+TEST(DaemonConfig, ApplyingAnObjectOverridesOnlyItsKeys) {
+  std::string error;
+  const auto config = apply_config_json(nlohmann::json{{"output", "out"}, {"max_mass_ratio", 20}}, "/base",
+                                        default_config(), error);
+  ASSERT_TRUE(config) << error;
+  EXPECT_EQ(config->output, fs::path("/base/out"));
+  EXPECT_EQ(config->max_mass_ratio, 20);
+  EXPECT_EQ(config->watch, default_config().watch);
+  EXPECT_FALSE(apply_config_json(nlohmann::json{{"max_mass_ration", 20}}, "/base", default_config(), error));
+  EXPECT_EQ(error, "unknown key \"max_mass_ration\"");
 }
 
 }  // namespace

@@ -50,6 +50,13 @@ std::optional<int> urdf_joint_type(const Joint& joint, const std::string& name, 
     case JointKind::kContinuous:
       return urdf::Joint::CONTINUOUS;
     case JointKind::kFloating:
+      // Valid URDF, which check_urdf and urdfdom accept, but every URDF joint hangs below a link:
+      // MuJoCo makes it a free joint of a nested body and refuses the file, and ROS's
+      // robot_state_publisher publishes no transform for it.
+      diag.warning("URDF_FLOATING_JOINT", pointer,
+                   "floating joint '" + name + "' is written as URDF says it, but MuJoCo refuses the file "
+                   "(a free joint must belong to a top-level body) and robot_state_publisher ignores it; "
+                   "for those tools make the child a separate model or use a fixed joint");
       return urdf::Joint::FLOATING;
     case JointKind::kPlanar:
       return urdf::Joint::PLANAR;

@@ -177,6 +177,32 @@ TEST(UrdfMujoco, RotatedBoxFullTensor) {
 
 // A URDF imported (the ROS tutorial robot: fixed, continuous, prismatic and revolute joints,
 // authored inertials) and exported again loads in MuJoCo with its inertials.
+// A floating joint is valid URDF (check_urdf passes) that MuJoCo refuses, as the warning says.
+TEST(UrdfMujoco, FloatingJointIsWrittenWithAWarningThatMujocoRefusesIt) {
+  GltfBuilder b;
+  const int mesh = b.box_mesh(Eigen::Vector3f(0.2f, 0.2f, 0.2f));
+  const int base = b.node("base", -1, Json{{"mesh", mesh}});
+  const int joint = b.node("free", base, Json{{"extras", {{"rdtf_joint", "floating"}}}});
+  b.link_with_mesh("drone", joint, mesh);
+  Diagnostics diag;
+  const Conversion conversion = b.convert(diag);
+  TempDir dir;
+  Diagnostics export_diag;
+  ASSERT_TRUE(write_urdf(conversion, dir.path(), UrdfOptions{}, export_diag));
+  std::vector<Diagnostic> warnings;
+  for (const Diagnostic& d : export_diag.all()) {
+    if (d.code == "URDF_FLOATING_JOINT") warnings.push_back(d);
+  }
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_EQ(warnings[0].severity, Severity::kWarning);
+  EXPECT_EQ(warnings[0].pointer, "/nodes/" + std::to_string(joint));
+  EXPECT_NE(warnings[0].message.find("floating joint 'free'"), std::string::npos) << warnings[0].message;
+  expect_check_urdf_passes(dir / "robot.urdf");
+  std::string error;
+  EXPECT_FALSE(load_in_mujoco(dir / "robot.urdf", error));
+  EXPECT_NE(error.find("free joint can only be used on top level"), std::string::npos) << error;
+}
+
 TEST(UrdfMujoco, ImportedTutorialRobot) {
   Diagnostics diag;
   auto conversion = import_urdf(testing::data_dir() / "urdf/urdf_tutorial/07-physics.urdf", UrdfImportOptions{}, diag);

@@ -1,5 +1,6 @@
 // The entry points the fuzz targets drive, header-only so that the regression tests
-// (tests/fuzz_regressions/) feed their reproducers through exactly the same code.
+// (tests/fuzz_regressions/) feed their reproducers through exactly the same code: run_target at
+// the end of this file is the whole of what a target does with one input.
 //
 // Each run returns what happened; `contract_violation` says what broke the project's rule for bad
 // input ("a clear error, never a crash"): a refusal without an error diagnostic, a diagnostic
@@ -14,6 +15,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "rdtf/convert.h"
@@ -85,27 +87,32 @@ inline RunResult convert_bytes(const std::vector<std::uint8_t>& bytes,
   return run;
 }
 
-// convert_bytes, then the output loaded and converted again: what rdtf writes must be a model
-// rdtf reads (a GLB's buffer travels in the binary chunk, as write_rdtf puts it).
-inline RunResult convert_and_reconvert(const std::vector<std::uint8_t>& bytes,
-                                       const std::filesystem::path& folder,
-                                       std::string& reconvert_failure) {
-  Conversion conversion;
-  RunResult run = convert_bytes(bytes, folder, &conversion);
-  if (!run.succeeded) return run;
+// The output of a conversion (`run`, `conversion`) loaded and converted again: what rdtf writes
+// must be a model rdtf reads (a GLB's buffer travels in the binary chunk, as write_rdtf puts it).
+// Empty when it does, else why not.
+inline std::string reconvert(const RunResult& run, const Conversion& conversion,
+                             const std::filesystem::path& folder) {
   std::vector<std::uint8_t> again = to_bytes(run.output);
-  const bool glb = conversion.asset.binary;
-  if (glb) {
+  if (conversion.asset.binary) {
     const auto& buffers = conversion.asset.buffers;
     const bool first_in_bin = !buffers.empty() && !conversion.asset.document["buffers"][0].contains("uri");
     again = make_glb(run.output, first_in_bin ? std::span<const std::uint8_t>(buffers[0])
                                               : std::span<const std::uint8_t>());
   }
   RunResult second = convert_bytes(again, folder);
-  if (!second.succeeded) {
-    reconvert_failure = "the converted model does not convert again:";
-    for (const Diagnostic& d : second.diag.all()) reconvert_failure += "\n  " + format(d);
-  }
+  if (second.succeeded) return {};
+  std::string failure = "the converted model does not convert again:";
+  for (const Diagnostic& d : second.diag.all()) failure += "\n  " + format(d);
+  return failure;
+}
+
+// convert_bytes, then reconvert.
+inline RunResult convert_and_reconvert(const std::vector<std::uint8_t>& bytes,
+                                       const std::filesystem::path& folder,
+                                       std::string& reconvert_failure) {
+  Conversion conversion;
+  RunResult run = convert_bytes(bytes, folder, &conversion);
+  if (run.succeeded) reconvert_failure = reconvert(run, conversion, folder);
   return run;
 }
 
@@ -158,7 +165,7 @@ inline std::optional<std::vector<std::uint8_t>> model_with_extras(const Json& ba
 
 // URDF import from a file: `dir/fuzz.urdf` holds the bytes (import_urdf takes a path).
 inline RunResult import_urdf_bytes(const std::vector<std::uint8_t>& bytes,
-                                   const std::filesystem::path& dir) {
+                                   const std::filesystem::path& dir, Conversion* kept = nullptr) {
   RunResult run;
   const std::filesystem::path urdf = dir / "fuzz.urdf";
   {
@@ -171,7 +178,93 @@ inline RunResult import_urdf_bytes(const std::vector<std::uint8_t>& bytes,
   run.output = document_text(conversion->asset.document);
   run.summary = summary_text(*conversion, run.diag);
   run.succeeded = true;
+  if (kept != nullptr) *kept = std::move(*conversion);
   return run;
+}
+
+// A closed tetrahedron (outward winding), the mesh a URDF seed refers to.
+inline constexpr const char* kTetraStl =
+    "solid tetra\n"
+    "facet normal 0 0 -1 outer loop vertex 0 0 0 vertex 0 1 0 vertex 1 0 0 endloop endfacet\n"
+    "facet normal 0 -1 0 outer loop vertex 0 0 0 vertex 1 0 0 vertex 0 0 1 endloop endfacet\n"
+    "facet normal -1 0 0 outer loop vertex 0 0 0 vertex 0 0 1 vertex 0 1 0 endloop endfacet\n"
+    "facet normal 1 1 1 outer loop vertex 1 0 0 vertex 0 1 0 vertex 0 0 1 endloop endfacet\n"
+    "endsolid tetra\n";
+
+// Where a target's inputs are loaded: a folder holding copies of every external buffer of the
+// test models (tests/data/blender and tests/data/gltf-validator, whose .bin names are all
+// distinct), so that seeds made from them load, and tetra.stl for URDF meshes; every URI stays
+// confined to it. `extras_base` is the model the extras target puts its input into.
+struct Workspace {
+  std::filesystem::path folder;
+  Json extras_base;
+};
+
+inline Workspace make_workspace(const std::filesystem::path& folder,
+                                const std::filesystem::path& data_dir) {
+  namespace fs = std::filesystem;
+  fs::create_directories(folder);
+  for (const char* models : {"blender", "gltf-validator"}) {
+    if (!fs::is_directory(data_dir / models)) continue;
+    for (const auto& entry : fs::recursive_directory_iterator(data_dir / models)) {
+      if (entry.is_regular_file() && entry.path().extension() == ".bin") {
+        fs::copy_file(entry.path(), folder / entry.path().filename(),
+                      fs::copy_options::overwrite_existing);
+      }
+    }
+  }
+  std::ofstream(folder / "tetra.stl") << kTetraStl;
+  const auto arm3 = read_bytes(data_dir / "blender/arm3.gltf");
+  return {folder, Json::parse(arm3.begin(), arm3.end())};
+}
+
+// The targets, as fuzz/<name>_fuzzer.cc and the folders of tests/data/fuzz-regressions name them.
+inline constexpr std::string_view kTargets[] = {"convert_gltf", "convert_glb", "glb", "extras",
+                                                "urdf_import"};
+
+struct TargetRun {
+  bool not_for_target = false;  // An input this target leaves alone (libFuzzer: return -1).
+  RunResult run;
+  std::string violation;        // What broke the contract or a round trip; empty when kept.
+};
+
+// What the fuzz target `target` does with one input:
+//   convert_gltf  JSON bytes through the whole convert pipeline, output converted again
+//   convert_glb   the same from GLB bytes (the output's buffer goes in the binary chunk)
+//   glb           the GLB container parser, with make_glb as its inverse
+//   extras        the input (JSON) as extras.RDTF / node extras of blender/arm3, then converted
+//   urdf_import   the input as a URDF file, imported and converted; the output converted again
+inline TargetRun run_target(std::string_view target, const std::vector<std::uint8_t>& bytes,
+                            const Workspace& workspace) {
+  TargetRun result;
+  std::string failure;
+  if (target == "convert_gltf" || target == "convert_glb") {
+    if (looks_like_glb(bytes) != (target == "convert_glb")) {
+      result.not_for_target = true;  // The other convert target's input: keep the corpora apart.
+      return result;
+    }
+    result.run = convert_and_reconvert(bytes, workspace.folder, failure);
+  } else if (target == "glb") {
+    result.run = parse_glb_bytes(bytes, failure);
+  } else if (target == "extras") {
+    const auto model =
+        model_with_extras(workspace.extras_base, std::string(bytes.begin(), bytes.end()));
+    if (!model) {
+      result.not_for_target = true;
+      return result;
+    }
+    result.run = convert_and_reconvert(*model, workspace.folder, failure);
+  } else if (target == "urdf_import") {
+    Conversion conversion;
+    result.run = import_urdf_bytes(bytes, workspace.folder, &conversion);
+    if (result.run.succeeded) failure = reconvert(result.run, conversion, workspace.folder);
+  } else {
+    result.violation = "no fuzz target named '" + std::string(target) + "'";
+    return result;
+  }
+  result.violation = contract_violation(result.run);
+  if (result.violation.empty()) result.violation = failure;
+  return result;
 }
 
 }  // namespace rdtf::fuzz

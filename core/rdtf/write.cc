@@ -94,20 +94,22 @@ void external_buffers(const GltfAsset& asset, Json& document, const std::filesys
   for (std::size_t i = 0; i < buffers.size(); ++i) {
     Resource resource{json_pointer("/buffers", i), {}, {}, asset.buffers[i]};
     const bool has_uri = buffers[i].contains("uri");
-    if (!has_uri) {
-      resource.name = output.stem().string() + (i == 0 ? "" : "_" + std::to_string(i)) + ".bin";
-    } else {
+    // Named after the output, not the input: two models whose buffers are both "model.bin",
+    // converted into one folder, must not overwrite each other's. (Content-addressed names, in
+    // a folder of their own, keep the input's stem, which says where they came from.)
+    resource.name = output.stem().string() + (i == 0 ? "" : "_" + std::to_string(i)) + ".bin";
+    if (has_uri) {
       const std::string uri = buffers[i]["uri"].get<std::string>();
       if (internal::is_data_uri(uri)) continue;
       std::string why;
       const auto source = internal::resolve_uri(asset.folder, uri, why);
       const auto relative = internal::resolve_uri(std::filesystem::path("/"), uri, why);
       if (!source || !relative) continue;  // The loader refused these already.
-      resource.name = relative->relative_path();
+      if (options.content_digest) resource.name = relative->relative_path();
       resource.source = *source;
     }
     resource.name = resource_name(resource.name, resource.bytes, options);
-    if (!has_uri || options.content_digest) buffers[i]["uri"] = percent_encode(resource.name.string());
+    buffers[i]["uri"] = percent_encode(resource.name.string());
     resources.push_back(std::move(resource));
   }
 }

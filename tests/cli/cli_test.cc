@@ -138,7 +138,7 @@ TEST(Cli, ConvertCreatesTheOutputFolder) {
     EXPECT_EQ(run.exit_code, 0) << output << "\n" << run.err;
     EXPECT_TRUE(std::filesystem::is_regular_file(folder / output)) << output;
   }
-  EXPECT_TRUE(std::filesystem::is_regular_file(folder / "other/dir/arm3.bin"));
+  EXPECT_TRUE(std::filesystem::is_regular_file(folder / "other/dir/x.bin"));
 }
 
 // A write that fails takes back what it made: here the folder it created for the output. (A

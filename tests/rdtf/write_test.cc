@@ -70,8 +70,23 @@ TEST_P(WriteRdtf, OutputValidatesAndConvertsBackToItself) {
   auto again = convert_file(first, ConvertOptions{}, again_diag);
   ASSERT_TRUE(again);
   ASSERT_TRUE(write_rdtf(again->asset, second, output_format, again_diag));
-  // Idempotent: the output of converting the output is the output, byte for byte.
-  EXPECT_EQ(testing::read_file(second), testing::read_file(first)) << "conversion is not idempotent";
+  // Idempotent: the output of converting the output is the output, byte for byte, but for the
+  // names of its buffer files, which follow the output's name (and whose bytes are the same).
+  std::string second_text = testing::read_file(second);
+  for (const auto& [from, to] : {std::pair<std::string, std::string>{"\"second.bin\"", "\"first.bin\""},
+                                 {"\"second_", "\"first_"}}) {
+    for (auto at = second_text.find(from); at != std::string::npos; at = second_text.find(from, at + to.size())) {
+      second_text.replace(at, from.size(), to);
+    }
+  }
+  EXPECT_EQ(second_text, testing::read_file(first)) << "conversion is not idempotent";
+  if (output_format == OutputFormat::kGltf) {
+    for (std::size_t i = 0; i < conversion->asset.buffers.size(); ++i) {
+      const std::string suffix = (i == 0 ? "" : "_" + std::to_string(i)) + ".bin";
+      if (!std::filesystem::exists(out / ("first" + suffix))) continue;  // An embedded buffer.
+      EXPECT_EQ(testing::read_file(out / ("second" + suffix)), testing::read_file(out / ("first" + suffix)));
+    }
+  }
   ASSERT_EQ(again->robot.links.size(), conversion->robot.links.size());
   for (std::size_t i = 0; i < again->robot.links.size(); ++i) {
     EXPECT_EQ(again->robot.links[i].name, conversion->robot.links[i].name);
@@ -101,8 +116,32 @@ TEST(WriteRdtfFiles, GltfOutputCopiesItsBufferBesideIt) {
   auto conversion = convert_file(testing::data_dir() / "blender" / "arm3.gltf", ConvertOptions{}, diag);
   ASSERT_TRUE(conversion);
   ASSERT_TRUE(write_rdtf(conversion->asset, out / "robot.gltf", OutputFormat::kGltf, diag));
-  EXPECT_EQ(testing::read_file(out / "arm3.bin"),
+  EXPECT_EQ(testing::read_file(out / "robot.bin"),
             testing::read_file(testing::data_dir() / "blender" / "arm3.bin"));
+  EXPECT_EQ(Json::parse(testing::read_file(out / "robot.gltf"))["buffers"][0]["uri"], "robot.bin");
+}
+
+// Two models whose buffers have the same name, converted into one folder, keep their own.
+TEST(WriteRdtfFiles, BuffersOfModelsWithTheSameBufferNameDoNotCollide) {
+  testing::TempDir in_a, in_b, out;
+  const auto arm = testing::data_dir() / "blender" / "arm3";
+  for (const auto* folder : {&in_a, &in_b}) {
+    std::filesystem::copy_file(arm.string() + ".gltf", *folder / "model.gltf");
+    std::filesystem::copy_file(arm.string() + ".bin", *folder / "arm3.bin");
+  }
+  // b's buffer differs: one float of its first position changed.
+  std::string bytes = testing::read_file(in_b / "arm3.bin");
+  bytes[0] = static_cast<char>(bytes[0] ^ 0x01);
+  testing::write_file(in_b / "arm3.bin", bytes);
+  for (const auto& [input, output] : {std::pair{in_a / "model.gltf", out / "a.gltf"}, {in_b / "model.gltf", out / "b.gltf"}}) {
+    Diagnostics diag;
+    auto conversion = convert_file(input, ConvertOptions{}, diag);
+    ASSERT_TRUE(conversion);
+    ASSERT_TRUE(write_rdtf(conversion->asset, output, OutputFormat::kGltf, diag));
+  }
+  EXPECT_EQ(testing::read_file(out / "a.bin"), testing::read_file(in_a / "arm3.bin"));
+  EXPECT_EQ(testing::read_file(out / "b.bin"), testing::read_file(in_b / "arm3.bin"));
+  EXPECT_FALSE(std::filesystem::exists(out / "arm3.bin"));
 }
 
 TEST(WriteRdtfFiles, GlbInputToGltfGetsItsBinaryChunkAsAFile) {

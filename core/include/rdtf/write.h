@@ -15,8 +15,9 @@ enum class OutputFormat { kGltf, kGlb };
 struct WriteOptions {
   OutputFormat format = OutputFormat::kGltf;
   // How the files beside a .gltf are named (a .glb has none).
-  // Empty (`rdtf convert`): under the input's relative URI (a GLB's binary chunk as
-  // "<name>.bin"), overwriting what is there.
+  // Empty (`rdtf convert`): buffers after the output, "<stem>.bin", "<stem>_1.bin", ... (so that
+  // outputs of models whose buffers share a name do not collide in one folder); images under
+  // their relative URIs. Either overwrites what is there.
   // Given (rdtfd): content-addressed, "<stem>.<16 hex digits of the digest>.<ext>" directly in the
   // output's folder (atomic_file.h), written before the JSON, whose rename commits them all. Once
   // the JSON is in place, every content-addressed file of the folder that neither it nor the JSON

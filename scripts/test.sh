@@ -45,4 +45,22 @@ say "test: ctest --test-dir $build_dir --output-on-failure -j$jobs --no-tests=er
 rc=0
 ctest --test-dir "$build_dir" --output-on-failure -j"$jobs" --no-tests=error || rc=$?
 say "ctest exited $rc ($(($(now) - t)) s; whole script $(($(now) - t0)) s)"
+
+# A digest of each failed test (its failure lines from ctest's log) in $build_dir/failed-tests.txt,
+# which .ci/run prints again at its very end, where a truncated CI log still shows it.
+digest="$build_dir/failed-tests.txt"
+rm -f "$digest"
+if [[ $rc -ne 0 && -f $build_dir/Testing/Temporary/LastTestsFailed.log ]]; then
+  while IFS= read -r line; do
+    name=${line#*:}
+    {
+      echo "--- $name"
+      awk -v name="$name" '
+        $0 ~ "^[0-9]+/[0-9]+ Test: " && index($0, name) { inside = 1; next }
+        inside && /^<end of output>/ { exit }
+        inside' "$build_dir/Testing/Temporary/LastTest.log" |
+        grep -E -A6 'Failure|FAILED|ERROR|error:|runtime error|Timeout|what\(\)' | head -n 40
+    } >>"$digest"
+  done <"$build_dir/Testing/Temporary/LastTestsFailed.log"
+fi
 exit "$rc"

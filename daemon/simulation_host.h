@@ -30,8 +30,8 @@ struct SimulationHostOptions {
   std::string lcm_url;
   std::string channel_prefix = "RDTF";
   SimulationOptions simulation;
-  // Joint-state messages per wall-clock second and model (while the simulation keeps real time),
-  // at most one per step: 1 / time_step x real_time_factor.
+  // JOINT_STATE + LINK_STATE pairs per wall-clock second and model (while the simulation keeps
+  // real time), at most one per step: 1 / time_step x real_time_factor.
   double state_rate_hz = 100;
   double real_time_factor = 1.0;   // Simulated seconds per wall-clock second.
 };

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include <rdtf/joint_state_t.hpp>
+#include <rdtf/link_state_t.hpp>
 #include <rdtf/model_error_t.hpp>
 
 #include "daemon.h"
@@ -205,6 +206,31 @@ void SimulationHost::publish_state(const std::string& model_id, LiveModel& model
   }
   message.num_joints = static_cast<std::int32_t>(message.name.size());
   lcm_.publish(options_.channel_prefix + "/" + model_id + "/JOINT_STATE", &message);
+  publish_links(model_id, model, message.utime, message.sim_time);
+}
+
+void SimulationHost::publish_links(const std::string& model_id, LiveModel& model, std::int64_t utime,
+                                   double sim_time) {
+  rdtf::link_state_t message;
+  // The joint state's stamp and simulated time, so that a subscriber pairs the two exactly.
+  message.utime = utime;
+  message.model_id = model_id;
+  message.revision = model.revision;
+  message.content_hash = model.content_hash;
+  message.sim_time = sim_time;
+  for (const LinkPose& pose : model.simulation->link_poses()) {
+    message.name.push_back(pose.name);
+    const Eigen::Vector3d p = pose.X_SL.translation();
+    // The rotation comes out of ODE's bodies as a matrix; renormalised so that subscribers get a
+    // unit quaternion whatever the rounding of the conversion.
+    const Eigen::Quaterniond q = Eigen::Quaterniond(pose.X_SL.linear()).normalized();
+    message.position.push_back({p.x(), p.y(), p.z()});
+    message.orientation.push_back({q.w(), q.x(), q.y(), q.z()});
+    message.linear_velocity.push_back({pose.v_SLo_S.x(), pose.v_SLo_S.y(), pose.v_SLo_S.z()});
+    message.angular_velocity.push_back({pose.w_SL_S.x(), pose.w_SL_S.y(), pose.w_SL_S.z()});
+  }
+  message.num_links = static_cast<std::int32_t>(message.name.size());
+  lcm_.publish(options_.channel_prefix + "/" + model_id + "/LINK_STATE", &message);
 }
 
 void SimulationHost::run() {

@@ -1,5 +1,5 @@
 // Live simulation of every live model on one thread of its own: steps each model's ODE world in
-// real time, publishes joint states (and answers nothing else), and applies controllers'
+// real time, publishes joint states and link poses (and answers nothing else), and applies controllers'
 // commands. The event loop hands it models and commands through a mutex-guarded inbox, so the
 // loop never waits for physics and physics never waits for files.
 #pragma once
@@ -30,8 +30,8 @@ struct SimulationHostOptions {
   std::string lcm_url;
   std::string channel_prefix = "RDTF";
   SimulationOptions simulation;
-  // Joint-state messages per wall-clock second and model (while the simulation keeps real time),
-  // at most one per step: 1 / time_step x real_time_factor.
+  // JOINT_STATE + LINK_STATE pairs per wall-clock second and model (while the simulation keeps
+  // real time), at most one per step: 1 / time_step x real_time_factor.
   double state_rate_hz = 100;
   double real_time_factor = 1.0;   // Simulated seconds per wall-clock second.
 };
@@ -116,7 +116,9 @@ class SimulationHost {
   void apply_inbox();
   void apply_command(const rdtf::joint_command_t& command);
   void reject(const rdtf::joint_command_t& command, const std::string& why);
+  // JOINT_STATE, then LINK_STATE with the same utime and sim_time.
   void publish_state(const std::string& model_id, LiveModel& model);
+  void publish_links(const std::string& model_id, LiveModel& model, std::int64_t utime, double sim_time);
 
   SimulationHostOptions options_;
   lcm::LCM lcm_;

@@ -8,6 +8,7 @@
 #include <rdtf/inertia_table_t.hpp>
 #include <rdtf/joint_command_t.hpp>
 #include <rdtf/joint_state_t.hpp>
+#include <rdtf/link_state_t.hpp>
 #include <rdtf/model_error_t.hpp>
 #include <rdtf/model_removed_t.hpp>
 #include <rdtf/request_t.hpp>
@@ -103,6 +104,14 @@ Json to_json(const rdtf::joint_state_t& m) {
   return j;
 }
 
+Json to_json(const rdtf::link_state_t& m) {
+  Json j = header("rdtf.link_state_t", m.utime, m.model_id);
+  j.update({{"revision", m.revision}, {"content_hash", m.content_hash}, {"sim_time", m.sim_time},
+            {"name", m.name}, {"position", m.position}, {"orientation", m.orientation},
+            {"linear_velocity", m.linear_velocity}, {"angular_velocity", m.angular_velocity}});
+  return j;
+}
+
 Json to_json(const rdtf::joint_command_t& m) {
   std::vector<int> modes(m.mode.begin(), m.mode.end());
   Json j = header("rdtf.joint_command_t", m.utime, m.model_id);
@@ -141,6 +150,7 @@ std::optional<nlohmann::ordered_json> message_to_json(const void* data, std::uin
       decoder<rdtf::inertia_table_t>(),  decoder<rdtf::model_error_t>(),
       decoder<rdtf::model_removed_t>(),  decoder<rdtf::request_t>(),
       decoder<rdtf::status_t>(),         decoder<rdtf::joint_state_t>(),
+      decoder<rdtf::link_state_t>(),
       decoder<rdtf::joint_command_t>(),  decoder<rdtf::validation_report_t>()};
   if (size < 8) return std::nullopt;
   const auto* bytes = static_cast<const std::uint8_t*>(data);

@@ -39,6 +39,47 @@ bool json_depth_within(std::string_view text, int max_depth, std::size_t& offset
   return true;
 }
 
+// "line L, column C (byte B)" of the B-th byte (1-based) of `text`: what an editor shows.
+std::string place_in(std::string_view text, std::size_t byte) {
+  std::size_t line = 1;
+  std::size_t column = 1;
+  const std::size_t end = std::min<std::size_t>(byte == 0 ? 0 : byte - 1, text.size());
+  for (std::size_t i = 0; i < end; ++i) {
+    if (text[i] == '\n') {
+      ++line;
+      column = 1;
+    } else {
+      ++column;
+    }
+  }
+  return "line " + std::to_string(line) + ", column " + std::to_string(column) + " (byte " +
+         std::to_string(byte) + ")";
+}
+
+// Where nlohmann's parser stopped: its SAX interface is told the position, which the exception
+// for a number beyond double's range (out_of_range 406) does not carry. Builds nothing.
+class ErrorPosition final : public nlohmann::json_sax<Json> {
+ public:
+  std::size_t byte = 0;  // 1-based, the first byte of the token at fault.
+  bool null() override { return true; }
+  bool boolean(bool) override { return true; }
+  bool number_integer(number_integer_t) override { return true; }
+  bool number_unsigned(number_unsigned_t) override { return true; }
+  bool number_float(number_float_t, const string_t&) override { return true; }
+  bool string(string_t&) override { return true; }
+  bool binary(binary_t&) override { return true; }
+  bool start_object(std::size_t) override { return true; }
+  bool key(string_t&) override { return true; }
+  bool end_object() override { return true; }
+  bool start_array(std::size_t) override { return true; }
+  bool end_array() override { return true; }
+  bool parse_error(std::size_t position, const std::string& token, const nlohmann::detail::exception&) override {
+    // `position` counts the bytes read, up to the token's last.
+    byte = position >= token.size() ? position - token.size() + 1 : position;
+    return false;
+  }
+};
+
 std::optional<Json> parse_json(std::string_view text, Diagnostics& diag) {
   if (text.substr(0, 3) == "\xEF\xBB\xBF") {
     diag.error("JSON_BOM", "", "the JSON starts with a UTF-8 byte order mark, which glTF forbids");
@@ -59,26 +100,15 @@ std::optional<Json> parse_json(std::string_view text, Diagnostics& diag) {
     }
     return document;
   } catch (const Json::out_of_range& error) {
-    // E.g. a number beyond double's range ("1e309"): valid JSON syntax, not a usable value.
-    diag.error("INVALID_JSON", "", std::string("unusable JSON value: ") + error.what());
+    // E.g. a number beyond double's range ("1e309"): valid JSON syntax, not a usable value. The
+    // exception has no position: the text again through the SAX parser finds it.
+    ErrorPosition position;
+    const bool parsed = Json::sax_parse(text.begin(), text.end(), &position);
+    const std::string at = parsed ? "" : " at " + place_in(text, position.byte);
+    diag.error("INVALID_JSON", "", "unusable JSON value" + at + ": " + error.what());
     return std::nullopt;
   } catch (const Json::parse_error& error) {
-    // Turn the byte offset into line:column, which is what an editor shows.
-    std::size_t line = 1;
-    std::size_t column = 1;
-    const std::size_t end = std::min<std::size_t>(error.byte == 0 ? 0 : error.byte - 1, text.size());
-    for (std::size_t i = 0; i < end; ++i) {
-      if (text[i] == '\n') {
-        ++line;
-        column = 1;
-      } else {
-        ++column;
-      }
-    }
-    diag.error("INVALID_JSON", "",
-               "invalid JSON at line " + std::to_string(line) + ", column " +
-                   std::to_string(column) + " (byte " + std::to_string(error.byte) +
-                   "): " + error.what());
+    diag.error("INVALID_JSON", "", "invalid JSON at " + place_in(text, error.byte) + ": " + error.what());
     return std::nullopt;
   } catch (const Json::exception& error) {
     diag.error("INVALID_JSON", "", std::string("invalid JSON: ") + error.what());

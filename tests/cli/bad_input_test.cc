@@ -19,6 +19,9 @@ struct BadCase {
   std::string expected_place;  // A JSON pointer or other locator the error must name.
 };
 
+// gtest names each case by its name, not by the bytes of the struct.
+void PrintTo(const BadCase& bad, std::ostream* out) { *out << bad.name; }
+
 Json arm3() { return Json::parse(testing::read_file(testing::data_dir() / "blender" / "arm3.gltf")); }
 
 // arm3.gltf with `edit` applied, beside a copy of arm3.bin.
@@ -56,6 +59,10 @@ std::vector<BadCase> cases() {
   all.push_back({"InvalidJson", raw_file("model.gltf", "{\"asset\": {\"version\": \"2.0\"},\n \"nodes\": [}"),
                  "line 2"});
   all.push_back({"EmptyFile", raw_file("model.gltf", ""), "empty"});
+  // Valid JSON syntax, but beyond a double: placed like any other JSON error (it named no place).
+  all.push_back({"NumberBeyondDouble",
+                 raw_file("model.gltf", "{\"asset\": {\"version\": \"2.0\"},\n \"nodes\": [{\"translation\": [1e400, 0, 0]}]}"),
+                 "error INVALID_JSON: unusable JSON value at line 2, column 29 (byte 59)"});
   all.push_back({"AccessorOutOfItsBufferView",
                  edited_arm3([](Json& d) { d["accessors"][0]["byteOffset"] = 4096; }), "/accessors/0"});
   all.push_back({"AbsurdCount",

@@ -3,6 +3,7 @@
 #include <optional>
 
 #include "rdtf/geometry.h"
+#include "typed_view.h"
 
 namespace rdtf {
 namespace {
@@ -204,7 +205,82 @@ void warn_incomplete_triangle(std::uint64_t n, const std::string& pointer, Diagn
   }
 }
 
+// The primitive's triangles where they lie when that is possible: mode TRIANGLES, POSITION as
+// dense floats, indices dense unsigned integers or none. Nothing otherwise (and no diagnostics:
+// read_primitive_triangles then reads the primitive, with its diagnostics).
+std::optional<TriangleMeshView> view_in_place(const GltfAsset& asset, const Json& prim) {
+  if (prim.value("mode", 4) != 4 || !prim["attributes"].contains("POSITION")) return std::nullopt;
+  const Json& accessors = asset.document["accessors"];
+  const auto points = dense_view(asset, accessors[prim["attributes"]["POSITION"].get<std::size_t>()], 3);
+  if (!points || points->component_type != kFloat) return std::nullopt;
+  TriangleMeshView view;
+  view.positions = points->first;
+  view.position_stride = points->stride;
+  view.vertex_count = points->count;
+  view.position_type = TriangleMeshView::Positions::kFloat32;
+  if (!prim.contains("indices")) {
+    view.triangle_count = points->count / 3;
+    view.index_type = TriangleMeshView::Indices::kNone;
+    return view;
+  }
+  const auto indices = dense_view(asset, accessors[prim["indices"].get<std::size_t>()], 1);
+  if (!indices) return std::nullopt;
+  switch (indices->component_type) {
+    case kUnsignedByte:
+      view.index_type = TriangleMeshView::Indices::kUint8;
+      break;
+    case kUnsignedShort:
+      view.index_type = TriangleMeshView::Indices::kUint16;
+      break;
+    case kUnsignedInt:
+      view.index_type = TriangleMeshView::Indices::kUint32;
+      break;
+    default:
+      return std::nullopt;
+  }
+  view.indices = indices->first;
+  view.index_stride = indices->stride;
+  view.triangle_count = indices->count / 3;
+  return view;
+}
+
 }  // namespace
+
+TriangleMesh PrimitiveTriangles::mesh() const {
+  if (copy) return *copy;
+  TriangleMesh mesh;
+  internal::with_typed_view(in_place, [&](const auto& view) {
+    mesh.positions.resize(view.vertex_count);
+    for (std::size_t v = 0; v < view.vertex_count; ++v) {
+      view.vertex(static_cast<std::uint32_t>(v), mesh.positions[v].data());
+    }
+    mesh.triangles.resize(view.triangle_count);
+    for (std::size_t t = 0; t < view.triangle_count; ++t) {
+      mesh.triangles[t] = {view.index(3 * t), view.index(3 * t + 1), view.index(3 * t + 2)};
+    }
+  });
+  return mesh;
+}
+
+std::optional<PrimitiveTriangles> read_primitive_in_place(const GltfAsset& asset, std::size_t mesh,
+                                                          std::size_t primitive, Diagnostics& diag) {
+  const Json& prim = asset.document["meshes"][mesh]["primitives"][primitive];
+  if (const auto view = view_in_place(asset, prim)) {
+    // What read_primitive_triangles says of the same primitive: the index count (or vertex
+    // count, without indices) that is not a multiple of 3.
+    const Json& accessors = asset.document["accessors"];
+    const std::uint64_t n =
+        prim.contains("indices")
+            ? accessors[prim["indices"].get<std::size_t>()]["count"].get<std::uint64_t>()
+            : view->vertex_count;
+    warn_incomplete_triangle(
+        n, json_pointer(json_pointer("/meshes", mesh) + "/primitives", primitive), diag);
+    return PrimitiveTriangles{*view, std::nullopt};
+  }
+  auto copy = read_primitive_triangles(asset, mesh, primitive, diag);
+  if (!copy) return std::nullopt;
+  return PrimitiveTriangles{{}, std::move(copy)};
+}
 
 int component_count(const std::string& type) {
   if (type == "SCALAR") return 1;

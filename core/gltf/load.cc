@@ -1,7 +1,11 @@
 #include <tiny_gltf.h>
 
+#include <algorithm>
+#include <cstring>
 #include <map>
+#include <span>
 
+#include "../geometry/big_arrays.h"
 #include "confined_files.h"
 #include "rdtf/glb.h"
 #include "rdtf/gltf.h"
@@ -121,6 +125,7 @@ struct ConfinedReads {
   std::filesystem::path folder;
   std::uint64_t max_bytes = 0;
   std::map<std::string, std::filesystem::path> files;
+  std::map<std::string, std::uint64_t> sizes;  // byteLength of each, checked against the file.
 };
 
 bool fs_file_exists(const std::string& name, void* user) {
@@ -139,6 +144,10 @@ bool fs_read(std::vector<unsigned char>* out, std::string* err, const std::strin
     return false;
   }
   std::string why;
+  // tinygltf keeps this vector as the buffer (it swaps it in): huge pages for a large one.
+  if (const auto size = reads->sizes.find(name); size != reads->sizes.end()) {
+    if (size->second <= reads->max_bytes) internal::reserve_huge(*out, static_cast<std::size_t>(size->second));
+  }
   if (!internal::read_confined_file(reads->folder, found->second, reads->max_bytes, *out, why)) {
     if (err) *err = why;
     return false;
@@ -232,6 +241,7 @@ std::optional<Json> prepare_buffers(const Json& document, bool binary, const Loa
     }
     const std::string token = "rdtf-confined-buffer-" + std::to_string(i);
     reads.files[token] = *path;
+    reads.sizes[token] = declared;
     entry["uri"] = token;
     loader_document["buffers"].push_back(entry);
   }
@@ -264,10 +274,83 @@ bool looks_like_glb(const std::vector<std::uint8_t>& bytes) {
          bytes[3] == 'F';
 }
 
-std::optional<GltfAsset> load_gltf_from_memory(const std::vector<std::uint8_t>& bytes,
-                                               const std::filesystem::path& display_path,
-                                               const std::filesystem::path& folder,
-                                               const LoadLimits& limits, Diagnostics& diag) {
+namespace {
+
+// The GLB's BIN chunk when it is the only buffer and tinygltf would load it without complaint
+// (it copies the chunk's first byteLength bytes after checks that all pass here): that buffer is
+// taken straight from the file's bytes, which spares rebuilding an 18 MB GLB for tinygltf and
+// tinygltf's own copy of it (issue 6). Anything else - external files, data URIs, a byteLength
+// tinygltf would refuse - goes through tinygltf as before, with its diagnostics.
+std::optional<std::span<const std::uint8_t>> lone_bin_chunk(const Json& loader_document,
+                                                           bool binary,
+                                                           std::span<const std::uint8_t> bin) {
+  const Json& buffers = loader_document["buffers"];
+  if (!binary || buffers.size() != 1 || buffers[0].contains("uri")) return std::nullopt;
+  const Json& length = buffers[0]["byteLength"];
+  if (!length.is_number_unsigned()) return std::nullopt;
+  const auto byte_length = length.get<std::uint64_t>();
+  // tinygltf refuses a BIN chunk under 4 bytes and a byteLength beyond it, and cannot copy none.
+  if (bin.size() < 4 || byte_length == 0 || byte_length > bin.size()) return std::nullopt;
+  return bin.first(static_cast<std::size_t>(byte_length));
+}
+
+// The buffer holding `chunk`: the file's own bytes with the chunk moved to their front when the
+// caller hands them over (`owned`, which holds the chunk), so that no new memory is faulted in;
+// else a copy, in huge pages.
+std::vector<std::uint8_t> bin_chunk_buffer(std::span<const std::uint8_t> chunk,
+                                           std::vector<std::uint8_t>* owned) {
+  std::vector<std::uint8_t> buffer;
+  if (owned != nullptr) {
+    const auto offset = static_cast<std::size_t>(chunk.data() - owned->data());
+    std::memmove(owned->data(), owned->data() + offset, chunk.size());
+    owned->resize(chunk.size());
+    buffer = std::move(*owned);
+  } else {
+    internal::reserve_huge(buffer, chunk.size());
+    buffer.assign(chunk.begin(), chunk.end());
+  }
+  return buffer;
+}
+
+// Every buffer of `loader_document` (prepare_buffers) through tinygltf, into asset.buffers.
+bool load_buffers(const Json& loader_document, bool binary, std::span<const std::uint8_t> bin,
+                  ConfinedReads& reads, GltfAsset& asset, Diagnostics& diag) {
+  tinygltf::TinyGLTF loader;
+  loader.SetImageLoader(&skip_image, nullptr);
+  tinygltf::FsCallbacks callbacks{&fs_file_exists, &fs_expand, &fs_read, &fs_write, &reads};
+  loader.SetFsCallbacks(callbacks);
+  tinygltf::Model model;
+  std::string error;
+  std::string warning;
+  const std::string loader_json = loader_document.dump();
+  bool loaded = false;
+  if (binary) {
+    const auto glb = make_glb(loader_json, bin);
+    loaded = loader.LoadBinaryFromMemory(&model, &error, &warning, glb.data(),
+                                         static_cast<unsigned int>(glb.size()), "");
+  } else {
+    loaded = loader.LoadASCIIFromString(&model, &error, &warning, loader_json.data(),
+                                        static_cast<unsigned int>(loader_json.size()), "");
+  }
+  if (!loaded || model.buffers.size() != loader_document.at("buffers").size()) {
+    // tinygltf names our tokens; map them back to the pointers the user knows.
+    std::string message = error.empty() ? std::string("tinygltf could not load the buffers") : error;
+    while (!message.empty() && message.back() == '\n') message.pop_back();
+    diag.error("BUFFER_LOAD_FAILED", "/buffers", message);
+    return false;
+  }
+  asset.buffers.reserve(model.buffers.size());
+  for (auto& buffer : model.buffers) asset.buffers.push_back(std::move(buffer.data));
+  return true;
+}
+
+// load_gltf_from_memory; `owned`, when given, holds `bytes` and may be consumed (load_gltf
+// hands over the file it read, whose BIN chunk then becomes the buffer in place).
+std::optional<GltfAsset> load_from_bytes(const std::vector<std::uint8_t>& bytes,
+                                         std::vector<std::uint8_t>* owned,
+                                         const std::filesystem::path& display_path,
+                                         const std::filesystem::path& folder,
+                                         const LoadLimits& limits, Diagnostics& diag) {
   diag.set_file(display_path.string());
   if (bytes.empty()) {
     diag.error("EMPTY_FILE", "", "the file is empty");
@@ -300,37 +383,25 @@ std::optional<GltfAsset> load_gltf_from_memory(const std::vector<std::uint8_t>& 
       prepare_buffers(*document, asset.binary, limits, folder, reads, diag);
   if (!loader_document) return std::nullopt;
 
-  tinygltf::TinyGLTF loader;
-  loader.SetImageLoader(&skip_image, nullptr);
-  tinygltf::FsCallbacks callbacks{&fs_file_exists, &fs_expand, &fs_read, &fs_write, &reads};
-  loader.SetFsCallbacks(callbacks);
-  tinygltf::Model model;
-  std::string error;
-  std::string warning;
-  const std::string loader_json = loader_document->dump();
-  bool loaded = false;
-  if (asset.binary) {
-    const auto glb = make_glb(loader_json, bin);
-    loaded = loader.LoadBinaryFromMemory(&model, &error, &warning, glb.data(),
-                                         static_cast<unsigned int>(glb.size()), "");
-  } else {
-    loaded = loader.LoadASCIIFromString(&model, &error, &warning, loader_json.data(),
-                                        static_cast<unsigned int>(loader_json.size()), "");
-  }
-  if (!loaded || model.buffers.size() != loader_document->at("buffers").size()) {
-    // tinygltf names our tokens; map them back to the pointers the user knows.
-    std::string message = error.empty() ? std::string("tinygltf could not load the buffers") : error;
-    while (!message.empty() && message.back() == '\n') message.pop_back();
-    diag.error("BUFFER_LOAD_FAILED", "/buffers", message);
+  if (const auto chunk = lone_bin_chunk(*loader_document, asset.binary, bin)) {
+    asset.buffers.push_back(bin_chunk_buffer(*chunk, owned));
+  } else if (!load_buffers(*loader_document, asset.binary, bin, reads, asset, diag)) {
     return std::nullopt;
   }
-  asset.buffers.reserve(model.buffers.size());
-  for (auto& buffer : model.buffers) asset.buffers.push_back(std::move(buffer.data));
   asset.document = std::move(*document);
 
   validate_data(asset, diag);
   if (diag.has_errors()) return std::nullopt;
   return asset;
+}
+
+}  // namespace
+
+std::optional<GltfAsset> load_gltf_from_memory(const std::vector<std::uint8_t>& bytes,
+                                               const std::filesystem::path& display_path,
+                                               const std::filesystem::path& folder,
+                                               const LoadLimits& limits, Diagnostics& diag) {
+  return load_from_bytes(bytes, nullptr, display_path, folder, limits, diag);
 }
 
 std::vector<std::filesystem::path> referenced_files(const std::vector<std::uint8_t>& bytes,
@@ -363,6 +434,13 @@ std::optional<GltfAsset> load_gltf(const std::filesystem::path& path, const Load
   diag.set_file(path.string());
   std::vector<std::uint8_t> bytes;
   std::string why;
+  // Room for the file in huge pages before it is read (big_arrays.h). The size is only a hint:
+  // read_regular_file checks the file itself and grows the vector if it must.
+  std::error_code size_error;
+  const auto size = std::filesystem::file_size(path, size_error);
+  if (!size_error && size <= limits.max_file_bytes) {
+    internal::reserve_huge(bytes, static_cast<std::size_t>(size));
+  }
   if (!internal::read_regular_file(path, limits.max_file_bytes, bytes, why)) {
     diag.error("IO_ERROR", "", "cannot read the model: " + why);
     return std::nullopt;
@@ -373,7 +451,7 @@ std::optional<GltfAsset> load_gltf(const std::filesystem::path& path, const Load
     diag.error("IO_ERROR", "", "cannot resolve the model's folder: " + error.message());
     return std::nullopt;
   }
-  return load_gltf_from_memory(bytes, path, folder, limits, diag);
+  return load_from_bytes(bytes, &bytes, path, folder, limits, diag);
 }
 
 }  // namespace rdtf

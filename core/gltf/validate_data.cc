@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <array>
 #include <cstring>
+#include <limits>
 #include <map>
 
 #include "rdtf/validate.h"
@@ -129,7 +130,74 @@ struct IndexSummary {
   std::uint64_t largest_at = 0;
   std::uint64_t restarts = 0, first_restart = 0;
   std::uint64_t component_type = 0;
+  // Dense unsigned indices (nearly every file's) are summarised without the element positions,
+  // which only an error message needs: they are found in `dense` when one is reported.
+  std::optional<Run> dense;
 };
+
+// Index of the first element of a dense run of unsigned T equal to `value` (there is one).
+template <typename T>
+std::uint64_t first_equal(const Run& run, std::uint64_t value) {
+  for (std::uint64_t i = 0; i < run.count; ++i) {
+    T v;
+    std::memcpy(&v, run.first + i * run.stride, sizeof(T));
+    if (v == value) return i;
+  }
+  return 0;
+}
+
+std::uint64_t first_equal(const Run& run, std::uint64_t value) {
+  switch (run.component_type) {
+    case kUnsignedByte:
+      return first_equal<std::uint8_t>(run, value);
+    case kUnsignedShort:
+      return first_equal<std::uint16_t>(run, value);
+    default:
+      return first_equal<std::uint32_t>(run, value);
+  }
+}
+
+// Largest index other than the restart value (the type's largest) and how many restarts. First
+// the plain largest value, a reduction the compiler vectorises when the indices are packed: when
+// it is not the restart value (always, in a valid file) there are no restarts and that is the
+// answer. Otherwise one exact pass. (Issue 6: element by element through doubles, this check was
+// 6% of converting a 1M-triangle model.)
+template <typename T>
+void summarize_dense(const Run& run, IndexSummary& summary) {
+  constexpr T kRestart = std::numeric_limits<T>::max();
+  summary.dense = run;
+  T largest = 0;
+  if (run.stride == sizeof(T)) {
+    for (std::uint64_t i = 0; i < run.count; ++i) {
+      T v;
+      std::memcpy(&v, run.first + i * sizeof(T), sizeof(T));
+      largest = v > largest ? v : largest;
+    }
+  } else {
+    for (std::uint64_t i = 0; i < run.count; ++i) {
+      T v;
+      std::memcpy(&v, run.first + i * run.stride, sizeof(T));
+      largest = v > largest ? v : largest;
+    }
+  }
+  if (largest != kRestart) {
+    summary.largest = static_cast<double>(largest);
+    return;
+  }
+  std::uint64_t restarts = 0;
+  largest = 0;
+  for (std::uint64_t i = 0; i < run.count; ++i) {
+    T v;
+    std::memcpy(&v, run.first + i * run.stride, sizeof(T));
+    if (v == kRestart) {
+      ++restarts;
+    } else {
+      largest = std::max(largest, v);
+    }
+  }
+  summary.restarts = restarts;
+  summary.largest = restarts == run.count ? -1.0 : static_cast<double>(largest);
+}
 
 class DataCheck {
  public:
@@ -362,7 +430,7 @@ bool DataCheck::check_values(std::size_t index, const AccessorRuns& runs) {
   std::fill_n(actual[0], n, std::numeric_limits<double>::infinity());
   std::fill_n(actual[1], n, -std::numeric_limits<double>::infinity());
   std::uint64_t non_finite = 0, first_non_finite = 0;
-  for_each_element(runs, [&](std::uint64_t i, const double* values, std::uint64_t repeats) {
+  const auto visit = [&](std::uint64_t i, const double* values, std::uint64_t repeats) {
     for (int c = 0; c < n; ++c) {
       const double v = values[c];
       if (!std::isfinite(v)) {
@@ -375,7 +443,52 @@ bool DataCheck::check_values(std::size_t index, const AccessorRuns& runs) {
       if (v < declared[0][c]) outside[0][c] += repeats;
       if (v > declared[1][c]) outside[1][c] += repeats;
     }
-  });
+  };
+  // Dense floats of up to four components (positions, normals, texture coordinates): the same
+  // visit with the component count known at compile time and the common case (every component
+  // finite and within the declared bounds) tested at once, so that it runs at the speed of the
+  // memory rather than of a loop over a runtime count (issue 6: it was 3% of a 1M-triangle
+  // conversion).
+  const bool dense_float = is_float && runs.base.first != nullptr && !runs.sparse_indices;
+  const auto dense = [&]<int N>() {
+    // v within [lo, hi] says at once that v is finite and within its declared bounds (a missing
+    // bound, NaN here, bounds nothing; declared bounds are never infinite: JSON has no infinity).
+    double lo[N], hi[N];
+    for (int c = 0; c < N; ++c) {
+      lo[c] = std::isnan(declared[0][c]) ? -std::numeric_limits<double>::max() : declared[0][c];
+      hi[c] = std::isnan(declared[1][c]) ? std::numeric_limits<double>::max() : declared[1][c];
+    }
+    for (std::uint64_t i = 0; i < runs.base.count; ++i) {
+      const std::uint8_t* element = runs.base.first + i * runs.base.stride;
+      double values[N];
+      bool plain = true;
+      for (int c = 0; c < N; ++c) {
+        float value;
+        std::memcpy(&value, element + runs.base.offsets[c], sizeof(value));
+        values[c] = value;
+        plain &= values[c] >= lo[c] && values[c] <= hi[c];
+      }
+      if (plain) [[likely]] {
+        for (int c = 0; c < N; ++c) {
+          actual[0][c] = std::min(actual[0][c], values[c]);
+          actual[1][c] = std::max(actual[1][c], values[c]);
+        }
+      } else {
+        visit(i, values, 1);
+      }
+    }
+  };
+  if (dense_float && n == 1) {
+    dense.operator()<1>();
+  } else if (dense_float && n == 2) {
+    dense.operator()<2>();
+  } else if (dense_float && n == 3) {
+    dense.operator()<3>();
+  } else if (dense_float && n == 4) {
+    dense.operator()<4>();
+  } else {
+    for_each_element(runs, visit);
+  }
   if (non_finite > 0) {
     diag_.error("ACCESSOR_INVALID_FLOAT", json_pointer("/accessors", index),
                 counted(non_finite, "component is", "components are") +
@@ -445,6 +558,21 @@ std::optional<std::uint64_t> DataCheck::vertex_count(const Json& primitive) {
 IndexSummary DataCheck::summarize_indices(const AccessorRuns& runs) {
   IndexSummary summary;
   summary.component_type = runs.base.component_type;
+  if (runs.base.first != nullptr && !runs.sparse_indices) {
+    switch (runs.base.component_type) {
+      case kUnsignedByte:
+        summarize_dense<std::uint8_t>(runs.base, summary);
+        return summary;
+      case kUnsignedShort:
+        summarize_dense<std::uint16_t>(runs.base, summary);
+        return summary;
+      case kUnsignedInt:
+        summarize_dense<std::uint32_t>(runs.base, summary);
+        return summary;
+      default:
+        break;
+    }
+  }
   const double restart =
       std::ldexp(1.0, 8 * static_cast<int>(component_size(runs.base.component_type))) - 1;
   for_each_element(runs, [&](std::uint64_t i, const double* value, std::uint64_t repeats) {
@@ -469,7 +597,17 @@ void DataCheck::check_indices(std::uint64_t accessor, std::uint64_t vertices,
     if (!runs || runs->base.components != 1 || runs->base.component_type == kFloat) return;
     found = index_summaries_.emplace(accessor, summarize_indices(*runs)).first;
   }
-  const IndexSummary& summary = found->second;
+  IndexSummary& summary = found->second;
+  if (summary.dense &&
+      (summary.restarts > 0 || summary.largest >= static_cast<double>(vertices))) {
+    // An error is reported: find where (once per accessor).
+    const auto restart = (std::uint64_t{1} << (8 * component_size(summary.component_type))) - 1;
+    if (summary.restarts > 0) summary.first_restart = first_equal(*summary.dense, restart);
+    if (summary.largest >= 0) {
+      summary.largest_at = first_equal(*summary.dense, static_cast<std::uint64_t>(summary.largest));
+    }
+    summary.dense.reset();
+  }
   const std::string where = "indices accessor " + std::to_string(accessor) + " (" +
                             json_pointer("/accessors", accessor) + ")";
   if (summary.restarts > 0) {

@@ -13,9 +13,23 @@ namespace rdtf {
 namespace {
 
 struct MeshGeometry {
-  std::vector<TriangleMesh> pieces;  // One per triangle primitive.
+  // One per triangle primitive, read in place from the buffers where possible (issue 6), with
+  // views of them (into the buffers or the primitives' copies; those move with the vectors).
+  std::vector<PrimitiveTriangles> primitives;
+  std::vector<TriangleMeshView> pieces;
   std::vector<std::size_t> primitive_index;
   SurfaceTopology topology;
+  // The primitives as TriangleMesh values, made only for the skinned path, which needs them.
+  const std::vector<TriangleMesh>& meshes() const {
+    if (meshes_.size() != primitives.size()) {
+      meshes_.clear();
+      for (const PrimitiveTriangles& primitive : primitives) meshes_.push_back(primitive.mesh());
+    }
+    return meshes_;
+  }
+
+ private:
+  mutable std::vector<TriangleMesh> meshes_;
 };
 
 const MeshGeometry& geometry_of(const GltfAsset& asset, std::size_t mesh,
@@ -25,12 +39,15 @@ const MeshGeometry& geometry_of(const GltfAsset& asset, std::size_t mesh,
   MeshGeometry geometry;
   const Json& primitives = asset.document["meshes"][mesh]["primitives"];
   for (std::size_t p = 0; p < primitives.size(); ++p) {
-    auto triangles = read_primitive_triangles(asset, mesh, p, diag);
+    auto triangles = read_primitive_in_place(asset, mesh, p, diag);
     if (!triangles) continue;
-    geometry.pieces.push_back(std::move(*triangles));
+    geometry.primitives.push_back(std::move(*triangles));
     geometry.primitive_index.push_back(p);
   }
-  geometry.topology = analyze_surface(geometry.pieces);
+  for (const PrimitiveTriangles& primitive : geometry.primitives) {
+    geometry.pieces.push_back(primitive.view());
+  }
+  geometry.topology = analyze_surface(std::span<const TriangleMeshView>(geometry.pieces));
   return cache.emplace(mesh, std::move(geometry)).first->second;
 }
 
@@ -189,7 +206,7 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
 
     if (skinned) {
       // Skinned: each bone gets the parts of the mesh bound to it, in its bind pose.
-      for (const BoneGeometry& bone : split_by_bone(asset, node, geometry.pieces, geometry.primitive_index, diag)) {
+      for (const BoneGeometry& bone : split_by_bone(asset, node, geometry.meshes(), geometry.primitive_index, diag)) {
         const int link = link_of_node[bone.joint_node];
         const Eigen::Affine3d X_LV = robot.links[link].X_SL.inverse() * world[bone.joint_node] * bone.inverse_bind;
         auto integrals = oriented(integrate_solid(bone.pieces, X_LV), pointer, name, diag);
@@ -200,7 +217,8 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
     }
     const int link = link_of_node[owner];
     const Eigen::Affine3d X_LN = robot.links[link].X_SL.inverse() * world[node];
-    auto integrals = oriented(integrate_solid(geometry.pieces, X_LN), pointer, name, diag);
+    auto integrals = oriented(integrate_solid(std::span<const TriangleMeshView>(geometry.pieces), X_LN),
+                              pointer, name, diag);
     double mesh_density = density;
     if (mass_override && integrals.volume > 0) mesh_density = *mass_override / integrals.volume;
     pieces[link].push_back({integrals, mesh_density});

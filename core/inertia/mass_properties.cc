@@ -4,7 +4,10 @@
 #include <cmath>
 #include <limits>
 #include <optional>
+#include <stdexcept>
+#include <vector>
 
+#include "../geometry/typed_view.h"
 #include "tetrahedron_sums.h"
 
 namespace rdtf {
@@ -17,44 +20,104 @@ namespace {
 // spares a whole pass over the vertices, which cost 15% of the kernel on a 5M-triangle mesh.
 constexpr std::size_t kApexSamples = 4096;
 
-std::optional<Eigen::Vector3d> apex_of(std::span<const TriangleMesh> pieces) {
+std::optional<Eigen::Vector3d> apex_of(std::span<const TriangleMeshView> pieces) {
   constexpr double kInf = std::numeric_limits<double>::infinity();
   Eigen::Vector3d lo(kInf, kInf, kInf);
   Eigen::Vector3d hi = -lo;
   std::size_t vertices = 0;
-  for (const TriangleMesh& piece : pieces) vertices += piece.positions.size();
+  for (const TriangleMeshView& piece : pieces) vertices += piece.vertex_count;
   const std::size_t step = std::max<std::size_t>(1, vertices / kApexSamples);
-  for (const TriangleMesh& piece : pieces) {
-    for (std::size_t i = 0; i < piece.positions.size(); i += step) {
-      lo = lo.cwiseMin(piece.positions[i]);
-      hi = hi.cwiseMax(piece.positions[i]);
-    }
+  for (const TriangleMeshView& piece : pieces) {
+    internal::with_typed_view(piece, [&](const auto& view) {
+      for (std::size_t i = 0; i < view.vertex_count; i += step) {
+        Eigen::Vector3d p;
+        view.vertex(static_cast<std::uint32_t>(i), p.data());
+        lo = lo.cwiseMin(p);
+        hi = hi.cwiseMax(p);
+      }
+    });
   }
   if (!(lo.array() <= hi.array()).all()) return std::nullopt;
   return 0.5 * (lo + hi);
 }
 
-// The triangle loop, compiled twice on x86-64 (baseline SSE2 and AVX, chosen at load time by
-// the processor): the same operations in the same order, so both give the same bits.
+// The triangle loop, compiled twice on x86-64: for the baseline (SSE2) and for AVX, chosen by the
+// processor at run time. The same operations in the same order, so both give the same bits
+// (tests/inertia checks it). Each is a template over the mesh's storage, with the target on the
+// template itself so that every instantiation gets it (a lambda inside would not).
+template <typename View>
+void add_view_baseline(detail::TetrahedronSums<double>& sums, const View& view,
+                       const detail::Corner<double>& apex) {
+  detail::add_mesh(sums, view, apex);
+}
+
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-[[gnu::target_clones("avx", "default")]]
+#define RDTF_KERNEL_AVX 1
+#else
+#define RDTF_KERNEL_AVX 0
 #endif
-void add_piece(detail::TetrahedronSums<double>& sums, const TriangleMesh& piece,
-               const Eigen::Vector3d& p_MoA_M) {
-  detail::add_mesh(sums, piece.positions, piece.triangles, {p_MoA_M.x(), p_MoA_M.y(), p_MoA_M.z()});
+
+#if RDTF_KERNEL_AVX
+template <typename View>
+[[gnu::target("avx")]] void add_view_avx(detail::TetrahedronSums<double>& sums, const View& view,
+                                         const detail::Corner<double>& apex) {
+  detail::add_mesh(sums, view, apex);
+}
+
+bool processor_has_avx() {
+  // libgcc's and compiler-rt's check includes the operating system's support (XGETBV).
+  static const bool has = __builtin_cpu_supports("avx");
+  return has;
+}
+#endif
+
+void add_piece(detail::TetrahedronSums<double>& sums, const TriangleMeshView& piece,
+               const Eigen::Vector3d& p_MoA_M, bool avx) {
+  const detail::Corner<double> apex{p_MoA_M.x(), p_MoA_M.y(), p_MoA_M.z()};
+  internal::with_typed_view(piece, [&](const auto& view) {
+#if RDTF_KERNEL_AVX
+    if (avx) {
+      add_view_avx(sums, view, apex);
+      return;
+    }
+#else
+    (void)avx;
+#endif
+    add_view_baseline(sums, view, apex);
+  });
 }
 
 }  // namespace
 
-VolumeIntegrals integrate_solid(std::span<const TriangleMesh> pieces, const Eigen::Affine3d& X) {
+namespace detail {
+
+bool kernel_available(KernelIsa isa) {
+  switch (isa) {
+    case KernelIsa::kAuto:
+    case KernelIsa::kBaseline:
+      return true;
+    case KernelIsa::kAvx:
+#if RDTF_KERNEL_AVX
+      return processor_has_avx();
+#else
+      return false;
+#endif
+  }
+  return false;
+}
+
+VolumeIntegrals integrate_solid(std::span<const TriangleMeshView> pieces, const Eigen::Affine3d& X,
+                                KernelIsa isa) {
   // Sums in the mesh's own frame about a point inside its bounding box (p_MoA_M, the apex of
   // every tetrahedron), so that a mesh far from the origin keeps its precision.
   VolumeIntegrals result;
   const std::optional<Eigen::Vector3d> p_MoA_M = apex_of(pieces);
   if (!p_MoA_M) return result;  // No vertices at all.
+  if (!kernel_available(isa)) throw std::invalid_argument("integrate_solid: no AVX on this processor");
+  const bool avx = isa == KernelIsa::kAvx || (isa == KernelIsa::kAuto && kernel_available(KernelIsa::kAvx));
   detail::TetrahedronSums<double> sums;
-  for (const TriangleMesh& piece : pieces) {
-    add_piece(sums, piece, *p_MoA_M);
+  for (const TriangleMeshView& piece : pieces) {
+    add_piece(sums, piece, *p_MoA_M, avx);
   }
   // Each tetrahedron (A, a, b, c) maps to (X A, X a, X b, X c): about the mapped apex, the volume
   // scales by det(L), the first moment by det(L) L and the second by det(L) L (.) L^T, exactly.
@@ -78,6 +141,19 @@ VolumeIntegrals integrate_solid(std::span<const TriangleMesh> pieces, const Eige
   result.centroid = apex + offset;
   result.second_central = second - volume * offset * offset.transpose();
   return result;
+}
+
+}  // namespace detail
+
+VolumeIntegrals integrate_solid(std::span<const TriangleMeshView> pieces, const Eigen::Affine3d& X) {
+  return detail::integrate_solid(pieces, X, detail::KernelIsa::kAuto);
+}
+
+VolumeIntegrals integrate_solid(std::span<const TriangleMesh> pieces, const Eigen::Affine3d& X) {
+  std::vector<TriangleMeshView> views;
+  views.reserve(pieces.size());
+  for (const TriangleMesh& piece : pieces) views.push_back(TriangleMeshView::of(piece));
+  return integrate_solid(views, X);
 }
 
 Eigen::Matrix3d inertia_from_second_moment(const Eigen::Matrix3d& second_central, double density) {

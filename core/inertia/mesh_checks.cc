@@ -2,15 +2,27 @@
 
 #include <algorithm>
 #include <array>
-#include <bit>
 #include <cstdint>
 #include <cstring>
-#include <memory>
+#include <limits>
 #include <span>
+#include <stdexcept>
 #include <vector>
+
+#include "../geometry/big_arrays.h"
+#include "../geometry/typed_view.h"
 
 namespace rdtf {
 namespace {
+
+using internal::BigArray;
+
+// A position as the bits of its three coordinates as doubles (floats convert exactly), -0.0 and
+// +0.0 made one: two vertices weld exactly when these are equal, whatever their storage.
+struct PositionBits {
+  std::uint64_t x, y, z;
+  bool operator==(const PositionBits&) const = default;
+};
 
 std::uint64_t bits_of(double value) {
   value += 0.0;  // -0.0 and +0.0 are one position.
@@ -19,130 +31,114 @@ std::uint64_t bits_of(double value) {
   return bits;
 }
 
-std::uint64_t mix(std::uint64_t x) {  // splitmix64's finaliser
-  x ^= x >> 30;
-  x *= 0xbf58476d1ce4e5b9ull;
-  x ^= x >> 27;
-  x *= 0x94d049bb133111ebull;
-  return x ^ (x >> 31);
+template <typename View>
+PositionBits position_bits(const View& view, std::uint32_t v) {
+  double p[3];
+  view.vertex(v, p);
+  return {bits_of(p[0]), bits_of(p[1]), bits_of(p[2])};
 }
 
-// Welds vertices by exact position with an open-addressing table: one id per distinct position.
-// Each slot keeps 32 bits of the position's hash beside its id, so that probing past other
-// positions rarely has to read them (those reads are cache misses: they were half the time of
-// the surface check on a million-triangle mesh).
+// The high and low halves of a 128-bit product folded together (wyhash's "mum"): one
+// multiplication spreads both operands' bits over the whole result, upwards and downwards.
+__extension__ using Uint128 = unsigned __int128;  // GCC and Clang on 64-bit targets.
+
+std::uint64_t mum(std::uint64_t a, std::uint64_t b) {
+  const Uint128 product = static_cast<Uint128>(a) * b;
+  return static_cast<std::uint64_t>(product) ^ static_cast<std::uint64_t>(product >> 64);
+}
+
+// A float's double has its low 29 bits zero, so hashes that only carry bits upwards (x ^ y * K1
+// ^ z * K2, the previous one) keep little of a float position: on a float UV sphere that one
+// averaged 4.3 probes per vertex and 1.5 false tag matches (each a cache miss) where this one
+// gives 1.45 and none; a finaliser per coordinate gave the same spread at twice the cost.
+std::uint64_t hash_of(const PositionBits& p) {
+  return mum(mum(p.x ^ 0xa0761d6478bd642full, p.y ^ 0xe7037ed1a0b428dbull) ^ 0x8ebc6af09c88c6e3ull,
+             p.z ^ 0x589965cc75374cc3ull);
+}
+
+// Vertex numbers across all pieces: piece p's vertex i is offset[p] + i.
+struct Pieces {
+  std::span<const TriangleMeshView> views;
+  std::vector<std::size_t> offset;  // One per piece, and the total last.
+
+  explicit Pieces(std::span<const TriangleMeshView> v) : views(v) {
+    std::size_t total = 0;
+    for (const TriangleMeshView& view : views) {
+      offset.push_back(total);
+      total += view.vertex_count;
+    }
+    offset.push_back(total);
+  }
+  std::size_t vertices() const { return offset.back(); }
+  PositionBits bits(std::size_t global) const {
+    const std::size_t p =
+        static_cast<std::size_t>(std::upper_bound(offset.begin(), offset.end(), global) - offset.begin()) - 1;
+    return internal::with_typed_view(views[p], [&](const auto& view) {
+      return position_bits(view, static_cast<std::uint32_t>(global - offset[p]));
+    });
+  }
+};
+
+// Welds vertices by exact position with an open-addressing table: each vertex gets the number
+// of the first vertex at its position (its representative). Each slot keeps 32 bits of the
+// position's hash beside that number, so that probing past other positions rarely has to read
+// them. The table (8 MB for half a million vertices) is far larger than the caches, so every
+// lookup is a cache miss: the hashes of the next vertices are computed ahead and their slots
+// prefetched, so that many misses are in flight at once instead of one (issue 6: the waits on
+// this table were a quarter of a million-triangle conversion).
 class Welder {
  public:
-  explicit Welder(std::size_t expected) {
+  // Slots for `vertices` vertices, at most half full.
+  static std::size_t capacity_for(std::size_t vertices) {
     std::size_t capacity = 16;
-    while (capacity < 2 * expected) capacity *= 2;
-    slots_.assign(capacity, kEmpty);
-    first_.reserve(expected);
+    while (capacity < 2 * vertices) capacity *= 2;
+    return capacity;
   }
-  std::uint32_t id(const Eigen::Vector3d& p) {
-    const std::uint64_t x = bits_of(p.x()), y = bits_of(p.y()), z = bits_of(p.z());
-    const std::uint64_t hash = mix(x ^ (y * 0x9e3779b97f4a7c15ull) ^ (z * 0xc2b2ae3d27d4eb4full));
+  // `slots`: capacity_for(vertices) entries of scratch memory.
+  Welder(std::uint64_t* slots, std::size_t vertices) : slots_(slots), mask_(capacity_for(vertices) - 1) {
+    std::fill_n(slots_, mask_ + 1, kEmpty);
+  }
+
+  // rep[i] = the representative of vertex i of `view` (global vertex number first + i).
+  template <typename View>
+  void weld(const View& view, std::size_t first, const Pieces& pieces, std::uint32_t* rep) {
+    constexpr std::size_t kBlock = 32;
+    std::array<PositionBits, kBlock> bits;
+    std::array<std::uint64_t, kBlock> hash;
+    for (std::size_t start = 0; start < view.vertex_count; start += kBlock) {
+      const std::size_t n = std::min(kBlock, view.vertex_count - start);
+      for (std::size_t k = 0; k < n; ++k) {
+        bits[k] = position_bits(view, static_cast<std::uint32_t>(start + k));
+        hash[k] = hash_of(bits[k]);
+        __builtin_prefetch(slots_ + (hash[k] & mask_));
+      }
+      for (std::size_t k = 0; k < n; ++k) {
+        rep[start + k] = representative(bits[k], hash[k], static_cast<std::uint32_t>(first + start + k), pieces);
+      }
+    }
+  }
+
+ private:
+  std::uint32_t representative(const PositionBits& p, std::uint64_t hash, std::uint32_t global,
+                               const Pieces& pieces) {
     const std::uint64_t tag = hash & 0xffffffff00000000ull;
-    for (std::size_t slot = hash & (slots_.size() - 1);; slot = (slot + 1) & (slots_.size() - 1)) {
+    for (std::size_t slot = hash & mask_;; slot = (slot + 1) & mask_) {
       const std::uint64_t entry = slots_[slot];
       if (entry == kEmpty) {
-        const auto fresh = static_cast<std::uint32_t>(first_.size());
-        slots_[slot] = tag | fresh;
-        first_.push_back(&p);
-        return fresh;
+        slots_[slot] = tag | global;
+        return global;
       }
       if ((entry & 0xffffffff00000000ull) != tag) continue;
       const auto found = static_cast<std::uint32_t>(entry);
-      const Eigen::Vector3d& q = *first_[found];
-      if (bits_of(q.x()) == x && bits_of(q.y()) == y && bits_of(q.z()) == z) return found;
+      if (pieces.bits(found) == p) return found;
     }
   }
-  std::size_t size() const { return first_.size(); }
 
- private:
-  // No id reaches 2^32 - 1 (vertex counts are capped far below), so this is never a real entry.
+  // Vertex numbers stay below 2^32 - 1 (analyze_surface checks), so this is never an entry.
   static constexpr std::uint64_t kEmpty = ~std::uint64_t{0};
-  std::vector<std::uint64_t> slots_;                // hash tag << 32 | id
-  std::vector<const Eigen::Vector3d*> first_;  // The first vertex seen at each position.
+  std::uint64_t* slots_;  // hash tag << 32 | representative
+  std::size_t mask_;
 };
-
-// Every directed edge of the welded surface, grouped by the vertex it leaves (compressed rows):
-// the edges leaving v go to targets[begin[v] .. begin[v + 1]), sorted. Built by counting, which
-// costs two passes over the triangles instead of sorting millions of edge keys.
-struct DirectedEdges {
-  std::vector<std::uint32_t> begin;
-  std::unique_ptr<std::uint32_t[]> targets;  // Not zeroed first: every entry is written.
-
-  std::span<const std::uint32_t> from(std::uint32_t v) const {
-    return {targets.get() + begin[v], targets.get() + begin[v + 1]};
-  }
-  // How many edges go from v to w.
-  std::size_t count(std::uint32_t v, std::uint32_t w) const {
-    const auto out = from(v);
-    if (out.size() <= 16) return static_cast<std::size_t>(std::count(out.begin(), out.end(), w));
-    const auto [lo, hi] = std::equal_range(out.begin(), out.end(), w);
-    return static_cast<std::size_t>(hi - lo);
-  }
-};
-
-// Most vertices have about six edges: insertion sort beats std::sort's set-up there.
-void sort_small(std::uint32_t* first, std::uint32_t* last) {
-  if (last - first > 16) {
-    std::sort(first, last);
-    return;
-  }
-  for (std::uint32_t* i = first + 1; i < last; ++i) {
-    const std::uint32_t value = *i;
-    std::uint32_t* j = i;
-    for (; j > first && *(j - 1) > value; --j) *j = *(j - 1);
-    *j = value;
-  }
-}
-
-// The pieces with their vertices welded: welded[offset[p] + i] is vertex i of piece p's id.
-struct WeldedPieces {
-  std::span<const TriangleMesh> pieces;
-  std::vector<std::size_t> offset;
-  std::vector<std::uint32_t> welded;
-  std::size_t distinct = 0;
-
-  // Calls f(v0, v1, v2) with the welded corners of every triangle whose corners differ.
-  template <typename F>
-  void for_each_proper_triangle(F&& f) const {
-    for (std::size_t p = 0; p < pieces.size(); ++p) {
-      const std::uint32_t* ids = welded.data() + offset[p];
-      for (const auto& t : pieces[p].triangles) {
-        const std::uint32_t v0 = ids[t[0]], v1 = ids[t[1]], v2 = ids[t[2]];
-        if (v0 != v1 && v1 != v2 && v0 != v2) f(v0, v1, v2);
-      }
-    }
-  }
-};
-
-DirectedEdges directed_edges(const WeldedPieces& mesh) {
-  DirectedEdges edges;
-  // Count the edges leaving each vertex (each corner leaves by one), then turn the counts into
-  // end offsets and place every edge by decrementing: begin[v] ends at v's first edge.
-  edges.begin.assign(mesh.distinct + 1, 0);
-  mesh.for_each_proper_triangle([&](std::uint32_t v0, std::uint32_t v1, std::uint32_t v2) {
-    ++edges.begin[v0];
-    ++edges.begin[v1];
-    ++edges.begin[v2];
-  });
-  std::uint32_t total = 0;
-  for (auto& b : edges.begin) b = total += b;
-  edges.targets.reset(new std::uint32_t[total]);
-  std::uint32_t* targets = edges.targets.get();
-  mesh.for_each_proper_triangle([&](std::uint32_t v0, std::uint32_t v1, std::uint32_t v2) {
-    targets[--edges.begin[v0]] = v1;
-    targets[--edges.begin[v1]] = v2;
-    targets[--edges.begin[v2]] = v0;
-  });
-  for (std::size_t v = 0; v < mesh.distinct; ++v) {
-    sort_small(targets + edges.begin[v], targets + edges.begin[v + 1]);
-  }
-  return edges;
-}
 
 // Classifies every undirected edge by its uses: `forward` times one way, `backward` the other.
 void classify(std::size_t forward, std::size_t backward, SurfaceTopology& topology) {
@@ -156,40 +152,187 @@ void classify(std::size_t forward, std::size_t backward, SurfaceTopology& topolo
   }
 }
 
+template <typename T>
+[[gnu::always_inline]] inline void compare_exchange(T& a, T& b) {
+  const T lo = std::min(a, b), hi = std::max(a, b);  // Conditional moves: no branch to mispredict.
+  a = lo;
+  b = hi;
+}
+
+// Sorts a row of edges. Rows of 2, 4, 6 and 8 (the sizes of a closed surface's rows, and nearly
+// all of them) go through sorting networks, which have no data-dependent branches: with them and
+// the pair check in classify_surface, the rows of a million-triangle sphere took 1.9 ms instead
+// of the 4.0 ms of insertion sort, which mispredicted its way through them.
+template <typename T>
+void sort_row(T* e, std::size_t n) {
+  switch (n) {
+    case 2:
+      compare_exchange(e[0], e[1]);
+      return;
+    case 4:  // Optimal networks (Knuth, TAOCP 5.3.4; Dobbelaere's list).
+      compare_exchange(e[0], e[2]), compare_exchange(e[1], e[3]);
+      compare_exchange(e[0], e[1]), compare_exchange(e[2], e[3]);
+      compare_exchange(e[1], e[2]);
+      return;
+    case 6:
+      compare_exchange(e[0], e[5]), compare_exchange(e[1], e[3]), compare_exchange(e[2], e[4]);
+      compare_exchange(e[1], e[2]), compare_exchange(e[3], e[4]);
+      compare_exchange(e[0], e[3]), compare_exchange(e[2], e[5]);
+      compare_exchange(e[0], e[1]), compare_exchange(e[2], e[3]), compare_exchange(e[4], e[5]);
+      compare_exchange(e[1], e[2]), compare_exchange(e[3], e[4]);
+      return;
+    case 8:
+      compare_exchange(e[0], e[2]), compare_exchange(e[1], e[3]), compare_exchange(e[4], e[6]),
+          compare_exchange(e[5], e[7]);
+      compare_exchange(e[0], e[4]), compare_exchange(e[1], e[5]), compare_exchange(e[2], e[6]),
+          compare_exchange(e[3], e[7]);
+      compare_exchange(e[0], e[1]), compare_exchange(e[2], e[3]), compare_exchange(e[4], e[5]),
+          compare_exchange(e[6], e[7]);
+      compare_exchange(e[2], e[4]), compare_exchange(e[3], e[5]);
+      compare_exchange(e[1], e[4]), compare_exchange(e[3], e[6]);
+      compare_exchange(e[1], e[2]), compare_exchange(e[3], e[4]), compare_exchange(e[5], e[6]);
+      return;
+    default:
+      break;
+  }
+  if (n > 16) {
+    std::sort(e, e + n);
+    return;
+  }
+  for (std::size_t i = 1; i < n; ++i) {
+    const T value = e[i];
+    std::size_t j = i;
+    for (; j > 0 && e[j - 1] > value; --j) e[j] = e[j - 1];
+    e[j] = value;
+  }
+}
+
+// Calls f(v0, v1, v2) with the welded corners of every triangle whose corners differ.
+// Two halves of each piece's triangles go through the loop side by side: consecutive triangles
+// share vertices, so their updates of the same row counter form a chain of dependent memory
+// operations, and a second, independent chain beside it took the two passes over a
+// million-triangle sphere from 5.2 to 3.8 ms. (Four chains were slower.) Only the order of the
+// calls changes, which nothing depends on.
+template <typename F>
+void for_each_proper_triangle(const Pieces& pieces, const std::uint32_t* welded, F&& f) {
+  for (std::size_t p = 0; p < pieces.views.size(); ++p) {
+    const std::uint32_t* ids = welded + pieces.offset[p];
+    internal::with_typed_view(pieces.views[p], [&](const auto& view) {
+      const auto triangle = [&](std::size_t t) {
+        const std::uint32_t v0 = ids[view.index(3 * t)], v1 = ids[view.index(3 * t + 1)],
+                            v2 = ids[view.index(3 * t + 2)];
+        if (v0 != v1 && v1 != v2 && v0 != v2) [[likely]] f(v0, v1, v2);
+      };
+      const std::size_t half = view.triangle_count / 2;
+      for (std::size_t t = 0; t < half; ++t) {
+        triangle(t);
+        triangle(half + t);
+      }
+      if (view.triangle_count % 2 != 0) triangle(view.triangle_count - 1);
+    });
+  }
+}
+
+// Every undirected edge {v, w} of the welded surface, v < w (by representative), is filed once
+// per use under v, its smaller end, as (w << 1 | d), d = 1 when that use goes from w to v. A row
+// sorted thus holds each edge's uses together, forward ones first, so every edge is classified
+// from its row alone: no lookup in another vertex's row (those were random reads over 12 MB).
+// The rows are laid out by counting (two passes over the triangles), not by sorting millions of
+// keys.
+//
+// Memory: one block, in huge pages (big_arrays.h), reused between the two phases: the weld's
+// table first, then the row counts and the edges in the same bytes. Every fresh megabyte costs
+// time here (zeroed by the kernel on first touch), and this saves 10 MB of the 26 MB that
+// separate arrays needed for a million triangles.
+template <typename Edge>
+void classify_surface(const Pieces& pieces, SurfaceTopology& topology) {
+  const std::size_t vertices = pieces.vertices();
+  const std::size_t slots = Welder::capacity_for(vertices);
+  const std::size_t rep_words = (vertices + 1) / 2;  // uint32 representatives, in 64-bit words.
+  const std::size_t count_words = (vertices + 2) / 2;
+  const std::size_t edge_words = (3 * topology.triangles * sizeof(Edge) + 7) / 8;  // At most.
+  BigArray<std::uint64_t> scratch(rep_words + std::max(slots, count_words + edge_words));
+  auto* const rep = reinterpret_cast<std::uint32_t*>(scratch.data());
+  {
+    Welder welder(scratch.data() + rep_words, vertices);
+    for (std::size_t p = 0; p < pieces.views.size(); ++p) {
+      internal::with_typed_view(pieces.views[p], [&](const auto& view) {
+        welder.weld(view, pieces.offset[p], pieces, rep + pieces.offset[p]);
+      });
+    }
+  }
+  // The table is done with: its bytes become the rows.
+  auto* const count = reinterpret_cast<std::uint32_t*>(scratch.data() + rep_words);
+  auto* const out = reinterpret_cast<Edge*>(scratch.data() + rep_words + count_words);
+  std::fill_n(count, vertices + 1, 0u);
+  for_each_proper_triangle(pieces, rep, [&](std::uint32_t v0, std::uint32_t v1, std::uint32_t v2) {
+    ++count[std::min(v0, v1)];
+    ++count[std::min(v1, v2)];
+    ++count[std::min(v2, v0)];
+  });
+  // Counts to end offsets; placing each edge then decrements its row's offset to its start.
+  std::size_t total = 0;
+  for (std::size_t v = 0; v <= vertices; ++v) count[v] = static_cast<std::uint32_t>(total += count[v]);
+  topology.degenerate_triangles = topology.triangles - total / 3;
+  const auto file = [&](std::uint32_t from, std::uint32_t to) {
+    // Without a branch on the direction, which is as good as random.
+    const std::uint32_t lo = std::min(from, to), hi = std::max(from, to);
+    out[--count[lo]] = static_cast<Edge>(Edge{hi} << 1 | Edge{from > to});
+  };
+  for_each_proper_triangle(pieces, rep, [&](std::uint32_t v0, std::uint32_t v1, std::uint32_t v2) {
+    file(v0, v1);
+    file(v1, v2);
+    file(v2, v0);
+  });
+  for (std::size_t v = 0; v < vertices; ++v) {
+    Edge* row = out + count[v];
+    const std::size_t n = count[v + 1] - count[v];
+    sort_row(row, n);
+    // A closed, consistently wound surface's rows are pairs (w << 1, w << 1 | 1) of distinct w:
+    // each edge used once each way, which changes no count. Checked without branches first.
+    // (Rows of vertices that are not representatives are empty.)
+    if (n % 2 == 0) {
+      Edge odd = 0;
+      for (std::size_t i = 0; i < n; i += 2) odd |= (row[i] & 1) | (row[i + 1] ^ (row[i] + 1));
+      if (odd == 0) continue;
+    }
+    Edge* const end = row + n;
+    while (row < end) {
+      const Edge w = *row >> 1;
+      std::size_t forward = 0, backward = 0;
+      for (; row < end && (*row >> 1) == w; ++row) ++((*row & 1) != 0 ? backward : forward);
+      classify(forward, backward, topology);
+    }
+  }
+}
+
 }  // namespace
 
-SurfaceTopology analyze_surface(std::span<const TriangleMesh> pieces) {
+SurfaceTopology analyze_surface(std::span<const TriangleMeshView> views) {
   SurfaceTopology topology;
-  WeldedPieces mesh{pieces, {}, {}, 0};
-  std::size_t vertices = 0;
-  for (const TriangleMesh& piece : pieces) {
-    mesh.offset.push_back(vertices);
-    vertices += piece.positions.size();
+  const Pieces pieces(views);
+  for (const TriangleMeshView& view : views) topology.triangles += view.triangle_count;
+  // Vertices are numbered in 32 bits, 2^32 - 1 excluded (the weld's empty slot), and rows are
+  // offsets into 3 x triangles edges, also in 32 bits; glTF input is capped far below
+  // (LoadLimits::max_accessor_count, max_triangles).
+  constexpr std::size_t kMax = std::numeric_limits<std::uint32_t>::max();
+  if (pieces.vertices() >= kMax || topology.triangles >= kMax / 3) {
+    throw std::length_error("analyze_surface: 2^32 - 1 vertices, or a third of it in triangles, or more");
   }
-  Welder welder(vertices);
-  mesh.welded.resize(vertices);
-  for (std::size_t p = 0; p < pieces.size(); ++p) {
-    for (std::size_t i = 0; i < pieces[p].positions.size(); ++i) {
-      mesh.welded[mesh.offset[p] + i] = welder.id(pieces[p].positions[i]);
-    }
-  }
-  mesh.distinct = welder.size();
-  const DirectedEdges edges = directed_edges(mesh);
-  for (const TriangleMesh& piece : pieces) topology.triangles += piece.triangles.size();
-  // Three directed edges for every triangle with three distinct corners.
-  topology.degenerate_triangles = topology.triangles - edges.begin.back() / 3;
-  // Each undirected edge {v, w} once: from v when v < w or when nothing goes back from w.
-  for (std::uint32_t v = 0; v < mesh.distinct; ++v) {
-    const auto out = edges.from(v);
-    for (std::size_t i = 0; i < out.size();) {
-      const std::uint32_t w = out[i];
-      std::size_t forward = 0;
-      while (i < out.size() && out[i] == w) ++forward, ++i;
-      const std::size_t backward = edges.count(w, v);
-      if (backward == 0 || v < w) classify(forward, backward, topology);
-    }
+  // An edge is filed as its far end's number shifted left once: 32 bits hold that below 2^31.
+  if (pieces.vertices() <= (std::size_t{1} << 31)) {
+    classify_surface<std::uint32_t>(pieces, topology);
+  } else {
+    classify_surface<std::uint64_t>(pieces, topology);
   }
   return topology;
+}
+
+SurfaceTopology analyze_surface(std::span<const TriangleMesh> meshes) {
+  std::vector<TriangleMeshView> views;
+  views.reserve(meshes.size());
+  for (const TriangleMesh& mesh : meshes) views.push_back(TriangleMeshView::of(mesh));
+  return analyze_surface(views);
 }
 
 }  // namespace rdtf

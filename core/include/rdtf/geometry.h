@@ -28,6 +28,23 @@ int component_count(const std::string& type);
 std::optional<TriangleMesh> read_primitive_triangles(const GltfAsset& asset, std::size_t mesh,
                                                      std::size_t primitive, Diagnostics& diag);
 
+// A primitive's triangles for the mass and surface computations: read in place from the asset's
+// buffers when they allow it (mode TRIANGLES, POSITION as dense floats, indices dense unsigned
+// integers or none: what exporters write), else copied out by read_primitive_triangles. The same
+// triangles, positions and diagnostics either way; in place spares copying (and faulting in) a
+// large model's geometry (issue 6).
+struct PrimitiveTriangles {
+  TriangleMeshView in_place;        // Borrows the asset's buffers; used when `copy` is empty.
+  std::optional<TriangleMesh> copy;
+
+  TriangleMeshView view() const { return copy ? TriangleMeshView::of(*copy) : in_place; }
+  TriangleMesh mesh() const;  // As read_primitive_triangles gives it.
+};
+
+// Nothing (and the diagnostics of read_primitive_triangles) for a primitive without triangles.
+std::optional<PrimitiveTriangles> read_primitive_in_place(const GltfAsset& asset, std::size_t mesh,
+                                                          std::size_t primitive, Diagnostics& diag);
+
 // A node's local transform (matrix, or translation * rotation * scale).
 Eigen::Affine3d node_local_transform(const Json& node);
 

@@ -31,6 +31,21 @@ struct VolumeIntegrals {
 // vertices or through X) keeps its precision, then maps the sums by X once (exact for affine X).
 VolumeIntegrals integrate_solid(std::span<const TriangleMesh> pieces, const Eigen::Affine3d& X);
 
+// The same on meshes read in place (the same result, bit for bit, for the same positions and
+// triangles).
+VolumeIntegrals integrate_solid(std::span<const TriangleMeshView> pieces, const Eigen::Affine3d& X);
+
+namespace detail {
+// Which compiled copy of the triangle loop runs. kAuto (what integrate_solid uses) picks AVX
+// where the processor has it, else the baseline; tests and benchmarks force each to check that
+// they agree bit for bit and to time them. Forcing one that kernel_available() says is not there
+// throws std::invalid_argument.
+enum class KernelIsa { kAuto, kBaseline, kAvx };
+bool kernel_available(KernelIsa isa);
+VolumeIntegrals integrate_solid(std::span<const TriangleMeshView> pieces, const Eigen::Affine3d& X,
+                                KernelIsa isa);
+}  // namespace detail
+
 struct MassProperties {
   double volume = 0;                                         // m^3
   double mass = 0;                                           // kg

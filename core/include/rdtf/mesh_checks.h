@@ -24,4 +24,7 @@ struct SurfaceTopology {
 // seams, which does not open the surface.
 SurfaceTopology analyze_surface(std::span<const TriangleMesh> pieces);
 
+// The same on meshes read in place (the same result for the same positions and triangles).
+SurfaceTopology analyze_surface(std::span<const TriangleMeshView> pieces);
+
 }  // namespace rdtf

@@ -428,6 +428,7 @@ void Daemon::dispatch_due() {
     job.output_dir = config_.output / record->id;
     job.options = config_.convert;
     job.previous_hash = record->last_hash;
+    job.write_failed = config_.publish_failed;
     if (config_.validate) {
       ValidationOptions validation;
       validation.duration = config_.validation_seconds;
@@ -498,38 +499,52 @@ void Daemon::apply(ConversionOutcome outcome) {
     case ConversionOutcome::Kind::kConverted: {
       const ConvertedModel& candidate = *outcome.converted;
       const bool failed = candidate.validation && !candidate.validation->passed;
+      retries_.erase(record->source);
+      record->last_hash = outcome.content_hash;
+      record->dependencies = outcome.dependencies;
+      // Every content that gets a VALIDATION gets a number of its own, accepted or not.
+      const std::int64_t number = ++record->numbered;
+      // Warnings of a conversion that succeeded: one log line each, and on LCM with the verdict
+      // (with the infos, which every Blender export has and which would only crowd the log).
+      for (const Diagnostic& d : outcome.diagnostics.all()) {
+        if (d.severity == Severity::kWarning) log_line("warning " + id + " revision " + std::to_string(number) + ": " + format(d));
+      }
       if (candidate.validation) {
         // The report comes first: a description is only ever published with its verdict.
+        ValidationSummary report = *candidate.validation;
+        report.diagnostics.append(outcome.diagnostics);
         publisher_->publish(channel(id, "VALIDATION"),
-                            make_validation_report(id, record->revisions + 1, outcome.content_hash,
-                                                   *candidate.validation));
+                            make_validation_report(id, number, outcome.content_hash, report));
       }
       if (failed && !config_.publish_failed) {
         ++counters_.rejections;
-        record->last_hash = outcome.content_hash;
-        record->dependencies = outcome.dependencies;
-        log_line("rejected " + id + " (dynamics) in " + milliseconds(outcome.duration) + ": " +
-                 candidate.validation->summary_line +
+        log_line("rejected " + id + " revision " + std::to_string(number) + " (dynamics) in " +
+                 milliseconds(outcome.duration) + ": " + candidate.validation->summary_line +
                  (record->live ? "; still serving revision " + std::to_string(record->revisions) : ""));
         publisher_->publish(channel(id, "ERROR"),
                             make_model_error(*record, outcome.content_hash, candidate.validation->diagnostics));
         break;
       }
-      retries_.erase(record->source);
       ++counters_.conversions;
-      ++record->revisions;
-      record->last_hash = outcome.content_hash;
-      record->dependencies = outcome.dependencies;
+      record->revisions = number;
       record->live = std::move(outcome.converted);
       log_line("converted " + id + " revision " + std::to_string(record->revisions) + " (" +
                std::to_string(record->live->robot.links.size()) + " links, " +
                std::to_string(record->live->robot.joints.size()) + " joints" +
                (record->live->validation ? std::string(", dynamics ") + (failed ? "FAILED" : "passed") : "") +
                ") in " + milliseconds(outcome.duration));
-      publish_model(*record);
-      if (simulation_ && !failed) {
-        simulation_->load(id, record->revisions, record->live->content_hash, record->live->robot);
+      if (simulation_) {
+        if (failed) {
+          // A revision that failed the check would blow up in ODE, and the previous one is no
+          // longer what is published: no simulation runs until a revision passes.
+          simulation_->remove(id);
+          log_line("stopped the simulation of " + id + ": revision " + std::to_string(number) +
+                   " failed the dynamics check");
+        } else {
+          simulation_->load(id, record->revisions, record->live->content_hash, record->live->robot);
+        }
       }
+      publish_model(*record);
       break;
     }
     case ConversionOutcome::Kind::kUnchanged:

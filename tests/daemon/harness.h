@@ -331,6 +331,25 @@ inline std::string broken_model() {
   return document.dump(1);
 }
 
+// A two-link chain that converts but fails the dynamics check: link_1 weighs a millionth of the
+// base (JOINT_MASS_RATIO, beyond the default bound of 1e3; docs/dynamics.md).
+inline GeneratedModel gate_failing_model(const std::string& name, double half, const std::string& bin_name = "") {
+  GeneratedModel model = box_model(name, half, 2, bin_name);
+  Json document = Json::parse(model.gltf);
+  document["nodes"][2]["extras"]["rdtf_mass"] = model.link_mass * 1e-6;
+  model.gltf = document.dump(1);
+  return model;
+}
+
+// Every regular file below `folder` (relative path -> bytes): what a reader of the outputs finds.
+inline std::map<std::string, std::string> snapshot(const fs::path& folder) {
+  std::map<std::string, std::string> files;
+  for (const auto& entry : fs::recursive_directory_iterator(folder)) {
+    if (entry.is_regular_file()) files[fs::relative(entry.path(), folder).string()] = read(entry.path());
+  }
+  return files;
+}
+
 // A fixture (tests/data/blender/<stem>.gltf and its .bin) copied into `folder`.
 inline fs::path copy_fixture(const fs::path& folder, const std::string& stem, const std::string& as = "") {
   const fs::path source = testing::data_dir() / "blender";

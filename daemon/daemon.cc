@@ -243,7 +243,7 @@ void Daemon::schedule_retry(const ConversionOutcome& outcome, ModelRecord& recor
            " ms (attempt " + std::to_string(retry.attempts) + ")");
   // One ERROR per outage, not one per attempt.
   if (retry.attempts == 1) {
-    publisher_->publish(channel(record.id, "ERROR"), make_model_error(record, outcome.content_hash, outcome.diagnostics));
+    publisher_->publish(channel(record.id, "ERROR"), make_model_error(record, outcome.content_hash, outcome.diagnostics, config_.max_chunk_bytes));
   }
 }
 
@@ -514,7 +514,7 @@ void Daemon::apply(ConversionOutcome outcome) {
         ValidationSummary report = *candidate.validation;
         report.diagnostics.append(outcome.diagnostics);
         publisher_->publish(channel(id, "VALIDATION"),
-                            make_validation_report(id, number, outcome.content_hash, report));
+                            make_validation_report(id, number, outcome.content_hash, report, config_.max_chunk_bytes));
       }
       if (failed && !config_.publish_failed) {
         ++counters_.rejections;
@@ -522,7 +522,7 @@ void Daemon::apply(ConversionOutcome outcome) {
                  milliseconds(outcome.duration) + ": " + candidate.validation->summary_line +
                  (record->live ? "; still serving revision " + std::to_string(record->revisions) : ""));
         publisher_->publish(channel(id, "ERROR"),
-                            make_model_error(*record, outcome.content_hash, candidate.validation->diagnostics));
+                            make_model_error(*record, outcome.content_hash, candidate.validation->diagnostics, config_.max_chunk_bytes));
         break;
       }
       ++counters_.conversions;
@@ -567,7 +567,7 @@ void Daemon::apply(ConversionOutcome outcome) {
       // A newer save already waits: the rejected content is superseded, so say nothing of it.
       if (!record->again) {
         publisher_->publish(channel(id, "ERROR"),
-                            make_model_error(*record, outcome.content_hash, outcome.diagnostics));
+                            make_model_error(*record, outcome.content_hash, outcome.diagnostics, config_.max_chunk_bytes));
       }
       break;
     case ConversionOutcome::Kind::kVanished: {
@@ -590,11 +590,13 @@ void Daemon::apply(ConversionOutcome outcome) {
 
 void Daemon::publish_model(const ModelRecord& record) {
   if (!record.live) return;
-  std::vector<rdtf::description_chunk_t> chunks;
-  const auto description = make_description(record, config_.max_chunk_bytes, chunks);
-  for (const auto& chunk : chunks) publisher_->publish(channel(record.id, "DESCRIPTION_CHUNK"), chunk);
-  publisher_->publish(channel(record.id, "DESCRIPTION"), description);
-  publisher_->publish(channel(record.id, "INERTIA"), make_inertia_table(record));
+  const auto messages = make_description(record, config_.max_chunk_bytes);
+  for (const auto& chunk : messages.json_chunks) publisher_->publish(channel(record.id, "DESCRIPTION_CHUNK"), chunk);
+  for (const auto& chunk : messages.urdf_chunks) publisher_->publish(channel(record.id, "URDF_CHUNK"), chunk);
+  publisher_->publish(channel(record.id, "DESCRIPTION"), messages.description);
+  for (const auto& table : make_inertia_tables(record, config_.max_chunk_bytes)) {
+    publisher_->publish(channel(record.id, "INERTIA"), table);
+  }
 }
 
 void Daemon::publish_all() {

@@ -505,7 +505,7 @@ inline std::vector<rdtf::status_t> statuses(const std::vector<Message>& all) {
 
 // One line per message about models (not STATUS or REQUEST), in arrival order:
 //   "arm.gltf DESCRIPTION r2 0123456789ab", "arm.gltf INERTIA r2 ...", "arm.gltf ERROR live=1 ...",
-//   "arm.gltf REMOVED last=2", "big.gltf DESCRIPTION_CHUNK r1 0/3"
+//   "arm.gltf REMOVED last=2", "big.gltf DESCRIPTION_CHUNK r1 0/3", "big.gltf URDF_CHUNK r1 0/2"
 inline std::string describe(const Message& m) {
   const std::string kind = m.kind();
   const std::string head = m.model_id() + " " + kind;
@@ -517,7 +517,7 @@ inline std::string describe(const Message& m) {
     const auto t = m.as<rdtf::inertia_table_t>();
     return head + " r" + std::to_string(t.revision) + " " + short_hash(t.content_hash);
   }
-  if (kind == "DESCRIPTION_CHUNK") {
+  if (kind == "DESCRIPTION_CHUNK" || kind == "URDF_CHUNK") {
     const auto c = m.as<rdtf::description_chunk_t>();
     return head + " r" + std::to_string(c.revision) + " " + std::to_string(c.index) + "/" + std::to_string(c.count);
   }

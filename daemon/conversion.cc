@@ -153,43 +153,9 @@ ConversionOutcome run_conversion(const ConversionJob& job) {
   auto conversion = convert(std::move(*asset), job.options, outcome.diagnostics);
   if (!conversion) return finish();
 
-  std::filesystem::create_directories(job.output_dir, ec);
-  if (ec) {
-    outcome.diagnostics.error("WRITE_FAILED", "", "cannot create " + job.output_dir.string() + ": " + ec.message());
-    outcome.retry = true;
-    return finish();
-  }
-  ConvertedModel converted;
-  converted.content_hash = outcome.content_hash;
-  converted.output_path = job.output_dir / (job.source.stem().string() + ".rdtf.gltf");
-  Diagnostics write_diag(converted.output_path.string());
-  WriteOptions write_options;
-  write_options.content_digest = output_digest;
-  if (!write_rdtf(conversion->asset, converted.output_path, write_options, write_diag, &converted.rdtf_json)) {
-    outcome.diagnostics.append(write_diag);
-    outcome.retry = has_code(write_diag, "WRITE_FAILED");
-    return finish();
-  }
-  outcome.diagnostics.append(write_diag);
-  if (job.urdf) {
-    // URDF is a second output: a model URDF cannot express (a ball joint) still converts.
-    Diagnostics urdf_diag(converted.output_path.string());
-    const auto urdf_dir = job.output_dir / "urdf";
-    UrdfOptions urdf_options = *job.urdf;
-    urdf_options.mesh_digest = output_digest;
-    if (write_urdf(*conversion, urdf_dir, urdf_options, urdf_diag, &converted.urdf)) {
-      converted.urdf_path = urdf_dir / "robot.urdf";
-    } else if (has_code(urdf_diag, "WRITE_FAILED")) {
-      // The disk, not the model: fail the revision and try again, so no output is left behind.
-      outcome.diagnostics.append(urdf_diag);
-      outcome.retry = true;
-      return finish();
-    } else {
-      for (const Diagnostic& d : urdf_diag.all()) {
-        outcome.diagnostics.warning("URDF_NOT_WRITTEN", d.pointer, d.message);
-      }
-    }
-  }
+  // The check runs before anything is written: a revision it rejects must never replace the live
+  // revision's files (docs/daemon.md, "Outputs").
+  std::optional<ValidationSummary> validation;
   if (job.validation) {
     ValidationReport report = validate_dynamics(*conversion, *job.validation, job.source.string());
     ValidationSummary summary;
@@ -201,7 +167,50 @@ ConversionOutcome run_conversion(const ConversionJob& job) {
     summary.wall_time = report.wall_time;
     summary.summary_line = validation_summary_line(report);
     summary.diagnostics = std::move(report.diagnostics);
-    converted.validation = std::move(summary);
+    validation = std::move(summary);
+  }
+  const bool write = !(validation && !validation->passed) || job.write_failed;
+  ConvertedModel converted;
+  converted.content_hash = outcome.content_hash;
+  converted.validation = std::move(validation);
+  if (write) {
+    std::filesystem::create_directories(job.output_dir, ec);
+    if (ec) {
+      outcome.diagnostics.error("WRITE_FAILED", "", "cannot create " + job.output_dir.string() + ": " + ec.message());
+      outcome.retry = true;
+      return finish();
+    }
+    converted.output_path = job.output_dir / (job.source.stem().string() + ".rdtf.gltf");
+    Diagnostics write_diag(converted.output_path.string());
+    WriteOptions write_options;
+    write_options.content_digest = output_digest;
+    if (!write_rdtf(conversion->asset, converted.output_path, write_options, write_diag, &converted.rdtf_json)) {
+      outcome.diagnostics.append(write_diag);
+      outcome.retry = has_code(write_diag, "WRITE_FAILED");
+      return finish();
+    }
+    outcome.diagnostics.append(write_diag);
+    if (job.urdf) {
+      // URDF is a second output: a model URDF cannot express (a ball joint) still converts.
+      Diagnostics urdf_diag(converted.output_path.string());
+      const auto urdf_dir = job.output_dir / "urdf";
+      UrdfOptions urdf_options = *job.urdf;
+      urdf_options.mesh_digest = output_digest;
+      if (write_urdf(*conversion, urdf_dir, urdf_options, urdf_diag, &converted.urdf)) {
+        converted.urdf_path = urdf_dir / "robot.urdf";
+        outcome.diagnostics.append(urdf_diag);  // Its warnings (URDF_NAME_CHANGED, ...).
+      } else if (has_code(urdf_diag, "WRITE_FAILED")) {
+        // The disk, not the model: fail the revision and try again, so no output is left behind.
+        outcome.diagnostics.append(urdf_diag);
+        outcome.retry = true;
+        return finish();
+      } else {
+        for (const Diagnostic& d : urdf_diag.all()) {
+          outcome.diagnostics.warning("URDF_NOT_WRITTEN", d.pointer, d.message);
+        }
+      }
+    }
+    converted.written = true;
   }
   converted.totals = robot_totals(conversion->robot);
   converted.robot = std::move(conversion->robot);

@@ -26,6 +26,9 @@ struct ConversionJob {
   std::string previous_hash;         // Content last converted (good or bad): skip when equal.
   std::optional<ValidationOptions> validation;  // Run the dynamics check when given.
   std::optional<UrdfOptions> urdf;              // Write <output_dir>/urdf/robot.urdf when given.
+  // publish_failed: a revision that fails the dynamics check is published, so its outputs are
+  // written too. Otherwise such a revision writes nothing: the live revision's files stay.
+  bool write_failed = false;
 };
 
 // The dynamics check of a revision, without the ODE world.
@@ -48,6 +51,9 @@ struct ConvertedModel {
   Robot robot;
   RobotTotals totals;
   std::optional<ValidationSummary> validation;
+  // False for a revision that failed the dynamics check and was not written (output_path,
+  // rdtf_json, urdf_path and urdf are then empty).
+  bool written = false;
   std::filesystem::path urdf_path;  // Empty when no URDF was written.
   std::string urdf;
 };

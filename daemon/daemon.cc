@@ -14,6 +14,7 @@
 #include <optional>
 #include <regex>
 #include <set>
+#include <tuple>
 
 #include <rdtf/status_t.hpp>
 
@@ -78,6 +79,35 @@ std::string first_error(const Diagnostics& diag) {
     if (d.severity == Severity::kError) return format(d);
   }
   return "unknown error";
+}
+
+// What a conversion's result depends on besides the files: a reload that changes none of these
+// gives no model a new revision.
+auto conversion_settings(const DaemonConfig& c) {
+  const auto& l = c.convert.limits;
+  return std::make_tuple(c.output, c.convert.default_density, l.max_file_bytes, l.max_buffer_bytes,
+                         l.max_accessor_count, l.max_triangles, c.validate, c.validation_seconds,
+                         c.publish_failed, c.floating_root, c.gravity.x(), c.gravity.y(), c.gravity.z(),
+                         c.urdf, c.urdf_y_up);
+}
+
+// What the live simulations depend on: a reload that changes none of these keeps them running.
+auto simulation_settings(const DaemonConfig& c) {
+  return std::make_tuple(c.simulate, c.state_rate_hz, c.real_time_factor, c.floating_root, c.gravity.x(),
+                         c.gravity.y(), c.gravity.z(), c.lcm_url, c.channel_prefix);
+}
+
+// A conversion again of the content served (after a reload) whose result is the served one.
+bool same_result(const ConvertedModel& live, const ConvertedModel& candidate) {
+  return live.content_hash == candidate.content_hash && live.written == candidate.written &&
+         live.output_path == candidate.output_path && live.rdtf_json == candidate.rdtf_json &&
+         live.urdf_path == candidate.urdf_path && live.urdf == candidate.urdf &&
+         live.validation.has_value() == candidate.validation.has_value() &&
+         (!live.validation || live.validation->passed == candidate.validation->passed);
+}
+
+std::string since(Clock::time_point start) {
+  return milliseconds(std::chrono::duration_cast<std::chrono::microseconds>(Clock::now() - start));
 }
 
 }  // namespace
@@ -243,7 +273,7 @@ void Daemon::schedule_retry(const ConversionOutcome& outcome, ModelRecord& recor
            " ms (attempt " + std::to_string(retry.attempts) + ")");
   // One ERROR per outage, not one per attempt.
   if (retry.attempts == 1) {
-    publisher_->publish(channel(record.id, "ERROR"), make_model_error(record, outcome.content_hash, outcome.diagnostics));
+    publisher_->publish(channel(record.id, "ERROR"), make_model_error(record, outcome.content_hash, outcome.diagnostics, config_.max_chunk_bytes));
   }
 }
 
@@ -346,12 +376,15 @@ bool Daemon::waiting_for_writer(const ModelRecord& record, Clock::time_point now
   return false;
 }
 
-void Daemon::drop_model(const std::filesystem::path& source) {
+void Daemon::drop_model(const std::filesystem::path& source, std::chrono::microseconds checked) {
+  const auto start = Clock::now();
   ModelRecord* record = registry_.find(source);
   if (record == nullptr) return;
-  log_line("removed " + record->id);
   if (record->live) publisher_->publish(channel(record->id, "REMOVED"), make_model_removed(*record));
   if (simulation_) simulation_->remove(record->id);
+  log_line("removed " + record->id + " in " +
+           milliseconds(checked + std::chrono::duration_cast<std::chrono::microseconds>(Clock::now() - start)) +
+           (record->live ? " (revision " + std::to_string(record->revisions) + " was live)" : ""));
   settle_.forget(source.string());
   retries_.erase(source);
   registry_.erase(source);
@@ -370,7 +403,7 @@ void Daemon::rescan(const char* why) {
     });
     if (!watched) outside.push_back(source);
   }
-  for (const auto& source : outside) drop_model(source);
+  for (const auto& source : outside) drop_model(source, {});
   watcher_.clear();
   std::vector<std::filesystem::path> files;
   for (const auto& root : config_.watch) {
@@ -428,6 +461,7 @@ void Daemon::dispatch_due() {
     job.output_dir = config_.output / record->id;
     job.options = config_.convert;
     job.previous_hash = record->last_hash;
+    job.write_failed = config_.publish_failed;
     if (config_.validate) {
       ValidationOptions validation;
       validation.duration = config_.validation_seconds;
@@ -498,38 +532,59 @@ void Daemon::apply(ConversionOutcome outcome) {
     case ConversionOutcome::Kind::kConverted: {
       const ConvertedModel& candidate = *outcome.converted;
       const bool failed = candidate.validation && !candidate.validation->passed;
+      retries_.erase(record->source);
+      record->last_hash = outcome.content_hash;
+      record->dependencies = outcome.dependencies;
+      if (record->live && same_result(*record->live, candidate)) {
+        // A reload changed settings this model's result does not depend on.
+        ++counters_.skipped_unchanged;
+        log_line("unchanged " + id + " in " + milliseconds(outcome.duration) + ": still revision " +
+                 std::to_string(record->revisions));
+        break;
+      }
+      // Every content that gets a VALIDATION gets a number of its own, accepted or not.
+      const std::int64_t number = ++record->numbered;
+      // Warnings of a conversion that succeeded: one log line each, and on LCM with the verdict
+      // (with the infos, which every Blender export has and which would only crowd the log).
+      for (const Diagnostic& d : outcome.diagnostics.all()) {
+        if (d.severity == Severity::kWarning) log_line("warning " + id + " revision " + std::to_string(number) + ": " + format(d));
+      }
       if (candidate.validation) {
         // The report comes first: a description is only ever published with its verdict.
+        ValidationSummary report = *candidate.validation;
+        report.diagnostics.append(outcome.diagnostics);
         publisher_->publish(channel(id, "VALIDATION"),
-                            make_validation_report(id, record->revisions + 1, outcome.content_hash,
-                                                   *candidate.validation));
+                            make_validation_report(id, number, outcome.content_hash, report, config_.max_chunk_bytes));
       }
       if (failed && !config_.publish_failed) {
         ++counters_.rejections;
-        record->last_hash = outcome.content_hash;
-        record->dependencies = outcome.dependencies;
-        log_line("rejected " + id + " (dynamics) in " + milliseconds(outcome.duration) + ": " +
-                 candidate.validation->summary_line +
+        log_line("rejected " + id + " revision " + std::to_string(number) + " (dynamics) in " +
+                 milliseconds(outcome.duration) + ": " + candidate.validation->summary_line +
                  (record->live ? "; still serving revision " + std::to_string(record->revisions) : ""));
         publisher_->publish(channel(id, "ERROR"),
-                            make_model_error(*record, outcome.content_hash, candidate.validation->diagnostics));
+                            make_model_error(*record, outcome.content_hash, candidate.validation->diagnostics, config_.max_chunk_bytes));
         break;
       }
-      retries_.erase(record->source);
       ++counters_.conversions;
-      ++record->revisions;
-      record->last_hash = outcome.content_hash;
-      record->dependencies = outcome.dependencies;
+      record->revisions = number;
       record->live = std::move(outcome.converted);
       log_line("converted " + id + " revision " + std::to_string(record->revisions) + " (" +
                std::to_string(record->live->robot.links.size()) + " links, " +
                std::to_string(record->live->robot.joints.size()) + " joints" +
                (record->live->validation ? std::string(", dynamics ") + (failed ? "FAILED" : "passed") : "") +
                ") in " + milliseconds(outcome.duration));
-      publish_model(*record);
-      if (simulation_ && !failed) {
-        simulation_->load(id, record->revisions, record->live->content_hash, record->live->robot);
+      if (simulation_) {
+        if (failed) {
+          // A revision that failed the check would blow up in ODE, and the previous one is no
+          // longer what is published: no simulation runs until a revision passes.
+          simulation_->remove(id);
+          log_line("stopped the simulation of " + id + ": revision " + std::to_string(number) +
+                   " failed the dynamics check");
+        } else {
+          simulation_->load(id, record->revisions, record->live->content_hash, record->live->robot);
+        }
       }
+      publish_model(*record);
       break;
     }
     case ConversionOutcome::Kind::kUnchanged:
@@ -552,7 +607,7 @@ void Daemon::apply(ConversionOutcome outcome) {
       // A newer save already waits: the rejected content is superseded, so say nothing of it.
       if (!record->again) {
         publisher_->publish(channel(id, "ERROR"),
-                            make_model_error(*record, outcome.content_hash, outcome.diagnostics));
+                            make_model_error(*record, outcome.content_hash, outcome.diagnostics, config_.max_chunk_bytes));
       }
       break;
     case ConversionOutcome::Kind::kVanished: {
@@ -563,7 +618,7 @@ void Daemon::apply(ConversionOutcome outcome) {
         settle_.touch(outcome.source.string(), Clock::now());
         return;
       }
-      drop_model(outcome.source);
+      drop_model(outcome.source, outcome.duration);
       return;
     }
   }
@@ -573,17 +628,22 @@ void Daemon::apply(ConversionOutcome outcome) {
   }
 }
 
-void Daemon::publish_model(const ModelRecord& record) {
-  if (!record.live) return;
-  std::vector<rdtf::description_chunk_t> chunks;
-  const auto description = make_description(record, config_.max_chunk_bytes, chunks);
-  for (const auto& chunk : chunks) publisher_->publish(channel(record.id, "DESCRIPTION_CHUNK"), chunk);
-  publisher_->publish(channel(record.id, "DESCRIPTION"), description);
-  publisher_->publish(channel(record.id, "INERTIA"), make_inertia_table(record));
+std::size_t Daemon::publish_model(const ModelRecord& record) {
+  if (!record.live) return 0;
+  const auto messages = make_description(record, config_.max_chunk_bytes);
+  for (const auto& chunk : messages.json_chunks) publisher_->publish(channel(record.id, "DESCRIPTION_CHUNK"), chunk);
+  for (const auto& chunk : messages.urdf_chunks) publisher_->publish(channel(record.id, "URDF_CHUNK"), chunk);
+  publisher_->publish(channel(record.id, "DESCRIPTION"), messages.description);
+  for (const auto& table : make_inertia_tables(record, config_.max_chunk_bytes)) {
+    publisher_->publish(channel(record.id, "INERTIA"), table);
+  }
+  return 1;
 }
 
-void Daemon::publish_all() {
-  for (const auto& [source, record] : registry_.all()) publish_model(record);
+std::size_t Daemon::publish_all() {
+  std::size_t count = 0;
+  for (const auto& [source, record] : registry_.all()) count += publish_model(record);
+  return count;
 }
 
 void Daemon::publish_status() {
@@ -610,14 +670,16 @@ void Daemon::publish_status() {
 }
 
 void Daemon::on_request(const lcm::ReceiveBuffer*, const std::string&, const rdtf::request_t* request) {
+  const auto start = Clock::now();
   if (request->model_id.empty()) {
-    log_line("republished every model on request of '" + request->requester + "'");
-    publish_all();
+    const std::size_t count = publish_all();
+    log_line("republished every model on request of '" + request->requester + "' (" + std::to_string(count) +
+             " models), queued in " + since(start));
     return;
   }
   if (ModelRecord* record = registry_.find_id(request->model_id)) {
-    log_line("republished " + record->id + " on request of '" + request->requester + "'");
     publish_model(*record);
+    log_line("republished " + record->id + " on request of '" + request->requester + "', queued in " + since(start));
   }
 }
 
@@ -652,6 +714,8 @@ void Daemon::reload_config() {
   }
   const bool lcm_changed = fresh->lcm_url != config_.lcm_url || fresh->channel_prefix != config_.channel_prefix;
   const bool folders_changed = fresh->watch != config_.watch || fresh->output != config_.output;
+  const bool conversion_changed = conversion_settings(*fresh) != conversion_settings(config_);
+  const bool simulation_changed = simulation_settings(*fresh) != simulation_settings(config_);
   const int workers = config_.workers;  // The pool keeps its size until a restart.
   config_ = std::move(*fresh);
   config_.workers = workers;
@@ -659,9 +723,13 @@ void Daemon::reload_config() {
   settle_.set_max_open_wait(config_.max_open_wait);
   if (lcm_changed && !connect_lcm(error)) log_line("SIGHUP: " + error);
   publisher_->set_rate(config_.chunk_rate_bytes_per_s);
-  start_simulation_host();
-  // New settings (density, limits) apply to every model: convert them all again.
-  for (auto& [source, record] : registry_.all()) record.last_hash.clear();
+  if (simulation_changed) start_simulation_host();
+  // New conversion settings (density, limits) may change any model: convert them all again. A
+  // model whose result comes out the same keeps its revision (apply), and a reload that changes
+  // no conversion setting converts nothing: the rescan finds every content unchanged.
+  if (conversion_changed) {
+    for (auto& [source, record] : registry_.all()) record.last_hash.clear();
+  }
   rescan(folders_changed ? "config reloaded, folders changed" : "config reloaded");
 }
 
@@ -703,7 +771,11 @@ void Daemon::step(std::chrono::milliseconds max_wait) {
   retry_due(now);
   dispatch_due();
   if (config_.republish_period.count() > 0 && now >= next_republish_) {
-    publish_all();
+    const auto start = Clock::now();
+    const std::size_t count = publish_all();
+    // One line per period, not per model: it repeats for as long as the daemon runs.
+    log_line("republished " + std::to_string(count) + " models (every " +
+             std::to_string(config_.republish_period.count()) + " ms), queued in " + since(start));
     next_republish_ = now + config_.republish_period;
   }
   if (now >= next_status_) {

@@ -68,13 +68,14 @@ class Daemon {
   void check_watches(Clock::time_point now);
   void handle_signals();
   void rescan(const char* why);
-  void drop_model(const std::filesystem::path& source);  // Announces REMOVED and forgets it.
+  // Announces REMOVED and forgets it; `checked`: how long finding it gone took.
+  void drop_model(const std::filesystem::path& source, std::chrono::microseconds checked);
   void note_change(const std::filesystem::path& path, bool still_open, bool closed);
   void dispatch_due();
   void handle_outcomes();
   void apply(ConversionOutcome outcome);
-  void publish_model(const ModelRecord& record);
-  void publish_all();
+  std::size_t publish_model(const ModelRecord& record);  // 1 when it has a live revision.
+  std::size_t publish_all();                             // How many models were published.
   void publish_status();
   void on_request(const lcm::ReceiveBuffer*, const std::string&, const rdtf::request_t* request);
   void on_command(const lcm::ReceiveBuffer*, const std::string&, const rdtf::joint_command_t* command);

@@ -27,10 +27,41 @@ std::vector<rdtf::diagnostic_t> to_messages(const Diagnostics& diagnostics) {
   return out;
 }
 
-rdtf::description_t make_description(const ModelRecord& record, std::size_t max_inline_bytes,
-                                     std::vector<rdtf::description_chunk_t>& chunks) {
+namespace {
+
+// Pieces of `text` of at most `piece_bytes`, as chunks of the record's live revision.
+std::vector<rdtf::description_chunk_t> chunks_of(const ModelRecord& record, const std::string& text,
+                                                 std::int64_t utime, std::size_t max_message_bytes) {
+  rdtf::description_chunk_t empty;
+  empty.utime = utime;
+  empty.model_id = record.id;
+  empty.revision = record.revisions;
+  empty.content_hash = record.live->content_hash;
+  empty.size = 0;
+  const std::size_t overhead = static_cast<std::size_t>(empty.getEncodedSize());
+  // A limit below the chunk's own fields still has to make progress.
+  const std::size_t piece = max_message_bytes > overhead + 1024 ? max_message_bytes - overhead : 1024;
+  const std::size_t count = (text.size() + piece - 1) / piece;
+  std::vector<rdtf::description_chunk_t> chunks;
+  for (std::size_t i = 0; i < count; ++i) {
+    rdtf::description_chunk_t chunk = empty;
+    chunk.index = static_cast<std::int32_t>(i);
+    chunk.count = static_cast<std::int32_t>(count);
+    const std::size_t begin = i * piece;
+    const std::size_t end = std::min(text.size(), begin + piece);
+    chunk.data.assign(text.begin() + static_cast<std::ptrdiff_t>(begin), text.begin() + static_cast<std::ptrdiff_t>(end));
+    chunk.size = static_cast<std::int32_t>(chunk.data.size());
+    chunks.push_back(std::move(chunk));
+  }
+  return chunks;
+}
+
+}  // namespace
+
+DescriptionMessages make_description(const ModelRecord& record, std::size_t max_message_bytes) {
   const ConvertedModel& model = *record.live;
-  rdtf::description_t message;
+  DescriptionMessages out;
+  rdtf::description_t& message = out.description;
   message.utime = now_utime();
   message.model_id = record.id;
   message.source_path = record.source.string();
@@ -44,35 +75,38 @@ rdtf::description_t make_description(const ModelRecord& record, std::size_t max_
   message.validation_passed = model.validation && model.validation->passed;
   message.rdtf_json_size = static_cast<std::int64_t>(model.rdtf_json.size());
   message.rdtf_json_sha256 = sha256_hex(model.rdtf_json);
-  message.urdf = model.urdf;
-  chunks.clear();
-  if (model.rdtf_json.size() <= max_inline_bytes) {
+  message.num_chunks = 0;
+  const std::size_t fields = static_cast<std::size_t>(message.getEncodedSize());
+  const std::size_t room = max_message_bytes > fields ? max_message_bytes - fields : 0;
+  const std::size_t json = model.rdtf_json.size();
+  const std::size_t urdf = model.urdf.size();
+  // Both inline when they fit together; else the one that fits alone stays inline (the smaller
+  // first) and the other goes in chunks; else both go in chunks.
+  bool json_inline = json + urdf <= room;
+  bool urdf_inline = json_inline;
+  if (!json_inline) {
+    if (urdf <= json && urdf <= room) {
+      urdf_inline = true;
+    } else if (json < urdf && json <= room) {
+      json_inline = true;
+    }
+  }
+  if (json_inline) {
     message.rdtf_json = model.rdtf_json;
-    message.num_chunks = 0;
-    return message;
+  } else {
+    out.json_chunks = chunks_of(record, model.rdtf_json, message.utime, max_message_bytes);
+    message.num_chunks = static_cast<std::int32_t>(out.json_chunks.size());
   }
-  message.rdtf_json = "";
-  const std::size_t count = (model.rdtf_json.size() + max_inline_bytes - 1) / max_inline_bytes;
-  message.num_chunks = static_cast<std::int32_t>(count);
-  for (std::size_t i = 0; i < count; ++i) {
-    rdtf::description_chunk_t chunk;
-    chunk.utime = message.utime;
-    chunk.model_id = record.id;
-    chunk.revision = record.revisions;
-    chunk.content_hash = model.content_hash;
-    chunk.index = static_cast<std::int32_t>(i);
-    chunk.count = static_cast<std::int32_t>(count);
-    const std::size_t begin = i * max_inline_bytes;
-    const std::size_t end = std::min(model.rdtf_json.size(), begin + max_inline_bytes);
-    chunk.data.assign(model.rdtf_json.begin() + static_cast<std::ptrdiff_t>(begin),
-                      model.rdtf_json.begin() + static_cast<std::ptrdiff_t>(end));
-    chunk.size = static_cast<std::int32_t>(chunk.data.size());
-    chunks.push_back(std::move(chunk));
+  // urdf "" with a urdf_path: the text came in URDF_CHUNK messages (lcm.md: no lcm field says so).
+  if (urdf_inline) {
+    message.urdf = model.urdf;
+  } else {
+    out.urdf_chunks = chunks_of(record, model.urdf, message.utime, max_message_bytes);
   }
-  return message;
+  return out;
 }
 
-rdtf::inertia_table_t make_inertia_table(const ModelRecord& record) {
+std::vector<rdtf::inertia_table_t> make_inertia_tables(const ModelRecord& record, std::size_t max_message_bytes) {
   const ConvertedModel& model = *record.live;
   rdtf::inertia_table_t table;
   table.utime = now_utime();
@@ -81,6 +115,10 @@ rdtf::inertia_table_t make_inertia_table(const ModelRecord& record) {
   table.content_hash = model.content_hash;
   table.total_mass = model.totals.mass;
   for (int i = 0; i < 3; ++i) table.center_of_mass_scene[i] = model.totals.center_of_mass_scene[i];
+  table.num_links = 0;
+  const std::size_t fields = static_cast<std::size_t>(table.getEncodedSize());
+  std::vector<rdtf::inertia_table_t> tables;
+  std::size_t size = fields;
   for (const Link& link : model.robot.links) {
     rdtf::link_inertia_t row;
     row.name = link.name;
@@ -96,14 +134,55 @@ rdtf::inertia_table_t make_inertia_table(const ModelRecord& record) {
     row.iyz = I(1, 2);
     row.izz = I(2, 2);
     row.authored = link.inertial_source == InertialSource::kAuthored;
+    const std::size_t row_size = static_cast<std::size_t>(row._getEncodedSizeNoHash());
+    if (!table.links.empty() && size + row_size > max_message_bytes) {
+      table.num_links = static_cast<std::int32_t>(table.links.size());
+      tables.push_back(table);
+      table.links.clear();
+      size = fields;
+    }
     table.links.push_back(std::move(row));
+    size += row_size;
   }
   table.num_links = static_cast<std::int32_t>(table.links.size());
-  return table;
+  tables.push_back(std::move(table));
+  return tables;
 }
 
+namespace {
+
+// Keeps the message within max_bytes: diagnostics are dropped from the end (errors come first,
+// conversion warnings last) and one INFO says how many went, all of which are in the log.
+template <typename Message>
+void fit_diagnostics(Message& message, std::size_t max_bytes) {
+  if (static_cast<std::size_t>(message.getEncodedSize()) <= max_bytes) return;
+  rdtf::diagnostic_t note;
+  note.severity = rdtf::diagnostic_t::INFO;
+  note.code = "DIAGNOSTICS_TRUNCATED";
+  note.byte_offset = -1;
+  // Sized with the longest count it can hold; the real count is put in below.
+  note.message = "999999 more diagnostics not sent: they did not fit in one datagram (rdtfd's log has every one)";
+  std::vector<rdtf::diagnostic_t> all = std::move(message.diagnostics);
+  message.diagnostics.clear();
+  message.num_diagnostics = 0;
+  std::size_t size = static_cast<std::size_t>(message.getEncodedSize()) + static_cast<std::size_t>(note._getEncodedSizeNoHash());
+  std::size_t kept = 0;
+  for (; kept < all.size(); ++kept) {
+    const std::size_t row = static_cast<std::size_t>(all[kept]._getEncodedSizeNoHash());
+    if (size + row > max_bytes) break;
+    size += row;
+    message.diagnostics.push_back(std::move(all[kept]));
+  }
+  note.message = std::to_string(all.size() - kept) +
+                 " more diagnostics not sent: they did not fit in one datagram (rdtfd's log has every one)";
+  message.diagnostics.push_back(std::move(note));
+  message.num_diagnostics = static_cast<std::int32_t>(message.diagnostics.size());
+}
+
+}  // namespace
+
 rdtf::model_error_t make_model_error(const ModelRecord& record, const std::string& content_hash,
-                                     const Diagnostics& diagnostics) {
+                                     const Diagnostics& diagnostics, std::size_t max_message_bytes) {
   rdtf::model_error_t message;
   message.utime = now_utime();
   message.model_id = record.id;
@@ -112,6 +191,7 @@ rdtf::model_error_t make_model_error(const ModelRecord& record, const std::strin
   message.content_hash = content_hash;
   message.diagnostics = to_messages(diagnostics);
   message.num_diagnostics = static_cast<std::int32_t>(message.diagnostics.size());
+  fit_diagnostics(message, max_message_bytes);
   return message;
 }
 
@@ -130,7 +210,7 @@ namespace rdtf::daemon {
 
 rdtf::validation_report_t make_validation_report(const std::string& model_id, std::int64_t revision,
                                                  const std::string& content_hash,
-                                                 const ValidationSummary& summary) {
+                                                 const ValidationSummary& summary, std::size_t max_message_bytes) {
   rdtf::validation_report_t message;
   message.utime = now_utime();
   message.model_id = model_id;
@@ -144,6 +224,7 @@ rdtf::validation_report_t make_validation_report(const std::string& model_id, st
   message.wall_time = summary.wall_time;
   message.diagnostics = to_messages(summary.diagnostics);
   message.num_diagnostics = static_cast<std::int32_t>(message.diagnostics.size());
+  fit_diagnostics(message, max_message_bytes);
   return message;
 }
 

@@ -16,7 +16,10 @@ namespace rdtf::daemon {
 struct ModelRecord {
   std::string id;
   std::filesystem::path source;
-  std::int64_t revisions = 0;              // Accepted conversions so far.
+  std::int64_t revisions = 0;              // Number of the revision served (0: none yet).
+  // Revision numbers handed out: accepted revisions and revisions the dynamics check rejected
+  // (their VALIDATION carries the number), so that one number never means two contents.
+  std::int64_t numbered = 0;
   std::optional<ConvertedModel> live;      // The revision served (number: `revisions`).
   std::string last_hash;                   // Content last converted, good or bad.
   std::vector<std::filesystem::path> dependencies;

@@ -331,6 +331,25 @@ inline std::string broken_model() {
   return document.dump(1);
 }
 
+// A two-link chain that converts but fails the dynamics check: link_1 weighs a millionth of the
+// base (JOINT_MASS_RATIO, beyond the default bound of 1e3; docs/dynamics.md).
+inline GeneratedModel gate_failing_model(const std::string& name, double half, const std::string& bin_name = "") {
+  GeneratedModel model = box_model(name, half, 2, bin_name);
+  Json document = Json::parse(model.gltf);
+  document["nodes"][2]["extras"]["rdtf_mass"] = model.link_mass * 1e-6;
+  model.gltf = document.dump(1);
+  return model;
+}
+
+// Every regular file below `folder` (relative path -> bytes): what a reader of the outputs finds.
+inline std::map<std::string, std::string> snapshot(const fs::path& folder) {
+  std::map<std::string, std::string> files;
+  for (const auto& entry : fs::recursive_directory_iterator(folder)) {
+    if (entry.is_regular_file()) files[fs::relative(entry.path(), folder).string()] = read(entry.path());
+  }
+  return files;
+}
+
 // A fixture (tests/data/blender/<stem>.gltf and its .bin) copied into `folder`.
 inline fs::path copy_fixture(const fs::path& folder, const std::string& stem, const std::string& as = "") {
   const fs::path source = testing::data_dir() / "blender";
@@ -486,7 +505,7 @@ inline std::vector<rdtf::status_t> statuses(const std::vector<Message>& all) {
 
 // One line per message about models (not STATUS or REQUEST), in arrival order:
 //   "arm.gltf DESCRIPTION r2 0123456789ab", "arm.gltf INERTIA r2 ...", "arm.gltf ERROR live=1 ...",
-//   "arm.gltf REMOVED last=2", "big.gltf DESCRIPTION_CHUNK r1 0/3"
+//   "arm.gltf REMOVED last=2", "big.gltf DESCRIPTION_CHUNK r1 0/3", "big.gltf URDF_CHUNK r1 0/2"
 inline std::string describe(const Message& m) {
   const std::string kind = m.kind();
   const std::string head = m.model_id() + " " + kind;
@@ -498,7 +517,7 @@ inline std::string describe(const Message& m) {
     const auto t = m.as<rdtf::inertia_table_t>();
     return head + " r" + std::to_string(t.revision) + " " + short_hash(t.content_hash);
   }
-  if (kind == "DESCRIPTION_CHUNK") {
+  if (kind == "DESCRIPTION_CHUNK" || kind == "URDF_CHUNK") {
     const auto c = m.as<rdtf::description_chunk_t>();
     return head + " r" + std::to_string(c.revision) + " " + std::to_string(c.index) + "/" + std::to_string(c.count);
   }

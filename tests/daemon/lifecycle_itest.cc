@@ -3,7 +3,10 @@
 #include <signal.h>
 
 #include <algorithm>
+#include <regex>
 #include <set>
+
+#include <rdtf/joint_state_t.hpp>
 
 #include "daemon/harness.h"
 
@@ -109,6 +112,121 @@ TEST(DaemonLife, SighupReloadsTheConfigAndRepublishesWithNewMasses) {
   }
   // The description's document carries the new masses too.
   EXPECT_NE(last_description(all, "arm3.gltf")->rdtf_json, on_kind(all, "DESCRIPTION", "arm3.gltf")[0].as<rdtf::description_t>().rdtf_json);
+}
+
+// Log lines matching `pattern` (the whole line after the timestamp).
+std::vector<std::string> log_lines(const std::string& log, const std::string& pattern) {
+  static const std::regex kStamp(R"(\d{4}-\d\d-\d\dT\d\d:\d\d:\d\d\.\d{3}Z (.*))");
+  const std::regex wanted(pattern);
+  std::vector<std::string> out;
+  std::istringstream in(log);
+  for (std::string line; std::getline(in, line);) {
+    std::smatch match;
+    if (std::regex_match(line, match, kStamp) && std::regex_match(match[1].str(), wanted)) out.push_back(match[1].str());
+  }
+  return out;
+}
+
+TEST(DaemonLife, LogsOneLinePerEventWithTimings) {
+  Session s;
+  const auto a = box_model("a_base", 0.05);
+  const auto b = box_model("b_base", 0.05);
+  write_model(s.watch, "a.gltf", a);
+  const auto b_path = write_model(s.watch, "b.gltf", b);
+  auto& daemon = s.start(DaemonOptions().with_republish(300));
+  ASSERT_TRUE(s.wait_revision("a.gltf", 1, content_hash(a)));
+  ASSERT_TRUE(s.wait_revision("b.gltf", 1, content_hash(b)));
+  const std::string ms = R"([0-9]+\.[0-9] ms)";
+  for (const char* id : {"a", "b"}) {
+    EXPECT_EQ(log_lines(daemon.log(), std::string("converted ") + id + R"(\.gltf revision 1 \(1 links, 0 joints\) in )" + ms).size(), 1u)
+        << daemon.log();
+  }
+  // Periodic republication: one line per period for both models, never one per model.
+  const std::string periodic = R"(republished 2 models \(every 300 ms\), queued in )" + ms;
+  ASSERT_TRUE(wait_until([&] { return log_lines(daemon.log(), periodic).size() >= 3; }, 5s)) << daemon.log();
+  // The description of each model came again with every period that was logged.
+  const auto periods = log_lines(daemon.log(), periodic).size();
+  EXPECT_GE(on_kind(s.messages(), "DESCRIPTION", "a.gltf").size(), periods);
+  EXPECT_TRUE(log_lines(daemon.log(), R"(republished (a|b)\.gltf.*)").empty()) << daemon.log();
+
+  s.request("a.gltf", "log test");
+  EXPECT_TRUE(wait_until([&] {
+    return log_lines(daemon.log(), R"(republished a\.gltf on request of 'log test', queued in )" + ms).size() == 1;
+  }, 5s)) << daemon.log();
+  s.request("", "log test");
+  EXPECT_TRUE(wait_until([&] {
+    return log_lines(daemon.log(), R"(republished every model on request of 'log test' \(2 models\), queued in )" + ms).size() == 1;
+  }, 5s)) << daemon.log();
+
+  fs::remove(b_path);
+  ASSERT_TRUE(s.wait_for([](const auto& all) { return !on_kind(all, "REMOVED", "b.gltf").empty(); }));
+  EXPECT_TRUE(wait_until([&] {
+    return log_lines(daemon.log(), R"(removed b\.gltf in )" + ms + R"( \(revision 1 was live\))").size() == 1;
+  }, 5s)) << daemon.log();
+  // Now one model is left, and the periodic line says so.
+  EXPECT_TRUE(wait_until([&] {
+    return !log_lines(daemon.log(), R"(republished 1 models \(every 300 ms\), queued in )" + ms).empty();
+  }, 5s)) << daemon.log();
+}
+
+// Joint states of `id` with revision `revision`.
+std::vector<rdtf::joint_state_t> states_of(const std::vector<Message>& all, const std::string& id, std::int64_t revision) {
+  std::vector<rdtf::joint_state_t> out;
+  for (const auto& st : decoded<rdtf::joint_state_t>(all, "JOINT_STATE", id)) {
+    if (st.revision == revision) out.push_back(st);
+  }
+  return out;
+}
+
+// model_events without the live simulation's stream.
+std::vector<std::string> events_but_states(const std::vector<Message>& all, const std::string& id) {
+  std::vector<std::string> out;
+  for (auto& e : model_events(all, id)) {
+    if (e != id + " JOINT_STATE") out.push_back(e);
+  }
+  return out;
+}
+
+TEST(DaemonLife, SighupThatChangesNoConversionSettingKeepsRevisionsAndSimulations) {
+  Session s;
+  const auto a = box_model("a_base", 0.05, 2);
+  write_model(s.watch, "a.gltf", a);
+  auto& daemon = s.start(DaemonOptions().with("simulate", true).with("state_rate_hz", 100));
+  ASSERT_TRUE(s.wait_revision("a.gltf", 1, content_hash(a)));
+  ASSERT_TRUE(s.wait_for([&](const auto& all) { return states_of(all, "a.gltf", 1).size() >= 10; }));
+  ASSERT_TRUE(s.wait_idle());
+
+  auto reload = [&](const Json& config, int reloads) {
+    daemon.write_config(config);
+    daemon.signal(SIGHUP);
+    return wait_until([&] { return log_lines(daemon.log(), "rescan \\(config reloaded\\).*").size() ==
+                                   static_cast<std::size_t>(reloads); }, 5s);
+  };
+  // Nothing changed, then only settings no conversion depends on.
+  ASSERT_TRUE(reload({{"simulate", true}, {"state_rate_hz", 100}}, 1)) << daemon.log();
+  ASSERT_TRUE(s.wait_idle());
+  const double before = states_of(s.messages(), "a.gltf", 1).back().sim_time;
+  ASSERT_TRUE(reload({{"simulate", true}, {"state_rate_hz", 100}, {"max_open_wait_ms", 4000},
+                      {"chunk_rate_bytes_per_s", 16000000}}, 2)) << daemon.log();
+  const auto idle = s.wait_idle();
+  ASSERT_TRUE(idle);
+  EXPECT_EQ(idle->conversions, 1);
+  EXPECT_EQ(idle->rescans, 3);
+  // The simulation ran on: simulated time did not start again from zero.
+  ASSERT_TRUE(s.wait_for([&](const auto& all) { return states_of(all, "a.gltf", 1).back().sim_time > before + 0.2; }));
+  double previous = 0;
+  for (const auto& st : states_of(s.messages(), "a.gltf", 1)) {
+    EXPECT_GE(st.sim_time, previous) << "the simulation was started again";
+    previous = st.sim_time;
+  }
+  EXPECT_EQ(events_but_states(s.messages(), "a.gltf"), revision_events("a.gltf", 1, content_hash(a)));
+
+  // A setting the result depends on: a new revision.
+  ASSERT_TRUE(reload({{"simulate", true}, {"state_rate_hz", 100}, {"default_density", 2000}}, 3)) << daemon.log();
+  ASSERT_TRUE(s.wait_revision("a.gltf", 2, content_hash(a)));
+  ASSERT_TRUE(s.wait_idle());
+  EXPECT_EQ(events_but_states(s.messages(), "a.gltf"),
+            concat({revision_events("a.gltf", 1, content_hash(a)), revision_events("a.gltf", 2, content_hash(a))}));
 }
 
 TEST(DaemonLife, SighupWithABadConfigKeepsTheRunningOne) {

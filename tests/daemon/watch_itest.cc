@@ -267,24 +267,52 @@ TEST(DaemonWatch, ThreeQuickAppendsGiveOneConversion) {
   expect_content(s, "arm.gltf", path, content_hash(v2), "v2_base");
 }
 
-TEST(DaemonWatch, HundredSavesInASecondGiveFewConversionsEndingWithTheLast) {
+TEST(DaemonWatch, HundredQuickSavesGiveOneConversionPerPauseEndingWithTheLast) {
   Session s;
   const auto v0 = box_model("v0_base", 0.05);
   const auto path = write_model(s.watch, "arm.gltf", v0);
+  constexpr auto kSettle = 50ms;
   s.start(DaemonOptions().with_settle(50));
   ASSERT_TRUE(s.wait_revision("arm.gltf", 1, content_hash(v0)));
   ASSERT_TRUE(s.wait_idle());
 
-  // 100 in-place saves, one every 10 ms, each a different model.
+  // 100 in-place saves, one every 10 ms, each a different model, with one pause of a second
+  // after the 50th: two bursts of half a second.
+  constexpr int kPauseAfter = 50;
   std::map<std::string, int> version_of_hash;
+  std::vector<Clock::time_point> started(102), ended(102);
   GeneratedModel last;
-  const auto begin = Clock::now();
+  auto begin = Clock::now();
   for (int i = 1; i <= 100; ++i) {
     last = box_model("v" + std::to_string(i) + "_base", 0.05 + 0.0005 * i);
     version_of_hash[content_hash(last)] = i;
+    started[i] = Clock::now();
     write_in_place(path, last.gltf);
+    ended[i] = Clock::now();
+    if (i == kPauseAfter) {
+      std::this_thread::sleep_for(1s);
+      begin = Clock::now() - i * 10ms;
+    }
     std::this_thread::sleep_until(begin + i * 10ms);
   }
+  // Which saves must and which must not become revisions, from when the writes happened. Every
+  // event of save i comes after started[i], so the daemon's settle deadline for it is at least
+  // started[i] + settle; every event of save i+1 comes before ended[i+1]. When ended[i+1] is
+  // earlier than that deadline, the daemon saw save i+1 before it could convert save i: save i
+  // is never a revision. A save followed by quiet far longer than the settle period (the pause,
+  // minus a generous allowance for a loaded machine to notice and read it) must be one, and the
+  // last always. Between the two (the writer paused for about the settle period) either outcome
+  // is right, and a revision then is still exactly that save.
+  constexpr auto kNoticeAllowance = 500ms;
+  std::set<int> must, may;
+  for (int i = 1; i <= 100; ++i) {
+    if (i == 100 || started[i + 1] - ended[i] >= kSettle + kNoticeAllowance) {
+      must.insert(i);
+    } else if (ended[i + 1] >= started[i] + kSettle) {
+      may.insert(i);
+    }
+  }
+  ASSERT_TRUE(must.count(kPauseAfter)) << "the writer never paused: the pause is the point of the test";
   const auto final_hash = content_hash(last);
   ASSERT_TRUE(s.wait_for([&](const auto& all) {
     const auto d = last_description(all, "arm.gltf");
@@ -294,10 +322,7 @@ TEST(DaemonWatch, HundredSavesInASecondGiveFewConversionsEndingWithTheLast) {
   ASSERT_TRUE(idle);
 
   const auto descriptions = decoded<rdtf::description_t>(s.messages(), "DESCRIPTION", "arm.gltf");
-  ASSERT_GE(descriptions.size(), 2u);
-  // Far fewer conversions than saves: ideally one; a loaded machine may pause the writer for
-  // longer than the settle period a few times.
-  EXPECT_LE(descriptions.size() - 1, 5u) << ::testing::PrintToString(model_events(s.messages()));
+  std::set<int> seen;
   int previous_version = 0;
   for (std::size_t i = 1; i < descriptions.size(); ++i) {
     EXPECT_EQ(descriptions[i].revision, static_cast<std::int64_t>(i + 1));
@@ -306,7 +331,16 @@ TEST(DaemonWatch, HundredSavesInASecondGiveFewConversionsEndingWithTheLast) {
     const int version = version_of_hash[descriptions[i].content_hash];
     EXPECT_GT(version, previous_version);
     previous_version = version;
+    seen.insert(version);
   }
+  for (int version : must) EXPECT_TRUE(seen.count(version)) << "save " << version << " was followed by quiet";
+  for (int version : seen) {
+    EXPECT_TRUE(must.count(version) || may.count(version))
+        << "save " << version << " became a revision though the next save came within the settle period";
+  }
+  std::cout << "revisions of saves " << ::testing::PrintToString(seen) << "; required "
+            << ::testing::PrintToString(must) << "; allowed by the writer's timing " << ::testing::PrintToString(may)
+            << "\n";
   EXPECT_EQ(previous_version, 100);
   EXPECT_TRUE(on_kind(s.messages(), "ERROR").empty()) << ::testing::PrintToString(model_events(s.messages()));
   EXPECT_EQ(idle->rejections, 0);

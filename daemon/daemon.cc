@@ -88,13 +88,16 @@ auto conversion_settings(const DaemonConfig& c) {
   return std::make_tuple(c.output, c.convert.default_density, l.max_file_bytes, l.max_buffer_bytes,
                          l.max_accessor_count, l.max_triangles, c.validate, c.validation_seconds,
                          c.publish_failed, c.floating_root, c.gravity.x(), c.gravity.y(), c.gravity.z(),
-                         c.urdf, c.urdf_y_up);
+                         c.time_step, static_cast<int>(c.stepper), c.max_mass_ratio,
+                         c.validation_start_offset_rad, c.energy_tolerance, c.joint_separation_tolerance_m,
+                         c.limit_tolerance_rad, c.limit_tolerance_m, c.urdf, c.urdf_y_up);
 }
 
 // What the live simulations depend on: a reload that changes none of these keeps them running.
 auto simulation_settings(const DaemonConfig& c) {
   return std::make_tuple(c.simulate, c.state_rate_hz, c.real_time_factor, c.floating_root, c.gravity.x(),
-                         c.gravity.y(), c.gravity.z(), c.lcm_url, c.channel_prefix);
+                         c.gravity.y(), c.gravity.z(), c.time_step, static_cast<int>(c.stepper), c.lcm_url,
+                         c.channel_prefix);
 }
 
 // A conversion again of the content served (after a reload) whose result is the served one.
@@ -463,11 +466,7 @@ void Daemon::dispatch_due() {
     job.previous_hash = record->last_hash;
     job.write_failed = config_.publish_failed;
     if (config_.validate) {
-      ValidationOptions validation;
-      validation.duration = config_.validation_seconds;
-      validation.simulation.gravity = config_.gravity;
-      validation.simulation.floating_root = config_.floating_root;
-      job.validation = validation;
+      job.validation = validation_options(config_);
     }
     if (config_.urdf) {
       UrdfOptions urdf;
@@ -694,8 +693,7 @@ void Daemon::start_simulation_host() {
   SimulationHostOptions options;
   options.lcm_url = config_.lcm_url;
   options.channel_prefix = config_.channel_prefix;
-  options.simulation.gravity = config_.gravity;
-  options.simulation.floating_root = config_.floating_root;
+  options.simulation = simulation_options(config_);
   options.state_rate_hz = config_.state_rate_hz;
   options.real_time_factor = config_.real_time_factor;
   simulation_ = std::make_unique<SimulationHost>(options);

@@ -182,7 +182,7 @@ std::vector<rdtf::joint_state_t> states_of(const std::vector<Message>& all, cons
 std::vector<std::string> events_but_states(const std::vector<Message>& all, const std::string& id) {
   std::vector<std::string> out;
   for (auto& e : model_events(all, id)) {
-    if (e != id + " JOINT_STATE") out.push_back(e);
+    if (e != id + " JOINT_STATE" && e != id + " LINK_STATE") out.push_back(e);
   }
   return out;
 }
@@ -404,6 +404,35 @@ TEST(DaemonLife, DefaultsValidateEveryRevisionBeforePublishingIt) {
   }
   daemon.signal(SIGTERM);
   EXPECT_EQ(daemon.wait_exit(3s), std::optional<int>(0)) << daemon.log();
+}
+
+// The gate's settings reach it, from the config file and from --set on the command line (which
+// wins): the run lasts validation_seconds in steps of time_step.
+TEST(DaemonLife, ValidationSettingsFromTheConfigAndSetReachTheGate) {
+  Session s;
+  const auto a = box_model("a_base", 0.05, 2);
+  write_model(s.watch, "a.gltf", a);
+  s.start(DaemonOptions()
+              .with("validate", true)
+              .with("validation_seconds", 0.5)
+              .with("time_step", 0.001)
+              .with_args({"--set", "time_step=0.002", "--set", "stepper=quick_step"}));
+  ASSERT_TRUE(s.wait_revision("a.gltf", 1, content_hash(a)));
+  ASSERT_TRUE(s.wait_for([](const auto& all) { return !on_kind(all, "VALIDATION", "a.gltf").empty(); }));
+  const auto report = on_kind(s.messages(), "VALIDATION", "a.gltf").front().as<rdtf::validation_report_t>();
+  EXPECT_TRUE(report.passed);
+  EXPECT_EQ(report.steps, 250);
+  EXPECT_NEAR(report.simulated_time, 0.5, 1e-9 * 0.5);
+}
+
+TEST(DaemonLife, UnknownSetKeyIsRefusedAtStart) {
+  Session s;
+  DaemonOptions options = DaemonOptions().with_args({"--set", "max_mass_ration=20"});
+  options.watch = {s.watch};
+  options.output = s.output;
+  DaemonProcess daemon(std::move(options));
+  EXPECT_EQ(daemon.wait_exit(5s), std::optional<int>(2)) << daemon.log();
+  EXPECT_NE(daemon.log().find("rdtfd: --set: unknown key \"max_mass_ration\""), std::string::npos) << daemon.log();
 }
 
 }  // namespace

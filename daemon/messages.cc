@@ -76,6 +76,9 @@ DescriptionMessages make_description(const ModelRecord& record, std::size_t max_
   message.rdtf_json_size = static_cast<std::int64_t>(model.rdtf_json.size());
   message.rdtf_json_sha256 = sha256_hex(model.rdtf_json);
   message.num_chunks = 0;
+  message.num_urdf_chunks = 0;
+  message.urdf_size = static_cast<std::int64_t>(model.urdf.size());
+  message.urdf_sha256 = model.urdf.empty() ? "" : sha256_hex(model.urdf);
   const std::size_t fields = static_cast<std::size_t>(message.getEncodedSize());
   const std::size_t room = max_message_bytes > fields ? max_message_bytes - fields : 0;
   const std::size_t json = model.rdtf_json.size();
@@ -97,11 +100,11 @@ DescriptionMessages make_description(const ModelRecord& record, std::size_t max_
     out.json_chunks = chunks_of(record, model.rdtf_json, message.utime, max_message_bytes);
     message.num_chunks = static_cast<std::int32_t>(out.json_chunks.size());
   }
-  // urdf "" with a urdf_path: the text came in URDF_CHUNK messages (lcm.md: no lcm field says so).
   if (urdf_inline) {
     message.urdf = model.urdf;
   } else {
     out.urdf_chunks = chunks_of(record, model.urdf, message.utime, max_message_bytes);
+    message.num_urdf_chunks = static_cast<std::int32_t>(out.urdf_chunks.size());
   }
   return out;
 }

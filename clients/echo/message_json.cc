@@ -39,7 +39,8 @@ Json to_json(const rdtf::description_t& m) {
             {"validated", m.validated}, {"validation_passed", m.validation_passed},
             {"num_chunks", m.num_chunks}, {"rdtf_json_size", m.rdtf_json_size},
             {"rdtf_json_sha256", m.rdtf_json_sha256}, {"rdtf_json", m.rdtf_json},
-            {"urdf", m.urdf}});
+            {"urdf", m.urdf}, {"num_urdf_chunks", m.num_urdf_chunks}, {"urdf_size", m.urdf_size},
+            {"urdf_sha256", m.urdf_sha256}});
   return j;
 }
 

@@ -89,11 +89,17 @@ void expect_whole(const std::vector<Message>& all, const std::string& id, const 
   ASSERT_FALSE(d->urdf_path.empty());
   std::string urdf = d->urdf;
   if (urdf.empty()) {  // The documented sign that the URDF came in URDF_CHUNK messages.
+    EXPECT_GT(d->num_urdf_chunks, 0);
     const auto joined = reassemble(all, "URDF_CHUNK", id, d->revision, hash);
     ASSERT_TRUE(joined) << "URDF chunks incomplete";
     urdf = *joined;
+  } else {
+    EXPECT_EQ(d->num_urdf_chunks, 0);
   }
   EXPECT_EQ(urdf, read(d->urdf_path));
+  // The announced size and hash check the reassembled text, as for the JSON.
+  EXPECT_EQ(static_cast<std::int64_t>(urdf.size()), d->urdf_size);
+  EXPECT_EQ(sha256_plain(urdf), d->urdf_sha256);
 
   // The inertia table, in as many messages as it takes: every link once, in order. Its messages
   // follow the description, so those after the last description are one whole table.

@@ -5,6 +5,7 @@
 // max(4 MiB, 5% of the warm RSS). Every save is published exactly once: one DESCRIPTION per
 // (model, content) and nothing else.
 #include <numeric>
+#include <set>
 
 #include "daemon/harness.h"
 
@@ -56,6 +57,15 @@ TEST(SoakDaemon, TenHertzEditsAcrossFiftyModelsKeepMemoryFlatAndPublishEachSaveO
   }
   s.start();
   const pid_t pid = s.daemon->pid();
+  // Edits start once the initial scan has published every model: an edit during the scan may
+  // replace a first version before rdtfd ever reads it, which is then rightly never published.
+  ASSERT_TRUE(s.wait_for(
+      [&](const auto& all) {
+        std::set<std::string> seen;
+        for (const auto& d : decoded<rdtf::description_t>(all, "DESCRIPTION")) seen.insert(d.model_id);
+        return seen.size() == static_cast<std::size_t>(kModels);
+      },
+      30s));
 
   std::vector<double> times;
   std::vector<double> rss;
@@ -113,8 +123,11 @@ TEST(SoakDaemon, TenHertzEditsAcrossFiftyModelsKeepMemoryFlatAndPublishEachSaveO
     const auto found = published.find(save);
     if (found == published.end()) {
       ++missing;
+      std::cout << "soak: never published: " << save.first << " " << short_hash(save.second) << std::endl;
     } else if (found->second != 1) {
       ++repeated;
+      std::cout << "soak: published " << found->second << " times: " << save.first << " " << short_hash(save.second)
+                << std::endl;
     }
   }
   EXPECT_EQ(missing, 0) << "saves never published";

@@ -127,4 +127,11 @@ int remove_unreferenced(const std::filesystem::path& folder, const std::set<std:
   return removed;
 }
 
+void remove_created(const std::vector<std::filesystem::path>& created) {
+  for (const auto& path : created) {
+    std::error_code error;
+    std::filesystem::remove(path, error);
+  }
+}
+
 }  // namespace rdtf

@@ -176,10 +176,7 @@ std::set<std::string> names_referenced_by(const std::filesystem::path& path) {
 void tidy_content_addressed(const std::filesystem::path& folder, bool committed, const std::vector<Resource>& resources,
                             std::set<std::string> keep, const std::vector<std::filesystem::path>& created) {
   if (!committed) {
-    for (const auto& path : created) {
-      std::error_code error;
-      std::filesystem::remove(path, error);
-    }
+    remove_created(created);
     return;
   }
   for (const Resource& resource : resources) keep.insert(resource.name.filename().string());

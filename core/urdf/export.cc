@@ -171,10 +171,7 @@ bool write_meshes(const UrdfExport& exported, const std::filesystem::path& dir, 
 void tidy_meshes(const std::filesystem::path& meshes, bool committed, const UrdfExport& exported,
                  std::set<std::string> keep, const std::vector<std::filesystem::path>& created) {
   if (!committed) {
-    for (const auto& path : created) {
-      std::error_code error;
-      std::filesystem::remove(path, error);
-    }
+    remove_created(created);
     return;
   }
   for (const UrdfMeshFile& mesh : exported.meshes) keep.insert(std::filesystem::path(mesh.path).filename().string());

@@ -8,6 +8,7 @@
 #include <string_view>
 
 #include "import_internal.h"
+#include "rdtf/utf8.h"
 
 namespace rdtf::urdf_internal {
 namespace {
@@ -24,35 +25,6 @@ std::string place_of(std::string_view text, std::size_t at) {
     }
   }
   return "line " + std::to_string(line) + ", column " + std::to_string(column) + " (byte " + std::to_string(at + 1) + ")";
-}
-
-// Length of the well-formed UTF-8 sequence at `at` (RFC 3629: no overlongs, no surrogates, at
-// most U+10FFFF), or 0.
-std::size_t utf8_length(std::string_view text, std::size_t at) {
-  const auto byte = [&](std::size_t i) { return static_cast<unsigned char>(text[i]); };
-  const unsigned char b0 = byte(at);
-  if (b0 < 0x80) return 1;
-  std::size_t n = 0;
-  unsigned char low = 0x80, high = 0xBF;  // Bounds of the second byte.
-  if (b0 >= 0xC2 && b0 <= 0xDF) {
-    n = 2;
-  } else if (b0 >= 0xE0 && b0 <= 0xEF) {
-    n = 3;
-    if (b0 == 0xE0) low = 0xA0;
-    if (b0 == 0xED) high = 0x9F;
-  } else if (b0 >= 0xF0 && b0 <= 0xF4) {
-    n = 4;
-    if (b0 == 0xF0) low = 0x90;
-    if (b0 == 0xF4) high = 0x8F;
-  } else {
-    return 0;
-  }
-  if (at + n > text.size()) return 0;
-  if (byte(at + 1) < low || byte(at + 1) > high) return 0;
-  for (std::size_t i = 2; i < n; ++i) {
-    if (byte(at + i) < 0x80 || byte(at + i) > 0xBF) return 0;
-  }
-  return n;
 }
 
 void append_utf8(std::string& out, std::uint32_t c) {
@@ -101,7 +73,7 @@ std::optional<std::string> urdf_text_as_utf8(std::string_view text, Diagnostics&
   std::string out;
   out.reserve(text.size());
   for (std::size_t at = 0; at < text.size();) {
-    const std::size_t n = utf8_length(text, at);
+    const std::size_t n = utf8_sequence_length(text, at);
     if (n == 0) {
       diag.error("URDF_NOT_UTF8", "",
                  place_of(text, at) + ": byte 0x" + "0123456789ABCDEF"[static_cast<unsigned char>(text[at]) >> 4] +

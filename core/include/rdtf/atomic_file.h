@@ -15,6 +15,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace rdtf {
 
@@ -42,5 +43,9 @@ bool is_content_addressed_name(std::string_view file_name);
 // Returns how many were removed. A file that cannot be removed is left: an unreferenced leftover
 // harms no reader, and the next write or start tries again.
 int remove_unreferenced(const std::filesystem::path& folder, const std::set<std::string>& keep);
+
+// Removes the files a failed write created (no committed document refers to them); what cannot
+// be removed is left, as above.
+void remove_created(const std::vector<std::filesystem::path>& created);
 
 }  // namespace rdtf

@@ -177,6 +177,12 @@ TEST(DaemonLarge, ASmallerLimitHoldsForEveryMessageAndLongReportsSayWhatTheyLeft
               .with("validate", true)
               .with("validation_seconds", 0.2)
               .with("publish_failed", true));
+  // A datagram of the first publication lost under load (seen once under ASan in CI) is
+  // recovered as docs/lcm.md says: by a request.
+  if (!s.wait_revision("c60.gltf", 1, content_hash(chain), 20s)) {
+    std::cout << "c60.gltf revision 1 incomplete after 20 s: requesting it again" << std::endl;
+    s.request("c60.gltf", "recovery");
+  }
   ASSERT_TRUE(s.wait_revision("c60.gltf", 1, content_hash(chain), 20s)) << s.daemon->log();
   ASSERT_TRUE(s.wait_idle(3, 10s));
   recover(s, s.subscriber, "c60.gltf");

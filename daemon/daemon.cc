@@ -35,6 +35,11 @@ constexpr std::chrono::milliseconds kWatchRetryPeriod{1000};
 constexpr std::chrono::milliseconds kFirstRetryDelay{200};
 constexpr std::chrono::milliseconds kLongestRetryDelay{3000};
 
+// The publisher's burst, in receive-buffer bytes: 60% of Linux's default 212,992-byte socket
+// buffer, so that a subscriber that wakes late still holds a whole burst, with room left for
+// the joint and link states that the simulation sends alongside.
+constexpr std::size_t kBurstReceiveBufferBytes = 128 * 1024;
+
 std::string milliseconds(std::chrono::microseconds duration) {
   char text[32];
   std::snprintf(text, sizeof(text), "%.1f ms", static_cast<double>(duration.count()) / 1000.0);
@@ -152,7 +157,7 @@ bool Daemon::connect_lcm(std::string& error) {
   }
   lcm->subscribe(config_.channel_prefix + "/REQUEST", &Daemon::on_request, this);
   lcm->subscribe(config_.channel_prefix + "/.*/JOINT_COMMAND", &Daemon::on_command, this);
-  publisher_ = std::make_unique<Publisher>(*lcm, config_.chunk_rate_bytes_per_s, 128 * 1024);
+  publisher_ = std::make_unique<Publisher>(*lcm, config_.chunk_rate_bytes_per_s, kBurstReceiveBufferBytes);
   publisher_->on_event([this](const PublisherEvent& event) { on_publisher_event(event); });
   lcm_ = std::move(lcm);
   return true;

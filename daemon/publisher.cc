@@ -77,16 +77,16 @@ std::optional<Publisher::Clock::time_point> Publisher::drain(Clock::time_point n
   allowance_ = std::min(allowance_, static_cast<double>(burst_));
   last_ = now;
   while (!queue_.empty()) {
-    const auto size = static_cast<double>(queue_.front().bytes.size());
+    const double cost = receive_buffer_cost(queue_.front().bytes.size());
     // A message larger than the burst goes alone once the allowance is full.
-    if (size > allowance_ && allowance_ < static_cast<double>(burst_)) break;
+    if (cost > allowance_ && allowance_ < static_cast<double>(burst_)) break;
     if (!send_front(now)) return retry_at_;
-    allowance_ -= size;
+    allowance_ -= cost;
     queue_.pop_front();
   }
   if (queue_.empty()) return std::nullopt;
-  const double missing = std::min(static_cast<double>(queue_.front().bytes.size()),
-                                  static_cast<double>(burst_)) - allowance_;
+  const double missing =
+      std::min(receive_buffer_cost(queue_.front().bytes.size()), static_cast<double>(burst_)) - allowance_;
   return now + std::chrono::duration_cast<Clock::duration>(
                    std::chrono::duration<double>(std::max(missing, 0.0) / rate_));
 }

@@ -553,14 +553,13 @@ void Daemon::apply(ConversionOutcome outcome) {
       for (const Diagnostic& d : outcome.diagnostics.all()) {
         if (d.severity == Severity::kWarning) log_line("warning " + id + " revision " + std::to_string(number) + ": " + format(d));
       }
-      if (candidate.validation) {
-        // The report comes first: a description is only ever published with its verdict.
-        ValidationSummary report = *candidate.validation;
-        report.diagnostics.append(outcome.diagnostics);
-        publisher_->publish(channel(id, "VALIDATION"),
-                            make_validation_report(id, number, outcome.content_hash, report, config_.max_chunk_bytes));
-      }
+      // The verdict with the conversion's warnings: published before every description of the
+      // revision, so a subscriber that starts late gets the report too.
+      std::optional<ValidationSummary> report = candidate.validation;
+      if (report) report->diagnostics.append(outcome.diagnostics);
       if (failed && !config_.publish_failed) {
+        publisher_->publish(channel(id, "VALIDATION"),
+                            make_validation_report(id, number, outcome.content_hash, *report, config_.max_chunk_bytes));
         ++counters_.rejections;
         log_line("rejected " + id + " revision " + std::to_string(number) + " (dynamics) in " +
                  milliseconds(outcome.duration) + ": " + candidate.validation->summary_line +
@@ -572,6 +571,7 @@ void Daemon::apply(ConversionOutcome outcome) {
       ++counters_.conversions;
       record->revisions = number;
       record->live = std::move(outcome.converted);
+      record->live->validation = std::move(report);
       log_line("converted " + id + " revision " + std::to_string(record->revisions) + " (" +
                std::to_string(record->live->robot.links.size()) + " links, " +
                std::to_string(record->live->robot.joints.size()) + " joints" +
@@ -634,6 +634,12 @@ void Daemon::apply(ConversionOutcome outcome) {
 
 std::size_t Daemon::publish_model(const ModelRecord& record) {
   if (!record.live) return 0;
+  // The report comes first: a description is only ever published with its verdict.
+  if (record.live->validation) {
+    publisher_->publish(channel(record.id, "VALIDATION"),
+                        make_validation_report(record.id, record.revisions, record.live->content_hash,
+                                               *record.live->validation, config_.max_chunk_bytes));
+  }
   const auto messages = make_description(record, config_.max_chunk_bytes);
   for (const auto& chunk : messages.json_chunks) publisher_->publish(channel(record.id, "DESCRIPTION_CHUNK"), chunk);
   for (const auto& chunk : messages.urdf_chunks) publisher_->publish(channel(record.id, "URDF_CHUNK"), chunk);

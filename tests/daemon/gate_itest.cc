@@ -73,6 +73,11 @@ TEST(DaemonGate, ARejectedRevisionLeavesTheLiveOutputsAndNumbersAlone) {
   EXPECT_TRUE(mass_ratio) << ::testing::PrintToString(s.messages().back().json.dump());
   EXPECT_NE(daemon.log().find("rejected " + id + " revision 2 (dynamics)"), std::string::npos) << daemon.log();
 
+  // A subscriber that starts now gets the live revision with its own verdict, not the rejected one's.
+  s.request(id, "late");
+  ASSERT_TRUE(s.wait_for([&](const auto& all) { return on_kind(all, "DESCRIPTION", id).size() == 2; }));
+  ASSERT_TRUE(s.wait_idle());
+
   // The next good save gets a number of its own: 2 was the rejected content's.
   const auto fixed = box_model("fixed_base", 0.06, 2, "m.bin");
   write_model(s.watch, id, fixed);
@@ -85,7 +90,9 @@ TEST(DaemonGate, ARejectedRevisionLeavesTheLiveOutputsAndNumbersAlone) {
   EXPECT_EQ(model_events(all, id),
             (std::vector<std::string>{id + " VALIDATION r1 " + h1 + " passed", id + " DESCRIPTION r1 " + h1,
                                       id + " INERTIA r1 " + h1, id + " VALIDATION r2 " + h2 + " failed",
-                                      id + " ERROR live=1 " + h2, id + " VALIDATION r3 " + h3 + " passed",
+                                      id + " ERROR live=1 " + h2, id + " VALIDATION r1 " + h1 + " passed",
+                                      id + " DESCRIPTION r1 " + h1, id + " INERTIA r1 " + h1,
+                                      id + " VALIDATION r3 " + h3 + " passed",
                                       id + " DESCRIPTION r3 " + h3, id + " INERTIA r3 " + h3}));
   for (const auto& [revision, hashes] : numbers(all, id)) {
     EXPECT_EQ(hashes.size(), 1u) << "revision " << revision << " stands for several contents";
@@ -180,6 +187,24 @@ TEST(DaemonGate, WarningsOfAGoodConversionAreLoggedAndPublishedWithTheVerdict) {
   const auto at = log.find(line);
   ASSERT_NE(at, std::string::npos) << log;
   EXPECT_EQ(log.find(line, at + 1), std::string::npos) << "logged twice:\n" << log;
+
+  // A subscriber that starts late asks, and gets the same report (warnings included) before the
+  // description it belongs to.
+  Subscriber late(s.prefix + "/.*");
+  s.request(id, "late");
+  ASSERT_TRUE(late.wait_for([&](const auto& all) { return !on_kind(all, "INERTIA", id).empty(); }));
+  const auto answer = late.messages();
+  EXPECT_EQ(model_events(answer, id),
+            (std::vector<std::string>{id + " VALIDATION r1 " + short_hash(content_hash(model)) + " passed",
+                                      id + " DESCRIPTION r1 " + short_hash(content_hash(model)),
+                                      id + " INERTIA r1 " + short_hash(content_hash(model))}));
+  const auto again = decoded<rdtf::validation_report_t>(answer, "VALIDATION", id).at(0);
+  Json first = on_kind(s.messages(), "VALIDATION", id).at(0).json;
+  Json second = on_kind(answer, "VALIDATION", id).at(0).json;
+  first.erase("utime");  // Set when each is published.
+  second.erase("utime");
+  EXPECT_EQ(second, first);
+  EXPECT_GE(again.utime, reports[0].utime);
 }
 
 TEST(DaemonGate, WarningsAreLoggedWithoutValidationToo) {

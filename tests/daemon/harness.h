@@ -900,6 +900,22 @@ struct Session {
     return result;
   }
 
+  // Waits until an lcm-logger started on `log` records: a probe published on ITEST_PROBE until
+  // the file has bytes (the logger subscribes a moment after it starts).
+  bool wait_logger_recording(const fs::path& log, Clock::duration timeout = 5s) {
+    rdtf::request_t probe;
+    probe.utime = 0;
+    probe.model_id = "";
+    probe.requester = "probe";
+    return wait_until(
+        [&] {
+          subscriber.publish("ITEST_PROBE", probe);
+          std::error_code ec;
+          return fs::exists(log) && fs::file_size(log, ec) > 0;
+        },
+        timeout);
+  }
+
   void request(const std::string& model_id = "", const std::string& requester = "itest") {
     rdtf::request_t request;
     request.utime = 0;

@@ -190,17 +190,7 @@ TEST(LcmSpyJar, DecodesEveryChannelOfARecordedSession) {
   write_model(s.watch, "parts.gltf", parts);
   const fs::path log = s.root / "session.lcmlog";
   ChildProcess logger({"lcm-logger", "-f", log.string()}, s.root / "logger.out");
-  rdtf::request_t probe;
-  probe.model_id = "";
-  probe.requester = "probe";
-  ASSERT_TRUE(wait_until(
-      [&] {
-        s.subscriber.publish("ITEST_PROBE", probe);
-        std::error_code ec;
-        return fs::exists(log) && fs::file_size(log, ec) > 0;
-      },
-      5s))
-      << "lcm-logger recorded nothing: " << logger.output();
+  ASSERT_TRUE(s.wait_logger_recording(log)) << "lcm-logger recorded nothing: " << logger.output();
 
   auto& daemon = s.start(DaemonOptions().with("simulate", true).with("validate", true).with("state_rate_hz", 50));
   ASSERT_TRUE(s.wait_revision("arm3.gltf", 1, fixture_hash("arm3"), 20s));

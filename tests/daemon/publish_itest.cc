@@ -246,17 +246,7 @@ TEST(DaemonPublish, LcmLoggerRecordingReplaysTheSameMessages) {
 
   // Record everything, as the README shows. The logger is ready once a probe reaches its file.
   ChildProcess logger({"lcm-logger", "-f", log.string()}, s.root / "logger.out");
-  rdtf::request_t probe;
-  probe.model_id = "";
-  probe.requester = "probe";
-  ASSERT_TRUE(wait_until(
-      [&] {
-        s.subscriber.publish("ITEST_PROBE", probe);
-        std::error_code ec;
-        return fs::exists(log) && fs::file_size(log, ec) > 0;
-      },
-      5s))
-      << "lcm-logger recorded nothing: " << logger.output();
+  ASSERT_TRUE(s.wait_logger_recording(log)) << "lcm-logger recorded nothing: " << logger.output();
 
   // A session: initial scan, a new revision, a broken save, a removal, a request.
   auto& daemon = s.start();
@@ -289,6 +279,10 @@ TEST(DaemonPublish, LcmLoggerRecordingReplaysTheSameMessages) {
 
   // rdtf-echo prints what it receives; it is ready once it has printed a probe.
   ChildProcess echo({RDTF_ECHO_PATH, "-c", "RDTF/.*"}, s.root / "echo.out");
+  rdtf::request_t probe;
+  probe.utime = 0;
+  probe.model_id = "";
+  probe.requester = "probe";
   ASSERT_TRUE(wait_until(
       [&] {
         s.subscriber.publish("RDTF/ITEST_PROBE", probe);

@@ -235,6 +235,12 @@ std::string_view type_of(const void* data, std::size_t size) {
   return "";
 }
 
+std::string check_known(const void* data, std::size_t size) {
+  const std::string_view type = type_of(data, size);
+  if (type.empty()) return "not an rdtf type";
+  return check_encoded(type, read_big_endian(static_cast<const std::uint8_t*>(data), 8), data, size);
+}
+
 std::string printable(std::string_view text, std::size_t max_bytes) {
   static constexpr char kHex[] = "0123456789abcdef";
   std::string out;

@@ -26,6 +26,9 @@ std::string check_encoded(std::string_view type_name, std::int64_t fingerprint, 
 // The rdtf type whose fingerprint starts `data`, or "" for none (not an rdtf message).
 std::string_view type_of(const void* data, std::size_t size);
 
+// For a message whose fingerprint names an rdtf type: check_encoded against that type.
+std::string check_known(const void* data, std::size_t size);
+
 // `message` decoded from `data`, or nullopt with `why` set.
 template <typename Message>
 std::optional<Message> decode(const void* data, std::size_t size, std::string& why) {

@@ -10,6 +10,7 @@
 
 #include "daemon.h"
 #include "messages.h"
+#include "safe_decode.h"
 
 namespace rdtf::daemon {
 
@@ -196,16 +197,32 @@ void SimulationHost::apply_command(const rdtf::joint_command_t& command) {
     return reject(command, "command for content hash '" + command.content_hash + "' but revision " +
                                std::to_string(model.revision) + " has content hash '" + model.content_hash + "'");
   }
+  std::vector<JointCommand> commands;
+  if (const std::string why = joint_commands_of(command, *model.simulation, commands); !why.empty()) {
+    return reject(command, why);
+  }
+  for (const JointCommand& c : commands) {
+    std::string error;
+    if (!model.simulation->set_command(c, &error)) return reject(command, error);
+  }
+}
+
+std::string joint_commands_of(const rdtf::joint_command_t& command, const Simulation& simulation,
+                              std::vector<JointCommand>& commands) {
+  commands.clear();
+  if (command.num_joints < 0) return "num_joints is negative";
   const auto n = static_cast<std::size_t>(command.num_joints);
   if (command.name.size() != n || command.mode.size() != n || command.value.size() != n ||
       command.kp.size() != n || command.kd.size() != n) {
-    return reject(command, "array lengths do not match num_joints");
+    return "array lengths do not match num_joints";
   }
   // All or nothing: check every joint before applying any.
-  std::vector<JointCommand> commands;
   for (std::size_t i = 0; i < n; ++i) {
-    if (!model.simulation->joint_state(command.name[i])) {
-      return reject(command, "unknown joint '" + command.name[i] + "' (or not a one-degree-of-freedom joint)");
+    // Names from the bus go into ERROR messages and logs escaped.
+    const std::string name = lcm_safe::printable(command.name[i], 80);
+    if (!simulation.joint_state(command.name[i])) {
+      commands.clear();
+      return "unknown joint '" + name + "' (or not a one-degree-of-freedom joint)";
     }
     JointCommand c;
     c.joint = command.name[i];
@@ -226,14 +243,24 @@ void SimulationHost::apply_command(const rdtf::joint_command_t& command) {
         c.kd = command.kd[i];
         break;
       default:
-        return reject(command, "unknown mode " + std::to_string(command.mode[i]) + " for joint '" + command.name[i] + "'");
+        commands.clear();
+        return "unknown mode " + std::to_string(command.mode[i]) + " for joint '" + name + "'";
+    }
+    // Checked here too (set_command checks them again) so that a bad value for the last joint
+    // leaves the others' commands unapplied.
+    for (double v : {c.effort, c.position, c.velocity, c.kp, c.kd}) {
+      if (!std::isfinite(v)) {
+        commands.clear();
+        return "command for '" + name + "' rejected: values must be finite";
+      }
+    }
+    if (c.kp < 0 || c.kd < 0) {
+      commands.clear();
+      return "command for '" + name + "' rejected: gains must not be negative";
     }
     commands.push_back(c);
   }
-  for (const JointCommand& c : commands) {
-    std::string error;
-    if (!model.simulation->set_command(c, &error)) return reject(command, error);
-  }
+  return "";
 }
 
 void SimulationHost::publish_state(const std::string& model_id, LiveModel& model) {

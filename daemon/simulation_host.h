@@ -99,6 +99,12 @@ using LiveModels = std::map<std::string, std::unique_ptr<LiveModel>>;
 void advance_live_models(StepClock& clock, LiveModels& models, Clock::time_point now, double time_step,
                          const std::function<void(const std::string&, LiveModel&)>& publish);
 
+// The joint commands a controller's message asks of `simulation`, all or nothing: empty with the
+// reason when a joint is unknown, a mode unknown or the arrays disagree with num_joints.
+// (Revision and content hash are checked by the host.)
+std::string joint_commands_of(const rdtf::joint_command_t& command, const Simulation& simulation,
+                              std::vector<JointCommand>& commands);
+
 // The CPU budget of the live simulations: the fraction of the host's steps each model may take
 // when one step of every model costs `step_seconds` and `budget_seconds` is available per step.
 // Max-min fair (water-filling): models cheaper than an equal share run at full rate and leave the

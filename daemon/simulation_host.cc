@@ -169,6 +169,23 @@ void SimulationHost::apply_inbox() {
 }
 
 void SimulationHost::reject(const rdtf::joint_command_t& command, const std::string& why) {
+  // At most kRejectionsPerSecond reports a second: a flood of bad commands is not answered by a
+  // flood of ERRORs. The next report says how many went unreported.
+  const auto now = Clock::now();
+  if (now - rejection_window_ >= std::chrono::seconds(1)) {
+    rejection_window_ = now;
+    rejections_in_window_ = 0;
+  }
+  if (++rejections_in_window_ > kRejectionsPerSecond) {
+    ++unreported_rejections_;
+    return;
+  }
+  std::string text = why;
+  if (unreported_rejections_ > 0) {
+    text += " (and " + std::to_string(unreported_rejections_) + " earlier rejections not reported: over " +
+            std::to_string(kRejectionsPerSecond) + " a second)";
+    unreported_rejections_ = 0;
+  }
   rdtf::model_error_t message;
   message.utime = now_utime();
   message.model_id = command.model_id;
@@ -179,7 +196,7 @@ void SimulationHost::reject(const rdtf::joint_command_t& command, const std::str
   d.severity = rdtf::diagnostic_t::ERROR;
   d.code = "COMMAND_REJECTED";
   d.byte_offset = -1;
-  d.message = why;
+  d.message = text;
   message.diagnostics.push_back(d);
   message.num_diagnostics = 1;
   lcm_.publish(options_.channel_prefix + "/" + command.model_id + "/ERROR", &message);

@@ -142,6 +142,8 @@ class SimulationHost {
 
   // Commands waiting for the host thread beyond this are dropped (a flood of them).
   static constexpr std::size_t kMaxPendingCommands = 4096;
+  // COMMAND_REJECTED reports a second, at most.
+  static constexpr int kRejectionsPerSecond = 20;
 
  private:
   struct Inbox {
@@ -176,6 +178,9 @@ class SimulationHost {
   std::uint64_t failures_ = 0;                                // Host thread.
   Clock::time_point window_start_{};                          // Host thread.
   Clock::time_point next_failure_log_{};                      // Host thread.
+  Clock::time_point rejection_window_{};                      // Host thread.
+  int rejections_in_window_ = 0;                              // Host thread.
+  std::uint64_t unreported_rejections_ = 0;                   // Host thread.
   std::atomic<bool> stop_{false};
   std::thread thread_;
 };

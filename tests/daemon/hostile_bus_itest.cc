@@ -320,15 +320,21 @@ TEST(HostileBus, HugeFiniteCommandsNeverStopTheSimulationNorPublishNonFiniteValu
     }
   }
   // Whether ODE failed under the clamped effort or not, the daemon reported every failure it had
-  // and kept stepping: a failure is on ERROR and in the log, and counted in STATUS.
-  const auto st = statuses(s.messages()).back();
-  std::size_t failures = 0;
-  for (const auto& e : decoded<rdtf::model_error_t>(s.messages(), "ERROR", kArm)) {
-    failures += !e.diagnostics.empty() && e.diagnostics[0].code == "SIMULATION_FAILED";
-  }
-  std::printf("simulation failures reported: %zu on ERROR, %lld in STATUS\n", failures,
-              static_cast<long long>(st.simulations_failed));
-  EXPECT_EQ(static_cast<std::int64_t>(failures), st.simulations_failed);
+  // and kept stepping: each failure is on ERROR, in the log and counted in STATUS.
+  const auto failures_on_error = [](const std::vector<Message>& all) {
+    std::int64_t failures = 0;
+    for (const auto& e : decoded<rdtf::model_error_t>(all, "ERROR", kArm)) {
+      failures += !e.diagnostics.empty() && e.diagnostics[0].code == "SIMULATION_FAILED";
+    }
+    return failures;
+  };
+  ASSERT_TRUE(s.wait_for([&](const auto& all) {
+    const auto st = statuses(all);
+    return !st.empty() && st.back().simulations_failed == failures_on_error(all);
+  })) << "STATUS counts " << statuses(s.messages()).back().simulations_failed << " failures, ERROR "
+      << failures_on_error(s.messages());
+  const std::int64_t failures = failures_on_error(s.messages());
+  std::printf("simulation failures reported: %lld\n", static_cast<long long>(failures));
   EXPECT_EQ(count_lines(s.daemon->log(), "restarted from the rest pose") > 0, failures > 0);
 }
 

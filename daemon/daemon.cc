@@ -40,6 +40,10 @@ constexpr std::chrono::milliseconds kLongestRetryDelay{3000};
 // the joint and link states that the simulation sends alongside.
 constexpr std::size_t kBurstReceiveBufferBytes = 128 * 1024;
 
+// Requests for the same model (or for all) are answered at most once per this period
+// (RequestThrottle): a flood of requests costs one publication per model and period.
+constexpr std::chrono::milliseconds kRequestAnswerPeriod{1000};
+
 std::string milliseconds(std::chrono::microseconds duration) {
   char text[32];
   std::snprintf(text, sizeof(text), "%.1f ms", static_cast<double>(duration.count()) / 1000.0);
@@ -136,7 +140,13 @@ void log_line(const std::string& text) {
 Daemon::Daemon(DaemonConfig config, ConfigLoader reload)
     : config_(std::move(config)),
       reload_(std::move(reload)),
-      settle_(config_.settle, config_.max_open_wait) {}
+      settle_(config_.settle, config_.max_open_wait),
+      bus_(BusInput::Handlers{[this](const rdtf::request_t& request) { on_request(request); },
+                              [this](const rdtf::joint_command_t& command) {
+                                if (simulation_) simulation_->command(command);
+                              },
+                              [](const std::string& line) { log_line(line); }}),
+      request_throttle_(kRequestAnswerPeriod) {}
 
 Daemon::~Daemon() {
   {
@@ -155,8 +165,8 @@ bool Daemon::connect_lcm(std::string& error) {
     error = "cannot open LCM at '" + (config_.lcm_url.empty() ? std::string("default URL") : config_.lcm_url) + "'";
     return false;
   }
-  lcm->subscribe(config_.channel_prefix + "/REQUEST", &Daemon::on_request, this);
-  lcm->subscribe(config_.channel_prefix + "/.*/JOINT_COMMAND", &Daemon::on_command, this);
+  lcm->subscribe(config_.channel_prefix + "/REQUEST", &Daemon::on_request_datagram, this);
+  lcm->subscribe(config_.channel_prefix + "/.*/JOINT_COMMAND", &Daemon::on_command_datagram, this);
   publisher_ = std::make_unique<Publisher>(*lcm, config_.chunk_rate_bytes_per_s, kBurstReceiveBufferBytes);
   publisher_->on_event([this](const PublisherEvent& event) { on_publisher_event(event); });
   lcm_ = std::move(lcm);
@@ -676,26 +686,57 @@ void Daemon::publish_status() {
   status.pending = pending;
   status.num_models = static_cast<std::int32_t>(status.model_ids.size());
   status.num_model_ids = status.num_models;
-  publisher_->publish(config_.channel_prefix + "/STATUS", status);
+  status.dropped_messages = static_cast<std::int64_t>(bus_.dropped());
+  status.coalesced_requests = static_cast<std::int64_t>(request_throttle_.coalesced());
+  status.send_queue_bytes = static_cast<std::int64_t>(publisher_->queued_bytes());
+  status.send_dropped = static_cast<std::int64_t>(publisher_->dropped());
+  if (simulation_) {
+    const LiveTiming timing = simulation_->timing();
+    status.live_real_time_factor = timing.real_time_factor;
+    status.simulations_behind = timing.behind;
+    status.simulations_failed = static_cast<std::int64_t>(timing.failed);
+  }
+  // Ahead of anything queued: the heartbeat stays on time under any backlog.
+  publisher_->publish(config_.channel_prefix + "/STATUS", status, Publisher::Priority::kUrgent);
 }
 
-void Daemon::on_request(const lcm::ReceiveBuffer*, const std::string&, const rdtf::request_t* request) {
+void Daemon::on_request_datagram(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
+  bus_.request_datagram(channel, buffer->data, buffer->data_size);
+}
+
+void Daemon::on_command_datagram(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
+  bus_.command_datagram(channel, buffer->data, buffer->data_size);
+}
+
+void Daemon::on_request(const rdtf::request_t& request) {
+  // Only ids of models that exist are remembered by the throttle, so a flood of made-up ids
+  // costs nothing.
+  if (!request.model_id.empty() && registry_.find_id(request.model_id) == nullptr) return;
+  if (!request_throttle_.admit(request.model_id, Clock::now())) return;
+  answer_request(request.model_id, lcm_safe::printable(request.requester, 80));
+}
+
+// `requester` is already escaped for the log (it comes from the bus).
+void Daemon::answer_request(const std::string& model_id, const std::string& requester) {
   const auto start = Clock::now();
-  if (request->model_id.empty()) {
+  if (model_id.empty()) {
     const std::size_t count = publish_all();
-    log_line("republished every model on request of '" + request->requester + "' (" + std::to_string(count) +
+    log_line("republished every model on request of '" + requester + "' (" + std::to_string(count) +
              " models), queued in " + since(start));
     return;
   }
-  if (ModelRecord* record = registry_.find_id(request->model_id)) {
+  if (ModelRecord* record = registry_.find_id(model_id)) {
     publish_model(*record);
-    log_line("republished " + record->id + " on request of '" + request->requester + "', queued in " + since(start));
+    log_line("republished " + record->id + " on request of '" + requester + "', queued in " + since(start));
   }
 }
 
-void Daemon::on_command(const lcm::ReceiveBuffer*, const std::string&,
-                        const rdtf::joint_command_t* command) {
-  if (simulation_) simulation_->command(*command);
+// Requests that came while the same model's last answer was recent: one answer for all of them.
+void Daemon::answer_deferred_requests(Clock::time_point now) {
+  for (const std::string& model_id : request_throttle_.take_due(now)) {
+    answer_request(model_id, "(repeated requests, " + std::to_string(request_throttle_.coalesced()) +
+                                 " answered together since start)");
+  }
 }
 
 void Daemon::start_simulation_host() {
@@ -764,6 +805,7 @@ void Daemon::step(std::chrono::milliseconds max_wait) {
   for (const auto& [source, retry] : retries_) wake = std::min(wake, retry.due);
   if (watches_failing_) wake = std::min(wake, next_watch_retry_);
   wake = std::min(wake, next_status_);
+  if (auto deferred = request_throttle_.next_due()) wake = std::min(wake, *deferred);
   const auto timeout = std::chrono::duration_cast<std::chrono::milliseconds>(wake - now).count();
 
   pollfd fds[4] = {{watcher_.fd(), POLLIN, 0}, {lcm_->getFileno(), POLLIN, 0},
@@ -779,6 +821,7 @@ void Daemon::step(std::chrono::milliseconds max_wait) {
   check_watches(now);
   retry_due(now);
   dispatch_due();
+  answer_deferred_requests(now);
   if (config_.republish_period.count() > 0 && now >= next_republish_) {
     const auto start = Clock::now();
     const std::size_t count = publish_all();

@@ -16,6 +16,7 @@
 #include <rdtf/joint_command_t.hpp>
 #include <rdtf/request_t.hpp>
 
+#include "bus_input.h"
 #include "config.h"
 #include "publisher.h"
 #include "registry.h"
@@ -77,8 +78,12 @@ class Daemon {
   std::size_t publish_model(const ModelRecord& record);  // 1 when it has a live revision.
   std::size_t publish_all();                             // How many models were published.
   void publish_status();
-  void on_request(const lcm::ReceiveBuffer*, const std::string&, const rdtf::request_t* request);
-  void on_command(const lcm::ReceiveBuffer*, const std::string&, const rdtf::joint_command_t* command);
+  // Raw datagrams: decoded by bus_ only after the schema check (never lcm-gen's decoder alone).
+  void on_request_datagram(const lcm::ReceiveBuffer* buffer, const std::string& channel);
+  void on_command_datagram(const lcm::ReceiveBuffer* buffer, const std::string& channel);
+  void on_request(const rdtf::request_t& request);
+  void answer_request(const std::string& model_id, const std::string& requester);
+  void answer_deferred_requests(Clock::time_point now);
   void start_simulation_host();
   bool ignored(const std::filesystem::path& path) const;
   bool waiting_for_writer(const ModelRecord& record, Clock::time_point now) const;
@@ -96,6 +101,8 @@ class Daemon {
   std::unique_ptr<lcm::LCM> lcm_;
   std::unique_ptr<Publisher> publisher_;
   std::unique_ptr<SimulationHost> simulation_;  // Null when `simulate` is off.
+  BusInput bus_;
+  RequestThrottle request_throttle_;
   Counters counters_;
   // Files modified and not yet closed by their writer, since when.
   std::map<std::filesystem::path, Clock::time_point> open_for_writing_;

@@ -25,21 +25,35 @@ void Publisher::report(PublisherEvent::Kind kind, std::string text) {
   if (on_event_) on_event_(PublisherEvent{kind, std::move(text)});
 }
 
-void Publisher::enqueue(std::string channel, std::vector<std::uint8_t> bytes) {
-  if (queue_.size() >= kMaxQueued) {
-    // Only when LCM has refused every send for a long time: the oldest message goes, and says so.
-    ++dropped_;
+void Publisher::drop_oldest(const char* why) {
+  std::deque<Pending>& from = queue_.empty() ? urgent_ : queue_;
+  ++dropped_;
+  ++dropped_unreported_;
+  const auto now = Clock::now();
+  // One line per second at most: under a flood, one per message would be a flood of its own.
+  if (now >= next_drop_report_) {
+    next_drop_report_ = now + std::chrono::seconds(1);
     report(PublisherEvent::Kind::kDropped,
-           "LCM send queue full (" + std::to_string(kMaxQueued) + " messages): dropped one on " +
-               queue_.front().channel);
-    queue_.pop_front();
+           std::string("LCM send queue full (") + why + "): dropped " + std::to_string(dropped_unreported_) +
+               " oldest message(s) (" + std::to_string(dropped_) + " since start), the latest on " +
+               from.front().channel);
+    dropped_unreported_ = 0;
   }
-  queue_.push_back({std::move(channel), std::move(bytes)});
+  queued_bytes_ -= from.front().bytes.size();
+  from.pop_front();
+}
+
+void Publisher::enqueue(std::string channel, std::vector<std::uint8_t> bytes, Priority priority) {
+  // Only when LCM has refused every send for long, or more is queued than the rate sends.
+  while (queued() >= kMaxQueued) drop_oldest("100,000 messages");
+  while (queued() > 0 && queued_bytes_ + bytes.size() > kMaxQueuedBytes) drop_oldest("64 MiB");
+  queued_bytes_ += bytes.size();
+  (priority == Priority::kUrgent ? urgent_ : queue_).push_back({std::move(channel), std::move(bytes)});
 }
 
 // Sends the head of the queue; false (message kept, retry scheduled) when LCM refuses it.
 bool Publisher::send_front(Clock::time_point now) {
-  const Pending& next = queue_.front();
+  const Pending& next = head_queue().front();
   errno = 0;
   if (send_(next.channel, next.bytes.data(), static_cast<unsigned int>(next.bytes.size())) != 0) {
     const int error = errno;
@@ -49,7 +63,7 @@ bool Publisher::send_front(Clock::time_point now) {
       backoff_ = kFirstBackoff;
       report(PublisherEvent::Kind::kSendFailing,
              "LCM send failed on " + next.channel + ": " +
-                 (error != 0 ? std::strerror(error) : "refused") + "; " + std::to_string(queue_.size()) +
+                 (error != 0 ? std::strerror(error) : "refused") + "; " + std::to_string(queued()) +
                  " messages kept, retrying");
     } else {
       backoff_ = std::min<Clock::duration>(backoff_ * 2, kLongestBackoff);
@@ -76,17 +90,19 @@ std::optional<Publisher::Clock::time_point> Publisher::drain(Clock::time_point n
   }
   allowance_ = std::min(allowance_, static_cast<double>(burst_));
   last_ = now;
-  while (!queue_.empty()) {
-    const double cost = receive_buffer_cost(queue_.front().bytes.size());
+  while (queued() > 0) {
+    auto& head = head_queue();
+    const double cost = receive_buffer_cost(head.front().bytes.size());
     // A message larger than the burst goes alone once the allowance is full.
     if (cost > allowance_ && allowance_ < static_cast<double>(burst_)) break;
     if (!send_front(now)) return retry_at_;
     allowance_ -= cost;
-    queue_.pop_front();
+    queued_bytes_ -= head.front().bytes.size();
+    head.pop_front();
   }
-  if (queue_.empty()) return std::nullopt;
+  if (queued() == 0) return std::nullopt;
   const double missing =
-      std::min(receive_buffer_cost(queue_.front().bytes.size()), static_cast<double>(burst_)) - allowance_;
+      std::min(receive_buffer_cost(head_queue().front().bytes.size()), static_cast<double>(burst_)) - allowance_;
   return now + std::chrono::duration_cast<Clock::duration>(
                    std::chrono::duration<double>(std::max(missing, 0.0) / rate_));
 }

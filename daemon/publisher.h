@@ -7,6 +7,10 @@
 // datagrams of 8,000 bytes or 166 of 300 bytes (measured on loopback; docs/lcm.md). A burst
 // counted in payload bytes overflowed it with 8,000-byte chunks.
 //
+// The queue is bounded in bytes (kMaxQueuedBytes; also kMaxQueued messages): beyond it the oldest
+// messages go, counted, and reported at most once a second. Messages published `urgent` (STATUS)
+// go before everything else queued, so a backlog never delays the heartbeat.
+//
 // A send that LCM refuses (no route, no buffer space) is not dropped: the message stays at the
 // head of the queue and is tried again after a back-off, so nothing is lost once sending works
 // again. The first failure and the recovery are reported through `on_event`.
@@ -44,22 +48,25 @@ class Publisher {
  public:
   using Clock = std::chrono::steady_clock;
   static constexpr std::size_t kMaxQueued = 100000;  // Beyond this (LCM down for long) the oldest go.
+  static constexpr std::size_t kMaxQueuedBytes = 64 * 1024 * 1024;  // Encoded bytes, both queues.
+  enum class Priority { kNormal, kUrgent };
 
   // Both in receive-buffer bytes (receive_buffer_cost).
   Publisher(lcm::LCM& lcm, double bytes_per_second, std::size_t burst_bytes);
   Publisher(SendFunction send, double bytes_per_second, std::size_t burst_bytes);
 
   template <typename Message>
-  void publish(const std::string& channel, const Message& message) {
+  void publish(const std::string& channel, const Message& message, Priority priority = Priority::kNormal) {
     std::vector<std::uint8_t> bytes(static_cast<std::size_t>(message.getEncodedSize()));
     message.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
-    enqueue(channel, std::move(bytes));
+    enqueue(channel, std::move(bytes), priority);
   }
 
   // Sends what the rate allows now; returns when the next message may go (or nothing queued).
   std::optional<Clock::time_point> drain(Clock::time_point now);
 
-  std::size_t queued() const { return queue_.size(); }
+  std::size_t queued() const { return queue_.size() + urgent_.size(); }
+  std::size_t queued_bytes() const { return queued_bytes_; }
   std::uint64_t send_failures() const { return send_failures_; }
   std::uint64_t dropped() const { return dropped_; }
   bool failing() const { return failures_in_a_row_ > 0; }
@@ -71,7 +78,9 @@ class Publisher {
     std::string channel;
     std::vector<std::uint8_t> bytes;
   };
-  void enqueue(std::string channel, std::vector<std::uint8_t> bytes);
+  void enqueue(std::string channel, std::vector<std::uint8_t> bytes, Priority priority);
+  void drop_oldest(const char* why);
+  std::deque<Pending>& head_queue() { return urgent_.empty() ? queue_ : urgent_; }
   bool send_front(Clock::time_point now);
   void report(PublisherEvent::Kind kind, std::string text);
 
@@ -81,8 +90,12 @@ class Publisher {
   double allowance_ = 0;
   Clock::time_point last_{};
   std::deque<Pending> queue_;
+  std::deque<Pending> urgent_;
+  std::size_t queued_bytes_ = 0;
   std::uint64_t send_failures_ = 0;
   std::uint64_t dropped_ = 0;
+  std::uint64_t dropped_unreported_ = 0;
+  Clock::time_point next_drop_report_{};
   // The current run of failed sends: how many, since when, and when to try again.
   std::uint64_t failures_in_a_row_ = 0;
   Clock::time_point failing_since_{};

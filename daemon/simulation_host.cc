@@ -1,6 +1,8 @@
 #include "simulation_host.h"
 
+#include <algorithm>
 #include <cmath>
+#include <numeric>
 
 #include <rdtf/joint_state_t.hpp>
 #include <rdtf/link_state_t.hpp>
@@ -8,6 +10,7 @@
 
 #include "daemon.h"
 #include "messages.h"
+#include "safe_decode.h"
 
 namespace rdtf::daemon {
 
@@ -42,10 +45,42 @@ void advance_live_models(StepClock& clock, LiveModels& models, Clock::time_point
   // states at 1 kHz with 20 models on a machine with load 6 (bench/live_sim_bench.cc).
   for (int due = clock.take_due(now); due > 0; --due) {
     for (auto& [id, model] : models) {
+      if (model->failed) continue;
+      model->credit += model->rate;
+      if (model->credit < 1) continue;
+      model->credit -= 1;
+      const double before = model->simulation->time();
+      const auto start = Clock::now();
       model->simulation->step(time_step);
+      const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
+      model->step_seconds = model->step_seconds == 0 ? seconds : 0.95 * model->step_seconds + 0.05 * seconds;
+      // Simulation::step does nothing once ODE's state is non-finite or beyond its bound.
+      if (!(model->simulation->time() > before)) {
+        model->failed = true;
+        continue;
+      }
       if (model->states->after_step()) publish(id, *model);
     }
   }
+}
+
+std::vector<double> budget_step_rates(const std::vector<double>& step_seconds, double budget_seconds) {
+  std::vector<double> rates(step_seconds.size(), 1.0);
+  std::vector<std::size_t> order(step_seconds.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return step_seconds[a] < step_seconds[b]; });
+  double left = std::max(budget_seconds, 0.0);
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    const double share = left / static_cast<double>(order.size() - k);
+    const double cost = step_seconds[order[k]];
+    if (cost <= share) {
+      left -= cost;
+      continue;
+    }
+    rates[order[k]] = share / cost;
+    left -= share;
+  }
+  return rates;
 }
 
 SimulationHost::SimulationHost(SimulationHostOptions options)
@@ -76,7 +111,16 @@ void SimulationHost::remove(const std::string& model_id) {
 
 void SimulationHost::command(const rdtf::joint_command_t& command) {
   std::lock_guard lock(mutex_);
+  if (inbox_.commands.size() >= kMaxPendingCommands) {
+    ++dropped_commands_;
+    return;
+  }
   inbox_.commands.push_back(command);
+}
+
+LiveTiming SimulationHost::timing() const {
+  std::lock_guard lock(mutex_);
+  return timing_;
 }
 
 std::size_t SimulationHost::model_count() const {
@@ -115,14 +159,33 @@ void SimulationHost::apply_inbox() {
       models_.erase(id);
       continue;
     }
+    model->robot = std::make_shared<const Robot>(robot->second);
     models_[id] = std::move(model);
   }
   for (const auto& command : inbox.commands) apply_command(command);
   std::lock_guard lock(mutex_);
   model_count_ = models_.size();
+  if (models_.empty()) timing_ = LiveTiming{0, 0, failures_};
 }
 
 void SimulationHost::reject(const rdtf::joint_command_t& command, const std::string& why) {
+  // At most kRejectionsPerSecond reports a second: a flood of bad commands is not answered by a
+  // flood of ERRORs. The next report says how many went unreported.
+  const auto now = Clock::now();
+  if (now - rejection_window_ >= std::chrono::seconds(1)) {
+    rejection_window_ = now;
+    rejections_in_window_ = 0;
+  }
+  if (++rejections_in_window_ > kRejectionsPerSecond) {
+    ++unreported_rejections_;
+    return;
+  }
+  std::string text = why;
+  if (unreported_rejections_ > 0) {
+    text += " (and " + std::to_string(unreported_rejections_) + " earlier rejections not reported: over " +
+            std::to_string(kRejectionsPerSecond) + " a second)";
+    unreported_rejections_ = 0;
+  }
   rdtf::model_error_t message;
   message.utime = now_utime();
   message.model_id = command.model_id;
@@ -133,7 +196,7 @@ void SimulationHost::reject(const rdtf::joint_command_t& command, const std::str
   d.severity = rdtf::diagnostic_t::ERROR;
   d.code = "COMMAND_REJECTED";
   d.byte_offset = -1;
-  d.message = why;
+  d.message = text;
   message.diagnostics.push_back(d);
   message.num_diagnostics = 1;
   lcm_.publish(options_.channel_prefix + "/" + command.model_id + "/ERROR", &message);
@@ -151,16 +214,32 @@ void SimulationHost::apply_command(const rdtf::joint_command_t& command) {
     return reject(command, "command for content hash '" + command.content_hash + "' but revision " +
                                std::to_string(model.revision) + " has content hash '" + model.content_hash + "'");
   }
+  std::vector<JointCommand> commands;
+  if (const std::string why = joint_commands_of(command, *model.simulation, commands); !why.empty()) {
+    return reject(command, why);
+  }
+  for (const JointCommand& c : commands) {
+    std::string error;
+    if (!model.simulation->set_command(c, &error)) return reject(command, error);
+  }
+}
+
+std::string joint_commands_of(const rdtf::joint_command_t& command, const Simulation& simulation,
+                              std::vector<JointCommand>& commands) {
+  commands.clear();
+  if (command.num_joints < 0) return "num_joints is negative";
   const auto n = static_cast<std::size_t>(command.num_joints);
   if (command.name.size() != n || command.mode.size() != n || command.value.size() != n ||
       command.kp.size() != n || command.kd.size() != n) {
-    return reject(command, "array lengths do not match num_joints");
+    return "array lengths do not match num_joints";
   }
   // All or nothing: check every joint before applying any.
-  std::vector<JointCommand> commands;
   for (std::size_t i = 0; i < n; ++i) {
-    if (!model.simulation->joint_state(command.name[i])) {
-      return reject(command, "unknown joint '" + command.name[i] + "' (or not a one-degree-of-freedom joint)");
+    // Names from the bus go into ERROR messages and logs escaped.
+    const std::string name = lcm_safe::printable(command.name[i], 80);
+    if (!simulation.joint_state(command.name[i])) {
+      commands.clear();
+      return "unknown joint '" + name + "' (or not a one-degree-of-freedom joint)";
     }
     JointCommand c;
     c.joint = command.name[i];
@@ -181,14 +260,24 @@ void SimulationHost::apply_command(const rdtf::joint_command_t& command) {
         c.kd = command.kd[i];
         break;
       default:
-        return reject(command, "unknown mode " + std::to_string(command.mode[i]) + " for joint '" + command.name[i] + "'");
+        commands.clear();
+        return "unknown mode " + std::to_string(command.mode[i]) + " for joint '" + name + "'";
+    }
+    // Checked here too (set_command checks them again) so that a bad value for the last joint
+    // leaves the others' commands unapplied.
+    for (double v : {c.effort, c.position, c.velocity, c.kp, c.kd}) {
+      if (!std::isfinite(v)) {
+        commands.clear();
+        return "command for '" + name + "' rejected: values must be finite";
+      }
+    }
+    if (c.kp < 0 || c.kd < 0) {
+      commands.clear();
+      return "command for '" + name + "' rejected: gains must not be negative";
     }
     commands.push_back(c);
   }
-  for (const JointCommand& c : commands) {
-    std::string error;
-    if (!model.simulation->set_command(c, &error)) return reject(command, error);
-  }
+  return "";
 }
 
 void SimulationHost::publish_state(const std::string& model_id, LiveModel& model) {
@@ -197,8 +286,13 @@ void SimulationHost::publish_state(const std::string& model_id, LiveModel& model
   message.model_id = model_id;
   message.revision = model.revision;
   message.content_hash = model.content_hash;
-  message.sim_time = model.simulation->time();
+  message.sim_time = model.sim_time();
   for (const JointState& state : model.simulation->joint_states()) {
+    // A non-finite value is never published: the simulation has failed and is restarted.
+    if (!std::isfinite(state.position) || !std::isfinite(state.velocity) || !std::isfinite(state.effort)) {
+      model.failed = true;
+      return;
+    }
     message.name.push_back(state.name);
     message.position.push_back(state.position);
     message.velocity.push_back(state.velocity);
@@ -218,7 +312,14 @@ void SimulationHost::publish_links(const std::string& model_id, LiveModel& model
   message.revision = model.revision;
   message.content_hash = model.content_hash;
   message.sim_time = sim_time;
-  for (const LinkPose& pose : model.simulation->link_poses()) {
+  const auto poses = model.simulation->link_poses();
+  for (const LinkPose& pose : poses) {
+    if (!pose.X_SL.matrix().allFinite() || !pose.v_SLo_S.allFinite() || !pose.w_SL_S.allFinite()) {
+      model.failed = true;  // The joint state of this step went out; this pair's link state does not.
+      return;
+    }
+  }
+  for (const LinkPose& pose : poses) {
     message.name.push_back(pose.name);
     const Eigen::Vector3d p = pose.X_SL.translation();
     // The rotation comes out of ODE's bodies as a matrix; renormalised so that subscribers get a
@@ -231,6 +332,106 @@ void SimulationHost::publish_links(const std::string& model_id, LiveModel& model
   }
   message.num_links = static_cast<std::int32_t>(message.name.size());
   lcm_.publish(options_.channel_prefix + "/" + model_id + "/LINK_STATE", &message);
+}
+
+void SimulationHost::publish_problem(const std::string& model_id, const LiveModel& model, const char* code,
+                                     std::int8_t severity, const std::string& text) {
+  rdtf::model_error_t message;
+  message.utime = now_utime();
+  message.model_id = model_id;
+  message.live_revision = model.revision;
+  message.content_hash = model.content_hash;
+  rdtf::diagnostic_t d;
+  d.severity = severity;
+  d.code = code;
+  d.byte_offset = -1;
+  d.message = text;
+  message.diagnostics.push_back(d);
+  message.num_diagnostics = 1;
+  lcm_.publish(options_.channel_prefix + "/" + model_id + "/ERROR", &message);
+}
+
+void SimulationHost::restart(const std::string& model_id, LiveModel& model) {
+  ++failures_;
+  std::string why = "its state became non-finite or blew up";
+  if (!model.simulation->ode_messages().empty()) why += " (" + model.simulation->ode_messages().back() + ")";
+  const std::string text = "live simulation of " + model_id + " revision " + std::to_string(model.revision) +
+                           " failed at t = " + std::to_string(model.sim_time()) + " s: " + why +
+                           "; restarted from the rest pose, commands cleared";
+  const auto now = Clock::now();
+  // A sender that makes it fail again and again gets one log line a second, not one per failure.
+  if (now >= next_failure_log_) {
+    next_failure_log_ = now + std::chrono::seconds(1);
+    log_line(text + " (" + std::to_string(failures_) + " failures since start)");
+  }
+  publish_problem(model_id, model, "SIMULATION_FAILED", rdtf::diagnostic_t::ERROR, text);
+  Diagnostics diag;
+  // Simulated time goes on from where it was, so that subscribers see it keep advancing.
+  const double offset = model.sim_time();
+  auto fresh = Simulation::create(*model.robot, options_.simulation, {}, diag);
+  if (!fresh) {
+    log_line("simulation of " + model_id + " could not be started again: " +
+             (diag.all().empty() ? std::string("unknown reason") : format(diag.all().front())));
+    model.simulation.reset();
+    return;
+  }
+  model.simulation = std::move(fresh);
+  model.time_offset = offset;
+  model.failed = false;
+}
+
+void SimulationHost::supervise(Clock::time_point now) {
+  for (auto it = models_.begin(); it != models_.end();) {
+    if (it->second->failed) restart(it->first, *it->second);
+    if (!it->second->simulation) {
+      it = models_.erase(it);
+    } else {
+      ++it;
+    }
+  }
+  // Once per window: how each model kept time, and its step rate for the next window.
+  constexpr auto kWindow = std::chrono::milliseconds(500);
+  if (window_start_ == Clock::time_point{}) window_start_ = now;
+  const double wall = std::chrono::duration<double>(now - window_start_).count();
+  if (now - window_start_ < kWindow) return;
+  window_start_ = now;
+  const double tick = options_.simulation.time_step / options_.real_time_factor;
+  std::vector<double> costs;
+  LiveTiming timing;
+  timing.failed = failures_;
+  bool first = true;
+  for (auto& [id, model] : models_) {
+    costs.push_back(model->step_seconds);
+    if (!model->measured) {  // Loaded during this window: measured from the next one on.
+      model->measured = true;
+      model->window_start_time = model->sim_time();
+      continue;
+    }
+    const double simulated = model->sim_time() - model->window_start_time;
+    model->window_start_time = model->sim_time();
+    const double factor = simulated / wall;
+    timing.real_time_factor = first ? factor : std::min(timing.real_time_factor, factor);
+    first = false;
+    const bool behind = factor < 0.9 * options_.real_time_factor;
+    if (behind) ++timing.behind;
+    if (behind != model->behind) {
+      model->behind = behind;
+      char text[256];
+      std::snprintf(text, sizeof(text),
+                    behind ? "live simulation of %s is behind: %.3g simulated s per wall s of %.3g wanted "
+                             "(one step %.3g ms; its share of the CPU budget %.0f%% of the steps)"
+                           : "live simulation of %s keeps time again: %.3g simulated s per wall s of %.3g wanted "
+                             "(one step %.3g ms; %.0f%% of the steps)",
+                    id.c_str(), factor, options_.real_time_factor, model->step_seconds * 1e3, model->rate * 100);
+      log_line(text);
+    }
+  }
+  // 80% of the thread's time for stepping; the rest publishes and sleeps.
+  const auto rates = budget_step_rates(costs, 0.8 * tick);
+  std::size_t k = 0;
+  for (auto& [id, model] : models_) model->rate = rates[k++];
+  std::lock_guard lock(mutex_);
+  timing_ = timing;
 }
 
 void SimulationHost::run() {
@@ -247,6 +448,7 @@ void SimulationHost::run() {
       continue;
     }
     advance_live_models(clock, models_, now, dt, publish);
+    supervise(Clock::now());
     std::this_thread::sleep_until(clock.next_due());
   }
 }

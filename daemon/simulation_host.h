@@ -77,13 +77,47 @@ struct LiveModel {
   std::string content_hash;
   std::unique_ptr<Simulation> simulation;
   std::optional<StateSchedule> states;
+  std::shared_ptr<const Robot> robot;  // To start again from rest after a failure.
+  double time_offset = 0;              // s: simulated time of the runs before a restart.
+  bool failed = false;                 // Its state became non-finite or blew up (not stepped).
+  // The CPU budget: the fraction of the host's steps this model takes (budget_step_rates), the
+  // credit towards its next step, and the measured wall time of one of its steps.
+  double rate = 1;
+  double credit = 0;
+  double step_seconds = 0;  // moving average
+  double window_start_time = 0;  // simulated time (with time_offset) at the window's start
+  bool behind = false;
+  bool measured = false;  // Has had a whole window.
+  double sim_time() const { return time_offset + (simulation ? simulation->time() : 0.0); }
 };
 using LiveModels = std::map<std::string, std::unique_ptr<LiveModel>>;
 
 // One pass of the simulation thread at wall time `now`: every step due on `clock`, every model in
-// lockstep, and `publish` for each state due after each step.
+// lockstep (a model whose `rate` is below 1 takes that fraction of the steps), and `publish` for
+// each state due after each step. A model whose simulation stops advancing (ODE failed on a
+// non-finite or blown-up state) is marked `failed` and left alone.
 void advance_live_models(StepClock& clock, LiveModels& models, Clock::time_point now, double time_step,
                          const std::function<void(const std::string&, LiveModel&)>& publish);
+
+// The joint commands a controller's message asks of `simulation`, all or nothing: empty with the
+// reason when a joint is unknown, a mode unknown or the arrays disagree with num_joints.
+// (Revision and content hash are checked by the host.)
+std::string joint_commands_of(const rdtf::joint_command_t& command, const Simulation& simulation,
+                              std::vector<JointCommand>& commands);
+
+// The CPU budget of the live simulations: the fraction of the host's steps each model may take
+// when one step of every model costs `step_seconds` and `budget_seconds` is available per step.
+// Max-min fair (water-filling): models cheaper than an equal share run at full rate and leave the
+// rest to the others; a model costlier than its share takes only its share, so one huge model
+// falls behind real time alone instead of slowing every simulation.
+std::vector<double> budget_step_rates(const std::vector<double>& step_seconds, double budget_seconds);
+
+// How the live simulations keep real time, for STATUS.
+struct LiveTiming {
+  double real_time_factor = 0;  // the slowest model's simulated s per wall s over the last window
+  int behind = 0;               // models below 90% of the configured real-time factor
+  std::uint64_t failed = 0;     // simulations that failed and were restarted from rest, since start
+};
 
 class SimulationHost {
  public:
@@ -104,6 +138,12 @@ class SimulationHost {
   void command(const rdtf::joint_command_t& command);
 
   std::size_t model_count() const;
+  LiveTiming timing() const;
+
+  // Commands waiting for the host thread beyond this are dropped (a flood of them).
+  static constexpr std::size_t kMaxPendingCommands = 4096;
+  // COMMAND_REJECTED reports a second, at most.
+  static constexpr int kRejectionsPerSecond = 20;
 
  private:
   struct Inbox {
@@ -114,6 +154,12 @@ class SimulationHost {
 
   void run();
   void apply_inbox();
+  // Restarts failed simulations from rest, with a report; measures how each model keeps time and
+  // sets its step rate from the budget, once per window.
+  void supervise(Clock::time_point now);
+  void restart(const std::string& model_id, LiveModel& model);
+  void publish_problem(const std::string& model_id, const LiveModel& model, const char* code, std::int8_t severity,
+                       const std::string& text);
   void apply_command(const rdtf::joint_command_t& command);
   void reject(const rdtf::joint_command_t& command, const std::string& why);
   // JOINT_STATE, then LINK_STATE with the same utime and sim_time.
@@ -127,6 +173,14 @@ class SimulationHost {
   std::map<std::string, Robot> pending_robots_;  // Under mutex_: robots of inbox_.loads.
   LiveModels models_;                                         // Owned by the host thread.
   std::size_t model_count_ = 0;                               // Under mutex_.
+  LiveTiming timing_;                                         // Under mutex_.
+  std::uint64_t dropped_commands_ = 0;                        // Under mutex_.
+  std::uint64_t failures_ = 0;                                // Host thread.
+  Clock::time_point window_start_{};                          // Host thread.
+  Clock::time_point next_failure_log_{};                      // Host thread.
+  Clock::time_point rejection_window_{};                      // Host thread.
+  int rejections_in_window_ = 0;                              // Host thread.
+  std::uint64_t unreported_rejections_ = 0;                   // Host thread.
   std::atomic<bool> stop_{false};
   std::thread thread_;
 };

@@ -71,6 +71,58 @@ else
   say "apt: done"
 fi
 
+# --- liblcm, patched ----------------------------------------------------------------------------
+# liblcm 1.3.1's UDP receive path writes out of bounds on a crafted fragment (docs/security.md).
+# rdtfd and the clients link a static liblcm built by CMake from Debian's source of the installed
+# version with scripts/lcm/*.patch applied, kept in $RDTF_LCM_SRC (default /opt/rdtf/lcm-src;
+# CMake's RDTF_LCM_SOURCE_DIR). Done again only when the patches or the installed version change.
+lcm_root=${RDTF_LCM_SRC:-/opt/rdtf/lcm-src}
+lcm_version=$(dpkg-query -W -f='${Version}' liblcm-dev)
+lcm_want=$( (echo "$lcm_version"; cat scripts/lcm/*.patch) | sha256sum | cut -d' ' -f1)
+if [[ -f $lcm_root/.rdtf-patched && $(cat "$lcm_root/.rdtf-patched") == "$lcm_want" ]]; then
+  say "lcm: patched source in $lcm_root matches, nothing to do"
+else
+  # `apt-get source` needs a deb-src entry: one for bookworm's main, added once.
+  src_list=/etc/apt/sources.list.d/rdtf-deb-src.sources
+  if ! grep -rqsE '^(Types:.*deb-src|deb-src )' /etc/apt/sources.list /etc/apt/sources.list.d/; then
+    say "lcm: adding $src_list (deb-src for bookworm main)"
+    printf '%s\n' '# Added by rdtf scripts/install-deps.sh: sources of Debian packages rdtf patches (liblcm).' \
+      'Types: deb-src' 'URIs: http://deb.debian.org/debian' 'Suites: bookworm' 'Components: main' \
+      'Signed-By: /usr/share/keyrings/debian-archive-keyring.gpg' | "${SUDO[@]}" tee "$src_list" >/dev/null
+  fi
+  say "lcm: apt-get source lcm=$lcm_version"
+  apt_get update -q >/dev/null
+  work=$(mktemp -d)
+  # Root downloads into a folder _apt cannot enter: apt says so and downloads unsandboxed.
+  if ! (cd "$work" && apt_get source -q --download-only "lcm=$lcm_version" >/dev/null 2>"$work/apt.log"); then
+    # Some mirrors serve the .orig tarball but not the .debian.tar.xz (Debian's packaging, no
+    # change to liblcm's C sources); apt has checked whatever it did download against the index.
+    say "lcm: apt-get source incomplete ($(grep -m1 '^E:' "$work/apt.log" || echo 'see apt'))"
+  fi
+  if compgen -G "$work/*.debian.tar.*" >/dev/null; then
+    (cd "$work" && dpkg-source -q -x ./*.dsc src >/dev/null)
+  elif compgen -G "$work/*.orig.tar.*" >/dev/null; then
+    say "lcm: using the .orig tarball alone"
+    mkdir "$work/src" && tar -xf "$work"/*.orig.tar.* -C "$work/src" --strip-components=1
+  else
+    say "lcm: could not fetch Debian's source of lcm $lcm_version" >&2
+    cat "$work/apt.log" >&2
+    exit 1
+  fi
+  for p in scripts/lcm/*.patch; do
+    say "lcm: applying $p"
+    patch -s -p1 -d "$work/src" <"$p"
+  done
+  "${SUDO[@]}" mkdir -p "$(dirname "$lcm_root")"
+  "${SUDO[@]}" rm -rf "$lcm_root.new"
+  "${SUDO[@]}" cp -r "$work/src" "$lcm_root.new"
+  echo "$lcm_want" | "${SUDO[@]}" tee "$lcm_root.new/.rdtf-patched" >/dev/null
+  "${SUDO[@]}" rm -rf "$lcm_root"
+  "${SUDO[@]}" mv "$lcm_root.new" "$lcm_root"
+  rm -rf "$work"
+  say "lcm: patched source of lcm $lcm_version in $lcm_root"
+fi
+
 # --- npm packages of tools/gltf-validator ------------------------------------------------------
 validator=tools/gltf-validator
 if [[ -f $validator/package.json ]]; then

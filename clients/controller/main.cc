@@ -17,6 +17,7 @@
 #include <csignal>
 #include <iostream>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -26,6 +27,7 @@
 #include <rdtf/model_error_t.hpp>
 
 #include "pd_controller.h"
+#include "safe_decode.h"
 
 namespace {
 
@@ -57,29 +59,51 @@ class ControllerNode {
   ControllerNode(lcm::LCM& lcm, std::string prefix, rdtf::controller::PdOptions options)
       : lcm_(lcm), prefix_(std::move(prefix)), model_id_(options.model_id), controller_(std::move(options)) {
     const std::string model_channel = prefix_ + "/" + model_id_ + "/";
-    lcm_.subscribe(model_channel + "JOINT_STATE", &ControllerNode::on_state, this);
-    lcm_.subscribe(model_channel + "DESCRIPTION", &ControllerNode::on_description, this);
-    lcm_.subscribe(model_channel + "ERROR", &ControllerNode::on_error, this);
+    // Raw datagrams, decoded only after the schema check (lcmtypes/safe_decode.h).
+    lcm_.subscribe(model_channel + "JOINT_STATE", &ControllerNode::on_state_datagram, this);
+    lcm_.subscribe(model_channel + "DESCRIPTION", &ControllerNode::on_description_datagram, this);
+    lcm_.subscribe(model_channel + "ERROR", &ControllerNode::on_error_datagram, this);
     command_channel_ = model_channel + "JOINT_COMMAND";
   }
 
+  std::uint64_t dropped() const { return drops_.total(); }
+
  private:
-  void on_description(const lcm::ReceiveBuffer*, const std::string&, const rdtf::description_t* d) {
-    controller_.on_description(d->revision);
+  template <typename Message>
+  std::optional<Message> decode(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
+    std::string why;
+    auto message = rdtf::lcm_safe::decode<Message>(buffer->data, buffer->data_size, why);
+    if (!message) {
+      if (auto line = drops_.drop(channel, why, std::chrono::steady_clock::now())) {
+        std::cerr << "rdtf-pd-controller: " << *line << "\n";
+      }
+    }
+    return message;
+  }
+  void on_description_datagram(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
+    if (auto d = decode<rdtf::description_t>(buffer, channel)) controller_.on_description(d->revision);
+  }
+  void on_state_datagram(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
+    if (auto state = decode<rdtf::joint_state_t>(buffer, channel)) on_state(*state);
+  }
+  void on_error_datagram(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
+    if (auto error = decode<rdtf::model_error_t>(buffer, channel)) on_error(*error);
   }
 
-  void on_state(const lcm::ReceiveBuffer*, const std::string&, const rdtf::joint_state_t* state) {
+  void on_state(const rdtf::joint_state_t& state) {
     const std::int64_t followed = controller_.revision();
-    auto command = controller_.on_state(*state);
+    auto command = controller_.on_state(state);
     if (!command) return;
     if (controller_.revision() != followed) report_revision();
     command->utime = now_utime();
     lcm_.publish(command_channel_, &*command);
   }
 
-  void on_error(const lcm::ReceiveBuffer*, const std::string&, const rdtf::model_error_t* error) {
-    for (const auto& d : error->diagnostics) {
-      if (d.code == "COMMAND_REJECTED") std::cerr << "rdtf-pd-controller: command rejected: " << d.message << "\n";
+  void on_error(const rdtf::model_error_t& error) {
+    for (const auto& d : error.diagnostics) {
+      if (d.code == "COMMAND_REJECTED") {
+        std::cerr << "rdtf-pd-controller: command rejected: " << rdtf::lcm_safe::printable(d.message) << "\n";
+      }
     }
   }
 
@@ -95,6 +119,7 @@ class ControllerNode {
   }
 
   lcm::LCM& lcm_;
+  rdtf::lcm_safe::DropCounter drops_;
   std::string prefix_;
   std::string model_id_;
   std::string command_channel_;

@@ -9,6 +9,7 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include "message_json.h"
+#include "safe_decode.h"
 
 namespace {
 
@@ -41,7 +42,13 @@ int main(int argc, char** argv) {
     std::int64_t* printed;
     void handle(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
       nlohmann::ordered_json line = {{"channel", channel}, {"recv_utime", buffer->recv_utime}};
-      if (auto message = rdtf::clients::message_to_json(buffer->data, buffer->data_size)) {
+      // An rdtf type is decoded only when it passes the schema check (lcmtypes/safe_decode.h);
+      // one that does not is printed as dropped, with the reason.
+      const std::string_view type = rdtf::lcm_safe::type_of(buffer->data, buffer->data_size);
+      const std::string invalid = type.empty() ? std::string() : rdtf::lcm_safe::check_known(buffer->data, buffer->data_size);
+      if (!invalid.empty()) {
+        line["message"] = {{"type", "rdtf." + std::string(type)}, {"size", buffer->data_size}, {"dropped", invalid}};
+      } else if (auto message = rdtf::clients::message_to_json(buffer->data, buffer->data_size)) {
         if (omit_json) {
           for (const char* key : {"rdtf_json", "urdf", "data"}) {
             if (message->contains(key)) (*message)[key] = "(omitted)";

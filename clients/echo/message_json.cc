@@ -94,7 +94,11 @@ Json to_json(const rdtf::status_t& m) {
           {"pid", m.pid}, {"uptime", m.uptime}, {"num_models", m.num_models},
           {"num_watched_dirs", m.num_watched_dirs}, {"conversions", m.conversions},
           {"rejections", m.rejections}, {"skipped_unchanged", m.skipped_unchanged},
-          {"rescans", m.rescans}, {"pending", m.pending}, {"model_ids", m.model_ids}};
+          {"rescans", m.rescans}, {"pending", m.pending}, {"dropped_messages", m.dropped_messages},
+          {"coalesced_requests", m.coalesced_requests}, {"send_queue_bytes", m.send_queue_bytes},
+          {"send_dropped", m.send_dropped}, {"live_real_time_factor", m.live_real_time_factor},
+          {"simulations_behind", m.simulations_behind}, {"simulations_failed", m.simulations_failed},
+          {"model_ids", m.model_ids}};
 }
 
 Json to_json(const rdtf::joint_state_t& m) {

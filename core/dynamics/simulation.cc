@@ -17,14 +17,23 @@ using dynamics_internal::kWorld;
 
 Eigen::Vector3d vec(const dReal* v) { return {v[0], v[1], v[2]}; }
 
+// The bound of a joint's commanded effort: its authored effort limit, else kDefaultEffortLimit.
+double effort_bound(const JointModel& jm) { return jm.effort_limit > 0 ? jm.effort_limit : kDefaultEffortLimit; }
+
+// The commanded effort, within the joint's bound. Each term is bounded before the sum, so finite
+// commands whose products overflow (kp 1e308 times an error of 1) give the bound, never inf or
+// NaN (inf - inf).
 double command_effort(const JointModel& jm) {
   if (!jm.command) return 0;
   const JointCommand& c = *jm.command;
-  double effort = c.effort;
-  if (c.mode == CommandMode::kPosition) effort += c.kp * (c.position - jm.q) + c.kd * (c.velocity - jm.qdot);
-  if (c.mode == CommandMode::kVelocity) effort += c.kd * (c.velocity - jm.qdot);
-  if (jm.effort_limit > 0) effort = std::clamp(effort, -jm.effort_limit, jm.effort_limit);
-  return effort;
+  const double bound = effort_bound(jm);
+  const auto bounded = [bound](double term) { return std::isnan(term) ? 0.0 : std::clamp(term, -bound, bound); };
+  double effort = bounded(c.effort);
+  if (c.mode == CommandMode::kPosition) {
+    effort += bounded(c.kp * (c.position - jm.q)) + bounded(c.kd * (c.velocity - jm.qdot));
+  }
+  if (c.mode == CommandMode::kVelocity) effort += bounded(c.kd * (c.velocity - jm.qdot));
+  return bounded(effort);
 }
 
 Eigen::Vector3d angular_velocity(const Simulation::Model& model, int body) {

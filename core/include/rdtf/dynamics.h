@@ -109,6 +109,11 @@ enum class CommandMode { kTorque, kPosition, kVelocity };
 
 // Held until replaced or cleared. Torque: effort. Position: kp (position - q) + kd (velocity -
 // qdot) + effort. Velocity: kd (velocity - qdot) + effort. Clamped to the joint's effort limit.
+// A command's effort (feed-forward plus the gains' terms) is clamped to the joint's authored effort
+// limit, or to this where none is authored: N m (revolute) or N (prismatic). Any finite command,
+// however large, then stays a force ODE can step.
+inline constexpr double kDefaultEffortLimit = 1000;
+
 struct JointCommand {
   std::string joint;
   CommandMode mode = CommandMode::kTorque;

@@ -1,0 +1,361 @@
+// rdtfd and the rdtf clients against a hostile bus (docs/security.md): datagrams crafted byte by
+// byte and sent over a plain UDP socket to LCM's multicast group, inside the test's own network
+// namespace (harness.h). Malformed messages (lengths of 0, negative, or far beyond the datagram)
+// are dropped, counted in STATUS and logged once a second; liblcm's fragment reassembly refuses a
+// fragment whose offset wraps 32 bits; the requester field reaches the log escaped; a request flood
+// is answered once per second and model; a huge but finite joint command never makes the live
+// simulation publish a non-finite value or stop; a live simulation that cannot keep real time says
+// so in STATUS and the log.
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+
+#include <cmath>
+#include <limits>
+
+#include "clients/live_arm.h"
+
+namespace rdtf::itest {
+namespace {
+
+// Big-endian fields as LCM encodes them.
+struct Bytes {
+  std::vector<std::uint8_t> data;
+  Bytes& u(std::uint64_t value, int width) {
+    for (int k = width - 1; k >= 0; --k) data.push_back(static_cast<std::uint8_t>(value >> (8 * k)));
+    return *this;
+  }
+  Bytes& i64(std::int64_t v) { return u(static_cast<std::uint64_t>(v), 8); }
+  Bytes& i32(std::int32_t v) { return u(static_cast<std::uint32_t>(v), 4); }
+  Bytes& f64(double v) {
+    std::uint64_t bits;
+    std::memcpy(&bits, &v, 8);
+    return u(bits, 8);
+  }
+  // An LCM string: its length with the NUL, the bytes, the NUL.
+  Bytes& str(const std::string& s) {
+    i32(static_cast<std::int32_t>(s.size() + 1));
+    data.insert(data.end(), s.begin(), s.end());
+    data.push_back(0);
+    return *this;
+  }
+  Bytes& raw(const std::string& s) {
+    data.insert(data.end(), s.begin(), s.end());
+    return *this;
+  }
+};
+
+// A UDP socket sending to LCM's default group (udpm://239.255.76.67:7667), multicast looped back.
+class RawSender {
+ public:
+  RawSender() {
+    fd_ = ::socket(AF_INET, SOCK_DGRAM, 0);
+    if (fd_ < 0) throw std::runtime_error("socket failed");
+    const unsigned char ttl = 0, loop = 1;
+    ::setsockopt(fd_, IPPROTO_IP, IP_MULTICAST_TTL, &ttl, sizeof(ttl));
+    ::setsockopt(fd_, IPPROTO_IP, IP_MULTICAST_LOOP, &loop, sizeof(loop));
+    to_.sin_family = AF_INET;
+    to_.sin_port = htons(7667);
+    ::inet_pton(AF_INET, "239.255.76.67", &to_.sin_addr);
+  }
+  ~RawSender() { ::close(fd_); }
+  void send(const std::vector<std::uint8_t>& datagram) const {
+    if (::sendto(fd_, datagram.data(), datagram.size(), 0, reinterpret_cast<const sockaddr*>(&to_), sizeof(to_)) !=
+        static_cast<ssize_t>(datagram.size())) {
+      throw std::runtime_error("sendto failed");
+    }
+  }
+  // One LCM datagram with the short header: magic "LC02", sequence number, channel, payload.
+  std::vector<std::uint8_t> short_message(const std::string& channel, const Bytes& payload) {
+    Bytes d;
+    d.u(0x4c433032, 4).u(sequence_++, 4).raw(channel).u(0, 1);
+    d.data.insert(d.data.end(), payload.data.begin(), payload.data.end());
+    return d.data;
+  }
+  // One fragment with the long header: magic "LC03", sequence, message size, fragment offset,
+  // fragment number and count; fragment 0 carries the channel.
+  static std::vector<std::uint8_t> fragment(std::uint32_t sequence, std::uint32_t message_size, std::uint32_t offset,
+                                            std::uint16_t number, std::uint16_t count, const std::string& channel,
+                                            std::size_t data_bytes) {
+    Bytes d;
+    d.u(0x4c433033, 4).u(sequence, 4).u(message_size, 4).u(offset, 4).u(number, 2).u(count, 2);
+    if (number == 0) d.raw(channel).u(0, 1);
+    d.data.insert(d.data.end(), data_bytes, 0x41);
+    return d.data;
+  }
+
+ private:
+  int fd_ = -1;
+  sockaddr_in to_{};
+  std::uint32_t sequence_ = 1;
+};
+
+Bytes request_head() { return Bytes().i64(rdtf::request_t::getHash()).i64(0); }
+Bytes command_head(const std::string& hash) {
+  return Bytes().i64(rdtf::joint_command_t::getHash()).i64(0).str(kArm).i64(1).str(hash);
+}
+
+std::int64_t dropped(const std::vector<Message>& all) {
+  const auto s = statuses(all);
+  return s.empty() ? 0 : s.back().dropped_messages;
+}
+
+// The daemon's own uptime in its newest STATUS: how long it has run, by its clock.
+double uptime(const std::vector<Message>& all) {
+  const auto s = statuses(all);
+  return s.empty() ? 0 : s.back().uptime;
+}
+
+std::size_t count_lines(const std::string& log, const std::string& text) {
+  std::size_t n = 0;
+  for (std::size_t at = log.find(text); at != std::string::npos; at = log.find(text, at + 1)) ++n;
+  return n;
+}
+
+// A request answered: a DESCRIPTION of arm3 after `from` messages.
+bool answered(Session& s, std::size_t from) {
+  return s.wait_for([&](const auto& all) {
+    for (std::size_t i = from; i < all.size(); ++i) {
+      if (all[i].kind() == "DESCRIPTION" && all[i].model_id() == kArm) return true;
+    }
+    return false;
+  });
+}
+
+void request_all(Session& s, const std::string& requester) {
+  rdtf::request_t request;
+  request.requester = requester;
+  s.subscriber.publish("RDTF/REQUEST", request);
+}
+
+TEST(HostileBus, MalformedDatagramsAreDroppedCountedAndLoggedNotFatal) {
+  Session s;
+  copy_fixture(s.watch, "arm3");
+  s.start();
+  ASSERT_TRUE(s.wait_revision(kArm, 1, fixture_hash("arm3")));
+  RawSender sender;
+  const std::string hash = fixture_hash("arm3");
+  std::vector<std::vector<std::uint8_t>> datagrams;
+  // request_t: model_id of length 0 (lcm-gen: assign(p, -1)), negative, and a requester of 0.
+  datagrams.push_back(sender.short_message("RDTF/REQUEST", request_head().i32(0).str("x")));
+  datagrams.push_back(sender.short_message("RDTF/REQUEST", request_head().i32(-5).str("x")));
+  datagrams.push_back(sender.short_message("RDTF/REQUEST", request_head().str("").i32(0)));
+  // joint_command_t: num_joints -1 and 2^31-1 (resize before any check), a name of length 0.
+  const std::string channel = "RDTF/arm3.gltf/JOINT_COMMAND";
+  datagrams.push_back(sender.short_message(channel, command_head(hash).i32(-1)));
+  datagrams.push_back(sender.short_message(channel, command_head(hash).i32(std::numeric_limits<std::int32_t>::max())));
+  datagrams.push_back(sender.short_message(channel, command_head(hash).i32(1).i32(0)));
+  // num_joints 100,000,000 in a 111-byte datagram (3.1 GB and a 7 s stall before).
+  Bytes padded = Bytes().i64(rdtf::joint_command_t::getHash()).i64(0).str(kArm).i64(1);
+  const std::size_t header = 8 + channel.size() + 1;
+  padded.str(std::string(111 - header - padded.data.size() - 4 - 1 - 4, 'h')).i32(100000000);
+  datagrams.push_back(sender.short_message(channel, padded));
+  ASSERT_EQ(datagrams.back().size(), 111u);
+  for (const auto& d : datagrams) sender.send(d);
+
+  const auto sent = static_cast<std::int64_t>(datagrams.size());
+  ASSERT_TRUE(s.wait_for([&](const auto& all) { return dropped(all) >= sent; }))
+      << "STATUS counts " << dropped(s.messages()) << " dropped of " << sent;
+  EXPECT_EQ(dropped(s.messages()), sent);
+  ASSERT_TRUE(s.daemon->running());
+  const std::string log = s.daemon->log();
+  EXPECT_NE(log.find("undecodable"), std::string::npos) << log;
+  EXPECT_NE(log.find("request_t: model_id: string length 0"), std::string::npos) << log;
+  // Still serving: a valid request is answered.
+  const std::size_t from = s.messages().size();
+  request_all(s, "itest");
+  EXPECT_TRUE(answered(s, from));
+}
+
+TEST(HostileBus, FloodOfMalformedDatagramsIsLoggedOnceASecond) {
+  Session s;
+  s.start();
+  RawSender sender;
+  const int kCount = 3000;
+  for (int k = 0; k < kCount; ++k) sender.send(sender.short_message("RDTF/REQUEST", request_head().i32(0)));
+  // Not every datagram need arrive (the socket buffer); every one that did is counted.
+  request_all(s, "after the flood");
+  ASSERT_TRUE(s.wait_log("on request of 'after the flood'", 20s));
+  ASSERT_TRUE(s.wait_for([&](const auto& all) { return dropped(all) > 0; }));
+  const auto all = s.messages();
+  const std::string log = s.daemon->log();
+  const std::size_t lines = count_lines(log, "undecodable");
+  std::printf("%lld of %d malformed datagrams counted; %zu log lines over %.2f s of the daemon's uptime\n",
+              static_cast<long long>(dropped(all)), kCount, lines, uptime(all));
+  EXPECT_LE(dropped(all), kCount);
+  // One line for the first drop, then at most one per second of the daemon's run.
+  EXPECT_LE(static_cast<double>(lines), 1 + std::ceil(uptime(all)));
+}
+
+TEST(HostileBus, FragmentWhoseOffsetWraps32BitsIsRefusedByLiblcm) {
+  Session s;
+  copy_fixture(s.watch, "arm3");
+  s.start();
+  ASSERT_TRUE(s.wait_revision(kArm, 1, fixture_hash("arm3")));
+  ChildProcess echo({RDTF_ECHO_PATH, "--omit-documents"}, s.root / "echo.out");
+  RawSender sender;
+  // Fragment 0 of a 1000-byte message on a subscribed channel, then one at offset 0xfffffff0:
+  // 0xfffffff0 + 100 wraps to 84 < 1000 in liblcm 1.3.1's check, and its memcpy wrote 16 bytes
+  // before the buffer and the rest 4 GB past it (SIGSEGV). Both channels: rdtfd's and rdtf-echo's.
+  for (int round = 0; round < 3; ++round) {
+    const auto seq = static_cast<std::uint32_t>(100 + round);
+    sender.send(RawSender::fragment(seq, 1000, 0, 0, 2, "RDTF/REQUEST", 100));
+    sender.send(RawSender::fragment(seq, 1000, 0xfffffff0u, 1, 2, "", 100));
+    // Shorter than the long header; a fragment count of 0; a channel longer than the datagram.
+    sender.send({0x4c, 0x43, 0x30, 0x33, 0, 0, 0, 1, 0, 0});
+    sender.send(RawSender::fragment(seq + 10, 1000, 0, 0, 0, "RDTF/REQUEST", 10));
+  }
+  // rdtfd still answers; rdtf-echo still prints.
+  const std::size_t from = s.messages().size();
+  request_all(s, "after the fragments");
+  EXPECT_TRUE(answered(s, from));
+  EXPECT_TRUE(s.daemon->running());
+  EXPECT_TRUE(wait_until([&] { return echo.output().find("after the fragments") != std::string::npos; }, 5s))
+      << echo.output();
+  EXPECT_FALSE(echo.wait_exit(0s).has_value()) << "rdtf-echo exited:\n" << echo.output();
+}
+
+TEST(HostileBus, RequesterIsEscapedInTheLog) {
+  Session s;
+  s.start();
+  request_all(s, "mallory\n2030-01-01T00:00:00.000Z rdtfd stopped\x1b[2J");
+  ASSERT_TRUE(s.wait_log("on request of 'mallory"));
+  const std::string log = s.daemon->log();
+  EXPECT_NE(log.find("on request of 'mallory\\x0a2030-01-01T00:00:00.000Z rdtfd stopped\\x1b[2J'"), std::string::npos)
+      << log;
+  EXPECT_EQ(log.find("\n2030-01-01"), std::string::npos) << log;
+}
+
+TEST(HostileBus, RequestFloodIsAnsweredOncePerSecondWithStatusOnTime) {
+  Session s;
+  copy_fixture(s.watch, "arm3");
+  s.start();
+  ASSERT_TRUE(s.wait_revision(kArm, 1, fixture_hash("arm3")));
+  const std::size_t from = s.messages().size();
+  const int kRequests = 5000;
+  for (int k = 0; k < kRequests; ++k) request_all(s, "flood");
+  // Every request is either answered or answered together with others (coalesced).
+  ASSERT_TRUE(s.wait_for(
+      [&](const auto& all) {
+        const auto st = statuses(all);
+        return !st.empty() && st.back().coalesced_requests > 0 && st.back().pending == 0;
+      },
+      20s));
+  ASSERT_TRUE(s.wait_idle());
+  const auto all = s.messages();
+  std::size_t descriptions = 0;
+  std::size_t statuses_during = 0;
+  std::int64_t most_queued = 0;
+  for (std::size_t i = from; i < all.size(); ++i) {
+    if (all[i].kind() == "DESCRIPTION") ++descriptions;
+    if (all[i].kind() == "STATUS") {
+      ++statuses_during;
+      most_queued = std::max(most_queued, all[i].as<rdtf::status_t>().send_queue_bytes);
+    }
+  }
+  const auto last = statuses(all).back();
+  std::printf("%d requests: %zu descriptions, %lld coalesced, %zu STATUS, most queued %lld bytes\n", kRequests,
+              descriptions, static_cast<long long>(last.coalesced_requests), statuses_during,
+              static_cast<long long>(most_queued));
+  // Answers: one per second of the daemon's clock (STATUS every 100 ms: ten per answer), plus the
+  // first and the one deferred to the end of its period.
+  EXPECT_LE(static_cast<double>(descriptions), 2 + static_cast<double>(statuses_during) / 10.0);
+  EXPECT_GE(last.coalesced_requests, 1);
+  // The queue never held more than a few descriptions (each well under 64 KiB here).
+  EXPECT_LT(most_queued, 1 << 20);
+}
+
+DaemonOptions simulating() { return DaemonOptions().with("simulate", true).with("state_rate_hz", 100); }
+
+bool all_finite(const rdtf::joint_state_t& s) {
+  for (const auto* v : {&s.position, &s.velocity, &s.effort}) {
+    for (double x : *v) {
+      if (!std::isfinite(x)) return false;
+    }
+  }
+  return std::isfinite(s.sim_time);
+}
+
+TEST(HostileBus, HugeFiniteCommandsNeverStopTheSimulationNorPublishNonFiniteValues) {
+  Session s;
+  copy_fixture(s.watch, "arm3");
+  s.start(simulating());
+  const std::string hash = fixture_hash("arm3");
+  ASSERT_TRUE(s.wait_revision(kArm, 1, hash));
+  ASSERT_TRUE(s.wait_for([](const auto& all) { return last_state(all, 1).has_value(); }));
+  const std::vector<JointOrder> huge_torque{{"shoulder", rdtf::joint_command_t::TORQUE, 1e300},
+                                            {"elbow", rdtf::joint_command_t::TORQUE, -1e300}};
+  const std::vector<JointOrder> huge_position{{"shoulder", rdtf::joint_command_t::POSITION, 1e308, 1e308, 1e308},
+                                              {"elbow", rdtf::joint_command_t::POSITION, -1e308, 1e308, 0}};
+  for (const auto& orders : {huge_torque, huge_position}) {
+    const std::size_t from = s.messages().size();
+    s.subscriber.publish("RDTF/arm3.gltf/JOINT_COMMAND", make_command(kArm, 1, hash, orders));
+    // Two seconds of simulated time after the command.
+    const double t0 = last_state(s.messages(), 1)->sim_time;
+    ASSERT_TRUE(s.wait_for(
+        [&](const auto& all) {
+          const auto last = last_state(all, 1);
+          return last && last->sim_time > t0 + 2.0;
+        },
+        20s))
+        << "simulated time stopped";
+    const auto all = s.messages();
+    double previous = -1;
+    for (std::size_t i = from; i < all.size(); ++i) {
+      if (all[i].kind() == "JOINT_STATE") {
+        const auto state = all[i].as<rdtf::joint_state_t>();
+        EXPECT_TRUE(all_finite(state)) << "non-finite JOINT_STATE at t = " << state.sim_time;
+        EXPECT_GT(state.sim_time, previous);
+        previous = state.sim_time;
+        for (double e : state.effort) EXPECT_LE(std::abs(e), rdtf::kDefaultEffortLimit);
+      }
+      if (all[i].kind() == "LINK_STATE") {
+        const auto links = all[i].as<rdtf::link_state_t>();
+        for (const auto* rows : {&links.position, &links.linear_velocity, &links.angular_velocity}) {
+          for (const auto& row : *rows) {
+            for (double x : row) EXPECT_TRUE(std::isfinite(x));
+          }
+        }
+      }
+    }
+  }
+  // Whether ODE failed under the clamped effort or not, the daemon reported every failure it had
+  // and kept stepping: each failure is on ERROR, in the log and counted in STATUS.
+  const auto failures_on_error = [](const std::vector<Message>& all) {
+    std::int64_t failures = 0;
+    for (const auto& e : decoded<rdtf::model_error_t>(all, "ERROR", kArm)) {
+      failures += !e.diagnostics.empty() && e.diagnostics[0].code == "SIMULATION_FAILED";
+    }
+    return failures;
+  };
+  ASSERT_TRUE(s.wait_for([&](const auto& all) {
+    const auto st = statuses(all);
+    return !st.empty() && st.back().simulations_failed == failures_on_error(all);
+  })) << "STATUS counts " << statuses(s.messages()).back().simulations_failed << " failures, ERROR "
+      << failures_on_error(s.messages());
+  const std::int64_t failures = failures_on_error(s.messages());
+  std::printf("simulation failures reported: %lld\n", static_cast<long long>(failures));
+  EXPECT_EQ(count_lines(s.daemon->log(), "restarted from the rest pose") > 0, failures > 0);
+}
+
+TEST(HostileBus, LiveSimulationThatCannotKeepRealTimeSaysSo) {
+  Session s;
+  copy_fixture(s.watch, "arm3");
+  // 10,000 simulated seconds per wall second at 1 ms steps: ten million steps a second, which no
+  // machine steps arm3 at.
+  s.start(simulating().with("real_time_factor", 10000.0).with("state_rate_hz", 100));
+  ASSERT_TRUE(s.wait_revision(kArm, 1, fixture_hash("arm3")));
+  ASSERT_TRUE(s.wait_for(
+      [](const auto& all) {
+        const auto st = statuses(all);
+        return !st.empty() && st.back().simulations_behind == 1;
+      },
+      10s));
+  const auto st = statuses(s.messages()).back();
+  EXPECT_GT(st.live_real_time_factor, 0);
+  EXPECT_LT(st.live_real_time_factor, 0.9 * 10000);
+  EXPECT_TRUE(s.daemon->wait_log("live simulation of arm3.gltf is behind")) << s.daemon->log();
+}
+
+}  // namespace
+}  // namespace rdtf::itest

@@ -14,6 +14,7 @@
 #include <mujoco/mujoco.h>
 #include <urdf_parser/urdf_parser.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <map>
@@ -177,10 +178,10 @@ struct MujocoRun {
   double worst_energy_rise = 0;  // J: largest E(t) - E(0), E = kinetic + potential
 };
 
-// Passive motion dissipates (joint damping, friction loss, MuJoCo's soft limits and contacts): the
-// energy may not rise. MuJoCo's semi-implicit Euler at its default 2 ms step lets it oscillate
-// well below 1% of m g L on these robots (printed by the test); an unstable or impossible model
-// grows it by orders of magnitude. 5% of m g L separates the two with a wide margin both ways.
+// Passive motion dissipates (joint damping, friction loss, MuJoCo's soft limits): the energy may
+// not rise. MuJoCo's semi-implicit Euler at its default 2 ms step lets it rise by at most 0.51% of
+// m g L on these robots (the undamped UR5; printed by the test); an unstable model grows it by
+// orders of magnitude. 5% of m g L separates the two with a margin of 10 on the sound side.
 constexpr double kEnergyRiseBound = 0.05;
 
 struct MjModelDeleter {
@@ -218,7 +219,18 @@ inline MujocoRun run_in_mujoco(const std::filesystem::path& urdf, double seconds
   run.bodies = m->nbody;
   run.dofs = m->nv;
   m->opt.enableflags |= mjENBL_ENERGY;
+  // The tree's own dynamics, as rdtf's gate simulates it: no contacts (collision shapes that overlap
+  // at rest, e.g. a thigh's cylinder in the trunk's box, would push the bodies apart and add energy).
+  m->opt.disableflags |= mjDSBL_CONTACT;
   std::unique_ptr<mjData, MjDataDeleter> d(mj_makeData(m.get()));
+  // Start at rest inside every joint's range: a joint whose zero is outside it (the A1's calves,
+  // [-2.70, -0.92] rad) starts at the nearest limit, as rdtf does; started at zero, MuJoCo's soft
+  // limit would push it back with energy the test does not count.
+  for (int j = 0; j < m->njnt; ++j) {
+    if (!m->jnt_limited[j] || (m->jnt_type[j] != mjJNT_HINGE && m->jnt_type[j] != mjJNT_SLIDE)) continue;
+    mjtNum& q = d->qpos[m->jnt_qposadr[j]];
+    q = std::clamp(q, m->jnt_range[2 * j], m->jnt_range[2 * j + 1]);
+  }
   mj_forward(m.get(), d.get());
   const double e0 = d->energy[0] + d->energy[1];
   double total_mass = 0, reach = 0;

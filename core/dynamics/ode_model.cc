@@ -69,6 +69,8 @@ void check_mappable(const Robot& robot, const WeldGroups& welds, Diagnostics& di
     if (!link.X_SL.matrix().allFinite()) diag.error("ODE_INVALID_LINK", where, name + "pose is not finite");
     const WeldGroup& group = welds.groups[welds.group_of[l]];
     if (group.welded_to_world || is_massless(link)) continue;
+    // Mass 0 with an inertia, in a body with mass: its inertia only adds to the body's.
+    if (link.inertial.mass == 0 && group.merged.mass > 0 && link.inertial.inertia.allFinite()) continue;
     const MassProperties& inertial = link.inertial;
     if (!std::isfinite(inertial.mass) || !inertial.inertia.allFinite() ||
         !inertial.center_of_mass.allFinite()) {
@@ -200,21 +202,19 @@ void add_bodies(Simulation::Model& model, const WeldGroups& welds, const std::ve
 }
 
 // ODE measures a hinge's angle in (-pi, pi] and its stops act only inside that window. A range
-// narrower than 2 pi is moved to the window's middle: the hinge then reads q - c, c the range's
-// centre (dJointSetHingeAxisOffset at the rest pose, q = 0), and its stops are the range's ends
-// minus c, both inside (-pi, pi). A range of 2 pi or more (+-pi exactly, +-2 pi) cannot be a
-// window of the wrapped angle: a one-axis angular motor in user mode carries the stops instead,
-// on the unwrapped position that Simulation::step hands it before every step (ODE tests the stops
-// of both the same way: against the position at the start of the step).
+// inside it uses the hinge's own stops. Any other range (beyond pi on one side, +-pi exactly,
+// +-2 pi) is no window of the wrapped angle: a one-axis angular motor in user mode carries the
+// stops instead, on the unwrapped position that Simulation::step hands it before every step (ODE
+// tests the stops of both the same way: against the position at the start of the step). Moving
+// the hinge's window with dJointSetHingeAxisOffset instead is wrong in ODE 0.16 when the child
+// body is turned in the world: it composes the world axis with a rotation kept in body axes
+// (measured: an offset of 0.23 read 1.70, and turning the body by 0.1 rad changed it by 0.035).
 void add_hinge_limits(Simulation::Model& model, JointModel& jm, dBodyID child, dBodyID parent,
                       const Eigen::Vector3d& axis) {
   jm.stops = true;
-  if (jm.upper - jm.lower < 2 * std::numbers::pi) {
-    jm.window_offset = 0.5 * (jm.lower + jm.upper);
-    // ODE reads -a after an offset a (measured: an offset of 0.23 reads -0.23).
-    if (jm.window_offset != 0) dJointSetHingeAxisOffset(jm.id, axis.x(), axis.y(), axis.z(), jm.window_offset);
-    dJointSetHingeParam(jm.id, dParamLoStop, jm.lower - jm.window_offset);
-    dJointSetHingeParam(jm.id, dParamHiStop, jm.upper - jm.window_offset);
+  if (jm.lower > -std::numbers::pi && jm.upper < std::numbers::pi) {
+    dJointSetHingeParam(jm.id, dParamLoStop, jm.lower);
+    dJointSetHingeParam(jm.id, dParamHiStop, jm.upper);
     dJointSetFeedback(jm.id, &jm.feedback);
     return;
   }

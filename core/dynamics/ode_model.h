@@ -110,11 +110,9 @@ struct JointModel {
   JointKind kind = JointKind::kFixed;
   dJointID id = nullptr;  // Nothing for a floating joint or one inside a body (massless link)
   dJointID friction_motor = nullptr;
-  // A hinge range of 2 pi or more: a user-mode angular motor whose stops act on the unwrapped
-  // position (set before every step). Narrower ranges use the hinge's own stops, its measured
-  // window moved by window_offset (ODE's angle reads q - window_offset).
+  // A hinge range not inside (-pi, pi): a user-mode angular motor whose stops act on the
+  // unwrapped position (set before every step). Ranges inside it use the hinge's own stops.
   dJointID limit_motor = nullptr;
-  double window_offset = 0;
   int child_body = -1;
   int parent_body = kWorld;
   // The joint frame's origin on each side (child body, parent body or world), and the axis.

@@ -68,6 +68,10 @@ void check_mass(const Robot& robot, std::size_t l, const WeldGroups& welds, cons
       // Welded to the world it never moves: neither its mass nor its inertia is used.
       diag.warning("LINK_MASSLESS_WITH_INERTIA", where(link),
                    message + "; it is welded to the world and never moves, so its inertia is not used");
+    } else if (group.merged.mass > 0) {
+      diag.warning("LINK_MASSLESS_WITH_INERTIA", where(link),
+                   message + "; it is welded (fixed joints) into the body of " + body_text(robot, group) +
+                       ", whose inertia it adds to (as MuJoCo's fusestatic does)");
     } else {
       diag.error("LINK_MASSLESS_WITH_INERTIA", where(link), message);
     }

@@ -144,9 +144,12 @@ WeldGroups weld_groups(const Robot& robot, const std::vector<int>& order,
     if (mass > 0) {
       const Eigen::Vector3d p_ToBcm_T = moment / mass;
       Eigen::Matrix3d I_Bcm_T = Eigen::Matrix3d::Zero();
+      // A link of mass 0 with an inertia (pybullet's Panda hangs 0 kg, 0.1 kg m^2 frames on its
+      // flange) adds its inertia alone, as MuJoCo's fusestatic adds it: it has no centre of mass
+      // to carry.
       for (int l : group.links) {
         const MassProperties& in = robot.links[l].inertial;
-        if (!(in.mass > 0) || !std::isfinite(in.mass) || !in.center_of_mass.allFinite() || !in.inertia.allFinite()) {
+        if (!(in.mass >= 0) || !std::isfinite(in.mass) || !in.center_of_mass.allFinite() || !in.inertia.allFinite()) {
           continue;
         }
         const Eigen::Isometry3d X_TL = X_TS * rest[l];

@@ -19,8 +19,7 @@ using rdtf::Robot;
 constexpr double kStartAngle = 0.3;  // rad on every joint: the runs start off equilibrium.
 
 // 100 links as real descriptions have them: a 25-link tree of moving boxes, each with three
-// links on fixed joints (a 10 g IMU box, a camera frame of 1e-5 kg and zero inertia, a massless
-// optical frame). Kept as separate ODE bodies they are 100 bodies (QuickStep); merged, 24 moving
+// links on fixed joints (a 10 g IMU box, a camera frame of 1e-5 kg, a massless optical frame). Kept as separate ODE bodies they are 100 bodies (QuickStep); merged, 24 moving
 // ones (dWorldStep) and the root's group, which the world holds.
 Robot sensor_tree() {
   Robot robot = rdtf::bench::tree_robot(25);
@@ -50,8 +49,9 @@ Robot sensor_tree() {
     imu.mass = 0.01;
     imu.inertia = (0.01 * 0.02 * 0.02 / 6) * Eigen::Matrix3d::Identity();  // a 2 cm cube
     add(l, base + "_imu", {0.01, -0.05, 0}, imu);
-    rdtf::MassProperties camera;
+    rdtf::MassProperties camera;  // a 1e-5 kg speck of about 1 mm
     camera.mass = 1e-5;
+    camera.inertia = 1e-11 * Eigen::Matrix3d::Identity();
     add(l, base + "_camera", {0, -0.1, 0.01}, camera);
     add(static_cast<int>(robot.links.size()) - 1, base + "_camera_optical", {0, 0, 0.005}, rdtf::MassProperties{});
   }

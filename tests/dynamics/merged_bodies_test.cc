@@ -206,6 +206,38 @@ TEST(MergedBodies, MasslessRootWithInertiaWeldedToTheWorldIsAWarning) {
   EXPECT_EQ(error[0].severity, Severity::kError);
 }
 
+// pybullet's Panda hangs frames of 0 kg with an inertia of 0.1 kg m^2 on its flange: welded into a
+// body with mass, such a link adds its inertia (a warning), as MuJoCo's fusestatic does, and the
+// chain moves as the one with that inertia added to the arm's by hand.
+TEST(MergedBodies, MasslessLinkWithInertiaAddsItsInertiaToItsBody) {
+  Robot welded = chain_with_sensor();
+  welded.links[2].inertial.mass = 0;
+  welded.links[2].inertial.center_of_mass.setZero();
+  const Eigen::Matrix3d I_sensor = Eigen::Vector3d(0.01, 0.02, 0.015).asDiagonal();
+  welded.links[2].inertial.inertia = I_sensor;
+  Robot by_hand = chain_with_sensor();
+  by_hand.links[2].inertial = MassProperties{};
+  const Eigen::Matrix3d R_AS = arm_to_sensor().linear();
+  by_hand.links[1].inertial.inertia += R_AS * I_sensor * R_AS.transpose();
+  const ValidationReport report = validate_dynamics(welded, ValidationOptions{});
+  EXPECT_TRUE(report.passed) << all_text(report.diagnostics);
+  const auto massless = with_code(report.diagnostics, "LINK_MASSLESS_WITH_INERTIA");
+  ASSERT_EQ(massless.size(), 1u) << all_text(report.diagnostics);
+  EXPECT_EQ(massless[0].severity, Severity::kWarning);
+  EXPECT_NE(massless[0].message.find("into the body of link 'arm'"), std::string::npos) << massless[0].message;
+  const std::map<std::string, double> start{{"shoulder", 1.1}, {"wrist", -0.6}};
+  Diagnostics diag;
+  auto a = Simulation::create(welded, {}, start, diag);
+  auto b = Simulation::create(by_hand, {}, start, diag);
+  ASSERT_TRUE(a && b) << all_text(diag);
+  for (int step = 0; step < 1000; ++step) {
+    a->step();
+    b->step();
+    ASSERT_NEAR(a->joint_state("shoulder")->position, b->joint_state("shoulder")->position, 1e-9) << step;
+    ASSERT_NEAR(a->joint_state("wrist")->position, b->joint_state("wrist")->position, 1e-9) << step;
+  }
+}
+
 // A massless link on a hinge: an error that names the options that simulate it; with a bound
 // mass and inertia it is simulated and passes with a warning (or fails, if asked to).
 TEST(MergedBodies, MasslessMovingLinkAndTheBoundMass) {

@@ -75,8 +75,8 @@ const std::vector<std::string>& config_keys() {
       "max_accessor_count", "max_triangles", "validate", "validation_seconds", "publish_failed",
       "simulate", "state_rate_hz", "real_time_factor", "floating_root", "gravity", "time_step",
       "stepper", "max_mass_ratio", "validation_start_offset_rad", "energy_tolerance",
-      "joint_separation_tolerance_m", "limit_tolerance_rad", "limit_tolerance_m", "urdf",
-      "urdf_y_up"};
+      "joint_separation_tolerance_m", "limit_tolerance_rad", "limit_tolerance_m", "bound_mass_kg",
+      "bound_inertia_kgm2", "massless_link_severity", "validation_cpu_budget_s", "urdf", "urdf_y_up"};
   return keys;
 }
 
@@ -153,8 +153,20 @@ std::optional<DaemonConfig> apply_config_json(const nlohmann::json& json, const 
             read_key(json, "joint_separation_tolerance_m", config.joint_separation_tolerance_m, error) &&
             read_key(json, "limit_tolerance_rad", config.limit_tolerance_rad, error) &&
             read_key(json, "limit_tolerance_m", config.limit_tolerance_m, error) &&
+            read_key(json, "bound_mass_kg", config.bound_mass_kg, error) &&
+            read_key(json, "bound_inertia_kgm2", config.bound_inertia_kgm2, error) &&
+            read_key(json, "validation_cpu_budget_s", config.validation_cpu_budget_s, error) &&
             read_key(json, "urdf", config.urdf, error) &&
             read_key(json, "urdf_y_up", config.urdf_y_up, error);
+  if (ok && json.contains("massless_link_severity")) {
+    std::string severity;
+    ok = read_key(json, "massless_link_severity", severity, error);
+    if (ok && severity != "warning" && severity != "error") {
+      error = "\"massless_link_severity\" must be \"warning\" or \"error\"";
+      ok = false;
+    }
+    if (ok) config.massless_link_error = severity == "error";
+  }
   if (ok && json.contains("gravity")) {
     std::vector<double> gravity;
     ok = read_key(json, "gravity", gravity, error);
@@ -215,9 +227,13 @@ bool check_config(DaemonConfig& config, std::string& error) {
   if (!positive(config.time_step) || config.time_step > 0.1 || !(config.max_mass_ratio >= 1) ||
       !positive(config.energy_tolerance) || !positive(config.joint_separation_tolerance_m) ||
       !positive(config.limit_tolerance_rad) || !positive(config.limit_tolerance_m) ||
-      !std::isfinite(config.validation_start_offset_rad) || !config.gravity.allFinite()) {
+      !std::isfinite(config.validation_start_offset_rad) || !config.gravity.allFinite() ||
+      !(config.bound_mass_kg >= 0) || !std::isfinite(config.bound_mass_kg) || !(config.bound_inertia_kgm2 >= 0) ||
+      !std::isfinite(config.bound_inertia_kgm2) || !(config.validation_cpu_budget_s >= 0) ||
+      !std::isfinite(config.validation_cpu_budget_s)) {
     error = "time_step must be in (0, 0.1] s, max_mass_ratio >= 1, the tolerances finite and > 0, "
-            "validation_start_offset_rad and gravity finite";
+            "validation_start_offset_rad and gravity finite, bound_mass_kg, bound_inertia_kgm2 and "
+            "validation_cpu_budget_s finite and >= 0";
     return false;
   }
   for (const auto& folder : config.watch) {
@@ -257,6 +273,8 @@ SimulationOptions simulation_options(const DaemonConfig& config) {
   simulation.floating_root = config.floating_root;
   simulation.time_step = config.time_step;
   simulation.stepper = config.stepper;
+  simulation.bound_mass = config.bound_mass_kg;
+  simulation.bound_inertia = config.bound_inertia_kgm2;
   return simulation;
 }
 
@@ -270,6 +288,8 @@ ValidationOptions validation_options(const DaemonConfig& config) {
   validation.joint_separation_tolerance = config.joint_separation_tolerance_m;
   validation.limit_tolerance_angular = config.limit_tolerance_rad;
   validation.limit_tolerance_linear = config.limit_tolerance_m;
+  validation.checks.massless_link_error = config.massless_link_error;
+  validation.cpu_budget = config.validation_cpu_budget_s;
   return validation;
 }
 

@@ -49,6 +49,12 @@ struct DaemonConfig {
   double joint_separation_tolerance_m = 1e-3;
   double limit_tolerance_rad = 1e-2;
   double limit_tolerance_m = 1e-3;
+  // A moving body without mass is simulated with this mass and inertia when both are > 0 (MuJoCo's
+  // boundmass/boundinertia); off (0) by default, when such a link fails the check.
+  double bound_mass_kg = 0;
+  double bound_inertia_kgm2 = 0;
+  bool massless_link_error = false;       // "massless_link_severity": "warning" (default) or "error"
+  double validation_cpu_budget_s = 30;    // CPU seconds one check may take (0: no limit).
 
   // URDF beside each RDTF output (docs/urdf.md), and its text in the description.
   bool urdf = true;

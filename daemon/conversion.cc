@@ -158,6 +158,11 @@ ConversionOutcome run_conversion(const ConversionJob& job) {
   std::optional<ValidationSummary> validation;
   if (job.validation) {
     ValidationReport report = validate_dynamics(*conversion, *job.validation, job.source.string());
+    if (report.cancelled) {
+      outcome.cancelled = true;
+      outcome.diagnostics.append(report.diagnostics);
+      return finish();
+    }
     ValidationSummary summary;
     summary.passed = report.passed;
     summary.simulated_time = report.simulated_time;

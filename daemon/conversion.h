@@ -71,6 +71,8 @@ struct ConversionOutcome {
   // The failure was the environment's, not the model's (an output could not be written: disk
   // full, read-only folder): the daemon tries the same content again after a back-off.
   bool retry = false;
+  // The dynamics check was cancelled (the daemon is stopping): nothing was written or judged.
+  bool cancelled = false;
 };
 
 ConversionOutcome run_conversion(const ConversionJob& job);

@@ -99,14 +99,15 @@ auto conversion_settings(const DaemonConfig& c) {
                          c.publish_failed, c.floating_root, c.gravity.x(), c.gravity.y(), c.gravity.z(),
                          c.time_step, static_cast<int>(c.stepper), c.max_mass_ratio,
                          c.validation_start_offset_rad, c.energy_tolerance, c.joint_separation_tolerance_m,
-                         c.limit_tolerance_rad, c.limit_tolerance_m, c.urdf, c.urdf_y_up);
+                         c.limit_tolerance_rad, c.limit_tolerance_m, c.bound_mass_kg, c.bound_inertia_kgm2,
+                         c.massless_link_error, c.validation_cpu_budget_s, c.urdf, c.urdf_y_up);
 }
 
 // What the live simulations depend on: a reload that changes none of these keeps them running.
 auto simulation_settings(const DaemonConfig& c) {
   return std::make_tuple(c.simulate, c.state_rate_hz, c.real_time_factor, c.floating_root, c.gravity.x(),
                          c.gravity.y(), c.gravity.z(), c.time_step, static_cast<int>(c.stepper), c.lcm_url,
-                         c.channel_prefix);
+                         c.channel_prefix, c.bound_mass_kg, c.bound_inertia_kgm2);
 }
 
 // A conversion again of the content served (after a reload) whose result is the served one.
@@ -149,6 +150,7 @@ Daemon::Daemon(DaemonConfig config, ConfigLoader reload)
       request_throttle_(kRequestAnswerPeriod) {}
 
 Daemon::~Daemon() {
+  cancel_validations_ = true;
   {
     std::lock_guard lock(mutex_);
     workers_stop_ = true;
@@ -482,6 +484,7 @@ void Daemon::dispatch_due() {
     job.write_failed = config_.publish_failed;
     if (config_.validate) {
       job.validation = validation_options(config_);
+      job.validation->cancel = &cancel_validations_;
     }
     if (config_.urdf) {
       UrdfOptions urdf;
@@ -840,7 +843,10 @@ void Daemon::step(std::chrono::milliseconds max_wait) {
 int Daemon::run() {
   while (!stop_) step(std::chrono::milliseconds(1000));
   // Let conversions in flight finish: their outputs are written atomically, so nothing is
-  // half-done either way, and waiting keeps the registry consistent with the output folder.
+  // half-done either way, and waiting keeps the registry consistent with the output folder. A
+  // dynamics check in progress is cancelled (it writes nothing before its verdict), and its
+  // revision, never judged, is dropped.
+  cancel_validations_ = true;
   {
     std::lock_guard lock(mutex_);
     jobs_.clear();
@@ -849,6 +855,10 @@ int Daemon::run() {
   work_ready_.notify_all();
   for (auto& worker : workers_) worker.join();
   workers_.clear();
+  {
+    std::lock_guard lock(mutex_);
+    std::erase_if(outcomes_, [](const ConversionOutcome& outcome) { return outcome.cancelled; });
+  }
   handle_outcomes();
   const auto flush_until = Clock::now() + std::chrono::seconds(2);
   while (publisher_->queued() > 0 && Clock::now() < flush_until) {

@@ -122,6 +122,8 @@ class Daemon {
   std::deque<ConversionJob> jobs_;
   std::deque<ConversionOutcome> outcomes_;
   bool workers_stop_ = false;
+  // Set on shutdown: a dynamics check in progress stops (SIM_CANCELLED) instead of being waited for.
+  std::atomic<bool> cancel_validations_{false};
   std::vector<std::thread> workers_;
 };
 

@@ -13,6 +13,7 @@ struct ValidateArguments {
   ValidationOptions validation;
   std::string input;
   std::vector<double> gravity;
+  std::string massless_links = "warning";
   bool json = false;
   bool verbose = false;
 };
@@ -21,6 +22,7 @@ int run_validate(ValidateArguments& args) {
   Diagnostics diag(args.input);
   const auto conversion = convert_or_report(args.input, args.options, diag);
   if (!conversion) return kExitInvalidInput;
+  args.validation.checks.massless_link_error = args.massless_links == "error";
   if (!args.gravity.empty()) {
     args.validation.simulation.gravity = {args.gravity[0], args.gravity[1], args.gravity[2]};
   }
@@ -70,6 +72,24 @@ void add_validate_command(CLI::App& app, int& exit_code) {
   command->add_option("--max-mass-ratio", args->validation.checks.max_mass_ratio,
                       "Largest mass ratio across a joint")
       ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  command->add_option("--bound-mass", args->validation.simulation.bound_mass,
+                      "Mass (kg) given to a moving body without mass, with --bound-inertia "
+                      "(MuJoCo's boundmass); 0: off, such a link fails")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  command->add_option("--bound-inertia", args->validation.simulation.bound_inertia,
+                      "Inertia (kg m^2 about each axis) given to a moving body without mass, with "
+                      "--bound-mass (MuJoCo's boundinertia); 0: off")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  command->add_option("--massless-links", args->massless_links,
+                      "With a bound mass, a massless moving link is a warning or still an error")
+      ->check(CLI::IsMember({"warning", "error"}))
+      ->capture_default_str();
+  command->add_option("--cpu-budget", args->validation.cpu_budget,
+                      "CPU seconds the check may take; beyond, it fails with SIM_BUDGET_EXCEEDED (0: no limit)")
+      ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   command->add_flag("-v,--verbose", args->verbose, "Also print info diagnostics");
   add_conversion_options(*command, args->options);

@@ -44,35 +44,62 @@ void set_body_pose(dBodyID body, const Eigen::Isometry3d& X_SB) {
   dBodySetQuaternion(body, quaternion);
 }
 
-// Errors for what ODE cannot take: the model is refused when there is one.
-void check_mappable(const Robot& robot, const std::vector<int>& carrier, Diagnostics& diag) {
+std::string mass_text(const MassProperties& in) {
+  const Eigen::Matrix3d& I = in.inertia;
+  return "mass " + number(in.mass) + " kg with inertia [" + number(I(0, 0)) + ", " + number(I(0, 1)) + ", " +
+         number(I(0, 2)) + ", " + number(I(1, 1)) + ", " + number(I(1, 2)) + ", " + number(I(2, 2)) + "] kg m^2";
+}
+
+bool mass_checks(const MassProperties& in) {
+  const Eigen::Matrix3d& I = in.inertia;
+  dMass mass;
+  dMassSetParameters(&mass, in.mass, 0, 0, 0, I(0, 0), I(1, 1), I(2, 2), I(0, 1), I(0, 2), I(1, 2));
+  return dMassCheck(&mass) != 0;
+}
+
+// Errors for what ODE cannot take: the model is refused when there is one. Links welded to the
+// world never move: their mass is not used. In a moving group every link with mass must be one
+// ODE accepts, except a point mass (zero inertia) welded to other links, which only adds to the
+// group's inertia; and the group's combined mass must be one too.
+void check_mappable(const Robot& robot, const WeldGroups& welds, Diagnostics& diag) {
   for (std::size_t l = 0; l < robot.links.size(); ++l) {
     const Link& link = robot.links[l];
     const std::string where = node_pointer(link.node);
     const std::string name = "link '" + link.name + "': ";
     if (!link.X_SL.matrix().allFinite()) diag.error("ODE_INVALID_LINK", where, name + "pose is not finite");
-    if (carrier[l] == kUnresolved) {
-      diag.error("ODE_MASSLESS_LINK", where,
-                 name + "has no mass and is not fixed to a link with mass or to the world: ODE "
-                        "cannot move a body without mass");
-      continue;
-    }
-    if (carrier[l] != static_cast<int>(l)) continue;
+    const WeldGroup& group = welds.groups[welds.group_of[l]];
+    if (group.welded_to_world || is_massless(link)) continue;
+    // Mass 0 with an inertia, in a body with mass: its inertia only adds to the body's.
+    if (link.inertial.mass == 0 && group.merged.mass > 0 && link.inertial.inertia.allFinite()) continue;
     const MassProperties& inertial = link.inertial;
     if (!std::isfinite(inertial.mass) || !inertial.inertia.allFinite() ||
         !inertial.center_of_mass.allFinite()) {
       diag.error("ODE_MASS_CHECK_FAILED", where, name + "mass, inertia or centre of mass is not finite");
       continue;
     }
-    const Eigen::Matrix3d& I = inertial.inertia;
-    dMass mass;
-    dMassSetParameters(&mass, inertial.mass, 0, 0, 0, I(0, 0), I(1, 1), I(2, 2), I(0, 1), I(0, 2), I(1, 2));
-    if (!dMassCheck(&mass)) {
+    const bool point_mass = inertial.mass > 0 && inertial.inertia.isZero(0) && group.links.size() > 1;
+    if (!point_mass && !mass_checks(inertial)) {
       diag.error("ODE_MASS_CHECK_FAILED", where,
-                 name + "dMassCheck refuses mass " + number(inertial.mass) + " kg with inertia [" +
-                     number(I(0, 0)) + ", " + number(I(0, 1)) + ", " + number(I(0, 2)) + ", " +
-                     number(I(1, 1)) + ", " + number(I(1, 2)) + ", " + number(I(2, 2)) +
-                     "] kg m^2 (mass must be positive, inertia positive definite)");
+                 name + "dMassCheck refuses " + mass_text(inertial) +
+                     " (mass must be positive, inertia positive definite)");
+    }
+  }
+  for (const WeldGroup& group : welds.groups) {
+    if (group.welded_to_world) continue;
+    const Link& top = robot.links[group.top];
+    if (group.merged.mass == 0) {
+      for (int l : group.links) {
+        diag.error("ODE_MASSLESS_LINK", node_pointer(robot.links[l].node),
+                   "link '" + robot.links[l].name +
+                       "': has no mass and is not fixed to a link with mass or to the world: ODE "
+                       "cannot move a body without mass (a bound mass and inertia simulate it: "
+                       "rdtf validate --bound-mass KG --bound-inertia KGM2, rdtfd bound_mass_kg and "
+                       "bound_inertia_kgm2)");
+      }
+    } else if (group.links.size() > 1 && !mass_checks(group.merged)) {
+      diag.error("ODE_MASS_CHECK_FAILED", node_pointer(top.node),
+                 "link '" + top.name + "' and the " + std::to_string(group.links.size() - 1) +
+                     " links fixed to it: dMassCheck refuses their combined " + mass_text(group.merged));
     }
   }
   for (const Joint& joint : robot.joints) {
@@ -87,10 +114,11 @@ void check_mappable(const Robot& robot, const std::vector<int>& carrier, Diagnos
       diag.error("ODE_INVALID_JOINT", where, name + "axis " + vector_text(joint.axis) + " has no direction");
     }
     if (joint.limits && (joint.kind == JointKind::kRevolute || joint.kind == JointKind::kPrismatic) &&
-        !(joint.limits->lower <= joint.limits->upper)) {
+        !(joint.limits->lower <= joint.limits->upper && std::isfinite(joint.limits->lower) &&
+          std::isfinite(joint.limits->upper))) {
       diag.error("ODE_INVALID_JOINT", where,
                  name + "limits [" + number(joint.limits->lower) + ", " + number(joint.limits->upper) +
-                     "] are not an interval");
+                     "] are not a finite interval");
     }
     for (double value : {joint.damping, joint.friction, joint.spring_stiffness}) {
       if (!(value >= 0) || !std::isfinite(value)) {
@@ -136,37 +164,69 @@ std::vector<double> start_positions(const Robot& robot, const std::map<std::stri
   return q;
 }
 
-void add_bodies(Simulation::Model& model, const std::vector<int>& carrier, const std::vector<int>& order,
+// One ODE body per moving weld group: its origin at the group's centre of mass and its axes
+// those of the group's top link T, X_SB = X_ST * translation(p_ToBcm_T). Every link keeps X_BL,
+// its pose in its body (in the world, for a group the world holds).
+void add_bodies(Simulation::Model& model, const WeldGroups& welds, const std::vector<int>& order,
                 const std::vector<Eigen::Isometry3d>& rest) {
   const Robot& robot = model.robot;
   const std::vector<double> reach = reach_bounds(robot, order);
   const std::vector<int> root = root_of(robot, order);
-  std::vector<int> body_of(robot.links.size(), kWorld);
-  for (std::size_t l = 0; l < robot.links.size(); ++l) {
-    if (carrier[l] != static_cast<int>(l)) continue;
-    const MassProperties& inertial = robot.links[l].inertial;
+  std::vector<int> body_of_group(welds.groups.size(), kWorld);
+  for (std::size_t g = 0; g < welds.groups.size(); ++g) {
+    const WeldGroup& group = welds.groups[g];
+    if (!moves(group)) continue;
     BodyModel body;
-    body.link = static_cast<int>(l);
-    body.mass = inertial.mass;
-    body.inertia = 0.5 * (inertial.inertia + inertial.inertia.transpose());
-    body.com_L = inertial.center_of_mass;
-    body.reach = reach[l] + body.com_L.norm();
-    body.root_link = root[l];
+    body.link = group.top;
+    body.links = static_cast<int>(group.links.size());
+    body.mass = group.merged.mass;
+    body.inertia = group.merged.inertia;
+    body.com_L = group.merged.center_of_mass;
+    body.reach = reach[group.top] + body.com_L.norm();
+    body.root_link = root[group.top];
     body.id = dBodyCreate(model.world);
     const Eigen::Matrix3d& I = body.inertia;
     dMass mass;
     dMassSetParameters(&mass, body.mass, 0, 0, 0, I(0, 0), I(1, 1), I(2, 2), I(0, 1), I(0, 2), I(1, 2));
     dBodySetMass(body.id, &mass);
-    set_body_pose(body.id, rest[l] * Eigen::Translation3d(body.com_L));
-    body_of[l] = static_cast<int>(model.bodies.size());
+    set_body_pose(body.id, rest[group.top] * Eigen::Translation3d(body.com_L));
+    body_of_group[g] = static_cast<int>(model.bodies.size());
     model.bodies.push_back(body);
   }
   model.links.resize(robot.links.size());
   for (std::size_t l = 0; l < robot.links.size(); ++l) {
     LinkModel& link = model.links[l];
-    link.body = carrier[l] == kWorld ? kWorld : body_of[carrier[l]];
+    link.body = body_of_group[welds.group_of[l]];
     link.X_BL = link.body == kWorld ? rest[l] : body_pose(model.bodies[link.body].id).inverse() * rest[l];
   }
+}
+
+// ODE measures a hinge's angle in (-pi, pi] and its stops act only inside that window. A range
+// inside it uses the hinge's own stops. Any other range (beyond pi on one side, +-pi exactly,
+// +-2 pi) is no window of the wrapped angle: a one-axis angular motor in user mode carries the
+// stops instead, on the unwrapped position that Simulation::step hands it before every step (ODE
+// tests the stops of both the same way: against the position at the start of the step). Moving
+// the hinge's window with dJointSetHingeAxisOffset instead is wrong in ODE 0.16 when the child
+// body is turned in the world: it composes the world axis with a rotation kept in body axes
+// (measured: an offset of 0.23 read 1.70, and turning the body by 0.1 rad changed it by 0.035).
+void add_hinge_limits(Simulation::Model& model, JointModel& jm, dBodyID child, dBodyID parent,
+                      const Eigen::Vector3d& axis) {
+  jm.stops = true;
+  if (jm.lower > -std::numbers::pi && jm.upper < std::numbers::pi) {
+    dJointSetHingeParam(jm.id, dParamLoStop, jm.lower);
+    dJointSetHingeParam(jm.id, dParamHiStop, jm.upper);
+    dJointSetFeedback(jm.id, &jm.feedback);
+    return;
+  }
+  jm.limit_motor = dJointCreateAMotor(model.world, nullptr);
+  dJointAttach(jm.limit_motor, child, parent);
+  dJointSetAMotorMode(jm.limit_motor, dAMotorUser);
+  dJointSetAMotorNumAxes(jm.limit_motor, 1);
+  dJointSetAMotorAxis(jm.limit_motor, 0, 1, axis.x(), axis.y(), axis.z());  // fixed in the child
+  dJointSetAMotorParam(jm.limit_motor, dParamLoStop, jm.lower);
+  dJointSetAMotorParam(jm.limit_motor, dParamHiStop, jm.upper);
+  dJointSetAMotorAngle(jm.limit_motor, 0, 0.0);
+  dJointSetFeedback(jm.limit_motor, &jm.feedback);
 }
 
 void add_joint(Simulation::Model& model, int j, const Eigen::Isometry3d& X_SJ, Diagnostics& diag) {
@@ -197,12 +257,8 @@ void add_joint(Simulation::Model& model, int j, const Eigen::Isometry3d& X_SJ, D
     if (joint.friction > 0) ignored("friction");
     if (joint.spring_stiffness > 0) ignored("spring stiffness");
   }
-  // A fixed joint inside one body (a massless link riding on the body it is fixed to, or two
-  // massless links the world carries) is no constraint. Deciding by the massless side alone left a
-  // body whose massless parent is a root (Khronos RiggedSimple) unheld: it fell.
-  if (joint.kind == JointKind::kFloating || (joint.kind == JointKind::kFixed && jm.child_body == jm.parent_body)) {
-    return;
-  }
+  // A fixed joint is inside one body (its weld group) or inside the world: no constraint.
+  if (joint.kind == JointKind::kFloating || joint.kind == JointKind::kFixed) return;
 
   dBodyID child = model.bodies[jm.child_body].id;
   dBodyID parent = body_id(model, jm.parent_body);
@@ -220,15 +276,7 @@ void add_joint(Simulation::Model& model, int j, const Eigen::Isometry3d& X_SJ, D
       dJointAttach(jm.id, child, parent);  // child first: the angle is the child's about the axis
       dJointSetHingeAnchor(jm.id, p.x(), p.y(), p.z());
       dJointSetHingeAxis(jm.id, axis.x(), axis.y(), axis.z());
-      if (jm.limited && jm.lower > -std::numbers::pi && jm.upper < std::numbers::pi) {
-        dJointSetHingeParam(jm.id, dParamLoStop, jm.lower);
-        dJointSetHingeParam(jm.id, dParamHiStop, jm.upper);
-        jm.stops = true;
-      } else if (jm.limited) {
-        diag.warning("ODE_LIMIT_NOT_ENFORCED", where,
-                     name + "ODE enforces hinge limits inside (-pi, pi) only; [" + number(jm.lower) +
-                         ", " + number(jm.upper) + "] is watched (validation) but not enforced");
-      }
+      if (jm.limited) add_hinge_limits(model, jm, child, parent, axis);
       break;
     case JointKind::kPrismatic:
       jm.id = dJointCreateSlider(model.world, nullptr);
@@ -237,6 +285,7 @@ void add_joint(Simulation::Model& model, int j, const Eigen::Isometry3d& X_SJ, D
       if (jm.limited) {
         dJointSetSliderParam(jm.id, dParamLoStop, jm.lower);
         dJointSetSliderParam(jm.id, dParamHiStop, jm.upper);
+        dJointSetFeedback(jm.id, &jm.feedback);
         jm.stops = true;
       }
       break;
@@ -328,9 +377,13 @@ std::unique_ptr<Simulation::Model> build_model(const Robot& robot, const Simulat
     diag.error("SIM_INVALID_OPTIONS", "", "gravity must be finite and the time step positive");
     return nullptr;
   }
-  const std::vector<int> carrier = carriers(robot, options.floating_root);
+  const std::vector<int> order = tree_order(robot);
+  const std::vector<Eigen::Isometry3d> rest =
+      forward_kinematics(robot, order, std::vector<double>(robot.joints.size(), 0.0));
+  const WeldGroups welds =
+      weld_groups(robot, order, rest, options.floating_root, options.bound_mass, options.bound_inertia);
   const std::size_t errors = diag.error_count();
-  check_mappable(robot, carrier, diag);
+  check_mappable(robot, welds, diag);
   if (diag.error_count() > errors) return nullptr;
 
   auto model = std::make_unique<Simulation::Model>();
@@ -347,25 +400,16 @@ std::unique_ptr<Simulation::Model> build_model(const Robot& robot, const Simulat
   dWorldSetQuickStepW(model->world, options.quickstep_sor);
   dWorldSetAutoDisableFlag(model->world, 0);
 
-  const std::vector<int> order = tree_order(robot);
   const std::vector<double> q = start_positions(robot, initial, diag);
-  const std::vector<Eigen::Isometry3d> rest =
-      forward_kinematics(robot, order, std::vector<double>(robot.joints.size(), 0.0));
-  add_bodies(*model, carrier, order, rest);
+  add_bodies(*model, welds, order, rest);
   model->joints.resize(robot.joints.size());
   for (std::size_t j = 0; j < robot.joints.size(); ++j) {
     add_joint(*model, static_cast<int>(j), rest[robot.joints[j].child_link], diag);
   }
   for (std::size_t l = 0; l < robot.links.size(); ++l) {
     if (robot.links[l].parent_joint >= 0) continue;
+    // A root held by the world is in a group the world carries (no body); a floating one is free.
     model->root_links.push_back(static_cast<int>(l));
-    // A root is held by the world unless the roots float: through the body that carries it (its
-    // own, or that of the nearest link with mass it is fixed to); a root the world carries is.
-    if (!options.floating_root && carrier[l] >= 0) {
-      dJointID hold = dJointCreateFixed(model->world, nullptr);
-      dJointAttach(hold, model->bodies[model->links[l].body].id, nullptr);
-      dJointSetFixed(hold);
-    }
   }
   // Joints hold their rest pose as zero; now move the bodies to the start positions.
   const std::vector<Eigen::Isometry3d> start = forward_kinematics(robot, order, q);
@@ -378,7 +422,9 @@ std::unique_ptr<Simulation::Model> build_model(const Robot& robot, const Simulat
   prime_joint_states(*model);
   read_frames(*model);
   for (std::size_t j = 0; j < robot.joints.size(); ++j) {
-    if (model->joints[j].dof && model->joints[j].kind != JointKind::kPrismatic) model->joints[j].q = q[j];
+    JointModel& jm = model->joints[j];
+    if (jm.dof && jm.kind != JointKind::kPrismatic) jm.q = q[j];
+    if (jm.limit_motor) dJointSetAMotorAngle(jm.limit_motor, 0, jm.q);
     model->joint_index.emplace(robot.joints[j].name, static_cast<int>(j));
   }
   for (std::size_t l = 0; l < robot.links.size(); ++l) model->link_index.emplace(robot.links[l].name, static_cast<int>(l));

@@ -43,10 +43,32 @@ std::vector<int> tree_order(const Robot& robot);
 // The root link of each link's tree.
 std::vector<int> root_of(const Robot& robot, const std::vector<int>& order);
 
-// Which link's body carries each link: itself when it has mass; for a massless link, the nearest
-// link with mass it is fixed to (through fixed joints), else the world when it is fixed to a root
-// held by the world, else kUnresolved.
-std::vector<int> carriers(const Robot& robot, bool floating_root);
+// Links welded together by fixed joints move as one rigid body (as MuJoCo's fusestatic and
+// SDFormat's lumping do): one ODE body per group, with the group's combined mass properties.
+struct WeldGroup {
+  int top = -1;           // The group's link nearest the root: its frame T is the group's frame
+  std::vector<int> links;  // Tree order, top first
+  bool welded_to_world = false;  // Holds a root the world holds: the group never moves
+  // Combined over the links with mass: m, p_ToBcm_T (centre of mass in T) and I_Bcm_T (about
+  // it, T's axes), by the parallel-axis theorem. Zero for a group without mass.
+  MassProperties merged;
+  bool bounded = false;  // merged is the bound mass and inertia (a massless moving group)
+};
+
+struct WeldGroups {
+  std::vector<int> group_of;  // robot.links order
+  std::vector<WeldGroup> groups;
+};
+
+// Assumes check_structure passed. `rest`: X_SL of every link at the rest pose (fixed joints keep
+// the poses within a group at rest anyway). Links whose mass properties are not finite are left
+// out of the sums (they are errors of their own). A moving group without mass gets `bound_mass`
+// at its top's origin with inertia bound_inertia x identity when both are positive.
+WeldGroups weld_groups(const Robot& robot, const std::vector<int>& order,
+                       const std::vector<Eigen::Isometry3d>& rest, bool floating_root, double bound_mass = 0,
+                       double bound_inertia = 0);
+// A group that needs an ODE body: not welded to the world, and with mass (or bounded).
+bool moves(const WeldGroup& group);
 
 // The pose of the joint frame relative to the parent link frame at position q.
 Eigen::Isometry3d joint_motion(const Joint& joint, double q);
@@ -61,10 +83,11 @@ std::vector<double> reach_bounds(const Robot& robot, const std::vector<int>& ord
 
 struct BodyModel {
   dBodyID id = nullptr;
-  int link = -1;
+  int link = -1;   // The top link of its weld group
+  int links = 1;   // Links welded into it
   double mass = 0;
-  Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();  // About the COM, link axes (= body axes)
-  Eigen::Vector3d com_L = Eigen::Vector3d::Zero();     // p_LoLcm_L: the body origin in the link
+  Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();  // About the COM, top link axes (= body axes)
+  Eigen::Vector3d com_L = Eigen::Vector3d::Zero();     // p_ToBcm_T: the body origin in the top link
   double reach = kInfinity;  // Bound on the COM's distance from its root link's origin
   int root_link = -1;
 };
@@ -87,6 +110,9 @@ struct JointModel {
   JointKind kind = JointKind::kFixed;
   dJointID id = nullptr;  // Nothing for a floating joint or one inside a body (massless link)
   dJointID friction_motor = nullptr;
+  // A hinge range not inside (-pi, pi): a user-mode angular motor whose stops act on the
+  // unwrapped position (set before every step). Ranges inside it use the hinge's own stops.
+  dJointID limit_motor = nullptr;
   int child_body = -1;
   int parent_body = kWorld;
   // The joint frame's origin on each side (child body, parent body or world), and the axis.
@@ -100,7 +126,7 @@ struct JointModel {
   double qdot = 0;
   double ode_angle = 0;   // ODE's (wrapped) hinge angle after the last step
   bool limited = false;
-  bool stops = false;  // ODE enforces the limits (hinge limits inside (-pi, pi); sliders)
+  bool stops = false;  // ODE enforces the limits (every limited hinge and slider)
   double lower = 0;
   double upper = 0;
   // What an exact step leaves, for the health bounds (updated by Simulation::step):
@@ -114,6 +140,11 @@ struct JointModel {
   double drift = 0;
   double separation_drift = 0;
   double stop_overshoot = 0;
+  // A stop is a soft constraint, a spring k = ERP / (h CFM): under the load F it carries it gives
+  // F / k (rad or m), read from the constraint forces ODE reports (feedback) after each step.
+  double stop_yield = 0;
+  dJointFeedback feedback{};  // Of `id` (or of limit_motor), for stop_yield
+
   double effort_limit = 0;  // 0: none
   double damping = 0;
   double stiffness = 0;

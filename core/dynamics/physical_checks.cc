@@ -41,9 +41,20 @@ void check_roots(const Robot& robot, Diagnostics& diag) {
   }
 }
 
-void check_mass(const Robot& robot, std::size_t l, const std::vector<int>& carrier,
-                const PhysicalCheckOptions& options, Diagnostics& diag) {
+using dynamics_internal::WeldGroup;
+using dynamics_internal::WeldGroups;
+
+// "link 'T'" or "link 'T' and the N links fixed to it".
+std::string body_text(const Robot& robot, const WeldGroup& group) {
+  std::string text = "link '" + robot.links[group.top].name + "'";
+  if (group.links.size() > 1) text += " and the " + std::to_string(group.links.size() - 1) + " links fixed to it";
+  return text;
+}
+
+void check_mass(const Robot& robot, std::size_t l, const WeldGroups& welds, const PhysicalCheckOptions& options,
+                Diagnostics& diag) {
   const Link& link = robot.links[l];
+  const WeldGroup& group = welds.groups[welds.group_of[l]];
   const double mass = link.inertial.mass;
   const std::string name = "link '" + link.name + "': ";
   if (!std::isfinite(mass)) {
@@ -51,26 +62,51 @@ void check_mass(const Robot& robot, std::size_t l, const std::vector<int>& carri
   } else if (mass < 0) {
     diag.error("LINK_MASS_NEGATIVE", where(link), name + "mass " + number(mass) + " kg is negative");
   } else if (mass == 0 && !link.inertial.inertia.isZero(0)) {
-    diag.error("LINK_MASSLESS_WITH_INERTIA", where(link),
-               name + "mass is 0 but its inertia is not zero (largest moment " +
-                   number(link.inertial.inertia.cwiseAbs().maxCoeff()) + " kg m^2)");
+    const std::string message = name + "mass is 0 but its inertia is not zero (largest moment " +
+                                number(link.inertial.inertia.cwiseAbs().maxCoeff()) + " kg m^2)";
+    if (group.welded_to_world) {
+      // Welded to the world it never moves: neither its mass nor its inertia is used.
+      diag.warning("LINK_MASSLESS_WITH_INERTIA", where(link),
+                   message + "; it is welded to the world and never moves, so its inertia is not used");
+    } else if (group.merged.mass > 0) {
+      diag.warning("LINK_MASSLESS_WITH_INERTIA", where(link),
+                   message + "; it is welded (fixed joints) into the body of " + body_text(robot, group) +
+                       ", whose inertia it adds to (as MuJoCo's fusestatic does)");
+    } else {
+      diag.error("LINK_MASSLESS_WITH_INERTIA", where(link), message);
+    }
   } else if (mass == 0) {
-    const int c = carrier[l];
-    if (c == dynamics_internal::kUnresolved) {
+    if (group.welded_to_world) {
+      diag.info("LINK_MASSLESS", where(link), name + "has no mass; the world holds it (fixed joints)");
+    } else if (group.bounded) {
+      const std::string message = name + "has no mass and moves with " + body_text(robot, group) +
+                                  ", which have none: simulated with the bound mass " +
+                                  number(options.bound_mass) + " kg and inertia " +
+                                  number(options.bound_inertia) + " kg m^2";
+      if (options.massless_link_error) {
+        diag.error("LINK_MASS_ZERO", where(link), message + " (massless moving links are errors by option)");
+      } else {
+        diag.warning("LINK_MASS_ZERO", where(link), message);
+      }
+    } else if (group.merged.mass > 0) {
+      diag.info("LINK_MASSLESS", where(link),
+                name + "has no mass; it is welded (fixed joints) into the body of " + body_text(robot, group));
+    } else {
       const std::string how = link.parent_joint < 0
                                   ? std::string(options.floating_root ? "is a floating root" : "is a root")
                                   : "moves on joint '" + robot.joints[link.parent_joint].name + "' (" +
                                         to_string(robot.joints[link.parent_joint].kind) + ")";
+      const Link& top = robot.links[group.top];
+      const std::string on = group.top == static_cast<int>(l) || top.parent_joint < 0
+                                 ? std::string()
+                                 : " with link '" + top.name + "' on joint '" +
+                                       robot.joints[top.parent_joint].name + "'";
       diag.error("LINK_MASS_ZERO", where(link),
-                 name + "mass is 0 and the link " + how +
+                 name + "mass is 0 and the link " + (group.top == static_cast<int>(l) ? how : "moves" + on) +
                      " without being fixed to a link with mass: a body without mass cannot move "
-                     "(give it mass, e.g. rdtf_mass, or make its joint fixed)");
-    } else {
-      diag.info("LINK_MASSLESS", where(link),
-                name + "has no mass; it is carried by " +
-                    (c == dynamics_internal::kWorld ? std::string("the world")
-                                                    : "link '" + robot.links[c].name + "'") +
-                    " (fixed joints)");
+                     "(give it mass, e.g. rdtf_mass, or make its joint fixed; or simulate it with a "
+                     "bound mass and inertia: rdtf validate --bound-mass KG --bound-inertia KGM2, "
+                     "rdtfd bound_mass_kg and bound_inertia_kgm2)");
     }
   }
 }
@@ -91,11 +127,20 @@ double polar_lower_bound(const Link& link) {
   return bound * (link.inertial.mass / mass);  // rdtf_mass on a link rescales its inertia so
 }
 
-void check_inertia(const Link& link, const PhysicalCheckOptions& options, Diagnostics& diag) {
+void check_inertia(const Robot& robot, const Link& link, const WeldGroup& group, const PhysicalCheckOptions& options,
+                   Diagnostics& diag) {
   const Eigen::Matrix3d& I = link.inertial.inertia;
   const std::string name = "link '" + link.name + "': ";
   if (!I.allFinite()) {
     diag.error("LINK_INERTIA_NOT_FINITE", where(link), name + "inertia is not finite");
+    return;
+  }
+  // A point mass (a sensor frame of a gram) is a sound part of a rigid body: welded to other links
+  // or to the world it only adds m d^2 to the body's inertia. Alone on a joint it cannot turn.
+  if (I.isZero(0) && (group.links.size() > 1 || group.welded_to_world)) {
+    diag.info("LINK_POINT_MASS", where(link),
+              name + "a point mass (zero inertia), welded (fixed joints) into the body of " +
+                  (group.welded_to_world ? std::string("the world") : body_text(robot, group)));
     return;
   }
   const double largest = I.cwiseAbs().maxCoeff();
@@ -155,7 +200,7 @@ void check_center_of_mass(const Link& link, const std::optional<Eigen::AlignedBo
   }
 }
 
-void check_joint(const Robot& robot, const Joint& joint, const PhysicalCheckOptions& options,
+void check_joint(const Robot& robot, const Joint& joint, const WeldGroups& welds, const PhysicalCheckOptions& options,
                  Diagnostics& diag) {
   const std::string name = "joint '" + joint.name + "' (" + to_string(joint.kind) + "): ";
   if (!joint.X_PJ.matrix().allFinite()) {
@@ -204,15 +249,19 @@ void check_joint(const Robot& robot, const Joint& joint, const PhysicalCheckOpti
     check_value("effort limit", joint.limits->effort);
     check_value("velocity limit", joint.limits->velocity);
   }
-  const Link& parent = robot.links[joint.parent_link];
-  const Link& child = robot.links[joint.child_link];
-  const double mp = parent.inertial.mass, mc = child.inertial.mass;
+  // The ratio ODE sees is that of the two bodies a moving joint connects: each link with those
+  // welded to it. A fixed joint is inside one body, and the world, holding a body, has no mass.
+  if (joint.kind == JointKind::kFixed) return;
+  const WeldGroup& parent = welds.groups[welds.group_of[joint.parent_link]];
+  const WeldGroup& child = welds.groups[welds.group_of[joint.child_link]];
+  if (parent.welded_to_world || child.welded_to_world) return;
+  const double mp = parent.merged.mass, mc = child.merged.mass;
   if (std::isfinite(mp) && std::isfinite(mc) && mp > 0 && mc > 0) {
     const double ratio = std::max(mp, mc) / std::min(mp, mc);
     if (ratio > options.max_mass_ratio) {
       diag.error("JOINT_MASS_RATIO", where(joint),
-                 name + "joins '" + parent.name + "' (" + number(mp) + " kg) and '" + child.name +
-                     "' (" + number(mc) + " kg): mass ratio " + number(ratio) +
+                 name + "joins " + body_text(robot, parent) + " (" + number(mp) + " kg) and " +
+                     body_text(robot, child) + " (" + number(mc) + " kg): mass ratio " + number(ratio) +
                      " is above the bound " + number(options.max_mass_ratio) +
                      " (ODE goes unstable)");
     }
@@ -225,18 +274,23 @@ void check_physics(const Robot& robot, const PhysicalCheckOptions& options, cons
                    Diagnostics& diag) {
   if (!dynamics_internal::check_structure(robot, "ROBOT_INVALID_REFERENCE", diag)) return;
   check_roots(robot, diag);
-  const std::vector<int> carrier = dynamics_internal::carriers(robot, options.floating_root);
+  const std::vector<int> order = dynamics_internal::tree_order(robot);
+  const WeldGroups welds = dynamics_internal::weld_groups(
+      robot, order, dynamics_internal::forward_kinematics(robot, order, std::vector<double>(robot.joints.size(), 0.0)),
+      options.floating_root, options.bound_mass, options.bound_inertia);
   for (std::size_t l = 0; l < robot.links.size(); ++l) {
     const Link& link = robot.links[l];
     if (!link.X_SL.matrix().allFinite()) {
       diag.error("LINK_POSE_NOT_FINITE", where(link), "link '" + link.name + "': pose is not finite");
     }
-    check_mass(robot, l, carrier, options, diag);
-    if (std::isfinite(link.inertial.mass) && link.inertial.mass > 0) check_inertia(link, options, diag);
+    check_mass(robot, l, welds, options, diag);
+    if (std::isfinite(link.inertial.mass) && link.inertial.mass > 0) {
+      check_inertia(robot, link, welds.groups[welds.group_of[l]], options, diag);
+    }
     const std::optional<Eigen::AlignedBox3d> none;
     check_center_of_mass(link, bounds && l < bounds->size() ? (*bounds)[l] : none, options, diag);
   }
-  for (const Joint& joint : robot.joints) check_joint(robot, joint, options, diag);
+  for (const Joint& joint : robot.joints) check_joint(robot, joint, welds, options, diag);
 }
 
 }  // namespace rdtf

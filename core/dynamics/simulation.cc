@@ -104,6 +104,22 @@ bool update_exact_step_errors(Simulation::Model& m, JointModel& jm, double dt, d
   return true;
 }
 
+// The force (N) or torque (N m) a joint's stop carried in the last step, from the constraint
+// forces ODE reports on the child body. A slider's other rows act across its axis, so the force
+// along the axis is the stop's. A hinge's other rows are a force at the anchor (its moment about
+// the child's centre of mass, r x f, is in the reported torque, and is taken out) and a couple
+// across the axis. A limit motor has the stop's row only.
+double stop_load(const Simulation::Model& m, const JointModel& jm) {
+  const BodyFrame& child = frame_of(m, jm.child_body);
+  const BodyFrame& parent = frame_of(m, jm.parent_body);
+  const Eigen::Vector3d axis = parent.R * jm.axis_parent;
+  const Eigen::Vector3d f = vec(jm.feedback.f1), t = vec(jm.feedback.t1);
+  if (jm.kind == JointKind::kPrismatic) return std::abs(f.dot(axis));
+  if (jm.limit_motor) return std::abs(t.dot(axis));
+  const Eigen::Vector3d r = child.R * jm.anchor_child;
+  return std::abs((t - r.cross(f)).dot(axis));
+}
+
 }  // namespace
 
 Simulation::Simulation(std::unique_ptr<Model> model) : model_(std::move(model)) {}
@@ -155,6 +171,10 @@ void Simulation::step(double dt) {
       if (jm.parent_body != kWorld) dBodyAddTorque(m.bodies[jm.parent_body].id, -tau.x(), -tau.y(), -tau.z());
     }
   }
+  // Stops of ranges of 2 pi or more act on the unwrapped position (ode_model.cc).
+  for (JointModel& jm : m.joints) {
+    if (jm.limit_motor) dJointSetAMotorAngle(jm.limit_motor, 0, jm.q);
+  }
   try {
     if (m.quickstep) {
       dWorldQuickStep(m.world, dt);
@@ -191,6 +211,7 @@ void Simulation::step(double dt) {
       // part, and the joint may go on a little before it turns back).
       const bool past = jm.stops && (jm.q < jm.lower || jm.q > jm.upper);
       jm.stop_overshoot = (1 - erp) * jm.stop_overshoot + (past && resolved ? std::abs(dq) : 0.0);
+      if (jm.stops) jm.stop_yield = stop_load(m, jm) * dt * m.options.cfm / erp;
       m.dissipated -= damping_effort[j] * dq;
       m.actuator_work += jm.effort * dq;
     } else if (jm.kind == JointKind::kBall && jm.damping > 0) {
@@ -307,7 +328,7 @@ SimulationHealth Simulation::health(const HealthTolerances& tolerances) const {
     if (jm.limited) {
       const double violation = std::max({jm.lower - jm.q, jm.q - jm.upper, 0.0});
       const double bound = (jm.kind == JointKind::kPrismatic ? tolerances.limit_linear : tolerances.limit_angular) +
-                           (jm.stops ? jm.stop_overshoot : 0.0);
+                           (jm.stops ? jm.stop_overshoot + jm.stop_yield : 0.0);
       if (violation / bound > h.worst_limit_ratio) {
         h.worst_limit_ratio = violation / bound;
         h.worst_limit_violation = violation;

@@ -2,7 +2,6 @@
 // massless links go.
 #include <cmath>
 #include <cstdio>
-#include <deque>
 
 #include "ode_model.h"
 
@@ -105,44 +104,74 @@ std::vector<int> root_of(const Robot& robot, const std::vector<int>& order) {
   return root;
 }
 
-std::vector<int> carriers(const Robot& robot, bool floating_root) {
-  const int n = static_cast<int>(robot.links.size());
-  std::vector<std::vector<int>> fixed_neighbours(n);
-  for (const Joint& joint : robot.joints) {
-    if (joint.kind != JointKind::kFixed) continue;
-    fixed_neighbours[joint.parent_link].push_back(joint.child_link);
-    fixed_neighbours[joint.child_link].push_back(joint.parent_link);
-  }
-  std::vector<int> carrier(n, kUnresolved);
-  for (int l = 0; l < n; ++l) {
-    if (!is_massless(robot.links[l])) {
-      carrier[l] = l;
+WeldGroups weld_groups(const Robot& robot, const std::vector<int>& order,
+                       const std::vector<Eigen::Isometry3d>& rest, bool floating_root, double bound_mass,
+                       double bound_inertia) {
+  WeldGroups out;
+  out.group_of.assign(robot.links.size(), -1);
+  // Parents come first in tree order: a link on a fixed joint joins its parent's group, any other
+  // link starts one.
+  for (int l : order) {
+    const int pj = robot.links[l].parent_joint;
+    if (pj >= 0 && robot.joints[pj].kind == JointKind::kFixed) {
+      const int g = out.group_of[robot.joints[pj].parent_link];
+      out.group_of[l] = g;
+      out.groups[g].links.push_back(l);
       continue;
     }
-    // Breadth first through fixed joints: the nearest link with mass, else the world if the group
-    // is held by it. (A body in a group held by the world is itself held by the world through its
-    // root, so riding on it is the same; and its fixed joints then stay inside one body.)
-    std::vector<bool> seen(n, false);
-    std::deque<int> queue{l};
-    seen[l] = true;
-    int nearest = kUnresolved;
-    bool world = false;
-    while (!queue.empty()) {
-      const int at = queue.front();
-      queue.pop_front();
-      if (!floating_root && robot.links[at].parent_joint < 0) world = true;
-      if (nearest == kUnresolved && !is_massless(robot.links[at])) nearest = at;
-      for (int next : fixed_neighbours[at]) {
-        if (!seen[next]) {
-          seen[next] = true;
-          queue.push_back(next);
-        }
-      }
-    }
-    carrier[l] = nearest != kUnresolved ? nearest : (world ? kWorld : kUnresolved);
+    WeldGroup group;
+    group.top = l;
+    group.links.push_back(l);
+    group.welded_to_world = pj < 0 && !floating_root;
+    out.group_of[l] = static_cast<int>(out.groups.size());
+    out.groups.push_back(std::move(group));
   }
-  return carrier;
+  for (WeldGroup& group : out.groups) {
+    const Eigen::Isometry3d X_TS = rest[group.top].inverse();
+    // Two passes: the centre of mass, then every inertia about it (parallel-axis theorem), so that
+    // no large offset is subtracted from a sum about a far point.
+    double mass = 0;
+    Eigen::Vector3d moment = Eigen::Vector3d::Zero();
+    for (int l : group.links) {
+      const MassProperties& in = robot.links[l].inertial;
+      if (!(in.mass > 0) || !std::isfinite(in.mass) || !in.center_of_mass.allFinite() || !in.inertia.allFinite()) {
+        continue;
+      }
+      const Eigen::Isometry3d X_TL = X_TS * rest[l];
+      mass += in.mass;
+      moment += in.mass * (X_TL * in.center_of_mass);
+    }
+    if (mass > 0) {
+      const Eigen::Vector3d p_ToBcm_T = moment / mass;
+      Eigen::Matrix3d I_Bcm_T = Eigen::Matrix3d::Zero();
+      // A link of mass 0 with an inertia (pybullet's Panda hangs 0 kg, 0.1 kg m^2 frames on its
+      // flange) adds its inertia alone, as MuJoCo's fusestatic adds it: it has no centre of mass
+      // to carry.
+      for (int l : group.links) {
+        const MassProperties& in = robot.links[l].inertial;
+        if (!(in.mass >= 0) || !std::isfinite(in.mass) || !in.center_of_mass.allFinite() || !in.inertia.allFinite()) {
+          continue;
+        }
+        const Eigen::Isometry3d X_TL = X_TS * rest[l];
+        const Eigen::Matrix3d R_TL = X_TL.linear();
+        const Eigen::Vector3d d = X_TL * in.center_of_mass - p_ToBcm_T;  // Lcm from Bcm, in T
+        const Eigen::Matrix3d I_Lcm_L = 0.5 * (in.inertia + in.inertia.transpose());
+        I_Bcm_T += R_TL * I_Lcm_L * R_TL.transpose() +
+                   in.mass * (d.squaredNorm() * Eigen::Matrix3d::Identity() - d * d.transpose());
+      }
+      group.merged.mass = mass;
+      group.merged.center_of_mass = p_ToBcm_T;
+      group.merged.inertia = I_Bcm_T;
+    } else if (!group.welded_to_world && bound_mass > 0 && bound_inertia > 0) {
+      group.merged.mass = bound_mass;
+      group.merged.inertia = bound_inertia * Eigen::Matrix3d::Identity();
+      group.bounded = true;
+    }
+  }
+  return out;
 }
+
+bool moves(const WeldGroup& group) { return !group.welded_to_world && group.merged.mass > 0; }
 
 Eigen::Isometry3d joint_motion(const Joint& joint, double q) {
   Eigen::Isometry3d X = joint.X_PJ;

@@ -2,6 +2,7 @@
 // ODE watched for NaN, energy created, joints coming apart, limits overrun and bodies flying off.
 #include <chrono>
 #include <cmath>
+#include <ctime>
 #include <map>
 
 #include "ode_model.h"
@@ -69,6 +70,25 @@ std::string bound_text(double bound, double tolerance, const char* unit, double 
   return text;
 }
 
+// CPU time of the calling thread (s): the budget counts the validation's own work, not that of
+// other threads sharing the machine.
+double thread_cpu_seconds() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
+// Whether the run must stop: cancelled, or beyond its CPU budget (checked every 16 steps: reading
+// the thread's clock is a system call).
+struct Limits {
+  const ValidationOptions& options;
+  double cpu_start;
+  bool cancelled() const { return options.cancel && options.cancel->load(std::memory_order_relaxed); }
+  bool over_budget(std::uint64_t step) const {
+    return options.cpu_budget > 0 && step % 16 == 0 && thread_cpu_seconds() - cpu_start > options.cpu_budget;
+  }
+};
+
 }  // namespace
 
 // Friend-free access to the model for the run: the Simulation owns it.
@@ -79,7 +99,7 @@ struct ValidationRun {
 namespace {
 
 void run_scenario(Simulation& sim, const Simulation::Model& model, const ValidationOptions& options,
-                  ValidationReport& report) {
+                  const Limits& limits_of_run, ValidationReport& report) {
   const Robot& robot = sim.robot();
   Diagnostics& diag = report.diagnostics;
   const double separation_tolerance =
@@ -101,6 +121,23 @@ void run_scenario(Simulation& sim, const Simulation::Model& model, const Validat
   // may: ODE's generator is not per thread).
   dRandSetSeed(0);
   for (std::uint64_t n = 0; n < steps; ++n) {
+    if (limits_of_run.cancelled()) {
+      report.cancelled = true;
+      diag.error("SIM_CANCELLED", "",
+                 "the validation was cancelled at t = " + number(sim.time()) + " s of " + number(options.duration) +
+                     " s: the model is not judged");
+      break;
+    }
+    if (limits_of_run.over_budget(n)) {
+      diag.error("SIM_BUDGET_EXCEEDED", "",
+                 "the validation used " + number(thread_cpu_seconds() - limits_of_run.cpu_start) +
+                     " s of CPU, beyond its budget of " + number(options.cpu_budget) + " s (rdtf validate "
+                     "--cpu-budget, rdtfd validation_cpu_budget_s): stopped at t = " + number(sim.time()) +
+                     " s of " + number(options.duration) + " s simulated (" + std::to_string(sim.steps()) +
+                     " steps of " + std::to_string(sim.body_count()) + " bodies, " + std::string(sim.stepper_name()) +
+                     "); the model is not judged");
+      break;
+    }
     sim.step(dt);
     const double t = sim.time();
     const SimulationHealth h = sim.health(tolerances);
@@ -223,15 +260,25 @@ std::map<std::string, double> validation_start_pose(const Robot& robot, const Va
 ValidationReport validate_dynamics(const Robot& robot, const ValidationOptions& options,
                                    const LinkBounds* bounds, std::string file) {
   const auto started = std::chrono::steady_clock::now();
+  const Limits limits{options, thread_cpu_seconds()};
   ValidationReport report;
   report.diagnostics.set_file(std::move(file));
   report.time_step = options.simulation.time_step;
   PhysicalCheckOptions checks = options.checks;
   checks.floating_root = options.simulation.floating_root;
+  checks.bound_mass = options.simulation.bound_mass;
+  checks.bound_inertia = options.simulation.bound_inertia;
   check_physics(robot, checks, bounds, report.diagnostics);
-  if (!(options.duration >= 0) || !std::isfinite(options.duration) || !std::isfinite(options.start_offset_angular)) {
+  if (!(options.duration >= 0) || !std::isfinite(options.duration) || !std::isfinite(options.start_offset_angular) ||
+      !(options.cpu_budget >= 0) || !(options.simulation.bound_mass >= 0) ||
+      !std::isfinite(options.simulation.bound_mass) || !(options.simulation.bound_inertia >= 0) ||
+      !std::isfinite(options.simulation.bound_inertia)) {
     report.diagnostics.error("SIM_INVALID_OPTIONS", "",
-                             "the duration must be finite and not negative, the start offset finite");
+                             "the duration, CPU budget, bound mass and bound inertia must not be negative, "
+                             "and all but the budget finite; the start offset finite");
+  } else if (limits.cancelled()) {
+    report.cancelled = true;
+    report.diagnostics.error("SIM_CANCELLED", "", "the validation was cancelled before the run: the model is not judged");
   } else if (!report.diagnostics.contains("ROBOT_INVALID_REFERENCE")) {
     report.start_pose = validation_start_pose(robot, options);
     auto sim = Simulation::create(robot, options.simulation, report.start_pose, report.diagnostics);
@@ -239,11 +286,12 @@ ValidationReport validate_dynamics(const Robot& robot, const ValidationOptions& 
       report.simulated = true;
       report.stepper = std::string(sim->stepper_name());
       report.bodies = sim->body_count();
-      run_scenario(*sim, ValidationRun::model(*sim), options, report);
+      run_scenario(*sim, ValidationRun::model(*sim), options, limits, report);
     }
   }
   report.passed = !report.diagnostics.has_errors();
   report.wall_time = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  report.cpu_time = thread_cpu_seconds() - limits.cpu_start;
   return report;
 }
 
@@ -269,6 +317,8 @@ Json validation_report_json(const ValidationReport& report) {
           {"worstLimitViolation", report.worst_limit_violation},
           {"worstLimitJoint", report.worst_limit_joint},
           {"wallTime", report.wall_time},
+          {"cpuTime", report.cpu_time},
+          {"cancelled", report.cancelled},
           {"startPose", report.start_pose},
           {"diagnostics", diagnostics_json(report.diagnostics)}};
 }
@@ -285,7 +335,8 @@ std::string validation_summary_line(const ValidationReport& report) {
           "% (end " + number(100 * report.final_energy_drift) + "%); worst joint error " +
           number(report.worst_joint_error) + " m" +
           (report.worst_joint.empty() ? "" : " (" + report.worst_joint + ")") + ", misalignment " +
-          number(report.worst_joint_misalignment) + " rad; wall " + number(report.wall_time * 1e3) + " ms";
+          number(report.worst_joint_misalignment) + " rad; wall " + number(report.wall_time * 1e3) + " ms, CPU " +
+          number(report.cpu_time * 1e3) + " ms";
   return line;
 }
 

@@ -134,8 +134,12 @@ class Builder {
       return std::nullopt;
     };
     scale = Eigen::Vector3d::Ones();
+    if (const auto why = degenerate_shape(g)) {
+      diag.warning("URDF_SHAPE_DEGENERATE", pointer, at + *why + "; this geometry is skipped, the link is kept");
+      return std::nullopt;
+    }
     switch (g.type) {
-      // Sizes were checked in the XML (scan_urdf_xml): finite and above 0.
+      // Sizes were checked in the XML (scan_urdf_xml): finite and not negative; 0 is skipped above.
       case urdf::Geometry::BOX:
         return box_mesh(to_eigen(static_cast<const urdf::Box&>(g).dim));
       case urdf::Geometry::CYLINDER: {

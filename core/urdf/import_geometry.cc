@@ -1,7 +1,10 @@
 // Geometry for URDF import: generated primitives, mesh file lookup, and the glTF buffer.
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <numbers>
+
+#include <urdf_model/link.h>
 
 #include "import_internal.h"
 #include "rdtf/mass_properties.h"
@@ -20,7 +23,39 @@ void scale_to_volume(TriangleMesh& mesh, double volume) {
   for (Eigen::Vector3d& p : mesh.positions) p *= factor;
 }
 
+std::string size_text(double value) {
+  char text[32];
+  std::snprintf(text, sizeof(text), "%g", value);
+  return text;
+}
+
 }  // namespace
+
+std::optional<std::string> degenerate_shape(const urdf::Geometry& geometry) {
+  const auto none = [](const std::string& shape, const std::string& what) {
+    return "<" + shape + "> has " + what + ": it has no volume (MuJoCo refuses such a shape; Drake and Gazebo load it)";
+  };
+  switch (geometry.type) {
+    case urdf::Geometry::BOX: {
+      const urdf::Vector3& d = static_cast<const urdf::Box&>(geometry).dim;
+      if (d.x > 0 && d.y > 0 && d.z > 0) return std::nullopt;
+      return none("box", "size \"" + size_text(d.x) + " " + size_text(d.y) + " " + size_text(d.z) + "\", a side of 0");
+    }
+    case urdf::Geometry::CYLINDER: {
+      const auto& cylinder = static_cast<const urdf::Cylinder&>(geometry);
+      if (!(cylinder.radius > 0)) return none("cylinder", "radius " + size_text(cylinder.radius));
+      if (!(cylinder.length > 0)) return none("cylinder", "length " + size_text(cylinder.length));
+      return std::nullopt;
+    }
+    case urdf::Geometry::SPHERE: {
+      const double radius = static_cast<const urdf::Sphere&>(geometry).radius;
+      if (radius > 0) return std::nullopt;
+      return none("sphere", "radius " + size_text(radius));
+    }
+    default:
+      return std::nullopt;
+  }
+}
 
 TriangleMesh box_mesh(const Eigen::Vector3d& size) {
   TriangleMesh mesh;

@@ -16,6 +16,10 @@
 #include "rdtf/gltf.h"
 #include "rdtf/triangle_mesh.h"
 
+namespace urdf {
+class Geometry;
+}
+
 namespace rdtf::urdf_internal {
 
 // The URDF's text checked to be UTF-8 throughout, with numeric character references beyond ASCII
@@ -70,6 +74,10 @@ std::string joint_pointer(const std::string& name);
 // Generated surfaces, outward wound, in the geometry's own frame as URDF defines it (box centred;
 // cylinder along z, centred; sphere centred). The cylinder's polygon and the sphere's polyhedron
 // are scaled so that their volumes are exactly the true solid's (pi r^2 l, 4/3 pi r^3).
+// Why a primitive shape has no volume (a box with a side of 0, a cylinder of radius or length 0,
+// a sphere of radius 0), e.g. "<cylinder> has length 0: it has no volume"; nothing for a shape with
+// volume and for meshes.
+std::optional<std::string> degenerate_shape(const urdf::Geometry& geometry);
 TriangleMesh box_mesh(const Eigen::Vector3d& size);
 TriangleMesh cylinder_mesh(double radius, double length, int segments = 32);
 TriangleMesh sphere_mesh(double radius, int stacks = 16, int slices = 32);

@@ -243,8 +243,9 @@ void check_inertial(Checker& c, const TiXmlElement* inertial, const std::string&
   }
 }
 
-// A <visual> or <collision>: its origin, its one shape and the shape's sizes (a generated solid
-// needs sizes above 0; a mesh scale of 0 would flatten it); a visual's material colour.
+// A <visual> or <collision>: its origin, its one shape and the shape's sizes (not negative: a
+// shape with a size of 0 is skipped with a warning at import, as Drake and Gazebo load it; a
+// mesh scale of 0 would flatten it); a visual's material colour.
 void check_geometry(Checker& c, const TiXmlElement* holder, const std::string& pointer) {
   check_origin(c, holder, pointer, kInvalidNumber);
   const std::string holder_name = holder->Value();
@@ -262,12 +263,12 @@ void check_geometry(Checker& c, const TiXmlElement* holder, const std::string& p
   const std::string kind = shape->Value();
   const std::string at = pointer + "/geometry/" + kind;
   if (kind == "box") {
-    c.numbers(shape, at, "size", {3, Range::kPositive, "a box size"}, true);
+    c.numbers(shape, at, "size", {3, Range::kNonNegative, "a box size"}, true);
   } else if (kind == "cylinder") {
-    c.numbers(shape, at, "radius", {1, Range::kPositive, "a cylinder radius"}, true);
-    c.numbers(shape, at, "length", {1, Range::kPositive, "a cylinder length"}, true);
+    c.numbers(shape, at, "radius", {1, Range::kNonNegative, "a cylinder radius"}, true);
+    c.numbers(shape, at, "length", {1, Range::kNonNegative, "a cylinder length"}, true);
   } else if (kind == "sphere") {
-    c.numbers(shape, at, "radius", {1, Range::kPositive, "a sphere radius"}, true);
+    c.numbers(shape, at, "radius", {1, Range::kNonNegative, "a sphere radius"}, true);
   } else if (kind == "mesh") {
     if (shape->Attribute("filename") == nullptr) {
       c.error("URDF_INVALID", at, shape->Row(), "<mesh> has no filename attribute");

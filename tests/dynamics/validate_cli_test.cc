@@ -97,19 +97,44 @@ TEST(ValidateCli, GeneratedGoodModelPasses) {
   EXPECT_NE(run.out.find(": PASS:"), std::string::npos) << run.out;
 }
 
-// base at rdtf_mass 1e7 kg, arm 1 kg (0.1 m cube at 1000 kg/m^3): the joint is named.
+// base at rdtf_mass 1e7 kg, arm 1 kg (0.1 m cube at 1000 kg/m^3), floating: the joint is named
+// with both bodies. Held by the world (the default) the base is no body, and no ratio is judged.
 TEST(ValidateCli, MassRatioFailsWithExitTwoAndTheDiagnostic) {
   testing::TempDir folder;
   const auto path = write_two_boxes(folder, {{"rdtf_mass", 1e7}}, kHinge);
-  const auto run = validate(quoted(path));
+  const auto run = validate("--floating " + quoted(path));
   EXPECT_EQ(run.exit_code, 2) << run.out << run.err;
-  EXPECT_NE(run.err.find("error JOINT_MASS_RATIO: joint 'base_arm_joint' (revolute): joins 'base' (1e+07 kg) and "
-                         "'arm' (1 kg): mass ratio 1e+07"),
+  EXPECT_NE(run.err.find("error JOINT_MASS_RATIO: joint 'base_arm_joint' (revolute): joins link 'base' (1e+07 kg) "
+                         "and link 'arm' (1 kg): mass ratio 1e+07"),
             std::string::npos)
       << run.err;
   EXPECT_NE(run.out.find(": FAIL:"), std::string::npos) << run.out;
   // The bound is an option.
-  EXPECT_EQ(validate(quoted(path) + " --max-mass-ratio 1e8").exit_code, 0);
+  EXPECT_EQ(validate("--floating " + quoted(path) + " --max-mass-ratio 1e8").exit_code, 0);
+  EXPECT_EQ(validate(quoted(path)).exit_code, 0);
+}
+
+// A massless arm on a hinge fails naming the options that simulate it; with them it passes, and
+// --massless-links error keeps it an error. A tiny CPU budget gives its own verdict.
+TEST(ValidateCli, BoundMassMasslessLinksAndCpuBudgetOptions) {
+  testing::TempDir folder;
+  // The arm without its mesh: a link (rdtf_type) with nothing to weigh.
+  const auto path = write_two_boxes(folder, {}, {{"rdtf_joint", "revolute"}, {"rdtf_axis", {0.0, 0.0, 1.0}}, {"rdtf_type", "link"}});
+  json document = json::parse(testing::read_file(path));
+  document["nodes"][1].erase("mesh");
+  testing::write_file(path, document.dump(1));
+  const auto refused = validate(quoted(path));
+  EXPECT_EQ(refused.exit_code, 2) << refused.out << refused.err;
+  EXPECT_NE(refused.err.find("error LINK_MASS_ZERO: link 'arm'"), std::string::npos) << refused.err;
+  EXPECT_NE(refused.err.find("--bound-mass KG --bound-inertia KGM2"), std::string::npos) << refused.err;
+  const std::string bound = " --bound-mass 0.01 --bound-inertia 1e-5";
+  const auto passed = validate(quoted(path) + bound);
+  EXPECT_EQ(passed.exit_code, 0) << passed.out << passed.err;
+  EXPECT_NE(passed.err.find("warning LINK_MASS_ZERO: link 'arm'"), std::string::npos) << passed.err;
+  EXPECT_EQ(validate(quoted(path) + bound + " --massless-links error").exit_code, 2);
+  const auto budget = validate(quoted(path) + bound + " --cpu-budget 1e-9");
+  EXPECT_EQ(budget.exit_code, 2) << budget.out << budget.err;
+  EXPECT_NE(budget.err.find("error SIM_BUDGET_EXCEEDED"), std::string::npos) << budget.err;
 }
 
 // Inverted limits and a zero axis are refused while the joint is read: the extras are named.
@@ -141,9 +166,9 @@ TEST(ValidateCli, OpenMeshIsNamed) {
 }
 
 void expect_report_fields(const json& report) {
-  for (const char* key : {"passed", "simulated"}) EXPECT_TRUE(report.at(key).is_boolean()) << key;
+  for (const char* key : {"passed", "simulated", "cancelled"}) EXPECT_TRUE(report.at(key).is_boolean()) << key;
   for (const char* key : {"simulatedTime", "timeStep", "energyDrift", "finalEnergyDrift", "worstJointError",
-                          "worstJointMisalignment", "worstLimitViolation", "wallTime"}) {
+                          "worstJointMisalignment", "worstLimitViolation", "wallTime", "cpuTime"}) {
     EXPECT_TRUE(report.at(key).is_number()) << key;
   }
   for (const char* key : {"steps", "bodies"}) EXPECT_TRUE(report.at(key).is_number_integer()) << key;
@@ -159,7 +184,7 @@ TEST(ValidateCli, JsonReportHasTheDocumentedFields) {
   expect_report_fields(report);
   EXPECT_TRUE(report["passed"].get<bool>());
   EXPECT_EQ(report["steps"], 3000);
-  EXPECT_EQ(report["bodies"], 3);
+  EXPECT_EQ(report["bodies"], 2);  // the base is held by the world
   EXPECT_EQ(report["stepper"], "dWorldStep");
   EXPECT_EQ(report["timeStep"], 0.001);
   EXPECT_NEAR(report["simulatedTime"].get<double>(), 3.0, 1e-9);
@@ -169,7 +194,7 @@ TEST(ValidateCli, JsonReportHasTheDocumentedFields) {
 
 TEST(ValidateCli, JsonReportOfABrokenModelCarriesTheDiagnostic) {
   testing::TempDir folder;
-  const auto run = validate("--json " + quoted(write_two_boxes(folder, {{"rdtf_mass", 1e7}}, kHinge)));
+  const auto run = validate("--json --floating " + quoted(write_two_boxes(folder, {{"rdtf_mass", 1e7}}, kHinge)));
   EXPECT_EQ(run.exit_code, 2) << run.out << run.err;
   const json report = json::parse(run.out);
   expect_report_fields(report);

@@ -10,6 +10,7 @@
 // uses it; any thread may own it (each thread's ODE data is allocated on first use).
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <map>
 #include <memory>
@@ -48,6 +49,14 @@ struct PhysicalCheckOptions {
   double geometry_tolerance = 1e-6;
   // Whether the root links will float: a massless root is then not held by the world.
   bool floating_root = false;
+  // A moving body without mass (a link, or links welded by fixed joints, with no mass at all) is
+  // simulated with this mass (kg) and inertia (kg m^2 about each axis) when both are positive, as
+  // MuJoCo's boundmass/boundinertia; validate_dynamics takes them from SimulationOptions. Off (0)
+  // by default: such a link is then an error (LINK_MASS_ZERO) naming these options.
+  double bound_mass = 0;
+  double bound_inertia = 0;
+  // With the bound, a massless moving link is a warning (default), or still an error if this is set.
+  bool massless_link_error = false;
 };
 
 // Axis-aligned bounds of each link's geometry in its link frame (robot.links order); nothing for
@@ -85,6 +94,10 @@ struct SimulationOptions {
   double quickstep_sor = 1.3;
   double erp = 0.2;
   double cfm = 1e-10;
+  // Mass (kg) and inertia (kg m^2 about each axis, at the top link's origin) given to a moving
+  // body that has no mass, when both are positive (PhysicalCheckOptions::bound_mass). Off: 0.
+  double bound_mass = 0;
+  double bound_inertia = 0;
 };
 
 // A joint with one degree of freedom (revolute, continuous, prismatic). Position in rad or m
@@ -246,6 +259,11 @@ struct ValidationOptions {
   double limit_tolerance_linear = 1e-3;       // m
   double region_margin_relative = 0.1;        // of each body's reach bound
   double region_margin_absolute = 0.01;       // m
+  // CPU time (s, of the thread that validates) the checks, the model and the run may take
+  // together; beyond it the run stops with the error SIM_BUDGET_EXCEEDED. 0: no limit.
+  double cpu_budget = 30;
+  // When another thread sets it, the run stops with the error SIM_CANCELLED (e.g. rdtfd stopping).
+  const std::atomic<bool>* cancel = nullptr;
 };
 
 struct ValidationReport {
@@ -268,6 +286,8 @@ struct ValidationReport {
   double worst_limit_violation = 0;      // rad or m beyond a limit
   std::string worst_limit_joint;
   double wall_time = 0;                  // s, checks + model + run
+  double cpu_time = 0;                   // s of the validating thread's CPU, the same
+  bool cancelled = false;                // Stopped by ValidationOptions::cancel (SIM_CANCELLED)
   std::map<std::string, double> start_pose;  // rad or m by joint name; joints not listed start at rest
 };
 
@@ -285,7 +305,8 @@ ValidationReport validate_dynamics(const Conversion& conversion, const Validatio
 
 // {"passed", "simulated", "simulatedTime", "steps", "stepper", "bodies", "timeStep",
 //  "energyDrift", "finalEnergyDrift", "worstJointError", "worstJoint", "worstJointMisalignment",
-//  "worstLimitViolation", "worstLimitJoint", "wallTime", "startPose": {joint: position},
+//  "worstLimitViolation", "worstLimitJoint", "wallTime", "cpuTime", "cancelled",
+//  "startPose": {joint: position},
 //  "diagnostics": [...]}
 Json validation_report_json(const ValidationReport& report);
 // One line: "PASS|FAIL: 3 s simulated in 3000 steps (dWorldStep, 3 bodies), ...".

@@ -1,0 +1,280 @@
+// Links welded by fixed joints are one rigid body in ODE (docs/dynamics.md, "Bodies"): a chain
+// with a sensor link on a fixed joint moves exactly as the same chain with the sensor's mass
+// merged by hand into its carrier; the per-link checks still see every authored link; mass ratios
+// are judged between the bodies a moving joint connects; groups welded to the world are static.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "dynamics/dynamics_models.h"
+
+namespace rdtf {
+namespace {
+
+using dynamics_test::all_text;
+using dynamics_test::box_inertial;
+using dynamics_test::RobotBuilder;
+using dynamics_test::translation;
+using dynamics_test::with_code;
+
+// Where the sensor sits on the arm: off its axis and turned, so that the merge needs the full
+// tensor and the rotation.
+Eigen::Isometry3d arm_to_sensor() {
+  Eigen::Isometry3d X = translation(0.05, -0.4, 0.02);
+  X.rotate(Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, -1).normalized()));
+  return X;
+}
+
+Eigen::Isometry3d sensor_to_wrist() { return translation(0.01, -0.03, 0.0); }
+
+MassProperties arm_inertial() { return box_inertial(1.0, {0.05, 0.4, 0.05}, {0, -0.2, 0}); }
+
+MassProperties sensor_inertial() {
+  MassProperties sensor = box_inertial(0.3, {0.06, 0.03, 0.02}, {0.01, 0.005, -0.002});
+  sensor.inertia(0, 1) = sensor.inertia(1, 0) = 2e-6;  // not along the box axes
+  return sensor;
+}
+
+MassProperties hand_inertial() { return box_inertial(0.4, {0.04, 0.2, 0.04}, {0, -0.1, 0}); }
+
+// frame (massless root) -shoulder-> arm -sensor_mount (fixed)-> sensor -wrist-> hand.
+Robot chain_with_sensor() {
+  RobotBuilder b;
+  const int frame = b.root("frame", MassProperties{});
+  const int arm = b.child(frame, "shoulder", JointKind::kRevolute, Eigen::Isometry3d::Identity(),
+                          Eigen::Vector3d::UnitZ(), "arm", arm_inertial());
+  b.joint(0).limits = JointLimits{-2.5, 2.5, 0, 0};
+  const int sensor = b.child(arm, "sensor_mount", JointKind::kFixed, arm_to_sensor(), Eigen::Vector3d::UnitX(),
+                             "sensor", sensor_inertial());
+  b.child(sensor, "wrist", JointKind::kContinuous, sensor_to_wrist(), Eigen::Vector3d(0.3, 0, 1).normalized(),
+          "hand", hand_inertial());
+  return b.robot();
+}
+
+// The same chain with the sensor merged into the arm by hand, in the arm's frame A:
+// m = m_a + m_s; c = (m_a c_a + m_s (R_AS c_s + p_AS)) / m;
+// I = I_a + m_a (|d_a|^2 1 - d_a d_a^T) + R_AS I_s R_AS^T + m_s (|d_s|^2 1 - d_s d_s^T), d = c_i - c.
+Robot chain_merged_by_hand() {
+  const MassProperties a = arm_inertial(), s = sensor_inertial();
+  const Eigen::Isometry3d X_AS = arm_to_sensor();
+  MassProperties merged;
+  merged.mass = a.mass + s.mass;
+  const Eigen::Vector3d c_s_in_A = X_AS.linear() * s.center_of_mass + X_AS.translation();
+  merged.center_of_mass = (a.mass * a.center_of_mass + s.mass * c_s_in_A) / merged.mass;
+  const Eigen::Vector3d d_a = a.center_of_mass - merged.center_of_mass;
+  const Eigen::Vector3d d_s = c_s_in_A - merged.center_of_mass;
+  const Eigen::Matrix3d one = Eigen::Matrix3d::Identity();
+  merged.inertia = a.inertia + a.mass * (d_a.dot(d_a) * one - d_a * d_a.transpose()) +
+                   X_AS.linear() * s.inertia * X_AS.linear().transpose() +
+                   s.mass * (d_s.dot(d_s) * one - d_s * d_s.transpose());
+  RobotBuilder b;
+  const int frame = b.root("frame", MassProperties{});
+  const int arm = b.child(frame, "shoulder", JointKind::kRevolute, Eigen::Isometry3d::Identity(),
+                          Eigen::Vector3d::UnitZ(), "arm", merged);
+  b.joint(0).limits = JointLimits{-2.5, 2.5, 0, 0};
+  b.child(arm, "wrist", JointKind::kContinuous, arm_to_sensor() * sensor_to_wrist(),
+          Eigen::Vector3d(0.3, 0, 1).normalized(), "hand", hand_inertial());
+  return b.robot();
+}
+
+TEST(MergedBodies, SensorOnAFixedJointMovesAsMergedByHand) {
+  const std::map<std::string, double> start{{"shoulder", 1.1}, {"wrist", -0.6}};
+  Diagnostics diag;
+  auto welded = Simulation::create(chain_with_sensor(), {}, start, diag);
+  auto by_hand = Simulation::create(chain_merged_by_hand(), {}, start, diag);
+  ASSERT_TRUE(welded && by_hand) << all_text(diag);
+  EXPECT_EQ(welded->body_count(), 2);  // arm + sensor, hand
+  EXPECT_EQ(by_hand->body_count(), 2);
+  double largest_angle = 0;
+  for (int step = 0; step < 2000; ++step) {
+    welded->step();
+    by_hand->step();
+    for (const char* joint : {"shoulder", "wrist"}) {
+      const JointState a = *welded->joint_state(joint), b = *by_hand->joint_state(joint);
+      ASSERT_NEAR(a.position, b.position, 1e-9) << joint << " at step " << step;
+      ASSERT_NEAR(a.velocity, b.velocity, 1e-9) << joint << " at step " << step;
+      largest_angle = std::max(largest_angle, std::abs(a.position));
+    }
+    for (const char* link : {"arm", "hand"}) {
+      const LinkPose a = *welded->link_pose(link), b = *by_hand->link_pose(link);
+      ASSERT_LT((a.X_SL.matrix() - b.X_SL.matrix()).cwiseAbs().maxCoeff(), 1e-9) << link << " at step " << step;
+    }
+    // The sensor link is reported where its fixed joint puts it on the arm.
+    const Eigen::Isometry3d X_SSensor = welded->link_pose("sensor")->X_SL;
+    const Eigen::Isometry3d expected = welded->link_pose("arm")->X_SL * arm_to_sensor();
+    ASSERT_LT((X_SSensor.matrix() - expected.matrix()).cwiseAbs().maxCoeff(), 1e-12) << "step " << step;
+  }
+  EXPECT_GT(largest_angle, 1.0);  // it did swing
+  // Every authored link keeps its own inertial in the simulation's robot (what the inertia
+  // table is made from): the merge is the ODE model's, not the robot's.
+  const Robot& robot = welded->robot();
+  ASSERT_EQ(robot.links.size(), 4u);
+  EXPECT_EQ(robot.links[2].name, "sensor");
+  EXPECT_EQ(robot.links[2].inertial.mass, sensor_inertial().mass);
+  EXPECT_EQ(robot.links[2].inertial.inertia, sensor_inertial().inertia);
+  EXPECT_EQ(robot.links[1].inertial.mass, arm_inertial().mass);
+}
+
+// The per-link checks still run on a link that is welded into another's body.
+TEST(MergedBodies, PerLinkChecksSeeEveryWeldedLink) {
+  Robot robot = chain_with_sensor();
+  robot.links[2].inertial.inertia = Eigen::Vector3d(1e-6, 1e-6, 1e-5).asDiagonal();
+  Diagnostics diag;
+  check_physics(robot, {}, nullptr, diag);
+  dynamics_test::expect_one_error(diag, "LINK_INERTIA_TRIANGLE_INEQUALITY", robot.links[2].node, "sensor");
+}
+
+// A quadruped-like trunk: 12 kg, with a 1 g IMU, camera optical frames of 1e-5 kg and zero inertia
+// and a massless "floating_base" link, all on fixed joints; one 1 kg leg on a hinge. The small
+// links are no mass-ratio problem (they are part of the trunk's body) and the stepper counts the
+// bodies that move.
+Robot trunk_with_sensors() {
+  RobotBuilder b;
+  const int base = b.root("floating_base", MassProperties{});
+  const int trunk = b.child(base, "floating_base_joint", JointKind::kFixed, Eigen::Isometry3d::Identity(),
+                            Eigen::Vector3d::UnitX(), "trunk", box_inertial(12.0, {0.5, 0.15, 0.3}));
+  b.child(trunk, "imu_joint", JointKind::kFixed, translation(0.05, 0.02, 0), Eigen::Vector3d::UnitX(), "imu",
+          box_inertial(1e-3, {0.01, 0.01, 0.01}));
+  MassProperties optical;
+  optical.mass = 1e-5;  // zero inertia: a point mass
+  const int camera = b.child(trunk, "camera_joint", JointKind::kFixed, translation(0.25, 0, 0), Eigen::Vector3d::UnitX(),
+                             "camera", optical);
+  b.child(camera, "camera_optical_joint", JointKind::kFixed, translation(0.01, 0, 0), Eigen::Vector3d::UnitX(),
+          "camera_optical_frame", optical);
+  b.child(trunk, "hip", JointKind::kRevolute, translation(0.2, -0.075, 0.1), Eigen::Vector3d::UnitZ(), "leg",
+          box_inertial(1.0, {0.04, 0.3, 0.04}, {0, -0.15, 0}));
+  b.joint(4).limits = JointLimits{-1.0, 1.0, 0, 0};
+  return b.robot();
+}
+
+TEST(MergedBodies, SensorFramesOnATrunkPass) {
+  for (const bool floating : {false, true}) {
+    SCOPED_TRACE(floating ? "floating" : "fixed to the world");
+    ValidationOptions options;
+    options.simulation.floating_root = floating;
+    options.initial_positions = {{"hip", 0.5}};
+    const ValidationReport report = validate_dynamics(trunk_with_sensors(), options);
+    std::printf("trunk (%s): %s\n", floating ? "floating" : "fixed", validation_summary_line(report).c_str());
+    EXPECT_TRUE(report.passed) << all_text(report.diagnostics);
+    EXPECT_FALSE(report.diagnostics.contains("JOINT_MASS_RATIO")) << all_text(report.diagnostics);
+    EXPECT_EQ(report.bodies, floating ? 2 : 1);  // the welded trunk is static when the world holds it
+    EXPECT_EQ(report.stepper, "dWorldStep");
+    EXPECT_EQ(with_code(report.diagnostics, "LINK_POINT_MASS").size(), 2u) << all_text(report.diagnostics);
+  }
+}
+
+// A leg much lighter than the trunk's body is still a ratio problem, named with both bodies.
+TEST(MergedBodies, MassRatioIsJudgedBetweenMergedBodies) {
+  Robot robot = trunk_with_sensors();
+  robot.links[5].inertial = box_inertial(1e-3, {0.04, 0.3, 0.04}, {0, -0.15, 0});
+  PhysicalCheckOptions options;
+  options.floating_root = true;
+  Diagnostics diag;
+  check_physics(robot, options, nullptr, diag);
+  const auto ratio = with_code(diag, "JOINT_MASS_RATIO");
+  ASSERT_EQ(ratio.size(), 1u) << all_text(diag);
+  EXPECT_EQ(ratio[0].pointer, "/nodes/" + std::to_string(robot.joints[4].node));
+  EXPECT_NE(ratio[0].message.find("link 'floating_base' and the 4 links fixed to it (12.001 kg)"), std::string::npos)
+      << ratio[0].message;
+  EXPECT_NE(ratio[0].message.find("mass ratio 12001"), std::string::npos) << ratio[0].message;
+}
+
+// A cart-pole's rail: mass 0 but an inertia of 1, welded to the world: it never moves, a warning.
+// The same link moving is an error.
+TEST(MergedBodies, MasslessRootWithInertiaWeldedToTheWorldIsAWarning) {
+  RobotBuilder b;
+  MassProperties rail;
+  rail.inertia = Eigen::Matrix3d::Identity();
+  const int root = b.root("rail", rail);
+  b.child(root, "slider", JointKind::kPrismatic, Eigen::Isometry3d::Identity(), Eigen::Vector3d::UnitX(), "cart",
+          box_inertial(1.0, {0.2, 0.1, 0.1}));
+  b.joint(0).limits = JointLimits{-1, 1, 0, 0};
+  const ValidationReport report = validate_dynamics(b.robot(), ValidationOptions{});
+  EXPECT_TRUE(report.passed) << all_text(report.diagnostics);
+  const auto massless = with_code(report.diagnostics, "LINK_MASSLESS_WITH_INERTIA");
+  ASSERT_EQ(massless.size(), 1u) << all_text(report.diagnostics);
+  EXPECT_EQ(massless[0].severity, Severity::kWarning);
+  EXPECT_EQ(massless[0].pointer, "/nodes/0");
+  EXPECT_NE(massless[0].message.find("'rail'"), std::string::npos);
+
+  ValidationOptions floating;
+  floating.simulation.floating_root = true;
+  const ValidationReport moving = validate_dynamics(b.robot(), floating);
+  EXPECT_FALSE(moving.passed);
+  const auto error = with_code(moving.diagnostics, "LINK_MASSLESS_WITH_INERTIA");
+  ASSERT_EQ(error.size(), 1u) << all_text(moving.diagnostics);
+  EXPECT_EQ(error[0].severity, Severity::kError);
+}
+
+// pybullet's Panda hangs frames of 0 kg with an inertia of 0.1 kg m^2 on its flange: welded into a
+// body with mass, such a link adds its inertia (a warning), as MuJoCo's fusestatic does, and the
+// chain moves as the one with that inertia added to the arm's by hand.
+TEST(MergedBodies, MasslessLinkWithInertiaAddsItsInertiaToItsBody) {
+  Robot welded = chain_with_sensor();
+  welded.links[2].inertial.mass = 0;
+  welded.links[2].inertial.center_of_mass.setZero();
+  const Eigen::Matrix3d I_sensor = Eigen::Vector3d(0.01, 0.02, 0.015).asDiagonal();
+  welded.links[2].inertial.inertia = I_sensor;
+  Robot by_hand = chain_with_sensor();
+  by_hand.links[2].inertial = MassProperties{};
+  const Eigen::Matrix3d R_AS = arm_to_sensor().linear();
+  by_hand.links[1].inertial.inertia += R_AS * I_sensor * R_AS.transpose();
+  const ValidationReport report = validate_dynamics(welded, ValidationOptions{});
+  EXPECT_TRUE(report.passed) << all_text(report.diagnostics);
+  const auto massless = with_code(report.diagnostics, "LINK_MASSLESS_WITH_INERTIA");
+  ASSERT_EQ(massless.size(), 1u) << all_text(report.diagnostics);
+  EXPECT_EQ(massless[0].severity, Severity::kWarning);
+  EXPECT_NE(massless[0].message.find("into the body of link 'arm'"), std::string::npos) << massless[0].message;
+  const std::map<std::string, double> start{{"shoulder", 1.1}, {"wrist", -0.6}};
+  Diagnostics diag;
+  auto a = Simulation::create(welded, {}, start, diag);
+  auto b = Simulation::create(by_hand, {}, start, diag);
+  ASSERT_TRUE(a && b) << all_text(diag);
+  for (int step = 0; step < 1000; ++step) {
+    a->step();
+    b->step();
+    ASSERT_NEAR(a->joint_state("shoulder")->position, b->joint_state("shoulder")->position, 1e-9) << step;
+    ASSERT_NEAR(a->joint_state("wrist")->position, b->joint_state("wrist")->position, 1e-9) << step;
+  }
+}
+
+// A massless link on a hinge: an error that names the options that simulate it; with a bound
+// mass and inertia it is simulated and passes with a warning (or fails, if asked to).
+TEST(MergedBodies, MasslessMovingLinkAndTheBoundMass) {
+  RobotBuilder b;
+  const int base = b.root("base", box_inertial(2.0, {0.2, 0.2, 0.2}));
+  const int empty = b.child(base, "pan", JointKind::kRevolute, translation(0, -0.1, 0), Eigen::Vector3d::UnitY(),
+                            "pan_link", MassProperties{});
+  b.joint(0).limits = JointLimits{-1, 1, 0, 0};
+  b.child(empty, "tilt_mount", JointKind::kFixed, translation(0, -0.05, 0), Eigen::Vector3d::UnitX(), "tilt_frame",
+          MassProperties{});
+  const ValidationReport refused = validate_dynamics(b.robot(), ValidationOptions{});
+  EXPECT_FALSE(refused.passed);
+  const auto zero = with_code(refused.diagnostics, "LINK_MASS_ZERO");
+  ASSERT_EQ(zero.size(), 2u) << all_text(refused.diagnostics);
+  EXPECT_EQ(zero[0].pointer, "/nodes/2");
+  EXPECT_NE(zero[0].message.find("'pan_link'"), std::string::npos);
+  EXPECT_NE(zero[0].message.find("--bound-mass"), std::string::npos) << zero[0].message;
+  EXPECT_NE(zero[0].message.find("bound_mass_kg"), std::string::npos) << zero[0].message;
+
+  ValidationOptions bounded;
+  bounded.simulation.bound_mass = 1e-3;
+  bounded.simulation.bound_inertia = 1e-6;
+  bounded.initial_positions = {{"pan", 0.5}};
+  const ValidationReport passed = validate_dynamics(b.robot(), bounded);
+  EXPECT_TRUE(passed.passed) << all_text(passed.diagnostics);
+  EXPECT_EQ(passed.bodies, 1);
+  for (const Diagnostic& d : with_code(passed.diagnostics, "LINK_MASS_ZERO")) {
+    EXPECT_EQ(d.severity, Severity::kWarning) << format(d);
+    EXPECT_NE(d.message.find("bound mass 0.001 kg"), std::string::npos) << d.message;
+  }
+  EXPECT_EQ(with_code(passed.diagnostics, "LINK_MASS_ZERO").size(), 2u);
+
+  bounded.checks.massless_link_error = true;
+  const ValidationReport strict = validate_dynamics(b.robot(), bounded);
+  EXPECT_FALSE(strict.passed);
+  EXPECT_TRUE(strict.simulated);
+}
+
+}  // namespace
+}  // namespace rdtf

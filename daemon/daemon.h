@@ -72,7 +72,7 @@ class Daemon {
   void drop_model(const std::filesystem::path& source, std::chrono::microseconds checked);
   void note_change(const std::filesystem::path& path, bool still_open, bool closed);
   void dispatch_due();
-  void handle_outcomes();
+  void handle_outcomes(std::size_t max_outcomes);
   void apply(ConversionOutcome outcome);
   std::size_t publish_model(const ModelRecord& record);  // 1 when it has a live revision.
   std::size_t publish_all();                             // How many models were published.
@@ -84,6 +84,8 @@ class Daemon {
   bool waiting_for_writer(const ModelRecord& record, Clock::time_point now) const;
   std::string unique_model_id(const std::filesystem::path& source) const;
   std::string channel(const std::string& model_id, const char* kind) const;
+  // The watched folder a model lies in (the longest match when folders nest: the first listed).
+  std::filesystem::path root_of(const std::filesystem::path& source) const;
   bool connect_lcm(std::string& error);
   void worker_loop();
   void reload_config();
@@ -98,7 +100,7 @@ class Daemon {
   std::unique_ptr<SimulationHost> simulation_;  // Null when `simulate` is off.
   Counters counters_;
   // Files modified and not yet closed by their writer, since when.
-  std::map<std::filesystem::path, Clock::time_point> open_for_writing_;
+  OpenWrites open_for_writing_;
   int signal_fd_ = -1;
   int wake_fd_ = -1;  // eventfd: a worker finished.
   std::atomic<bool> stop_{false};
@@ -110,6 +112,7 @@ class Daemon {
   Clock::time_point next_watch_retry_;
 
   // Shared with the workers.
+  std::shared_ptr<ReadBudget> read_budget_;
   std::mutex mutex_;
   std::condition_variable work_ready_;
   std::deque<ConversionJob> jobs_;

@@ -43,8 +43,10 @@ constexpr std::size_t kBurstReceiveBufferBytes = 128 * 1024;
 
 // Work one turn of the loop does at most, so that a burst of files (tens of thousands) never
 // holds back requests, commands and heartbeats: inotify events are read one buffer per turn
-// (watcher.cc), and this many finished conversions are applied.
+// (watcher.cc), and this many file events are handled and finished conversions applied.
 constexpr std::size_t kOutcomesPerTurn = 64;
+// File events handled per turn (a new folder of 20,000 files is listed at once: 20,000 events).
+constexpr std::size_t kFileEventsPerTurn = 2048;
 
 std::string milliseconds(std::chrono::microseconds duration) {
   char text[32];
@@ -473,6 +475,7 @@ void Daemon::drop_model(const std::filesystem::path& source, std::chrono::micros
 void Daemon::rescan(const char* why) {
   ++counters_.rescans;
   open_for_writing_.clear();  // Close events may have been lost with the queue.
+  pending_events_.clear();    // What they told, the rescan finds.
   // Models outside every watched folder (after a reload changed them) are gone from our view.
   std::vector<std::filesystem::path> outside;
   for (const auto& [source, record] : registry_.all()) {
@@ -501,12 +504,18 @@ void Daemon::rescan(const char* why) {
 
 void Daemon::handle_file_events() {
   std::string error;
-  const auto events = watcher_.read_events(error);
+  auto events = watcher_.read_events(error);
   if (!error.empty()) log_line("watch error: " + error);
-  for (const FileEvent& event : events) {
+  for (auto& event : events) pending_events_.push_back(std::move(event));
+}
+
+void Daemon::process_file_events(std::size_t max_events) {
+  for (std::size_t handled = 0; handled < max_events && !pending_events_.empty(); ++handled) {
+    const FileEvent event = std::move(pending_events_.front());
+    pending_events_.pop_front();
     switch (event.kind) {
       case FileEvent::Kind::kRescan:
-        rescan("inotify queue overflow or a watched folder moved");
+        rescan("inotify queue overflow or a watched folder moved or went");
         return;
       case FileEvent::Kind::kModified:
         if (!ignored(event.path)) open_for_writing_.opened(event.path, Clock::now());
@@ -860,6 +869,7 @@ void Daemon::step(std::chrono::milliseconds max_wait) {
   if (config_.republish_period.count() > 0) wake = std::min(wake, next_republish_);
   for (const auto& [source, retry] : retries_) wake = std::min(wake, retry.due);
   if (watches_failing_) wake = std::min(wake, next_watch_retry_);
+  if (!pending_events_.empty()) wake = now;  // A burst still being handled: no sleep.
   wake = std::min(wake, next_status_);
   const auto timeout = std::chrono::duration_cast<std::chrono::milliseconds>(wake - now).count();
 
@@ -872,6 +882,7 @@ void Daemon::step(std::chrono::milliseconds max_wait) {
     if (fds[2].revents & POLLIN) handle_outcomes(kOutcomesPerTurn);
     if (fds[1].revents & POLLIN) lcm_->handleTimeout(0);
   }
+  process_file_events(kFileEventsPerTurn);
   now = Clock::now();
   check_watches(now);
   retry_due(now);

@@ -58,7 +58,8 @@ class Daemon {
     int attempts = 0;
   };
 
-  void handle_file_events();
+  void handle_file_events();                        // Reads what inotify has into pending_events_.
+  void process_file_events(std::size_t max_events);  // Handles the oldest of them.
   void remove_stale_temporaries();
   void remove_unreferenced_outputs();
   void publish_daemon_error(const std::string& code, const std::string& file, const std::string& message);
@@ -101,6 +102,7 @@ class Daemon {
   Counters counters_;
   // Files modified and not yet closed by their writer, since when.
   OpenWrites open_for_writing_;
+  std::deque<FileEvent> pending_events_;  // Read from inotify, not yet handled.
   int signal_fd_ = -1;
   int wake_fd_ = -1;  // eventfd: a worker finished.
   std::atomic<bool> stop_{false};

@@ -184,15 +184,15 @@ TEST(DaemonFilesystem, ADiskFullBetweenTheGltfAndTheUrdfLeavesTheLiveRevisionWho
   ASSERT_FALSE(live.urdf.empty());
   const fs::path folder = s.output / "arm.gltf";
   const auto at_publication = snapshot(folder);
-  // Room for the new revision's glTF side (its .bin and JSON, as large as the first's), one page
-  // to spare, and not for its URDF side (three meshes and robot.urdf, a page each at least).
+  // Room for the new revision's glTF side (its .bin and JSON, as large as the first's) and not
+  // for its URDF side too (three new meshes, other boxes, and robot.urdf: a page each at least).
   std::size_t gltf_pages = 0;
   for (const auto& [name, bytes] : at_publication) {
     if (name.rfind("urdf/", 0) != 0) gltf_pages += pages(bytes.size());
   }
-  disk.fill_leaving(s.output / "filler", gltf_pages + 1);
+  disk.fill_leaving(s.output / "filler", gltf_pages);
 
-  const auto second = box_model("secnd_base", 0.1, 3, "arm.bin");
+  const auto second = box_model("secnd_base", 0.12, 3, "arm.bin");
   write_model(s.watch, "arm.gltf", second);
   ASSERT_TRUE(s.daemon->wait_log("could not write the outputs of arm.gltf"));
   // The retries are where an older daemon removed the live revision's .bin.

@@ -42,8 +42,8 @@ constexpr std::chrono::milliseconds kLongestRetryDelay{3000};
 constexpr std::size_t kBurstReceiveBufferBytes = 128 * 1024;
 
 // Work one turn of the loop does at most, so that a burst of files (tens of thousands) never
-// holds back requests, commands and heartbeats: inotify events are read one buffer per turn
-// (watcher.cc), and this many file events are handled and finished conversions applied.
+// holds back requests, commands and heartbeats: this many file events are handled and finished
+// conversions applied per turn (reading the events is cheap; handling them is not).
 constexpr std::size_t kOutcomesPerTurn = 64;
 // File events handled per turn (a new folder of 20,000 files is listed at once: 20,000 events).
 constexpr std::size_t kFileEventsPerTurn = 2048;
@@ -476,6 +476,7 @@ void Daemon::rescan(const char* why) {
   ++counters_.rescans;
   open_for_writing_.clear();  // Close events may have been lost with the queue.
   pending_events_.clear();    // What they told, the rescan finds.
+  rescan_pending_ = false;
   // Models outside every watched folder (after a reload changed them) are gone from our view.
   std::vector<std::filesystem::path> outside;
   for (const auto& [source, record] : registry_.all()) {
@@ -506,10 +507,19 @@ void Daemon::handle_file_events() {
   std::string error;
   auto events = watcher_.read_events(error);
   if (!error.empty()) log_line("watch error: " + error);
-  for (auto& event : events) pending_events_.push_back(std::move(event));
+  for (auto& event : events) {
+    if (event.kind == FileEvent::Kind::kRescan) rescan_pending_ = true;
+    pending_events_.push_back(std::move(event));
+  }
 }
 
 void Daemon::process_file_events(std::size_t max_events) {
+  // Events were lost, or a watched folder moved or went: the rescan finds what every event
+  // still waiting would tell, so they need no handling of their own.
+  if (rescan_pending_) {
+    rescan("inotify queue overflow or a watched folder moved or went");
+    return;
+  }
   for (std::size_t handled = 0; handled < max_events && !pending_events_.empty(); ++handled) {
     const FileEvent event = std::move(pending_events_.front());
     pending_events_.pop_front();

@@ -103,6 +103,7 @@ class Daemon {
   // Files modified and not yet closed by their writer, since when.
   OpenWrites open_for_writing_;
   std::deque<FileEvent> pending_events_;  // Read from inotify, not yet handled.
+  bool rescan_pending_ = false;           // One of them asks for a rescan.
   int signal_fd_ = -1;
   int wake_fd_ = -1;  // eventfd: a worker finished.
   std::atomic<bool> stop_{false};

@@ -108,8 +108,6 @@ std::vector<std::filesystem::path> InotifyWatcher::watch_tree(const std::filesys
 
 std::vector<FileEvent> InotifyWatcher::read_events(std::string& error) {
   std::vector<FileEvent> events;
-  // One buffer per call (a few hundred to a few thousand events): what is left stays queued in
-  // the kernel, and the loop comes back for it after serving everything else once.
   alignas(inotify_event) char buffer[64 * 1024];
   for (;;) {
     const ssize_t n = ::read(fd_, buffer, sizeof(buffer));
@@ -163,7 +161,6 @@ std::vector<FileEvent> InotifyWatcher::read_events(std::string& error) {
         events.push_back({FileEvent::Kind::kModified, path});
       }
     }
-    break;  // One buffer per call.
   }
   return events;
 }

@@ -3,7 +3,13 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
-#include <fstream>
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <sstream>
 #include <type_traits>
 
 #include <nlohmann/json.hpp>
@@ -76,9 +82,156 @@ const std::vector<std::string>& config_keys() {
       "simulate", "state_rate_hz", "real_time_factor", "floating_root", "gravity", "time_step",
       "stepper", "max_mass_ratio", "validation_start_offset_rad", "energy_tolerance",
       "joint_separation_tolerance_m", "limit_tolerance_rad", "limit_tolerance_m", "bound_mass_kg",
-      "bound_inertia_kgm2", "massless_link_severity", "validation_cpu_budget_s", "urdf", "urdf_y_up"};
+      "bound_inertia_kgm2", "massless_link_severity", "validation_cpu_budget_s", "urdf", "urdf_y_up",
+      "max_read_bytes", "max_read_bytes_in_flight"};
   return keys;
 }
+
+const std::vector<KeyRange>& config_ranges() {
+  constexpr double kTiB = 1099511627776.0;
+  static const std::vector<KeyRange> ranges{
+      {"settle_ms", 1, 60000},
+      {"max_open_wait_ms", 0, 600000},
+      {"republish_period_ms", 0, 86400000},  // And 0 or at least 10.
+      {"status_period_ms", 10, 60000},
+      {"workers", 1, 64},
+      {"max_chunk_bytes", 1024, 65000},
+      {"chunk_rate_bytes_per_s", 1e4, 1e10},
+      {"default_density", 1e-3, 1e6},
+      {"max_file_bytes", 1, kTiB},
+      {"max_buffer_bytes", 1, kTiB},
+      {"max_accessor_count", 1, 4294967296.0},
+      {"max_triangles", 1, 4294967296.0},
+      {"max_read_bytes", 1, kTiB},
+      {"max_read_bytes_in_flight", 1, 4 * kTiB},  // And at least max_read_bytes.
+      {"validation_seconds", 1e-3, 60},
+      {"state_rate_hz", 0.1, 10000},
+      {"real_time_factor", 0.01, 100},
+      {"time_step", 1e-4, 0.1},
+      {"max_mass_ratio", 1, 1e12},
+      {"validation_start_offset_rad", -6.2832, 6.2832},
+      {"energy_tolerance", 1e-12, 1e6},
+      {"joint_separation_tolerance_m", 1e-12, 1e3},
+      {"limit_tolerance_rad", 1e-12, 6.2832},
+      {"limit_tolerance_m", 1e-12, 1e3},
+      {"bound_mass_kg", 0, 1e6},              // 0: off.
+      {"bound_inertia_kgm2", 0, 1e6},         // 0: off.
+      {"validation_cpu_budget_s", 0, 86400},  // 0: no limit.
+      {"gravity", -1e3, 1e3},  // Each component, m/s^2.
+  };
+  return ranges;
+}
+
+namespace {
+
+// The value of each ranged key in `config`, as checked.
+std::vector<double> ranged_values(const DaemonConfig& c, const char* key) {
+  const std::string k = key;
+  const auto& l = c.convert.limits;
+  if (k == "settle_ms") return {static_cast<double>(c.settle.count())};
+  if (k == "max_open_wait_ms") return {static_cast<double>(c.max_open_wait.count())};
+  if (k == "republish_period_ms") return {static_cast<double>(c.republish_period.count())};
+  if (k == "status_period_ms") return {static_cast<double>(c.status_period.count())};
+  if (k == "workers") return {static_cast<double>(c.workers)};
+  if (k == "max_chunk_bytes") return {static_cast<double>(c.max_chunk_bytes)};
+  if (k == "chunk_rate_bytes_per_s") return {c.chunk_rate_bytes_per_s};
+  if (k == "default_density") return {c.convert.default_density};
+  if (k == "max_file_bytes") return {static_cast<double>(l.max_file_bytes)};
+  if (k == "max_buffer_bytes") return {static_cast<double>(l.max_buffer_bytes)};
+  if (k == "max_accessor_count") return {static_cast<double>(l.max_accessor_count)};
+  if (k == "max_triangles") return {static_cast<double>(l.max_triangles)};
+  if (k == "max_read_bytes") return {static_cast<double>(c.max_read_bytes)};
+  if (k == "max_read_bytes_in_flight") return {static_cast<double>(c.max_read_bytes_in_flight)};
+  if (k == "validation_seconds") return {c.validation_seconds};
+  if (k == "state_rate_hz") return {c.state_rate_hz};
+  if (k == "real_time_factor") return {c.real_time_factor};
+  if (k == "time_step") return {c.time_step};
+  if (k == "max_mass_ratio") return {c.max_mass_ratio};
+  if (k == "validation_start_offset_rad") return {c.validation_start_offset_rad};
+  if (k == "energy_tolerance") return {c.energy_tolerance};
+  if (k == "joint_separation_tolerance_m") return {c.joint_separation_tolerance_m};
+  if (k == "limit_tolerance_rad") return {c.limit_tolerance_rad};
+  if (k == "limit_tolerance_m") return {c.limit_tolerance_m};
+  if (k == "bound_mass_kg") return {c.bound_mass_kg};
+  if (k == "bound_inertia_kgm2") return {c.bound_inertia_kgm2};
+  if (k == "validation_cpu_budget_s") return {c.validation_cpu_budget_s};
+  if (k == "gravity") return {c.gravity.x(), c.gravity.y(), c.gravity.z()};
+  return {};
+}
+
+std::string number_text(double value) {
+  std::ostringstream out;
+  out << value;
+  return out.str();
+}
+
+// Every ranged key within its range (NaN is in none).
+bool check_ranges(const DaemonConfig& config, std::string& error) {
+  for (const KeyRange& range : config_ranges()) {
+    for (const double value : ranged_values(config, range.key)) {
+      if (!(value >= range.min && value <= range.max)) {
+        error = std::string("\"") + range.key + "\" is " + number_text(value) + ", outside its valid range [" +
+                number_text(range.min) + ", " + number_text(range.max) + "] (docs/daemon.md)";
+        return false;
+      }
+    }
+  }
+  if (config.republish_period.count() > 0 && config.republish_period.count() < 10) {
+    error = "\"republish_period_ms\" must be 0 (off) or at least 10";
+    return false;
+  }
+  if (config.max_read_bytes > config.max_read_bytes_in_flight) {
+    error = "\"max_read_bytes\" (" + std::to_string(config.max_read_bytes) +
+            ") must not exceed \"max_read_bytes_in_flight\" (" + std::to_string(config.max_read_bytes_in_flight) + ")";
+    return false;
+  }
+  return true;
+}
+
+// The config file's text: a regular file only, opened without blocking and read up to a cap.
+std::optional<std::string> read_config_text(const std::filesystem::path& path, std::string& error) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_NOCTTY | O_CLOEXEC);
+  if (fd < 0) {
+    error = path.string() + ": cannot read the config file: " + std::strerror(errno);
+    return std::nullopt;
+  }
+  struct stat info {};
+  std::optional<std::string> text;
+  if (::fstat(fd, &info) != 0) {
+    error = path.string() + ": cannot read the config file: " + std::strerror(errno);
+  } else if (!S_ISREG(info.st_mode)) {
+    error = path.string() + ": the config is " +
+            (S_ISDIR(info.st_mode) ? std::string("a directory") : std::string("not a regular file (a FIFO, device or socket)")) +
+            ", not a file";
+  } else if (static_cast<std::uint64_t>(info.st_size) > kMaxConfigFileBytes) {
+    error = path.string() + ": the config file is " + std::to_string(info.st_size) + " bytes, over the limit of " +
+            std::to_string(kMaxConfigFileBytes);
+  } else {
+    std::string bytes;
+    char buffer[65536];
+    for (;;) {
+      const ssize_t n = ::read(fd, buffer, sizeof(buffer));
+      if (n < 0 && errno == EINTR) continue;
+      if (n < 0) {
+        error = path.string() + ": cannot read the config file: " + std::strerror(errno);
+        break;
+      }
+      if (n == 0) {
+        text = std::move(bytes);
+        break;
+      }
+      bytes.append(buffer, static_cast<std::size_t>(n));
+      if (bytes.size() > kMaxConfigFileBytes) {
+        error = path.string() + ": the config file grew over the limit of " + std::to_string(kMaxConfigFileBytes) + " bytes";
+        break;
+      }
+    }
+  }
+  ::close(fd);
+  return text;
+}
+
+}  // namespace
 
 DaemonConfig default_config() {
   DaemonConfig config;
@@ -89,14 +242,11 @@ DaemonConfig default_config() {
 
 std::optional<DaemonConfig> load_config(const std::filesystem::path& path, DaemonConfig config,
                                         std::string& error) {
-  std::ifstream in(path);
-  if (!in) {
-    error = path.string() + ": cannot read the config file";
-    return std::nullopt;
-  }
+  const auto text = read_config_text(path, error);
+  if (!text) return std::nullopt;
   nlohmann::json json;
   try {
-    json = nlohmann::json::parse(in);
+    json = nlohmann::json::parse(*text);
   } catch (const nlohmann::json::parse_error& e) {
     error = path.string() + ": invalid JSON: " + e.what();
     return std::nullopt;
@@ -157,7 +307,9 @@ std::optional<DaemonConfig> apply_config_json(const nlohmann::json& json, const 
             read_key(json, "bound_inertia_kgm2", config.bound_inertia_kgm2, error) &&
             read_key(json, "validation_cpu_budget_s", config.validation_cpu_budget_s, error) &&
             read_key(json, "urdf", config.urdf, error) &&
-            read_key(json, "urdf_y_up", config.urdf_y_up, error);
+            read_key(json, "urdf_y_up", config.urdf_y_up, error) &&
+            read_key(json, "max_read_bytes", config.max_read_bytes, error) &&
+            read_key(json, "max_read_bytes_in_flight", config.max_read_bytes_in_flight, error);
   if (ok && json.contains("massless_link_severity")) {
     std::string severity;
     ok = read_key(json, "massless_link_severity", severity, error);
@@ -218,6 +370,7 @@ bool check_config(DaemonConfig& config, std::string& error) {
     return false;
   }
   config.output = std::filesystem::canonical(config.output);
+  if (!check_ranges(config, error)) return false;
   if (!(config.validation_seconds > 0) || !(config.state_rate_hz > 0) || !(config.real_time_factor > 0)) {
     error = "validation_seconds, state_rate_hz and real_time_factor must be > 0";
     return false;

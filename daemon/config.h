@@ -30,6 +30,10 @@ struct DaemonConfig {
   std::size_t max_chunk_bytes = 60000;       // Largest LCM payload per description chunk.
   double chunk_rate_bytes_per_s = 32e6;      // Pacing of chunks, so receivers keep up.
   ConvertOptions convert;
+  // What one conversion may read (the model and every file it names, each time it is named), and
+  // what every conversion in flight may read together.
+  std::uint64_t max_read_bytes = std::uint64_t{1} << 30;
+  std::uint64_t max_read_bytes_in_flight = std::uint64_t{2} << 30;
 
   // Dynamics (docs/dynamics.md): every revision is validated in ODE before it is published.
   bool validate = true;
@@ -75,7 +79,20 @@ const std::vector<std::string>& config_keys();
 // $XDG_STATE_HOME/rdtf/output (~/.local/state/rdtf/output).
 DaemonConfig default_config();
 
-// Reads a config file over `base`. Unknown keys and wrong types are errors naming the key.
+// The largest config file read (a config is a few hundred bytes).
+inline constexpr std::uint64_t kMaxConfigFileBytes = 1 << 20;
+
+// The valid range of a numeric key, both ends included (docs/daemon.md lists them).
+struct KeyRange {
+  const char* key;
+  double min;
+  double max;
+};
+const std::vector<KeyRange>& config_ranges();
+
+// Reads a config file over `base`. Unknown keys and wrong types are errors naming the key. Only a
+// regular file of at most kMaxConfigFileBytes is read (opened without blocking: a FIFO or a
+// device given as the config is refused, never waited on).
 std::optional<DaemonConfig> load_config(const std::filesystem::path& path, DaemonConfig base,
                                         std::string& error);
 
@@ -84,7 +101,7 @@ std::optional<DaemonConfig> load_config(const std::filesystem::path& path, Daemo
 std::optional<DaemonConfig> apply_config_json(const nlohmann::json& json, const std::filesystem::path& base,
                                               DaemonConfig config, std::string& error);
 
-// Checks the settings make sense (folders exist or can be made, positive periods). Creates
+// Checks the settings make sense (folders exist or can be made, every number within its range). Creates
 // missing watch and output folders and makes every folder absolute and canonical.
 bool check_config(DaemonConfig& config, std::string& error);
 

@@ -7,57 +7,56 @@
 #include <openssl/evp.h>
 
 #include <cerrno>
+#include <cstring>
 #include <memory>
+#include <set>
 
+#include "../core/gltf/confined_files.h"
+#include "rdtf/atomic_file.h"
 #include "rdtf/write.h"
 
 namespace rdtf::daemon {
 namespace {
 
-// Reads a regular file of at most max_bytes. Opened without blocking (a FIFO put where a model
-// was must not hang a worker) and checked with fstat on the open descriptor, so a file swapped
-// for a FIFO or a directory between a check and the open is still refused.
-// With `folder`, the file's real location (through /proc, after every symlink) must lie inside it:
-// even the content hash never reads a file the loader would refuse.
-std::optional<std::vector<std::uint8_t>> read_bytes(const std::filesystem::path& path,
-                                                    std::uint64_t max_bytes,
-                                                    const std::filesystem::path* folder = nullptr) {
-  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK | O_NOCTTY);
-  if (fd < 0) return std::nullopt;
-  struct stat info {};
-  std::optional<std::vector<std::uint8_t>> result;
-  bool inside = true;
-  if (folder != nullptr) {
-    std::error_code ec;
-    const auto real = std::filesystem::read_symlink("/proc/self/fd/" + std::to_string(fd), ec);
-    const auto relative = real.lexically_relative(*folder);
-    inside = !ec && !relative.empty() && *relative.begin() != "..";
+// The content-addressed files a primary output's text refers to (file names in its folder).
+std::set<std::string> names_in_gltf(const std::string& json, const std::filesystem::path& folder) {
+  std::set<std::string> names;
+  if (json.empty()) return names;
+  for (const auto& file : referenced_files(std::vector<std::uint8_t>(json.begin(), json.end()), folder)) {
+    names.insert(file.filename().string());
   }
-  if (inside && ::fstat(fd, &info) == 0 && S_ISREG(info.st_mode) &&
-      static_cast<std::uint64_t>(info.st_size) <= max_bytes) {
-    std::vector<std::uint8_t> bytes(static_cast<std::size_t>(info.st_size));
-    std::size_t done = 0;
-    for (;;) {
-      if (done == bytes.size()) {
-        result = std::move(bytes);
-        break;
-      }
-      const ssize_t n = ::read(fd, bytes.data() + done, bytes.size() - done);
-      if (n < 0 && errno == EINTR) continue;
-      if (n <= 0) break;  // An error, or the file shrank while read: the writer's next event follows.
-      done += static_cast<std::size_t>(n);
-    }
-  }
-  ::close(fd);
-  return result;
+  return names;
 }
 
-// The model is gone for us: deleted, or a directory (or a symlink to one) stands in its place.
-bool model_gone(const std::filesystem::path& source) {
-  std::error_code ec;
-  const auto status = std::filesystem::status(source, ec);
-  return !std::filesystem::exists(status) || std::filesystem::is_directory(status);
+std::set<std::string> names_in_urdf(const std::string& text) {
+  std::set<std::string> names;
+  for (const auto& filename : urdf_mesh_filenames(text)) names.insert(std::filesystem::path(filename).filename().string());
+  return names;
 }
+
+std::string file_text(const std::filesystem::path& path) {
+  std::vector<std::uint8_t> bytes;
+  std::string why;
+  if (!internal::read_regular_file(path, std::uint64_t{1} << 30, bytes, why)) return {};
+  return std::string(bytes.begin(), bytes.end());
+}
+
+// Holds a share of the read budget for the life of a conversion.
+class HeldBytes {
+ public:
+  HeldBytes(ReadBudget* budget, std::uint64_t bytes) : budget_(budget), bytes_(bytes) {
+    if (budget_ != nullptr) budget_->acquire(bytes_);
+  }
+  ~HeldBytes() {
+    if (budget_ != nullptr) budget_->release(bytes_);
+  }
+  HeldBytes(const HeldBytes&) = delete;
+  HeldBytes& operator=(const HeldBytes&) = delete;
+
+ private:
+  ReadBudget* budget_;
+  std::uint64_t bytes_;
+};
 
 bool has_code(const Diagnostics& diag, const char* code) {
   for (const Diagnostic& d : diag.all()) {
@@ -104,6 +103,130 @@ std::string sha256_hex(std::string_view text) {
   return to_hex(digest, length);
 }
 
+namespace {
+
+// WRITE_FAILED because a name is longer than the output's file system allows: no retry helps.
+bool name_too_long(const Diagnostics& diag) {
+  const std::string text = std::strerror(ENAMETOOLONG);
+  for (const Diagnostic& d : diag.all()) {
+    if (d.severity == Severity::kError && d.code == "WRITE_FAILED" && d.message.find(text) != std::string::npos) {
+      return true;
+    }
+  }
+  return false;
+}
+
+// A failed write: retried later when the environment may change (disk full, unwritable folder),
+// refused for good when a name is too long.
+void write_failed(const std::filesystem::path& output_dir, Diagnostics& diagnostics, bool& retry) {
+  if (name_too_long(diagnostics)) {
+    const long name_max = ::pathconf(output_dir.c_str(), _PC_NAME_MAX);
+    diagnostics.error("NAME_TOO_LONG", "",
+                      "an output name made from this model (its file name, or a node's name in the "
+                      "URDF's meshes) is longer than " + (name_max > 0 ? std::to_string(name_max) : std::string("allowed")) +
+                      " bytes, the longest name the output file system takes; not retried: rename it");
+    retry = false;
+    return;
+  }
+  retry = true;
+}
+
+// Every file of the new revision is written into a stage folder first and moved into place only
+// when all of them are whole (the primary files last), and the previous generation's files go
+// only after that: a disk that fills up between two files leaves the live revision untouched.
+bool write_outputs(const ConversionJob& job, const Conversion& conversion, ConvertedModel& converted,
+                   Diagnostics& diagnostics, bool& retry) {
+  std::error_code ec;
+  std::filesystem::create_directories(job.output_dir, ec);
+  if (ec) {
+    diagnostics.error("WRITE_FAILED", "", "cannot create " + job.output_dir.string() + ": " + ec.message());
+    write_failed(job.output_dir, diagnostics, retry);
+    return false;
+  }
+  std::string why;
+  auto stage = StagedOutput::create(job.output_dir, "stage", why);
+  if (!stage) {
+    diagnostics.error("WRITE_FAILED", "", "cannot write: " + why);
+    write_failed(job.output_dir, diagnostics, retry);
+    return false;
+  }
+  const std::filesystem::path name = job.source.stem().string() + ".rdtf.gltf";
+  converted.output_path = job.output_dir / name;
+  Diagnostics write_diag(converted.output_path.string());
+  WriteOptions write_options;
+  write_options.content_digest = output_digest;
+  if (!write_rdtf(conversion.asset, stage->folder() / name, write_options, write_diag, &converted.rdtf_json)) {
+    diagnostics.append(write_diag);
+    if (has_code(write_diag, "WRITE_FAILED")) write_failed(job.output_dir, diagnostics, retry);
+    return false;
+  }
+  diagnostics.append(write_diag);
+  std::vector<std::filesystem::path> primaries{name};
+  if (job.urdf) {
+    // URDF is a second output: a model URDF cannot express (a ball joint) still converts.
+    Diagnostics urdf_diag(converted.output_path.string());
+    UrdfOptions urdf_options = *job.urdf;
+    urdf_options.mesh_digest = output_digest;
+    if (write_urdf(conversion, stage->folder() / "urdf", urdf_options, urdf_diag, &converted.urdf)) {
+      converted.urdf_path = job.output_dir / "urdf" / "robot.urdf";
+      primaries.emplace_back("urdf/robot.urdf");
+      diagnostics.append(urdf_diag);  // Its warnings (URDF_NAME_CHANGED, ...).
+    } else if (has_code(urdf_diag, "WRITE_FAILED")) {
+      // The disk, not the model: fail the revision and try again; nothing was moved into place.
+      diagnostics.append(urdf_diag);
+      write_failed(job.output_dir, diagnostics, retry);
+      return false;
+    } else {
+      for (const Diagnostic& d : urdf_diag.all()) diagnostics.warning("URDF_NOT_WRITTEN", d.pointer, d.message);
+    }
+  }
+  // Kept: the files of the new revision, of the outputs it replaces on disk, and of the live
+  // revision (the disk's may be newer after a restart or a half-committed earlier attempt).
+  std::set<std::string> keep_gltf = names_in_gltf(converted.rdtf_json, job.output_dir);
+  keep_gltf.merge(names_in_gltf(file_text(converted.output_path), job.output_dir));
+  keep_gltf.merge(names_in_gltf(job.live_rdtf_json, job.output_dir));
+  std::set<std::string> keep_meshes = names_in_urdf(converted.urdf);
+  keep_meshes.merge(names_in_urdf(file_text(job.output_dir / "urdf" / "robot.urdf")));
+  keep_meshes.merge(names_in_urdf(job.live_urdf));
+  if (!stage->commit(job.output_dir, primaries, why)) {
+    diagnostics.error("WRITE_FAILED", "", "cannot move the outputs into place: " + why);
+    write_failed(job.output_dir, diagnostics, retry);
+    return false;
+  }
+  remove_unreferenced(job.output_dir, keep_gltf);
+  if (job.urdf) remove_unreferenced(job.output_dir / "urdf" / "meshes", keep_meshes);
+  return true;
+}
+
+}  // namespace
+
+void ReadBudget::set_capacity(std::uint64_t capacity) {
+  {
+    std::lock_guard lock(mutex_);
+    capacity_ = capacity;
+  }
+  freed_.notify_all();
+}
+
+void ReadBudget::acquire(std::uint64_t bytes) {
+  std::unique_lock lock(mutex_);
+  freed_.wait(lock, [&] { return held_ == 0 || held_ + bytes <= capacity_; });
+  held_ += bytes;
+}
+
+void ReadBudget::release(std::uint64_t bytes) {
+  {
+    std::lock_guard lock(mutex_);
+    held_ -= std::min(held_, bytes);
+  }
+  freed_.notify_all();
+}
+
+std::uint64_t ReadBudget::held() const {
+  std::lock_guard lock(mutex_);
+  return held_;
+}
+
 ConversionOutcome run_conversion(const ConversionJob& job) {
   const auto start = std::chrono::steady_clock::now();
   ConversionOutcome outcome;
@@ -117,37 +240,61 @@ ConversionOutcome run_conversion(const ConversionJob& job) {
   };
 
   std::error_code ec;
-  if (model_gone(job.source)) {
-    outcome.kind = ConversionOutcome::Kind::kVanished;
-    return finish();
-  }
-  const auto model_bytes = read_bytes(job.source, job.options.limits.max_file_bytes);
-  if (!model_bytes) {
-    if (model_gone(job.source)) {
+  // The model is read without following any symlink from the watched folder down: a link named
+  // like a model, or a folder swapped for a link to another folder, leads nowhere.
+  std::vector<std::uint8_t> model_bytes;
+  std::string why;
+  switch (internal::read_beneath(job.root, job.source, job.options.limits.max_file_bytes, model_bytes, why)) {
+    case internal::ReadBeneath::kRead:
+      break;
+    case internal::ReadBeneath::kGone:
       outcome.kind = ConversionOutcome::Kind::kVanished;
-    } else {
-      outcome.diagnostics.error("IO_ERROR", "",
-                                "cannot read the model (too large, unreadable, or not a regular file)");
-    }
+      return finish();
+    case internal::ReadBeneath::kRefused:
+      outcome.diagnostics.error("IO_ERROR", "", "cannot read the model: it " + why);
+      return finish();
+  }
+  // Lexically, not canonically: no folder on the way is a symlink (read_beneath checked), and a
+  // file the model names must really lie below this path (confined_files.h).
+  const auto folder = job.source.parent_path();
+  outcome.dependencies = referenced_files(model_bytes, folder);
+
+  // Everything this conversion will read, each file as often as it is named, before any of it is
+  // read: a small file naming one huge (sparse) file many times is refused up front.
+  std::uint64_t to_read = model_bytes.size();
+  for (const auto& file : outcome.dependencies) {
+    std::string size_why;
+    to_read += internal::confined_file_size(folder, file, size_why).value_or(0);
+  }
+  if (to_read > job.max_read_bytes) {
+    outcome.diagnostics.error("LIMIT_EXCEEDED", "",
+                              "the model and the " + std::to_string(outcome.dependencies.size()) +
+                                  " files it names (each counted as often as it is named) add up to " +
+                                  std::to_string(to_read) + " bytes to read, over the limit of " +
+                                  std::to_string(job.max_read_bytes) + " bytes (max_read_bytes)");
     return finish();
   }
-  const auto folder = std::filesystem::canonical(job.source.parent_path(), ec);
-  outcome.dependencies = referenced_files(*model_bytes, folder);
+  HeldBytes held(job.budget.get(), to_read);
 
   // The content hash covers the model and every file it refers to, so a new .bin alone counts.
   std::vector<std::vector<std::uint8_t>> referenced;
   for (const auto& file : outcome.dependencies) {
-    referenced.push_back(read_bytes(file, job.options.limits.max_file_bytes, &folder).value_or(std::vector<std::uint8_t>{}));
+    std::vector<std::uint8_t> bytes;
+    std::string read_why;
+    if (!internal::read_confined_file(folder, file, job.options.limits.max_file_bytes, bytes, read_why)) bytes.clear();
+    referenced.push_back(std::move(bytes));
   }
-  std::vector<const std::vector<std::uint8_t>*> parts{&*model_bytes};
+  std::vector<const std::vector<std::uint8_t>*> parts{&model_bytes};
   for (const auto& bytes : referenced) parts.push_back(&bytes);
   outcome.content_hash = sha256_hex(parts);
+  referenced.clear();
+  referenced.shrink_to_fit();
   if (outcome.content_hash == job.previous_hash) {
     outcome.kind = ConversionOutcome::Kind::kUnchanged;
     return finish();
   }
 
-  auto asset = load_gltf_from_memory(*model_bytes, job.source, folder, job.options.limits,
+  auto asset = load_gltf_from_memory(model_bytes, job.source, folder, job.options.limits,
                                      outcome.diagnostics);
   if (!asset) return finish();
   auto conversion = convert(std::move(*asset), job.options, outcome.diagnostics);
@@ -179,42 +326,7 @@ ConversionOutcome run_conversion(const ConversionJob& job) {
   converted.content_hash = outcome.content_hash;
   converted.validation = std::move(validation);
   if (write) {
-    std::filesystem::create_directories(job.output_dir, ec);
-    if (ec) {
-      outcome.diagnostics.error("WRITE_FAILED", "", "cannot create " + job.output_dir.string() + ": " + ec.message());
-      outcome.retry = true;
-      return finish();
-    }
-    converted.output_path = job.output_dir / (job.source.stem().string() + ".rdtf.gltf");
-    Diagnostics write_diag(converted.output_path.string());
-    WriteOptions write_options;
-    write_options.content_digest = output_digest;
-    if (!write_rdtf(conversion->asset, converted.output_path, write_options, write_diag, &converted.rdtf_json)) {
-      outcome.diagnostics.append(write_diag);
-      outcome.retry = has_code(write_diag, "WRITE_FAILED");
-      return finish();
-    }
-    outcome.diagnostics.append(write_diag);
-    if (job.urdf) {
-      // URDF is a second output: a model URDF cannot express (a ball joint) still converts.
-      Diagnostics urdf_diag(converted.output_path.string());
-      const auto urdf_dir = job.output_dir / "urdf";
-      UrdfOptions urdf_options = *job.urdf;
-      urdf_options.mesh_digest = output_digest;
-      if (write_urdf(*conversion, urdf_dir, urdf_options, urdf_diag, &converted.urdf)) {
-        converted.urdf_path = urdf_dir / "robot.urdf";
-        outcome.diagnostics.append(urdf_diag);  // Its warnings (URDF_NAME_CHANGED, ...).
-      } else if (has_code(urdf_diag, "WRITE_FAILED")) {
-        // The disk, not the model: fail the revision and try again, so no output is left behind.
-        outcome.diagnostics.append(urdf_diag);
-        outcome.retry = true;
-        return finish();
-      } else {
-        for (const Diagnostic& d : urdf_diag.all()) {
-          outcome.diagnostics.warning("URDF_NOT_WRITTEN", d.pointer, d.message);
-        }
-      }
-    }
+    if (!write_outputs(job, *conversion, converted, outcome.diagnostics, outcome.retry)) return finish();
     converted.written = true;
   }
   converted.totals = robot_totals(conversion->robot);

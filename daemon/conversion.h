@@ -3,7 +3,11 @@
 #pragma once
 
 #include <chrono>
+#include <condition_variable>
+#include <cstdint>
 #include <filesystem>
+#include <memory>
+#include <mutex>
 #include <optional>
 #include <span>
 #include <string>
@@ -18,9 +22,28 @@
 
 namespace rdtf::daemon {
 
+// The bytes conversions may read at once, across every worker: a conversion holds what it will
+// read (the model and every file it names) from before its first read to its end.
+class ReadBudget {
+ public:
+  explicit ReadBudget(std::uint64_t capacity) : capacity_(capacity) {}
+  void set_capacity(std::uint64_t capacity);
+  // Waits until `bytes` more fit, or until nothing is held (so that one conversion always runs).
+  void acquire(std::uint64_t bytes);
+  void release(std::uint64_t bytes);
+  std::uint64_t held() const;
+
+ private:
+  mutable std::mutex mutex_;
+  std::condition_variable freed_;
+  std::uint64_t capacity_;
+  std::uint64_t held_ = 0;
+};
+
 struct ConversionJob {
   std::string model_id;
-  std::filesystem::path source;      // The model file.
+  std::filesystem::path root;        // The watched folder the model lies in (canonical).
+  std::filesystem::path source;      // The model file: root / a path with no symlink on it.
   std::filesystem::path output_dir;  // This model's own output folder.
   ConvertOptions options;
   std::string previous_hash;         // Content last converted (good or bad): skip when equal.
@@ -29,6 +52,13 @@ struct ConversionJob {
   // publish_failed: a revision that fails the dynamics check is published, so its outputs are
   // written too. Otherwise such a revision writes nothing: the live revision's files stay.
   bool write_failed = false;
+  // The live revision's outputs (what LCM advertises): their files stay until a newer revision
+  // has been committed whole, whatever happens to this one.
+  std::string live_rdtf_json;
+  std::string live_urdf;
+  // What one conversion may read, the model and every file it names (each time it is named).
+  std::uint64_t max_read_bytes = std::uint64_t{1} << 30;
+  std::shared_ptr<ReadBudget> budget;  // Shared by every worker; none: no limit across workers.
 };
 
 // The dynamics check of a revision, without the ODE world.

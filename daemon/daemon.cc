@@ -11,6 +11,7 @@
 #include <ctime>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <optional>
 #include <regex>
 #include <set>
@@ -43,6 +44,13 @@ constexpr std::size_t kBurstReceiveBufferBytes = 128 * 1024;
 // Requests for the same model (or for all) are answered at most once per this period
 // (RequestThrottle): a flood of requests costs one publication per model and period.
 constexpr std::chrono::milliseconds kRequestAnswerPeriod{1000};
+
+// Work one turn of the loop does at most, so that a burst of files (tens of thousands) never
+// holds back requests, commands and heartbeats: this many file events are handled and finished
+// conversions applied per turn (reading the events is cheap; handling them is not).
+constexpr std::size_t kOutcomesPerTurn = 64;
+// File events handled per turn (a new folder of 20,000 files is listed at once: 20,000 events).
+constexpr std::size_t kFileEventsPerTurn = 2048;
 
 std::string milliseconds(std::chrono::microseconds duration) {
   char text[32];
@@ -94,7 +102,7 @@ std::string first_error(const Diagnostics& diag) {
 // gives no model a new revision.
 auto conversion_settings(const DaemonConfig& c) {
   const auto& l = c.convert.limits;
-  return std::make_tuple(c.output, c.convert.default_density, l.max_file_bytes, l.max_buffer_bytes,
+  return std::make_tuple(c.output, c.convert.default_density, l.max_file_bytes, l.max_buffer_bytes, c.max_read_bytes,
                          l.max_accessor_count, l.max_triangles, c.validate, c.validation_seconds,
                          c.publish_failed, c.floating_root, c.gravity.x(), c.gravity.y(), c.gravity.z(),
                          c.time_step, static_cast<int>(c.stepper), c.max_mass_ratio,
@@ -119,11 +127,51 @@ bool same_result(const ConvertedModel& live, const ConvertedModel& candidate) {
          (!live.validation || live.validation->passed == candidate.validation->passed);
 }
 
+// Whether `path` is a regular file reached from `root` through real folders only (no symlink on
+// the way, none at the end): where read_beneath would find a model.
+bool regular_file_below(const std::filesystem::path& root, const std::filesystem::path& path) {
+  const auto relative = path.lexically_relative(root);
+  if (relative.empty() || *relative.begin() == "..") return false;
+  std::filesystem::path at = root;
+  std::error_code ec;
+  for (auto it = relative.begin(); it != relative.end(); ++it) {
+    at /= *it;
+    const auto status = std::filesystem::symlink_status(at, ec);
+    const bool last = std::next(it) == relative.end();
+    if (ec || !(last ? std::filesystem::is_regular_file(status) : std::filesystem::is_directory(status))) return false;
+  }
+  return true;
+}
+
 std::string since(Clock::time_point start) {
   return milliseconds(std::chrono::duration_cast<std::chrono::microseconds>(Clock::now() - start));
 }
 
 }  // namespace
+
+std::string escape_for_log(std::string_view text) {
+  std::string out;
+  out.reserve(text.size());
+  for (const char c : text) {
+    const auto byte = static_cast<unsigned char>(c);
+    if (c == '\\') {
+      out += "\\\\";
+    } else if (c == '\n') {
+      out += "\\n";
+    } else if (c == '\r') {
+      out += "\\r";
+    } else if (c == '\t') {
+      out += "\\t";
+    } else if (byte < 0x20 || byte == 0x7f) {
+      char escaped[8];
+      std::snprintf(escaped, sizeof(escaped), "\\x%02x", byte);
+      out += escaped;
+    } else {
+      out += c;
+    }
+  }
+  return out;
+}
 
 void log_line(const std::string& text) {
   const auto now = std::chrono::system_clock::now();
@@ -135,7 +183,9 @@ void log_line(const std::string& text) {
   std::strftime(stamp, sizeof(stamp), "%Y-%m-%dT%H:%M:%S", &utc);
   char full[40];
   std::snprintf(full, sizeof(full), "%s.%03lldZ", stamp, static_cast<long long>(millis));
-  std::cerr << full << " " << text << std::endl;
+  // One event, one line: a file name (or any other text from outside) with a newline or a
+  // terminal escape in it cannot forge a line or rewrite the terminal.
+  std::cerr << full << " " << escape_for_log(text) << std::endl;
 }
 
 Daemon::Daemon(DaemonConfig config, ConfigLoader reload)
@@ -147,7 +197,8 @@ Daemon::Daemon(DaemonConfig config, ConfigLoader reload)
                                 if (simulation_) simulation_->command(command);
                               },
                               [](const std::string& line) { log_line(line); }}),
-      request_throttle_(kRequestAnswerPeriod) {}
+      request_throttle_(kRequestAnswerPeriod),
+      read_budget_(std::make_shared<ReadBudget>(config_.max_read_bytes_in_flight)) {}
 
 Daemon::~Daemon() {
   cancel_validations_ = true;
@@ -210,20 +261,24 @@ bool Daemon::start(std::string& error) {
 // Temporary files of write_file_atomically (".<name>.<pid>-<random>.tmp") whose writer is gone:
 // left by a daemon killed mid-write. Files of a live process (another rdtfd) are left alone.
 void Daemon::remove_stale_temporaries() {
-  static const std::regex kTemporary(R"(\..+\.([0-9]+)-[0-9]+\.tmp)");
   std::error_code ec;
   int removed = 0;
+  std::vector<std::filesystem::path> stale;
   for (std::filesystem::recursive_directory_iterator it(config_.output, ec), end; !ec && it != end; it.increment(ec)) {
     std::error_code type_error;
-    if (!it->is_regular_file(type_error)) continue;
-    const std::string name = it->path().filename().string();
-    std::smatch match;
-    if (!std::regex_match(name, match, kTemporary)) continue;
-    const long pid = std::stol(match[1].str());
-    const bool writer_alive = pid > 0 && pid != ::getpid() && (::kill(static_cast<pid_t>(pid), 0) == 0 || errno == EPERM);
-    if (writer_alive) continue;
+    const auto status = it->symlink_status(type_error);
+    const bool folder = std::filesystem::is_directory(status);
+    if (!folder && !std::filesystem::is_regular_file(status)) continue;
+    const auto pid = temporary_writer_pid(it->path().filename().string());
+    if (!pid) continue;
+    // Stage folders (StagedOutput) are temporaries too, with all they hold.
+    if (folder) it.disable_recursion_pending();
+    const bool writer_alive = *pid > 0 && *pid != ::getpid() && (::kill(static_cast<pid_t>(*pid), 0) == 0 || errno == EPERM);
+    if (!writer_alive) stale.push_back(it->path());
+  }
+  for (const auto& path : stale) {
     std::error_code remove_error;
-    if (std::filesystem::remove(it->path(), remove_error)) ++removed;
+    if (std::filesystem::remove_all(path, remove_error) > 0) ++removed;
   }
   if (removed > 0) {
     log_line("removed " + std::to_string(removed) + " temporary files left in " + config_.output.string() +
@@ -305,8 +360,10 @@ void Daemon::retry_due(Clock::time_point now) {
   }
 }
 
-// Folders that could not be watched (inotify's max_user_watches reached) are reported once and
-// tried again every second; when every folder is watched again, a rescan catches what changed.
+// Folders that could not be watched are reported once. A folder inotify refused (max_user_watches
+// reached) is tried again every second; a watched folder that is missing (deleted) is looked for
+// every second, which costs one stat, and watched again when it is back. When every folder is
+// watched again, a rescan has caught what changed meanwhile.
 void Daemon::check_watches(Clock::time_point now) {
   const auto& unwatched = watcher_.unwatched();
   if (unwatched.empty()) {
@@ -317,17 +374,29 @@ void Daemon::check_watches(Clock::time_point now) {
   if (!watches_failing_) {
     watches_failing_ = true;
     next_watch_retry_ = now + kWatchRetryPeriod;
-    for (const auto& folder : unwatched) {
-      publish_daemon_error("WATCH_FAILED", folder.string(),
-                           "cannot watch " + folder.string() +
-                               ": inotify watches exhausted (raise /proc/sys/fs/inotify/max_user_watches); "
-                               "its models were converted once, and the folder is tried again every second");
+    for (const auto& [folder, missing] : unwatched) {
+      if (missing) {
+        log_line("watched folder " + folder.string() + " is missing; looking for it every second");
+        publish_daemon_error("WATCH_FAILED", folder.string(),
+                             "cannot watch " + folder.string() +
+                                 ": it is missing (deleted or moved away); its models were removed, and "
+                                 "it is looked for every second and watched again when it is back");
+      } else {
+        publish_daemon_error("WATCH_FAILED", folder.string(),
+                             "cannot watch " + folder.string() +
+                                 ": inotify watches exhausted (raise /proc/sys/fs/inotify/max_user_watches); "
+                                 "its models were converted once, and the folder is tried again every second");
+      }
     }
     return;
   }
   if (now >= next_watch_retry_) {
     next_watch_retry_ = now + kWatchRetryPeriod;
-    rescan("retrying folders that could not be watched");
+    const bool worth_a_rescan = std::any_of(unwatched.begin(), unwatched.end(), [](const auto& entry) {
+      std::error_code ec;
+      return !entry.missing || std::filesystem::is_directory(std::filesystem::symlink_status(entry.folder, ec));
+    });
+    if (worth_a_rescan) rescan("retrying folders that could not be watched");
   }
 }
 
@@ -340,6 +409,14 @@ bool Daemon::ignored(const std::filesystem::path& path) const {
   }
   const auto relative = path.lexically_relative(config_.output);
   return !relative.empty() && *relative.begin() != "..";
+}
+
+std::filesystem::path Daemon::root_of(const std::filesystem::path& source) const {
+  for (const auto& root : config_.watch) {
+    const auto relative = source.lexically_relative(root);
+    if (!relative.empty() && *relative.begin() != "..") return root;
+  }
+  return source.parent_path();
 }
 
 std::string Daemon::channel(const std::string& model_id, const char* kind) const {
@@ -386,14 +463,11 @@ std::string Daemon::unique_model_id(const std::filesystem::path& source) const {
 }
 
 bool Daemon::waiting_for_writer(const ModelRecord& record, Clock::time_point now) const {
-  for (const auto& [file, since] : open_for_writing_) {
-    if (now - since > config_.max_open_wait) continue;  // A writer that never closes: go anyway.
-    const bool referenced = std::find(record.dependencies.begin(), record.dependencies.end(), file) !=
-                            record.dependencies.end();
-    const bool maybe_referenced = record.dependencies.empty() && file.parent_path() == record.source.parent_path();
-    if (file == record.source || referenced || maybe_referenced) return true;
-  }
-  return false;
+  // The model file, a file it refers to, or (never converted yet: its .bin unknown) any file in its folder.
+  std::vector<std::filesystem::path> files = record.dependencies;
+  files.push_back(record.source);
+  const auto folder = record.source.parent_path();
+  return open_for_writing_.holds(files, record.dependencies.empty() ? &folder : nullptr, now, config_.max_open_wait);
 }
 
 void Daemon::drop_model(const std::filesystem::path& source, std::chrono::microseconds checked) {
@@ -413,6 +487,8 @@ void Daemon::drop_model(const std::filesystem::path& source, std::chrono::micros
 void Daemon::rescan(const char* why) {
   ++counters_.rescans;
   open_for_writing_.clear();  // Close events may have been lost with the queue.
+  pending_events_.clear();    // What they told, the rescan finds.
+  rescan_pending_ = false;
   // Models outside every watched folder (after a reload changed them) are gone from our view.
   std::vector<std::filesystem::path> outside;
   for (const auto& [source, record] : registry_.all()) {
@@ -441,20 +517,35 @@ void Daemon::rescan(const char* why) {
 
 void Daemon::handle_file_events() {
   std::string error;
-  const auto events = watcher_.read_events(error);
+  auto events = watcher_.read_events(error);
   if (!error.empty()) log_line("watch error: " + error);
-  for (const FileEvent& event : events) {
+  for (auto& event : events) {
+    if (event.kind == FileEvent::Kind::kRescan) rescan_pending_ = true;
+    pending_events_.push_back(std::move(event));
+  }
+}
+
+void Daemon::process_file_events(std::size_t max_events) {
+  // Events were lost, or a watched folder moved or went: the rescan finds what every event
+  // still waiting would tell, so they need no handling of their own.
+  if (rescan_pending_) {
+    rescan("inotify queue overflow or a watched folder moved or went");
+    return;
+  }
+  for (std::size_t handled = 0; handled < max_events && !pending_events_.empty(); ++handled) {
+    const FileEvent event = std::move(pending_events_.front());
+    pending_events_.pop_front();
     switch (event.kind) {
       case FileEvent::Kind::kRescan:
-        rescan("inotify queue overflow or a watched folder moved");
+        rescan("inotify queue overflow or a watched folder moved or went");
         return;
       case FileEvent::Kind::kModified:
-        if (!ignored(event.path)) open_for_writing_.try_emplace(event.path, Clock::now());
+        if (!ignored(event.path)) open_for_writing_.opened(event.path, Clock::now());
         note_change(event.path, true, false);
         break;
       case FileEvent::Kind::kWritten:
       case FileEvent::Kind::kRemoved:
-        open_for_writing_.erase(event.path);
+        open_for_writing_.closed(event.path);
         note_change(event.path, false, true);
         break;
     }
@@ -477,7 +568,14 @@ void Daemon::dispatch_due() {
     record->in_flight = true;
     ConversionJob job;
     job.model_id = record->id;
+    job.root = root_of(record->source);
     job.source = record->source;
+    if (record->live) {
+      job.live_rdtf_json = record->live->rdtf_json;
+      job.live_urdf = record->live->urdf;
+    }
+    job.max_read_bytes = config_.max_read_bytes;
+    job.budget = read_budget_;
     job.output_dir = config_.output / record->id;
     job.options = config_.convert;
     job.previous_hash = record->last_hash;
@@ -529,15 +627,25 @@ void Daemon::worker_loop() {
   }
 }
 
-void Daemon::handle_outcomes() {
+void Daemon::handle_outcomes(std::size_t max_outcomes) {
   std::uint64_t value = 0;
   [[maybe_unused]] auto read = ::read(wake_fd_, &value, sizeof(value));
   std::deque<ConversionOutcome> outcomes;
+  bool more = false;
   {
     std::lock_guard lock(mutex_);
-    outcomes.swap(outcomes_);
+    while (!outcomes_.empty() && outcomes.size() < max_outcomes) {
+      outcomes.push_back(std::move(outcomes_.front()));
+      outcomes_.pop_front();
+    }
+    more = !outcomes_.empty();
   }
   for (auto& outcome : outcomes) apply(std::move(outcome));
+  // The rest in the next turns of the loop, between requests and heartbeats.
+  if (more) {
+    const std::uint64_t one = 1;
+    [[maybe_unused]] auto written = ::write(wake_fd_, &one, sizeof(one));
+  }
 }
 
 void Daemon::apply(ConversionOutcome outcome) {
@@ -629,8 +737,7 @@ void Daemon::apply(ConversionOutcome outcome) {
       break;
     case ConversionOutcome::Kind::kVanished: {
       retries_.erase(outcome.source);
-      std::error_code ec;
-      if (std::filesystem::is_regular_file(outcome.source, ec)) {
+      if (regular_file_below(root_of(outcome.source), outcome.source)) {
         // Recreated while its conversion found it gone: convert the new file.
         settle_.touch(outcome.source.string(), Clock::now());
         return;
@@ -760,9 +867,17 @@ void Daemon::start_simulation_host() {
 
 void Daemon::reload_config() {
   std::string error;
-  auto fresh = reload_ ? reload_(error) : std::nullopt;
-  if (!fresh || !check_config(*fresh, error)) {
-    log_line("SIGHUP: config not reloaded: " + error);
+  std::optional<DaemonConfig> fresh;
+  // Whatever goes wrong reading or checking the new config, the running one stays.
+  try {
+    fresh = reload_ ? reload_(error) : std::nullopt;
+    if (fresh && !check_config(*fresh, error)) fresh.reset();
+  } catch (const std::exception& e) {
+    error = e.what();
+    fresh.reset();
+  }
+  if (!fresh) {
+    log_line("SIGHUP: config not reloaded, the running config stays: " + error);
     return;
   }
   const bool lcm_changed = fresh->lcm_url != config_.lcm_url || fresh->channel_prefix != config_.channel_prefix;
@@ -776,6 +891,7 @@ void Daemon::reload_config() {
   settle_.set_max_open_wait(config_.max_open_wait);
   if (lcm_changed && !connect_lcm(error)) log_line("SIGHUP: " + error);
   publisher_->set_rate(config_.chunk_rate_bytes_per_s);
+  read_budget_->set_capacity(config_.max_read_bytes_in_flight);
   if (simulation_changed) start_simulation_host();
   // New conversion settings (density, limits) may change any model: convert them all again. A
   // model whose result comes out the same keeps its revision (apply), and a reload that changes
@@ -807,6 +923,7 @@ void Daemon::step(std::chrono::milliseconds max_wait) {
   if (config_.republish_period.count() > 0) wake = std::min(wake, next_republish_);
   for (const auto& [source, retry] : retries_) wake = std::min(wake, retry.due);
   if (watches_failing_) wake = std::min(wake, next_watch_retry_);
+  if (!pending_events_.empty()) wake = now;  // A burst still being handled: no sleep.
   wake = std::min(wake, next_status_);
   if (auto deferred = request_throttle_.next_due()) wake = std::min(wake, *deferred);
   const auto timeout = std::chrono::duration_cast<std::chrono::milliseconds>(wake - now).count();
@@ -817,9 +934,10 @@ void Daemon::step(std::chrono::milliseconds max_wait) {
   if (ready > 0) {
     if (fds[3].revents & POLLIN) handle_signals();
     if (fds[0].revents & POLLIN) handle_file_events();
-    if (fds[2].revents & POLLIN) handle_outcomes();
+    if (fds[2].revents & POLLIN) handle_outcomes(kOutcomesPerTurn);
     if (fds[1].revents & POLLIN) lcm_->handleTimeout(0);
   }
+  process_file_events(kFileEventsPerTurn);
   now = Clock::now();
   check_watches(now);
   retry_due(now);
@@ -859,7 +977,7 @@ int Daemon::run() {
     std::lock_guard lock(mutex_);
     std::erase_if(outcomes_, [](const ConversionOutcome& outcome) { return outcome.cancelled; });
   }
-  handle_outcomes();
+  handle_outcomes(std::numeric_limits<std::size_t>::max());
   const auto flush_until = Clock::now() + std::chrono::seconds(2);
   while (publisher_->queued() > 0 && Clock::now() < flush_until) {
     if (auto next = publisher_->drain(Clock::now())) std::this_thread::sleep_until(*next);

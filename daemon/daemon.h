@@ -59,7 +59,8 @@ class Daemon {
     int attempts = 0;
   };
 
-  void handle_file_events();
+  void handle_file_events();                        // Reads what inotify has into pending_events_.
+  void process_file_events(std::size_t max_events);  // Handles the oldest of them.
   void remove_stale_temporaries();
   void remove_unreferenced_outputs();
   void publish_daemon_error(const std::string& code, const std::string& file, const std::string& message);
@@ -73,7 +74,7 @@ class Daemon {
   void drop_model(const std::filesystem::path& source, std::chrono::microseconds checked);
   void note_change(const std::filesystem::path& path, bool still_open, bool closed);
   void dispatch_due();
-  void handle_outcomes();
+  void handle_outcomes(std::size_t max_outcomes);
   void apply(ConversionOutcome outcome);
   std::size_t publish_model(const ModelRecord& record);  // 1 when it has a live revision.
   std::size_t publish_all();                             // How many models were published.
@@ -89,6 +90,8 @@ class Daemon {
   bool waiting_for_writer(const ModelRecord& record, Clock::time_point now) const;
   std::string unique_model_id(const std::filesystem::path& source) const;
   std::string channel(const std::string& model_id, const char* kind) const;
+  // The watched folder a model lies in (the longest match when folders nest: the first listed).
+  std::filesystem::path root_of(const std::filesystem::path& source) const;
   bool connect_lcm(std::string& error);
   void worker_loop();
   void reload_config();
@@ -105,7 +108,9 @@ class Daemon {
   RequestThrottle request_throttle_;
   Counters counters_;
   // Files modified and not yet closed by their writer, since when.
-  std::map<std::filesystem::path, Clock::time_point> open_for_writing_;
+  OpenWrites open_for_writing_;
+  std::deque<FileEvent> pending_events_;  // Read from inotify, not yet handled.
+  bool rescan_pending_ = false;           // One of them asks for a rescan.
   int signal_fd_ = -1;
   int wake_fd_ = -1;  // eventfd: a worker finished.
   std::atomic<bool> stop_{false};
@@ -117,6 +122,7 @@ class Daemon {
   Clock::time_point next_watch_retry_;
 
   // Shared with the workers.
+  std::shared_ptr<ReadBudget> read_budget_;
   std::mutex mutex_;
   std::condition_variable work_ready_;
   std::deque<ConversionJob> jobs_;

@@ -51,6 +51,7 @@ ModelRecord& Registry::ensure(const std::filesystem::path& source, const std::st
   if (inserted) {
     it->second.source = source;
     it->second.id = id;
+    ids_[id] = source;
   }
   return it->second;
 }
@@ -61,20 +62,23 @@ ModelRecord* Registry::find(const std::filesystem::path& source) {
 }
 
 ModelRecord* Registry::find_id(const std::string& id) {
-  for (auto& [source, record] : models_) {
-    if (record.id == id) return &record;
-  }
-  return nullptr;
+  const auto it = ids_.find(id);
+  return it == ids_.end() ? nullptr : find(it->second);
 }
 
 const ModelRecord* Registry::find_id(const std::string& id) const {
-  for (const auto& [source, record] : models_) {
-    if (record.id == id) return &record;
-  }
-  return nullptr;
+  const auto it = ids_.find(id);
+  if (it == ids_.end()) return nullptr;
+  const auto model = models_.find(it->second);
+  return model == models_.end() ? nullptr : &model->second;
 }
 
-void Registry::erase(const std::filesystem::path& source) { models_.erase(source); }
+void Registry::erase(const std::filesystem::path& source) {
+  const auto it = models_.find(source);
+  if (it == models_.end()) return;
+  ids_.erase(it->second.id);
+  models_.erase(it);
+}
 
 std::vector<std::filesystem::path> Registry::dependents(const std::filesystem::path& file) const {
   std::vector<std::filesystem::path> result;

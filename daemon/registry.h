@@ -49,6 +49,7 @@ class Registry {
 
  private:
   std::map<std::filesystem::path, ModelRecord> models_;
+  std::map<std::string, std::filesystem::path> ids_;  // id -> source: find_id in log time.
 };
 
 bool is_model_file(const std::filesystem::path& path);

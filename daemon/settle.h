@@ -4,6 +4,7 @@
 #pragma once
 
 #include <chrono>
+#include <filesystem>
 #include <map>
 #include <optional>
 #include <string>
@@ -44,6 +45,25 @@ class SettleQueue {
   Clock::duration settle_;
   Clock::duration max_open_wait_;
   std::map<std::string, Pending> pending_;
+};
+
+// Files modified and not yet closed by their writer, since when; indexed by folder too, so that
+// asking whether a model waits for a writer costs a few lookups, not a pass over every open file
+// (a burst of 20,000 new files is 20,000 open files and 20,000 models asking).
+class OpenWrites {
+ public:
+  void opened(const std::filesystem::path& file, Clock::time_point now);  // Keeps the first time.
+  void closed(const std::filesystem::path& file);
+  void clear();
+  // A file of `files`, or (when `any_in_folder` is given) any file in that folder, is open and has
+  // been for at most `max_wait` (a writer that never closes holds nothing back for longer).
+  bool holds(const std::vector<std::filesystem::path>& files, const std::filesystem::path* any_in_folder,
+             Clock::time_point now, Clock::duration max_wait) const;
+  std::size_t size() const { return files_.size(); }
+
+ private:
+  std::map<std::filesystem::path, Clock::time_point> files_;
+  std::map<std::filesystem::path, std::map<std::filesystem::path, Clock::time_point>> by_folder_;
 };
 
 }  // namespace rdtf::daemon

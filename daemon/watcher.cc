@@ -7,14 +7,17 @@
 #include <optional>
 #include <cstdlib>
 #include <cstring>
+#include <algorithm>
 #include <fstream>
+
+#include "rdtf/atomic_file.h"
 
 namespace rdtf::daemon {
 namespace {
 
 constexpr std::uint32_t kFolderMask = IN_CLOSE_WRITE | IN_MODIFY | IN_CREATE | IN_DELETE |
                                       IN_MOVED_FROM | IN_MOVED_TO | IN_DELETE_SELF |
-                                      IN_MOVE_SELF | IN_ONLYDIR | IN_EXCL_UNLINK;
+                                      IN_MOVE_SELF | IN_ONLYDIR | IN_DONT_FOLLOW | IN_EXCL_UNLINK;
 
 std::string watch_error(const std::filesystem::path& folder) {
   const int error = errno;
@@ -38,6 +41,12 @@ std::optional<std::size_t> injected_watch_limit() {
   return limit;
 }
 
+// A stage folder of an output being written (StagedOutput: ".<name>.<pid>-<random>.tmp"), e.g.
+// of `rdtf convert` writing into a watched folder: its files are moved out when whole.
+bool is_staging_folder(const std::filesystem::path& folder) {
+  return rdtf::temporary_writer_pid(folder.filename().string()).has_value();
+}
+
 }  // namespace
 
 int InotifyWatcher::add_watch(const std::filesystem::path& folder) {
@@ -58,6 +67,7 @@ void InotifyWatcher::clear() {
   for (const auto& [wd, folder] : folders_) ::inotify_rm_watch(fd_, wd);
   folders_.clear();
   unwatched_.clear();
+  roots_.clear();
 }
 
 void InotifyWatcher::add_folder(const std::filesystem::path& folder,
@@ -65,10 +75,14 @@ void InotifyWatcher::add_folder(const std::filesystem::path& folder,
   // Watch first, then list: a file created in between shows up in both, never in neither.
   const int wd = add_watch(folder);
   if (wd < 0) {
+    const bool missing = errno == ENOENT || errno == ENOTDIR;
+    // A subfolder that went between its listing and its watch is simply gone (its parent's events
+    // tell); only a watched folder itself is looked for again.
+    if (missing && std::find(roots_.begin(), roots_.end(), folder) == roots_.end()) return;
     if (!error.empty()) error += "; ";
-    error += watch_error(folder);
+    error += missing ? "cannot watch " + folder.string() + ": it is missing" : watch_error(folder);
     // Still list it: its models are converted now, and seen again when a retry can watch it.
-    unwatched_.push_back(folder);
+    unwatched_.push_back({folder, missing});
   } else {
     folders_[wd] = folder;
   }
@@ -76,6 +90,7 @@ void InotifyWatcher::add_folder(const std::filesystem::path& folder,
   for (std::filesystem::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
     std::error_code type_error;
     if (it->is_directory(type_error) && !it->is_symlink(type_error)) {
+      if (is_staging_folder(it->path())) continue;
       add_folder(it->path(), files, error);
     } else if (it->is_regular_file(type_error)) {
       files.push_back(it->path());
@@ -86,6 +101,7 @@ void InotifyWatcher::add_folder(const std::filesystem::path& folder,
 std::vector<std::filesystem::path> InotifyWatcher::watch_tree(const std::filesystem::path& root,
                                                               std::string& error) {
   std::vector<std::filesystem::path> files;
+  roots_.push_back(root);
   add_folder(root, files, error);
   return files;
 }
@@ -111,8 +127,11 @@ std::vector<FileEvent> InotifyWatcher::read_events(std::string& error) {
       const auto folder = folders_.find(event->wd);
       if (folder == folders_.end()) continue;
       if (event->mask & (IN_DELETE_SELF | IN_MOVE_SELF)) {
-        // The folder itself went: its files are gone from our view.
-        if (event->mask & IN_MOVE_SELF) events.push_back({FileEvent::Kind::kRescan, {}});
+        // The folder itself went: its files are gone from our view. A subfolder's parent tells
+        // of its deletion; a watched folder has no watched parent, so its deletion is the
+        // rescan's to find (it then reports the folder missing and looks for it again).
+        const bool root = std::find(roots_.begin(), roots_.end(), folder->second) != roots_.end();
+        if ((event->mask & IN_MOVE_SELF) || root) events.push_back({FileEvent::Kind::kRescan, {}});
         continue;
       }
       if (event->mask & IN_IGNORED) {
@@ -122,6 +141,7 @@ std::vector<FileEvent> InotifyWatcher::read_events(std::string& error) {
       if (event->len == 0) continue;
       const std::filesystem::path path = folder->second / event->name;
       if (event->mask & IN_ISDIR) {
+        if (is_staging_folder(path)) continue;
         if (event->mask & (IN_CREATE | IN_MOVED_TO)) {
           std::vector<std::filesystem::path> files;
           add_folder(path, files, error);

@@ -43,8 +43,13 @@ class InotifyWatcher {
 
   std::size_t watch_count() const { return folders_.size(); }
   // Folders found since the last clear() that could not be watched (their files were still
-  // listed): changes there go unseen until a later watch_tree succeeds.
-  const std::vector<std::filesystem::path>& unwatched() const { return unwatched_; }
+  // listed): changes there go unseen until a later watch_tree succeeds. `missing`: the folder was
+  // not there (a watched folder deleted), rather than inotify refusing the watch.
+  struct Unwatched {
+    std::filesystem::path folder;
+    bool missing = false;
+  };
+  const std::vector<Unwatched>& unwatched() const { return unwatched_; }
 
  private:
   void add_folder(const std::filesystem::path& folder, std::vector<std::filesystem::path>& files,
@@ -53,7 +58,8 @@ class InotifyWatcher {
 
   int fd_ = -1;
   std::map<int, std::filesystem::path> folders_;  // watch descriptor -> folder
-  std::vector<std::filesystem::path> unwatched_;
+  std::vector<Unwatched> unwatched_;
+  std::vector<std::filesystem::path> roots_;  // Given to watch_tree since the last clear().
 };
 
 }  // namespace rdtf::daemon

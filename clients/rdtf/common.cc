@@ -223,6 +223,43 @@ void OutputFiles::roll_back() {
   for (const fs::path& folder : new_folders_) fs::remove(folder, error);
 }
 
+namespace {
+
+// `text` with the stage folder's path replaced by the folder it stands for: messages name the
+// files where the user will find them.
+std::string unstaged(std::string text, const std::string& stage, const std::string& folder) {
+  for (auto at = text.find(stage); at != std::string::npos; at = text.find(stage, at + folder.size())) {
+    text.replace(at, stage.size(), folder);
+  }
+  return text;
+}
+
+// The output and every file beside it written into a stage folder next to the target first, then
+// moved into place (the .gltf last): a disk that fills up midway leaves the previous output whole.
+bool write_staged(const Conversion& conversion, const fs::path& target, bool glb, Diagnostics& diag) {
+  const fs::path folder = target.has_parent_path() ? target.parent_path() : fs::path(".");
+  std::string why;
+  auto stage = StagedOutput::create(folder, "rdtf-stage", why);
+  if (!stage) {
+    diag.error("WRITE_FAILED", "", "cannot write " + target.string() + ": " + why);
+    return false;
+  }
+  Diagnostics staged(target.string());
+  const bool written = write_rdtf(conversion.asset, stage->folder() / target.filename(),
+                                  glb ? OutputFormat::kGlb : OutputFormat::kGltf, staged);
+  for (const Diagnostic& d : staged.all()) {
+    diag.add(d.severity, d.code, d.pointer, unstaged(d.message, stage->folder().string(), folder.string()));
+  }
+  if (!written) return false;
+  if (!stage->commit(folder, {target.filename()}, why, /*keep_identical=*/true)) {
+    diag.error("WRITE_FAILED", "", "cannot move the output into place: " + why);
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
 int write_conversion(const Conversion& conversion, const fs::path& target, bool glb,
                      const Diagnostics& diag, bool verbose) {
   Diagnostics write_diag(target.string());
@@ -254,7 +291,7 @@ int write_conversion(const Conversion& conversion, const fs::path& target, bool 
     output.will_write(file);
   }
   output.will_write(target);
-  written = written && write_rdtf(conversion.asset, target, glb ? OutputFormat::kGlb : OutputFormat::kGltf, write_diag);
+  written = written && write_staged(conversion, target, glb, write_diag);
   // No partial output: what this write created goes when any of it failed.
   if (!written) output.roll_back();
   print_diagnostics(write_diag, verbose || !written);

@@ -7,6 +7,7 @@
 #include <cerrno>
 #include <cstring>
 #include <limits>
+#include <memory>
 
 namespace rdtf::internal {
 namespace {
@@ -79,8 +80,17 @@ std::optional<std::uint64_t> open_checked(const std::filesystem::path* folder,
       why = "cannot tell where it really is: " + error.message();
       return std::nullopt;
     }
+    // The target is not named: a message must not tell where a link points (it may be a probe).
     if (!is_inside(*folder, real)) {
-      why = "resolves to " + real.string() + ", outside the model's folder " + folder->string();
+      why = "leads outside the model's folder " + folder->string() + " through a symbolic link";
+      return std::nullopt;
+    }
+    // Another name of the same file may lie anywhere on the file system: a hard link made in the
+    // folder to a file outside it is indistinguishable from the file itself.
+    if (info.st_nlink > 1) {
+      why = "has " + std::to_string(info.st_nlink) +
+            " hard links: a file with several names may be a file from outside the model's folder, "
+            "so it is refused (copy it instead)";
       return std::nullopt;
     }
   }
@@ -221,6 +231,73 @@ bool read_regular_file(const std::filesystem::path& path, std::uint64_t max_byte
   Fd fd(raw_fd);
   if (!size) return false;
   return read_all(fd.get(), *size, out, why);
+}
+
+ReadBeneath read_beneath(const std::filesystem::path& root, const std::filesystem::path& path,
+                         std::uint64_t max_bytes, std::vector<std::uint8_t>& out, std::string& why) {
+  const auto relative = path.lexically_normal().lexically_relative(root);
+  if (relative.empty() || *relative.begin() == ".." || relative.is_absolute()) {
+    why = "is not below the watched folder " + root.string();
+    return ReadBeneath::kGone;
+  }
+  int raw_dir = ::open(root.c_str(), O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC);
+  if (raw_dir < 0) {
+    why = "the watched folder " + root.string() + ": " + std::strerror(errno);
+    return ReadBeneath::kGone;
+  }
+  auto dir = std::make_unique<Fd>(raw_dir);
+  std::vector<std::string> parts;
+  for (const auto& part : relative) parts.push_back(part.string());
+  // Every folder on the way is opened with O_NOFOLLOW: a folder swapped for a symlink (to a folder
+  // outside) ends the walk instead of leading out.
+  for (std::size_t i = 0; i + 1 < parts.size(); ++i) {
+    const int next = ::openat(dir->get(), parts[i].c_str(), O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC);
+    if (next < 0) {
+      const int error = errno;
+      why = "its folder " + parts[i] + " " +
+            (error == ELOOP || error == ENOTDIR ? std::string("is no longer a folder (a symbolic link or a file)")
+                                                : std::string(std::strerror(error)));
+      return ReadBeneath::kGone;
+    }
+    dir = std::make_unique<Fd>(next);
+  }
+  const int raw_fd = ::openat(dir->get(), parts.back().c_str(),
+                              O_RDONLY | O_NOFOLLOW | O_NONBLOCK | O_NOCTTY | O_CLOEXEC);
+  if (raw_fd < 0) {
+    const int error = errno;
+    if (error == ELOOP) {
+      why = "is a symbolic link: rdtfd reads no model through a symbolic link, wherever it points";
+      return ReadBeneath::kRefused;
+    }
+    why = std::strerror(error);
+    return error == ENOENT || error == ENOTDIR ? ReadBeneath::kGone : ReadBeneath::kRefused;
+  }
+  Fd fd(raw_fd);
+  struct stat info {};
+  if (::fstat(fd.get(), &info) != 0) {
+    why = std::strerror(errno);
+    return ReadBeneath::kRefused;
+  }
+  if (S_ISDIR(info.st_mode)) {
+    why = "is a directory";
+    return ReadBeneath::kGone;
+  }
+  if (!S_ISREG(info.st_mode)) {
+    why = "is " + describe_file_type(info.st_mode) + ", not a regular file";
+    return ReadBeneath::kRefused;
+  }
+  if (info.st_nlink > 1) {
+    why = "has " + std::to_string(info.st_nlink) +
+          " hard links: a file with several names may be a file from outside the watched folder, so it "
+          "is refused (copy it instead)";
+    return ReadBeneath::kRefused;
+  }
+  const auto size = static_cast<std::uint64_t>(info.st_size);
+  if (size > max_bytes) {
+    why = "is " + std::to_string(size) + " bytes, over the limit of " + std::to_string(max_bytes);
+    return ReadBeneath::kRefused;
+  }
+  return read_all(fd.get(), size, out, why) ? ReadBeneath::kRead : ReadBeneath::kRefused;
 }
 
 }  // namespace rdtf::internal

@@ -26,8 +26,9 @@ std::optional<std::filesystem::path> resolve_uri(const std::filesystem::path& fo
                                                  std::string_view uri, std::string& why);
 
 // Reads a regular file whose real location (after following symlinks) lies inside `folder`.
-// Refuses directories, devices, FIFOs and sockets (without blocking on a FIFO) and files over
-// `max_bytes`, checked before reading. `why` says what went wrong.
+// Refuses directories, devices, FIFOs and sockets (without blocking on a FIFO), files with more
+// than one hard link, and files over `max_bytes`, checked before reading. `why` says what went
+// wrong; it never names where a symlink points.
 bool read_confined_file(const std::filesystem::path& folder, const std::filesystem::path& path,
                         std::uint64_t max_bytes, std::vector<std::uint8_t>& out, std::string& why);
 
@@ -39,5 +40,16 @@ std::optional<std::uint64_t> confined_file_size(const std::filesystem::path& fol
 // Reads any regular file (the model itself), refusing non-regular files and files over max_bytes.
 bool read_regular_file(const std::filesystem::path& path, std::uint64_t max_bytes,
                        std::vector<std::uint8_t>& out, std::string& why);
+
+// Reading a model file below a watched folder: every folder from `root` down and the file itself
+// are opened without following symlinks (a symlink is refused even when it points inside), and
+// the file must be a regular file with one link and at most `max_bytes`.
+enum class ReadBeneath {
+  kRead,     // `out` holds the file.
+  kGone,     // Not there (any more): missing, a directory, or a folder on the way is no folder.
+  kRefused,  // There, but not readable as a model: `why` says why (never the file's content).
+};
+ReadBeneath read_beneath(const std::filesystem::path& root, const std::filesystem::path& path,
+                         std::uint64_t max_bytes, std::vector<std::uint8_t>& out, std::string& why);
 
 }  // namespace rdtf::internal

@@ -84,6 +84,21 @@ class ErrorPosition final : public nlohmann::json_sax<Json> {
   }
 };
 
+// nlohmann's messages quote the bytes they stopped at ("last read: '...'"): a file that is no
+// glTF (a secret linked in, a log) would have its first bytes copied into an ERROR on the bus and
+// into the log. The place (line, column, byte) tells the user enough.
+std::string without_bytes_read(std::string message) {
+  const std::string marker = "; last read: '";
+  const auto start = message.find(marker);
+  if (start == std::string::npos) return message;
+  const std::string expected = "'; expected ";
+  const auto end = message.rfind(expected);
+  if (end != std::string::npos && end >= start + marker.size()) {
+    return message.substr(0, start) + message.substr(end + 1);
+  }
+  return message.substr(0, start);
+}
+
 std::optional<Json> parse_json(std::string_view text, Diagnostics& diag) {
   if (text.substr(0, 3) == "\xEF\xBB\xBF") {
     diag.error("JSON_BOM", "", "the JSON starts with a UTF-8 byte order mark, which glTF forbids");
@@ -112,10 +127,11 @@ std::optional<Json> parse_json(std::string_view text, Diagnostics& diag) {
     diag.error("INVALID_JSON", "", "unusable JSON value" + at + ": " + error.what());
     return std::nullopt;
   } catch (const Json::parse_error& error) {
-    diag.error("INVALID_JSON", "", "invalid JSON at " + place_in(text, error.byte) + ": " + error.what());
+    diag.error("INVALID_JSON", "",
+               "invalid JSON at " + place_in(text, error.byte) + ": " + without_bytes_read(error.what()));
     return std::nullopt;
   } catch (const Json::exception& error) {
-    diag.error("INVALID_JSON", "", std::string("invalid JSON: ") + error.what());
+    diag.error("INVALID_JSON", "", "invalid JSON: " + without_bytes_read(error.what()));
     return std::nullopt;
   }
 }

@@ -1,12 +1,15 @@
 #include "rdtf/atomic_file.h"
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
+#include <fstream>
 #include <random>
+#include <regex>
 #include <stdexcept>
 #include <vector>
 
@@ -125,6 +128,98 @@ int remove_unreferenced(const std::filesystem::path& folder, const std::set<std:
     if (std::filesystem::remove(path, remove_error)) ++removed;
   }
   return removed;
+}
+
+std::optional<long> temporary_writer_pid(std::string_view file_name) {
+  static const std::regex kTemporary(R"(\..+\.([0-9]{1,9})-[0-9]+\.tmp)");
+  std::match_results<std::string_view::const_iterator> match;
+  if (!std::regex_match(file_name.begin(), file_name.end(), match, kTemporary)) return std::nullopt;
+  return std::stol(match[1].str());
+}
+
+std::optional<StagedOutput> StagedOutput::create(const std::filesystem::path& folder, std::string_view name,
+                                                 std::string& why) {
+  std::random_device random;
+  const std::filesystem::path stage =
+      folder / ("." + std::string(name) + "." + std::to_string(::getpid()) + "-" + std::to_string(random()) + ".tmp");
+  if (::mkdir(stage.c_str(), 0755) != 0) {
+    why = errno_text(("create " + stage.string()).c_str());
+    return std::nullopt;
+  }
+  return StagedOutput(stage);
+}
+
+StagedOutput::~StagedOutput() {
+  if (folder_.empty()) return;
+  std::error_code error;
+  std::filesystem::remove_all(folder_, error);
+}
+
+namespace {
+
+bool same_bytes(const std::filesystem::path& a, const std::filesystem::path& b) {
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(std::filesystem::symlink_status(b, error)) ||
+      std::filesystem::file_size(a, error) != std::filesystem::file_size(b, error) || error) {
+    return false;
+  }
+  std::ifstream first(a, std::ios::binary);
+  std::ifstream second(b, std::ios::binary);
+  std::vector<char> x(1 << 16), y(1 << 16);
+  while (first && second) {
+    first.read(x.data(), static_cast<std::streamsize>(x.size()));
+    second.read(y.data(), static_cast<std::streamsize>(y.size()));
+    if (first.gcount() != second.gcount() ||
+        !std::equal(x.begin(), x.begin() + first.gcount(), y.begin())) {
+      return false;
+    }
+  }
+  return first.eof() && second.eof();
+}
+
+}  // namespace
+
+bool StagedOutput::commit(const std::filesystem::path& target, const std::vector<std::filesystem::path>& last,
+                          std::string& why, bool keep_identical) {
+  std::vector<std::filesystem::path> files;
+  std::error_code error;
+  for (std::filesystem::recursive_directory_iterator it(folder_, error), end; !error && it != end; it.increment(error)) {
+    std::error_code type_error;
+    if (!it->is_regular_file(type_error)) continue;
+    const auto relative = it->path().lexically_relative(folder_);
+    if (std::find(last.begin(), last.end(), relative) == last.end()) files.push_back(relative);
+  }
+  if (error) {
+    why = "cannot list " + folder_.string() + ": " + error.message();
+    return false;
+  }
+  for (const auto& file : last) {
+    std::error_code exists_error;
+    if (std::filesystem::exists(folder_ / file, exists_error)) files.push_back(file);
+  }
+  std::set<std::filesystem::path> folders;
+  for (const auto& file : files) {
+    const auto destination = target / file;
+    if (keep_identical && same_bytes(folder_ / file, destination)) continue;
+    std::filesystem::create_directories(destination.parent_path(), error);
+    if (error) {
+      why = "cannot create " + destination.parent_path().string() + ": " + error.message();
+      return false;
+    }
+    if (::rename((folder_ / file).c_str(), destination.c_str()) != 0) {
+      why = errno_text(("rename to " + destination.string()).c_str());
+      return false;
+    }
+    folders.insert(destination.parent_path());
+  }
+  for (const auto& folder : folders) {
+    const int dir = ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (dir >= 0) {
+      ::fsync(dir);  // Makes the renames durable; a failure here loses nothing already visible.
+      ::close(dir);
+    }
+  }
+  return true;
 }
 
 void remove_created(const std::vector<std::filesystem::path>& created) {

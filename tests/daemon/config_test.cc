@@ -2,6 +2,8 @@
 // with the key named, relative folders relative to the file, and the sanity checks.
 #include "config.h"
 
+#include <sys/stat.h>
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -377,14 +379,18 @@ TEST(DaemonConfig, BadDynamicsSettingsAreRefused) {
             std::string::npos)
       << error;
   EXPECT_NE(error.find("rdtfd.json"), std::string::npos) << error;
-  for (const char* bad : {R"({"time_step": 0})", R"({"time_step": 0.5})", R"({"max_mass_ratio": 0.5})",
-                          R"({"energy_tolerance": 0})", R"({"limit_tolerance_m": -1})"}) {
+  const std::pair<const char*, const char*> bad_values[] = {
+      {R"({"time_step": 0})", "time_step"}, {R"({"time_step": 0.5})", "time_step"},
+      {R"({"max_mass_ratio": 0.5})", "max_mass_ratio"}, {R"({"energy_tolerance": 0})", "energy_tolerance"},
+      {R"({"limit_tolerance_m": -1})", "limit_tolerance_m"}};
+  for (const auto& [bad, key] : bad_values) {
     auto config = load_text(folder, bad, error);
     ASSERT_TRUE(config) << bad << ": " << error;
     config->watch = {folder.path()};
     config->output = folder / "out";
     EXPECT_FALSE(check_config(*config, error)) << bad;
-    EXPECT_NE(error.find("time_step must be in (0, 0.1] s"), std::string::npos) << error;
+    EXPECT_NE(error.find(std::string("\"") + key + "\" is "), std::string::npos) << error;
+    EXPECT_NE(error.find("outside its valid range"), std::string::npos) << error;
   }
 }
 
@@ -399,6 +405,80 @@ TEST(DaemonConfig, ApplyingAnObjectOverridesOnlyItsKeys) {
   EXPECT_EQ(config->watch, default_config().watch);
   EXPECT_FALSE(apply_config_json(nlohmann::json{{"max_mass_ration", 20}}, "/base", default_config(), error));
   EXPECT_EQ(error, "unknown key \"max_mass_ration\"");
+}
+
+}  // namespace
+}  // namespace rdtf::daemon
+
+namespace rdtf::daemon {
+namespace {
+
+TEST(DaemonConfigRanges, EveryNumericKeyOutsideItsRangeIsRefusedNamingKeyAndRange) {
+  testing::TempDir top;
+  ASSERT_FALSE(config_ranges().empty());
+  for (const KeyRange& range : config_ranges()) {
+    SCOPED_TRACE(range.key);
+    EXPECT_NE(std::find(config_keys().begin(), config_keys().end(), range.key), config_keys().end());
+    const double above = range.max * 2 + 1;
+    const bool whole = std::string(range.key).find("bytes") != std::string::npos ||
+                       std::string(range.key).find("_ms") != std::string::npos ||
+                       std::string(range.key) == "workers" || std::string(range.key).find("max_") == 0;
+    nlohmann::json json;
+    if (std::string(range.key) == "gravity") {
+      json["gravity"] = {above, 0, 0};
+    } else if (whole) {
+      json[range.key] = static_cast<std::uint64_t>(above);
+    } else {
+      json[range.key] = above;
+    }
+    std::string error;
+    auto config = apply_config_json(json, top.path(), default_config(), error);
+    ASSERT_TRUE(config) << error;
+    config->watch = {top / "w"};
+    config->output = top / "o";
+    EXPECT_FALSE(check_config(*config, error)) << json.dump();
+    EXPECT_NE(error.find(std::string("\"") + range.key + "\""), std::string::npos) << error;
+  }
+}
+
+TEST(DaemonConfigRanges, ATimeStepThatWouldWedgeTheDaemonIsRefused) {
+  testing::TempDir top;
+  DaemonConfig config = default_config();
+  config.watch = {top / "w"};
+  config.output = top / "o";
+  config.time_step = 1e-7;
+  std::string error;
+  EXPECT_FALSE(check_config(config, error));
+  EXPECT_NE(error.find("\"time_step\" is 1e-07, outside its valid range [0.0001, 0.1]"), std::string::npos) << error;
+  config.time_step = 1e-4;
+  EXPECT_TRUE(check_config(config, error)) << error;
+}
+
+TEST(DaemonConfigRanges, ReadBytesPerModelMayNotExceedTheBytesInFlight) {
+  testing::TempDir top;
+  DaemonConfig config = default_config();
+  config.watch = {top / "w"};
+  config.output = top / "o";
+  config.max_read_bytes = 3000;
+  config.max_read_bytes_in_flight = 2000;
+  std::string error;
+  EXPECT_FALSE(check_config(config, error));
+  EXPECT_NE(error.find("max_read_bytes_in_flight"), std::string::npos) << error;
+}
+
+TEST(DaemonConfigFile, OnlyARegularFileOfBoundedSizeIsRead) {
+  testing::TempDir top;
+  std::string error;
+  fs::create_directory(top / "folder.json");
+  EXPECT_FALSE(load_config(top / "folder.json", default_config(), error));
+  EXPECT_NE(error.find("a directory"), std::string::npos) << error;
+  ASSERT_EQ(::mkfifo((top / "fifo.json").c_str(), 0644), 0);
+  // Opened without blocking, so this returns although no one ever writes the FIFO.
+  EXPECT_FALSE(load_config(top / "fifo.json", default_config(), error));
+  EXPECT_NE(error.find("not a regular file"), std::string::npos) << error;
+  testing::write_file(top / "big.json", "{\"_comment\": \"" + std::string(kMaxConfigFileBytes, 'x') + "\"}");
+  EXPECT_FALSE(load_config(top / "big.json", default_config(), error));
+  EXPECT_NE(error.find("over the limit"), std::string::npos) << error;
 }
 
 }  // namespace

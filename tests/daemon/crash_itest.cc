@@ -61,10 +61,23 @@ const std::regex& temporary_name() {
   return pattern;
 }
 
-// Temporary files below `folder`, with the pid in their name.
+// Every entry below `folder`, but none inside a temporary folder (a stage folder of outputs being
+// written, docs/daemon.md "Outputs": what it holds is no output until moved out of it).
+std::vector<fs::directory_entry> entries_below(const fs::path& folder) {
+  std::vector<fs::directory_entry> entries;
+  for (auto it = fs::recursive_directory_iterator(folder); it != fs::recursive_directory_iterator(); ++it) {
+    entries.push_back(*it);
+    if (it->is_directory() && std::regex_match(it->path().filename().string(), temporary_name())) {
+      it.disable_recursion_pending();
+    }
+  }
+  return entries;
+}
+
+// Temporary files (and stage folders) below `folder`, with the pid in their name.
 std::vector<std::pair<fs::path, long>> temporaries(const fs::path& folder) {
   std::vector<std::pair<fs::path, long>> found;
-  for (const auto& entry : fs::recursive_directory_iterator(folder)) {
+  for (const auto& entry : entries_below(folder)) {
     std::smatch match;
     const std::string name = entry.path().filename().string();
     if (std::regex_match(name, match, temporary_name())) found.emplace_back(entry.path(), std::stol(match[1].str()));
@@ -176,7 +189,7 @@ void expect_whole_urdf(const fs::path& path) {
 // Every finished output below `output` is whole. Returns how many outputs were checked.
 int expect_whole_outputs(const fs::path& output) {
   int checked = 0;
-  for (const auto& entry : fs::recursive_directory_iterator(output)) {
+  for (const auto& entry : entries_below(output)) {
     if (!entry.is_regular_file()) continue;
     const fs::path& path = entry.path();
     const std::string name = path.filename().string();
@@ -198,7 +211,7 @@ int expect_whole_outputs(const fs::path& output) {
 // Every file an output below `output` refers to, and every content-addressed file there.
 std::set<fs::path> files_referenced_below(const fs::path& output) {
   std::set<fs::path> files;
-  for (const auto& entry : fs::recursive_directory_iterator(output)) {
+  for (const auto& entry : entries_below(output)) {
     const std::string name = entry.path().filename().string();
     if (!entry.is_regular_file() || (!is_gltf_output(name) && name != "robot.urdf")) continue;
     for (const auto& file : files_named_by(entry.path())) files.insert(file.lexically_normal());
@@ -208,7 +221,7 @@ std::set<fs::path> files_referenced_below(const fs::path& output) {
 
 std::set<fs::path> content_addressed_below(const fs::path& output) {
   std::set<fs::path> files;
-  for (const auto& entry : fs::recursive_directory_iterator(output)) {
+  for (const auto& entry : entries_below(output)) {
     if (entry.is_regular_file() && !name_digest(entry.path().filename().string()).empty()) {
       files.insert(entry.path().lexically_normal());
     }
@@ -221,7 +234,7 @@ std::set<fs::path> content_addressed_below(const fs::path& output) {
 // does not refer to and that was renamed into place after it and after `since`. (The generation
 // before, also not referred to, is older than the output.)
 bool cut_between_files_and_output(const fs::path& output, fs::file_time_type since) {
-  for (const auto& entry : fs::recursive_directory_iterator(output)) {
+  for (const auto& entry : entries_below(output)) {
     const std::string name = entry.path().filename().string();
     if (!entry.is_regular_file() || (!is_gltf_output(name) && name != "robot.urdf")) continue;
     const auto referenced = files_named_by(entry.path());
@@ -358,10 +371,10 @@ void kill_at_random_moments(int kills, unsigned seed) {
             << " between an output's secondary files and its primary file (new content-addressed files beside an "
             << "older output); outputs checked: " << outputs_checked << std::endl;
   // A long run whose kills never cut a write would have tested nothing.
-  if (kills >= 100) {
-    EXPECT_GT(killed_mid_write, 0);
-    EXPECT_GT(killed_between_files, 0);
-  }
+  if (kills >= 100) EXPECT_GT(killed_mid_write, 0);
+  // Outputs are staged: only the renames out of the stage are left between an output's files and
+  // its primary file, about 2% of the kills (18 of 1,000 measured), too few to expect in 200.
+  if (kills >= 1000) EXPECT_GT(killed_between_files, 0);
 
   // The last start: temporaries gone, every model converted and published again. What the outputs
   // on disk refer to now is what the start keeps; each model's one conversion then keeps it as the

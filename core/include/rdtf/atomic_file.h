@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <set>
 #include <span>
 #include <string>
@@ -47,5 +48,40 @@ int remove_unreferenced(const std::filesystem::path& folder, const std::set<std:
 // Removes the files a failed write created (no committed document refers to them); what cannot
 // be removed is left, as above.
 void remove_created(const std::vector<std::filesystem::path>& created);
+
+// An output of several files written into a hidden folder first (".<name>.<pid>-<random>.tmp",
+// beside the output, so on the same file system), then moved into place by rename: until every
+// file of the new output is whole nothing of the previous output is touched, so a disk that fills
+// up between two files costs nothing but the new output. The folder goes with the object.
+class StagedOutput {
+ public:
+  // A fresh folder in `folder` (which must exist); nothing and `why` when it cannot be made.
+  static std::optional<StagedOutput> create(const std::filesystem::path& folder, std::string_view name,
+                                            std::string& why);
+  StagedOutput(StagedOutput&& other) noexcept : folder_(std::move(other.folder_)) { other.folder_.clear(); }
+  StagedOutput& operator=(StagedOutput&&) = delete;
+  StagedOutput(const StagedOutput&) = delete;
+  ~StagedOutput();
+
+  const std::filesystem::path& folder() const { return folder_; }
+
+  // Moves every file below the stage to the same place below `target` (folders made as needed),
+  // each by one rename: first every file not in `last`, then the files of `last` (paths relative
+  // to the stage) in that order, so that the primary files, renamed last, commit the rest. Then
+  // fsyncs the folders written to. False with `why` when a rename fails (the files already moved
+  // stay: they are whole).
+  // `keep_identical`: a file whose destination already holds the same bytes is not moved (the
+  // destination, perhaps the model's own .bin, stays the very same file).
+  bool commit(const std::filesystem::path& target, const std::vector<std::filesystem::path>& last,
+              std::string& why, bool keep_identical = false);
+
+ private:
+  explicit StagedOutput(std::filesystem::path folder) : folder_(std::move(folder)) {}
+  std::filesystem::path folder_;
+};
+
+// Whether a name has the form of write_file_atomically's and StagedOutput's temporaries
+// (".<name>.<pid>-<random>.tmp"), and the pid in it.
+std::optional<long> temporary_writer_pid(std::string_view file_name);
 
 }  // namespace rdtf

@@ -1,0 +1,79 @@
+// SIGHUP with a config that cannot be read (a directory, a FIFO) or that holds a value outside its
+// range keeps the running config and the daemon serving; file names reach the log escaped.
+#include <sys/stat.h>
+
+#include "daemon/fs_support.h"
+
+namespace rdtf::itest {
+namespace {
+
+// A save converts: the loop is alive and runs on the config it had.
+void expect_serving(Session& s, const std::string& base, std::int64_t revision) {
+  const auto model = box_model(base, 0.1 + 0.01 * static_cast<double>(revision));
+  write_model(s.watch, "arm.gltf", model);
+  EXPECT_TRUE(s.wait_revision("arm.gltf", revision, content_hash(model))) << base;
+}
+
+TEST(DaemonReload, ADirectoryOrAFifoAsTheConfigKeepsTheRunningConfig) {
+  Session s;
+  s.start();
+  expect_serving(s, "first_base", 1);
+  const fs::path config = s.daemon->config_path();
+  const std::string good = read(config);
+
+  fs::remove(config);
+  fs::create_directory(config);
+  s.daemon->signal(SIGHUP);
+  ASSERT_TRUE(s.daemon->wait_log("config not reloaded"));
+  EXPECT_NE(s.daemon->log().find("is a directory"), std::string::npos);
+  EXPECT_TRUE(s.daemon->running());
+  expect_serving(s, "second_base", 2);
+
+  fs::remove(config);
+  ASSERT_EQ(::mkfifo(config.c_str(), 0644), 0);
+  s.daemon->signal(SIGHUP);
+  ASSERT_TRUE(s.daemon->wait_log("not a regular file"));
+  EXPECT_TRUE(s.daemon->running());
+  expect_serving(s, "third_base", 3);
+
+  // A value outside its range: refused, naming the key and the range.
+  fs::remove(config);
+  Json wedging = Json::parse(good);
+  wedging["time_step"] = 1e-7;
+  testing::write_file(config, wedging.dump());
+  s.daemon->signal(SIGHUP);
+  ASSERT_TRUE(s.daemon->wait_log("\"time_step\" is 1e-07, outside its valid range"));
+  EXPECT_TRUE(s.daemon->running());
+  expect_serving(s, "fourth_base", 4);
+}
+
+TEST(DaemonReload, ATimeStepThatWouldWedgeTheDaemonIsRefusedAtStart) {
+  Session s;
+  DaemonOptions options;
+  options.with("time_step", 1e-7);
+  std::unique_ptr<DaemonProcess> daemon = std::make_unique<DaemonProcess>(options.with_watch({s.watch}).with_output(s.output));
+  const auto code = daemon->wait_exit(10s);
+  ASSERT_TRUE(code.has_value());
+  EXPECT_EQ(*code, 2);
+  EXPECT_NE(daemon->log().find("time_step"), std::string::npos) << daemon->log();
+}
+
+TEST(DaemonLog, FileNamesAreEscapedSoThatNoneForgesALine) {
+  Session s;
+  s.start();
+  const std::string forged = "FORGED 2026-01-01T00:00:00.000Z converted victim.gltf revision 9";
+  const std::string name = "bad\n" + forged + "\x1b[2J.gltf";
+  testing::write_file(s.watch / name, "{ not json");
+  ASSERT_TRUE(s.daemon->wait_log("rejected "));
+  const std::string log = s.daemon->log();
+  std::istringstream lines(log);
+  for (std::string line; std::getline(lines, line);) {
+    EXPECT_NE(line.rfind("FORGED", 0), 0u) << "a forged line: " << line;
+    EXPECT_EQ(line.find('\x1b'), std::string::npos) << "a terminal escape: " << line;
+  }
+  EXPECT_NE(log.find("bad\\nFORGED"), std::string::npos) << log;
+  EXPECT_NE(log.find("\\x1b[2J"), std::string::npos) << log;
+}
+
+}  // namespace
+}  // namespace rdtf::itest

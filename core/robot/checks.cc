@@ -77,6 +77,15 @@ void check_missing_properties(const Json& document, const std::vector<NodeType>&
       }
     }
   }
+  // Bones are reported as the armature, not one by one.
+  std::vector<char> bone(document["nodes"].size(), 0);
+  if (document.contains("skins") && document["skins"].is_array()) {
+    for (const Json& skin : document["skins"]) {
+      for (const Json& joint : skin.value("joints", Json::array())) {
+        if (joint.is_number_unsigned() && joint.get<std::size_t>() < bone.size()) bone[joint.get<std::size_t>()] = 1;
+      }
+    }
+  }
   std::vector<std::size_t> empties;
   bool bones = false;
   for (std::size_t i = 0; i < types.size() && i < document["nodes"].size(); ++i) {
@@ -84,7 +93,7 @@ void check_missing_properties(const Json& document, const std::vector<NodeType>&
     if (types[i] == NodeType::kNone) continue;
     if (node.contains("skin")) bones = true;
     const bool has_children = node.contains("children") && !node["children"].empty();
-    if (!node.contains("mesh") && has_children && is_child[i] &&
+    if (!node.contains("mesh") && has_children && is_child[i] && !bone[i] &&
         (types[i] == NodeType::kJoint || types[i] == NodeType::kLink)) {
       empties.push_back(i);
     }

@@ -141,6 +141,12 @@ void read_axis(const JointSource& source, const Eigen::Affine3d& X_SF, const Eig
     // the file: glTF (x, y, z) = Blender (x, z, -y)); map it into the child link frame.
     if (source.blender_axes) *axis = blender_to_gltf_axes() * *axis;
     *axis = X_SC.linear().transpose() * (X_SF.linear() * *axis);
+    if (!(axis->norm() > 0.0)) {  // The node's scale flattens it (a scale of 0).
+      diag.error("JOINT_AXIS_ZERO", pointer,
+                 source.label + ": the joint axis " + value_text(value) +
+                     " has no length in the scene: the node's scale flattens it");
+      return;
+    }
   }
   joint.axis = axis->normalized();
 }

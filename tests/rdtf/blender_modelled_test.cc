@@ -7,6 +7,7 @@
 
 #include "rdtf/completion.h"
 #include "rdtf/convert.h"
+#include "rdtf/urdf.h"
 #include "support/test_support.h"
 
 namespace rdtf {
@@ -260,6 +261,74 @@ TEST(BlenderModelled, PivotIsTheJointEmptyNotTheChildOrigin) {
   // A link under a link (rdtf's inserted joint node, no transform): the child's own origin.
   EXPECT_EQ(robot.joints[1].name, "base_tip_joint");
   EXPECT_EQ(robot.joints[1].frame_node, robot.links[robot.joints[1].child_link].node);
+}
+
+// What a tool that keeps node extras only (Blender's importer) leaves of rdtf's output is enough:
+// without extras.RDTF the output converts to the same robot, for models whose joints came from
+// extras.RDTF (URDF import: authored inertials too) as for Blender's.
+TEST(BlenderModelled, NodeExtrasAloneGiveTheSameRobot) {
+  Diagnostics diag;
+  std::vector<Conversion> firsts;
+  firsts.push_back(convert_blender("modelled_arm.gltf", diag));
+  UrdfImportOptions import_options;
+  auto imported = import_urdf(testing::data_dir() / "urdf" / "urdf_tutorial" / "07-physics.urdf",
+                              import_options, diag);
+  ASSERT_TRUE(imported) << (diag.all().empty() ? "" : format(diag.all().back()));
+  firsts.push_back(std::move(*imported));
+  for (const Conversion& first : firsts) {
+    SCOPED_TRACE(first.robot.name);
+    GltfAsset stripped = first.asset;
+    stripped.document["extras"].erase("RDTF");
+    Diagnostics again_diag;
+    const auto again = convert(std::move(stripped), ConvertOptions{}, again_diag);
+    ASSERT_TRUE(again);
+    const Robot& a = first.robot;
+    const Robot& b = again->robot;
+    ASSERT_EQ(b.links.size(), a.links.size());
+    for (std::size_t l = 0; l < a.links.size(); ++l) {
+      EXPECT_EQ(b.links[l].name, a.links[l].name);
+      EXPECT_EQ(b.links[l].inertial.mass, a.links[l].inertial.mass) << a.links[l].name;
+      EXPECT_EQ(b.links[l].inertial.center_of_mass, a.links[l].inertial.center_of_mass) << a.links[l].name;
+      EXPECT_TRUE(b.links[l].inertial.inertia.isApprox(a.links[l].inertial.inertia, 1e-12)) << a.links[l].name;
+      EXPECT_TRUE(b.links[l].X_SL.isApprox(a.links[l].X_SL, 1e-15)) << a.links[l].name;
+    }
+    ASSERT_EQ(b.joints.size(), a.joints.size());
+    for (std::size_t j = 0; j < a.joints.size(); ++j) {
+      EXPECT_EQ(b.joints[j].name, a.joints[j].name);
+      EXPECT_EQ(b.joints[j].kind, a.joints[j].kind) << a.joints[j].name;
+      EXPECT_LE((b.joints[j].axis - a.joints[j].axis).norm(), 1e-15) << a.joints[j].name;
+      EXPECT_EQ(b.joints[j].limits.has_value(), a.joints[j].limits.has_value()) << a.joints[j].name;
+      if (a.joints[j].limits && b.joints[j].limits) {
+        EXPECT_EQ(b.joints[j].limits->lower, a.joints[j].limits->lower);
+        EXPECT_EQ(b.joints[j].limits->upper, a.joints[j].limits->upper);
+        EXPECT_EQ(b.joints[j].limits->effort, a.joints[j].limits->effort);
+        EXPECT_EQ(b.joints[j].limits->velocity, a.joints[j].limits->velocity);
+      }
+      EXPECT_EQ(b.joints[j].damping, a.joints[j].damping);
+      EXPECT_EQ(b.joints[j].friction, a.joints[j].friction);
+    }
+  }
+}
+
+// A joint without authored effort and velocity: the URDF's required <limit> attributes get the
+// documented values that never bind, not 0 ("cannot move").
+TEST(BlenderModelled, UrdfLimitWithoutEffortOrVelocityGetsTheDocumentedDefaults) {
+  Diagnostics diag;
+  const Conversion conversion = convert_blender("modelled_arm.gltf", diag);
+  Diagnostics urdf_diag;
+  const auto urdf = export_urdf(conversion, UrdfOptions{}, urdf_diag);
+  ASSERT_TRUE(urdf);
+  // The shoulder authored both, the elbow neither.
+  EXPECT_NE(urdf->text.find("effort=\"20\""), std::string::npos) << urdf->text;
+  EXPECT_NE(urdf->text.find("velocity=\"2\""), std::string::npos) << urdf->text;
+  EXPECT_NE(urdf->text.find("effort=\"1e+06\""), std::string::npos) << urdf->text;
+  EXPECT_NE(urdf->text.find("velocity=\"1000\""), std::string::npos) << urdf->text;
+  EXPECT_EQ(urdf->text.find("effort=\"0\""), std::string::npos) << urdf->text;
+  ASSERT_EQ(urdf_diag.all().size(), 1u);
+  EXPECT_EQ(urdf_diag.all()[0].code, "URDF_LIMIT_DEFAULTED");
+  EXPECT_EQ(urdf_diag.all()[0].message,
+            "joint 'elbow' has no rdtf_effort or rdtf_velocity: the URDF's <limit> (which requires "
+            "both) says effort 1e+06 and velocity 1000, which never bind; set them to the real limits");
 }
 
 }  // namespace

@@ -114,7 +114,7 @@ VolumeIntegrals oriented(VolumeIntegrals integrals, const std::string& pointer,
 std::optional<MassProperties> authored_inertial(const Json& inertial, const std::string& where,
                                                 const std::string& label, Diagnostics& diag) {
   if (!inertial.is_object()) return std::nullopt;
-  if (inertial.value("source", std::string()) == "computed") return std::nullopt;
+  if (inertial.contains("source") && inertial["source"] == "computed") return std::nullopt;
   auto number = [&](const Json& value) { return value.is_number() && std::isfinite(value.get<double>()); };
   MassProperties result;
   if (!inertial.contains("mass") || !number(inertial["mass"])) {

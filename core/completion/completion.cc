@@ -47,6 +47,23 @@ std::string node_name(const Json& document, std::size_t node) {
   return "node" + std::to_string(node);
 }
 
+std::string node_label(const Json& document, std::size_t node) {
+  const Json& n = document["nodes"][node];
+  std::string label = "node " + std::to_string(node);
+  if (n.contains("name") && n["name"].is_string() && !n["name"].get<std::string>().empty()) {
+    label += " " + value_text(n["name"]);
+  }
+  return label;
+}
+
+std::string value_text(const Json& value) {
+  constexpr std::size_t kMax = 80;
+  std::string text = value.dump(-1, ' ', true, Json::error_handler_t::replace);
+  if (value.is_string() && text.size() >= 2) text = "'" + text.substr(1, text.size() - 2) + "'";
+  if (text.size() > kMax) text = text.substr(0, kMax - 3) + "...";
+  return text;
+}
+
 void complete_nodes(Json& document, std::vector<NodeType>& types, Diagnostics& diag) {
   if (!document.contains("nodes")) return;
   const std::size_t original_count = document["nodes"].size();

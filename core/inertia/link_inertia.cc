@@ -60,7 +60,8 @@ std::optional<double> positive_extra(const Json& document, std::size_t node, con
   const Json& value = n["extras"][key];
   if (!value.is_number() || !std::isfinite(value.get<double>()) || value.get<double>() <= 0) {
     diag.error("RDTF_INVALID_VALUE", json_pointer("/nodes", node) + "/extras/" + key,
-               std::string(key) + " must be a positive number");
+               node_label(document, node) + ": " + key + " is " + value_text(value) +
+                   ", not a positive number");
     return std::nullopt;
   }
   return value.get<double>();
@@ -108,23 +109,26 @@ VolumeIntegrals oriented(VolumeIntegrals integrals, const std::string& pointer,
   return integrals;
 }
 
-std::optional<MassProperties> authored_inertial(const Json& entry, const std::string& pointer,
-                                                Diagnostics& diag) {
-  if (!entry.contains("inertial") || !entry["inertial"].is_object()) return std::nullopt;
-  const Json& inertial = entry["inertial"];
-  if (inertial.value("source", std::string()) == "computed") return std::nullopt;
-  const std::string where = pointer + "/inertial";
+// `inertial` (at `where`, about the node `label`): an extras.RDTF inertial object or the node
+// extras rdtf_inertial that carries the same keys.
+std::optional<MassProperties> authored_inertial(const Json& inertial, const std::string& where,
+                                                const std::string& label, Diagnostics& diag) {
+  if (!inertial.is_object()) return std::nullopt;
+  if (inertial.contains("source") && inertial["source"] == "computed") return std::nullopt;
   auto number = [&](const Json& value) { return value.is_number() && std::isfinite(value.get<double>()); };
   MassProperties result;
   if (!inertial.contains("mass") || !number(inertial["mass"])) {
-    diag.error("RDTF_INVALID_VALUE", where + "/mass", "an authored inertial needs a finite mass");
+    diag.error("RDTF_INVALID_VALUE", where + "/mass",
+               label + ": an authored inertial needs a finite mass; it has " +
+                   (inertial.contains("mass") ? value_text(inertial["mass"]) : std::string("none")));
     return std::nullopt;
   }
   result.mass = inertial["mass"].get<double>();
   if (inertial.contains("gravityCenter")) {
     const Json& c = inertial["gravityCenter"];
     if (!c.is_array() || c.size() != 3 || !number(c[0]) || !number(c[1]) || !number(c[2])) {
-      diag.error("RDTF_INVALID_VALUE", where + "/gravityCenter", "gravityCenter must be 3 numbers");
+      diag.error("RDTF_INVALID_VALUE", where + "/gravityCenter",
+                 label + ": gravityCenter is " + value_text(c) + ", not 3 finite numbers");
       return std::nullopt;
     }
     result.center_of_mass = {c[0].get<double>(), c[1].get<double>(), c[2].get<double>()};
@@ -137,7 +141,7 @@ std::optional<MassProperties> authored_inertial(const Json& entry, const std::st
     for (std::size_t i = 0; valid && i < I.size(); ++i) valid = number(I[i]);
     if (!valid) {
       diag.error("RDTF_INVALID_VALUE", where + "/inertia",
-                 "inertia must be [ixx, ixy, ixz, iyy, iyz, izz] or a row-major 3x3 matrix");
+                 label + ": inertia is " + value_text(I) + "; it must be [ixx, ixy, ixz, iyy, iyz, izz] or a row-major 3x3 matrix");
       return std::nullopt;
     }
     if (six) {
@@ -232,13 +236,25 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
       if (types[child.get<std::size_t>()] == NodeType::kInertial) link.inertial_node = child.get<int>();
     }
     if (link.inertial_node >= 0) {
+      // The extras.RDTF entry's inertial, else the inertial node's rdtf_inertial (what survives a
+      // tool that keeps node extras only).
+      const std::string label = node_label(document, static_cast<std::size_t>(link.inertial_node));
       std::string entry_pointer;
-      if (const Json* entry = rdtf_entry(document, link.inertial_node, entry_pointer)) {
-        if (auto authored = authored_inertial(*entry, entry_pointer, diag)) {
-          link.inertial = *authored;
-          link.inertial_source = InertialSource::kAuthored;
-          continue;
-        }
+      const Json* entry = rdtf_entry(document, link.inertial_node, entry_pointer);
+      const Json& node = document["nodes"][link.inertial_node];
+      std::optional<MassProperties> authored;
+      if (entry != nullptr && entry->contains("inertial")) {
+        authored = authored_inertial((*entry)["inertial"], entry_pointer + "/inertial", label, diag);
+      } else if (node.contains("extras") && node["extras"].is_object() &&
+                 node["extras"].contains("rdtf_inertial")) {
+        authored = authored_inertial(node["extras"]["rdtf_inertial"],
+                                     json_pointer("/nodes", link.inertial_node) + "/extras/rdtf_inertial",
+                                     label, diag);
+      }
+      if (authored) {
+        link.inertial = *authored;
+        link.inertial_source = InertialSource::kAuthored;
+        continue;
       }
     }
     link.inertial = combine(pieces[l]);

@@ -74,12 +74,14 @@ std::optional<Conversion> convert(GltfAsset asset, const ConvertOptions& options
   if (!scene) return std::nullopt;
   auto types = type_nodes(asset.document, *scene, diag);
   if (diag.has_errors()) return std::nullopt;
+  check_missing_properties(asset.document, types, diag);
   add_missing_strides(asset.document, diag);
   complete_nodes(asset.document, types, diag);
   Robot robot = build_robot(asset.document, types, *scene, diag);
   robot.name = robot_name(asset);
   compute_link_inertia(asset, types, options.default_density, robot, diag);
   if (diag.has_errors()) return std::nullopt;
+  check_units(asset.document, robot, diag);
   if (!write_rdtf_extras(asset.document, types, robot, diag)) return std::nullopt;
   return Conversion{std::move(asset), std::move(robot)};
 }

@@ -1,6 +1,9 @@
+#include <initializer_list>
 #include <map>
 
 #include "rdtf/rdtf_extras.h"
+
+#include "rdtf/geometry.h"
 
 namespace rdtf {
 namespace {
@@ -23,6 +26,13 @@ Json joint_to_json(const Joint& joint) {
   return out;
 }
 
+Json authored_inertial_json(const MassProperties& inertial) {
+  return {{"mass", inertial.mass},
+          {"gravityCenter", vector_to_json(inertial.center_of_mass)},
+          {"inertia", inertia_to_json(inertial.inertia)},
+          {"frame", "link"}};
+}
+
 Json inertial_to_json(const MassProperties& inertial) {
   return {{"mass", inertial.mass},
           {"gravityCenter", vector_to_json(inertial.center_of_mass)},
@@ -32,7 +42,81 @@ Json inertial_to_json(const MassProperties& inertial) {
           {"source", "computed"}};
 }
 
+// The node's extras object, made when absent; nothing when it holds something else (left alone).
+Json* extras_object(Json& node) {
+  if (!node.contains("extras")) node["extras"] = Json::object();
+  return node["extras"].is_object() ? &node["extras"] : nullptr;
+}
+
+bool has_any(const Json& extras, std::initializer_list<const char*> keys) {
+  for (const char* key : keys) {
+    if (extras.contains(key)) return true;
+  }
+  return false;
+}
+
+// The joint as Blender custom properties on its frame node, the axis in that node's frame.
+void joint_to_extras(const Joint& joint, const Eigen::Matrix3d& R_FJ, Json& extras) {
+  const Json values = joint_to_json(joint);
+  extras["rdtf_joint"] = values["type"];
+  if (values.contains("axis")) {
+    extras["rdtf_axis"] = vector_to_json((R_FJ * joint.axis).normalized());
+    extras["rdtf_axes"] = "gltf";
+  }
+  for (const auto& [key, name] : {std::pair{"lower", "rdtf_lower"}, {"upper", "rdtf_upper"},
+                                  {"effort", "rdtf_effort"}, {"velocity", "rdtf_velocity"}}) {
+    if (values.contains(key)) extras[name] = values[key];
+  }
+  if (joint.friction != 0) extras["rdtf_friction"] = joint.friction;
+  if (joint.damping != 0) extras["rdtf_damping"] = joint.damping;
+  if (joint.spring_stiffness != 0) extras["rdtf_spring_stiffness"] = joint.spring_stiffness;
+}
+
 }  // namespace
+
+void write_node_extras(Json& document, const std::vector<NodeType>& types, const Robot& robot) {
+  if (!document.contains("nodes")) return;
+  Json& nodes = document["nodes"];
+  const auto world = node_world_transforms(document);
+  for (std::size_t i = 0; i < types.size() && i < nodes.size(); ++i) {
+    if (types[i] == NodeType::kNone) continue;
+    Json* extras = extras_object(nodes[i]);
+    if (extras != nullptr && !extras->contains("rdtf_type")) (*extras)["rdtf_type"] = to_string(types[i]);
+  }
+  // Joints whose properties were not in node extras: written on the joint's frame node, where
+  // they are read again (joint properties make a node a pivot, and this one is already the pivot).
+  for (const Joint& joint : robot.joints) {
+    if (joint.source_node >= 0 && !joint.source_is_entry) continue;
+    Json* extras = extras_object(nodes[joint.frame_node]);
+    if (extras == nullptr) continue;
+    bool has_joint_keys = false;
+    for (const char* key : kJointExtrasKeys) has_joint_keys |= extras->contains(key);
+    if (has_joint_keys) continue;
+    // The axis is in the child link frame (the frame node's, scale removed); as a node-extras
+    // vector it is read in the node's frame with its scale: R_FJ undoes that.
+    const Eigen::Matrix3d R_FJ = world[joint.frame_node].linear().inverse() *
+                                 robot.links[joint.child_link].X_SL.linear();
+    joint_to_extras(joint, R_FJ, *extras);
+  }
+  // Inertials and densities, so that a tool that keeps node extras only (Blender's importer drops
+  // the document's extras) still gives the same masses.
+  for (const Link& link : robot.links) {
+    if (link.inertial_node >= 0) {
+      Json* extras = extras_object(nodes[link.inertial_node]);
+      if (extras != nullptr && !extras->contains("rdtf_inertial")) {
+        (*extras)["rdtf_inertial"] = link.inertial_source == InertialSource::kComputed
+                                         ? inertial_to_json(link.inertial)
+                                         : authored_inertial_json(link.inertial);
+      }
+    }
+    if (link.inertial_source != InertialSource::kComputed) continue;
+    for (const LinkMesh& mesh : link.meshes) {
+      Json* extras = extras_object(nodes[mesh.node]);
+      if (extras == nullptr || has_any(*extras, {"rdtf_density", "rdtf_mass"}) || mesh.density <= 0) continue;
+      (*extras)["rdtf_density"] = mesh.density;
+    }
+  }
+}
 
 Json inertia_to_json(const Eigen::Matrix3d& I) {
   return Json::array({I(0, 0), I(0, 1), I(0, 2), I(1, 1), I(1, 2), I(2, 2)});
@@ -89,6 +173,7 @@ bool write_rdtf_extras(Json& document, const std::vector<NodeType>& types, const
   }
   if (!rdtf.contains("version")) rdtf["version"] = "1.0";
   rdtf["nodes"] = std::move(nodes);
+  write_node_extras(document, types, robot);
   return true;
 }
 

@@ -12,8 +12,10 @@ namespace {
 struct JointSource {
   const Json* values = nullptr;  // Object holding the keys.
   std::string pointer;           // JSON pointer of that object.
+  std::string label;             // The node it is about, as diagnostics name it.
   bool rdtf_entry = false;       // extras.RDTF joint object (keys without the "rdtf_" prefix).
   int frame_node = -1;           // Node whose frame a node-extras axis is in.
+  bool blender_axes = false;     // A node-extras vector is in Blender's axes (Z up).
 };
 
 std::string key_for(const JointSource& source, const std::string& rdtf_key,
@@ -26,7 +28,8 @@ std::optional<double> read_number(const JointSource& source, const std::string& 
   if (!source.values->contains(key)) return std::nullopt;
   const Json& value = (*source.values)[key];
   if (!value.is_number() || !std::isfinite(value.get<double>())) {
-    diag.error("RDTF_INVALID_VALUE", json_pointer(source.pointer, key), key + " must be a finite number");
+    diag.error("RDTF_INVALID_VALUE", json_pointer(source.pointer, key),
+               source.label + ": " + key + " is " + value_text(value) + ", not a finite number");
     return std::nullopt;
   }
   return value.get<double>();
@@ -60,12 +63,92 @@ const Json* node_extras(const Json& document, std::size_t node) {
   return &n["extras"];
 }
 
-bool has_joint_keys(const Json& extras) {
-  for (const char* key : {"rdtf_joint", "rdtf_axis", "rdtf_lower", "rdtf_upper", "rdtf_damping",
-                          "rdtf_friction", "rdtf_spring_stiffness", "rdtf_effort", "rdtf_velocity"}) {
-    if (extras.contains(key)) return true;
+bool has_joint_keys(const Json* extras) {
+  if (extras == nullptr) return false;
+  for (const char* key : kJointExtrasKeys) {
+    if (extras->contains(key)) return true;
   }
   return false;
+}
+
+// A local transform other than the identity: the node is placed somewhere of its own.
+bool has_own_transform(const Json& node) {
+  auto differs = [&](const char* key, const std::vector<double>& identity) {
+    if (!node.contains(key) || !node[key].is_array() || node[key].size() != identity.size()) return false;
+    for (std::size_t i = 0; i < identity.size(); ++i) {
+      if (!node[key][i].is_number() || node[key][i].get<double>() != identity[i]) return true;
+    }
+    return false;
+  };
+  return differs("translation", {0, 0, 0}) || differs("rotation", {0, 0, 0, 1}) ||
+         differs("scale", {1, 1, 1}) ||
+         differs("matrix", {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1});
+}
+
+// Does a node-extras vector of this node read in Blender's axes? "rdtf_axes" on the node says so
+// ("blender" or "gltf"); without it, yes exactly when Blender's exporter wrote the file.
+bool reads_blender_axes(const Json& document, std::size_t node, Diagnostics& diag) {
+  const Json* extras = node_extras(document, node);
+  if (extras != nullptr && extras->contains("rdtf_axes")) {
+    const Json& value = (*extras)["rdtf_axes"];
+    if (value == "blender") return true;
+    if (value == "gltf") return false;
+    diag.error("RDTF_INVALID_VALUE", json_pointer("/nodes", node) + "/extras/rdtf_axes",
+               node_label(document, node) + ": rdtf_axes is " + value_text(value) +
+                   ", not \"blender\" or \"gltf\"");
+  }
+  return written_by_blender(document);
+}
+
+// "x", "-z", "+y": a unit vector along a named axis.
+std::optional<Eigen::Vector3d> named_axis(const std::string& text) {
+  if (text.empty() || text.size() > 2) return std::nullopt;
+  const double sign = text[0] == '-' ? -1.0 : 1.0;
+  const std::string name = (text[0] == '-' || text[0] == '+') ? text.substr(1) : text;
+  if (name == "x" || name == "X") return sign * Eigen::Vector3d::UnitX();
+  if (name == "y" || name == "Y") return sign * Eigen::Vector3d::UnitY();
+  if (name == "z" || name == "Z") return sign * Eigen::Vector3d::UnitZ();
+  return std::nullopt;
+}
+
+void read_axis(const JointSource& source, const Eigen::Affine3d& X_SF, const Eigen::Isometry3d& X_SC,
+               Joint& joint, Diagnostics& diag) {
+  const std::string axis_key = key_for(source, "axis", "rdtf_axis");
+  if (!source.values->contains(axis_key)) return;
+  const Json& value = (*source.values)[axis_key];
+  const std::string pointer = json_pointer(source.pointer, axis_key);
+  std::optional<Eigen::Vector3d> axis;
+  if (value.is_string()) {
+    axis = named_axis(value.get<std::string>());
+  } else if (value.is_array() && value.size() == 3 && value[0].is_number() && value[1].is_number() &&
+             value[2].is_number()) {
+    axis = Eigen::Vector3d(value[0].get<double>(), value[1].get<double>(), value[2].get<double>());
+    if (!axis->allFinite()) axis.reset();
+  }
+  if (!axis) {
+    diag.error("RDTF_INVALID_VALUE", pointer,
+               source.label + ": " + axis_key + " is " + value_text(value) +
+                   ", not three finite numbers or one of \"x\", \"y\", \"z\", \"-x\", \"-y\", \"-z\"");
+    return;
+  }
+  if (axis->norm() == 0.0) {
+    diag.error("JOINT_AXIS_ZERO", pointer,
+               source.label + ": the joint axis " + value_text(value) + " is the zero vector");
+    return;
+  }
+  if (!source.rdtf_entry) {
+    // A node-extras axis is a direction in that node's frame (in Blender's axes when Blender wrote
+    // the file: glTF (x, y, z) = Blender (x, z, -y)); map it into the child link frame.
+    if (source.blender_axes) *axis = blender_to_gltf_axes() * *axis;
+    *axis = X_SC.linear().transpose() * (X_SF.linear() * *axis);
+    if (!(axis->norm() > 0.0)) {  // The node's scale flattens it (a scale of 0).
+      diag.error("JOINT_AXIS_ZERO", pointer,
+                 source.label + ": the joint axis " + value_text(value) +
+                     " has no length in the scene: the node's scale flattens it");
+      return;
+    }
+  }
+  joint.axis = axis->normalized();
 }
 
 void read_joint_properties(const JointSource& source, const Eigen::Affine3d& X_SF,
@@ -76,33 +159,13 @@ void read_joint_properties(const JointSource& source, const Eigen::Affine3d& X_S
     const auto kind = value.is_string() ? joint_kind_from_string(value.get<std::string>()) : std::nullopt;
     if (!kind) {
       diag.error("RDTF_INVALID_JOINT_TYPE", json_pointer(source.pointer, kind_key),
-                 "joint type must be one of fixed, revolute, continuous, prismatic, floating, "
-                 "planar, ball");
+                 source.label + ": joint type " + value_text(value) +
+                     " is not one of fixed, revolute, continuous, prismatic, floating, planar, ball");
     } else {
       joint.kind = *kind;
     }
   }
-  const std::string axis_key = key_for(source, "axis", "rdtf_axis");
-  if (source.values->contains(axis_key)) {
-    const Json& value = (*source.values)[axis_key];
-    const std::string pointer = json_pointer(source.pointer, axis_key);
-    bool valid = value.is_array() && value.size() == 3;
-    for (std::size_t i = 0; valid && i < 3; ++i) {
-      valid = value[i].is_number() && std::isfinite(value[i].get<double>());
-    }
-    if (!valid) {
-      diag.error("RDTF_INVALID_VALUE", pointer, "axis must be three finite numbers");
-    } else {
-      Eigen::Vector3d axis(value[0].get<double>(), value[1].get<double>(), value[2].get<double>());
-      // A node-extras axis is a direction in that node's frame; map it into the child link frame.
-      if (!source.rdtf_entry) axis = X_SC.linear().transpose() * (X_SF.linear() * axis);
-      if (axis.norm() == 0.0) {
-        diag.error("JOINT_AXIS_ZERO", pointer, "the joint axis is the zero vector");
-      } else {
-        joint.axis = axis.normalized();
-      }
-    }
-  }
+  read_axis(source, X_SF, X_SC, joint, diag);
   const auto lower = read_number(source, key_for(source, "lower", "rdtf_lower"), diag);
   const auto upper = read_number(source, key_for(source, "upper", "rdtf_upper"), diag);
   const auto effort = read_number(source, key_for(source, "effort", "rdtf_effort"), diag);
@@ -115,8 +178,8 @@ void read_joint_properties(const JointSource& source, const Eigen::Affine3d& X_S
     limits.velocity = velocity.value_or(0.0);
     if (limits.lower > limits.upper) {
       diag.error("JOINT_LIMITS_INVERTED", source.pointer,
-                 "lower limit " + std::to_string(limits.lower) + " is above upper limit " +
-                     std::to_string(limits.upper));
+                 source.label + ": lower limit " + value_text(limits.lower) +
+                     " is above upper limit " + value_text(limits.upper));
     }
     joint.limits = limits;
   }
@@ -128,6 +191,19 @@ void read_joint_properties(const JointSource& source, const Eigen::Affine3d& X_S
 }
 
 }  // namespace
+
+bool written_by_blender(const Json& document) {
+  if (!document.contains("asset") || !document["asset"].is_object()) return false;
+  const Json& asset = document["asset"];
+  if (!asset.contains("generator") || !asset["generator"].is_string()) return false;
+  return asset["generator"].get<std::string>().rfind("Khronos glTF Blender I/O", 0) == 0;
+}
+
+Eigen::Matrix3d blender_to_gltf_axes() {
+  Eigen::Matrix3d C;
+  C << 1, 0, 0, 0, 0, 1, 0, -1, 0;
+  return C;
+}
 
 const char* to_string(JointKind kind) {
   switch (kind) {
@@ -216,6 +292,18 @@ Robot build_robot(const Json& document, const std::vector<NodeType>& types, std:
                 std::to_string(joint_nodes.size()) + " joint nodes between links '" + parent.name +
                     "' and '" + child.name + "': they make one joint");
     }
+    // The joint frame, and so the child link frame (URDF keeps them one), is the pivot the
+    // modeller placed: the joint node nearest the child that has a transform of its own or joint
+    // properties. Without one (rdtf's inserted joint nodes, URDF import's) it is the child link
+    // node's frame. The geometry stays where it is: visuals and inertial are expressed in it.
+    joint.frame_node = child.node;
+    for (int node : joint_nodes) {
+      if (has_own_transform(document["nodes"][node]) || has_joint_keys(node_extras(document, node))) {
+        joint.frame_node = node;
+        break;
+      }
+    }
+    child.X_SL = rigid_part(world[joint.frame_node]);
     joint.X_PJ = parent.X_SL.inverse() * child.X_SL;
 
     // Sources of properties, first found wins: the RDTF entry of a joint node, then node extras
@@ -224,7 +312,8 @@ Robot build_robot(const Json& document, const std::vector<NodeType>& types, std:
     for (int node : joint_nodes) {
       const Json* entry = entries[node];
       if (entry != nullptr && entry->contains("joint") && (*entry)["joint"].is_object()) {
-        source = JointSource{&(*entry)["joint"], entry_pointers[node] + "/joint", true, node};
+        source = JointSource{&(*entry)["joint"], entry_pointers[node] + "/joint",
+                             "entry for " + node_label(document, node), true, node, false};
         break;
       }
     }
@@ -232,18 +321,21 @@ Robot build_robot(const Json& document, const std::vector<NodeType>& types, std:
     extras_nodes.push_back(child.node);
     for (std::size_t i = 0; !source && i < extras_nodes.size(); ++i) {
       const Json* extras = node_extras(document, extras_nodes[i]);
-      if (extras != nullptr && has_joint_keys(*extras)) {
-        source = JointSource{extras, json_pointer("/nodes", extras_nodes[i]) + "/extras", false,
-                             extras_nodes[i]};
+      if (has_joint_keys(extras)) {
+        source = JointSource{extras, json_pointer("/nodes", extras_nodes[i]) + "/extras",
+                             node_label(document, extras_nodes[i]), false, extras_nodes[i],
+                             reads_blender_axes(document, extras_nodes[i], diag)};
       }
     }
+    joint.source_node = source ? source->frame_node : -1;
+    joint.source_is_entry = source && source->rdtf_entry;
     if (source) read_joint_properties(*source, world[source->frame_node], child.X_SL, joint, diag);
     child.parent_joint = static_cast<int>(robot.joints.size());
     robot.links[joint.parent_link].child_joints.push_back(child.parent_joint);
     robot.joints.push_back(std::move(joint));
   }
   if (robot.links.empty()) {
-    diag.warning("NO_LINKS", "/scenes/" + std::to_string(scene),
+    diag.warning("NO_LINKS", json_pointer("/scenes", scene),
                  "the scene has no link: nothing in it carries a mesh or children");
   }
   return robot;

@@ -1,5 +1,6 @@
 #include "rdtf/typing.h"
 
+#include "rdtf/completion.h"
 #include "rdtf/geometry.h"
 
 namespace rdtf {
@@ -40,7 +41,10 @@ void read_authored_types(const Json& document, std::vector<NodeType>& types,
         if (!entry.is_object() || !entry.contains("node") || !entry["node"].is_number_unsigned() ||
             entry["node"].get<std::size_t>() >= nodes.size()) {
           diag.error("RDTF_INVALID_NODE_ENTRY", pointer,
-                     "an RDTF node entry needs \"node\": the index of an existing node");
+                     std::string("an RDTF node entry needs \"node\": the index of an existing node "
+                                 "(0 to ") + std::to_string(nodes.size() - 1) + "); it has " +
+                         (entry.is_object() && entry.contains("node") ? value_text(entry["node"])
+                                                                      : std::string("none")));
           continue;
         }
         if (!entry.contains("type")) continue;
@@ -49,7 +53,9 @@ void read_authored_types(const Json& document, std::vector<NodeType>& types,
                                       : std::nullopt;
         if (!type) {
           diag.error("RDTF_INVALID_TYPE", pointer + "/type",
-                     "type must be one of link, joint, mesh, visual, inertial");
+                     "entry for " + node_label(document, entry["node"].get<std::size_t>()) +
+                         ": type " + value_text(entry["type"]) +
+                         " is not one of link, joint, mesh, visual, inertial");
           continue;
         }
         const auto node = entry["node"].get<std::size_t>();
@@ -65,7 +71,8 @@ void read_authored_types(const Json& document, std::vector<NodeType>& types,
     const auto type = value.is_string() ? node_type_from_string(value.get<std::string>()) : std::nullopt;
     if (!type) {
       diag.error("RDTF_INVALID_TYPE", json_pointer("/nodes", i) + "/extras/rdtf_type",
-                 "rdtf_type must be one of link, joint, mesh, visual, inertial");
+                 node_label(document, i) + ": rdtf_type " + value_text(value) +
+                     " is not one of link, joint, mesh, visual, inertial");
       continue;
     }
     types[i] = *type;
@@ -90,14 +97,17 @@ void type_skin_joints(const Json& document, const std::vector<char>& in_scene,
 }
 
 // Algorithm 2, amended: see docs/format.md, "Typing".
-NodeType mesh_or_visual(const Json& nodes, const Json* parent, const Json& node) {
+NodeType mesh_or_visual(const Json& nodes, const Json* parent, NodeType parent_type,
+                        const Json& node) {
   const auto children = children_of(node);
   if (has_mesh(node)) {
     // A skinned mesh moves with its bones, whose links carry its mass: never a link itself.
     if (node.contains("skin") && children.empty()) return NodeType::kMesh;
-    // Blender puts an object's mesh on the node that parents other objects; and an object
-    // parented to a mesh object moves on its own: both are links.
-    if (!children.empty() || parent == nullptr || has_mesh(*parent) || has_extra(node, "rdtf_joint")) {
+    // Blender puts an object's mesh on the node that parents other objects; an object parented
+    // to a mesh object moves on its own; and an object parented to a joint empty is what that
+    // joint moves (an elbow empty under the upper-arm mesh, the forearm under the elbow): all links.
+    if (!children.empty() || parent == nullptr || has_mesh(*parent) ||
+        parent_type == NodeType::kJoint || has_extra(node, "rdtf_joint")) {
       return NodeType::kLink;
     }
     return NodeType::kMesh;
@@ -188,7 +198,8 @@ std::vector<NodeType> type_nodes(const Json& document, std::size_t scene, Diagno
   }
   for (const auto& [parent, node] : order) {
     if (fixed[node]) continue;
-    types[node] = mesh_or_visual(nodes, parent < 0 ? nullptr : &nodes[parent], nodes[node]);
+    types[node] = mesh_or_visual(nodes, parent < 0 ? nullptr : &nodes[parent],
+                                 parent < 0 ? NodeType::kNone : types[parent], nodes[node]);
   }
   for (const auto& [parent, node] : order) {
     if (fixed[node] || types[node] != NodeType::kNone) continue;

@@ -41,6 +41,12 @@ void choose_names(const Robot& robot, Diagnostics& diag, std::vector<std::string
   }
 }
 
+// URDF's <limit> requires effort and velocity, and tools read 0 as "cannot move" (Gazebo,
+// ros2_control, PyBullet). A joint that authored neither gets these instead: far above what any
+// robot modelled for rdtf applies (1 MN m, 1000 rad/s), so they never bind; docs/urdf.md.
+constexpr double kUnsetEffort = 1.0e6;    // N m or N
+constexpr double kUnsetVelocity = 1.0e3;  // rad/s or m/s
+
 // The joint type in URDF, or nothing (and an error) when URDF cannot say it.
 std::optional<int> urdf_joint_type(const Joint& joint, const std::string& name, Diagnostics& diag) {
   const std::string pointer = node_pointer(joint.node);
@@ -300,8 +306,18 @@ std::optional<UrdfExport> export_urdf(const Conversion& conversion, const UrdfOp
       out->limits = std::make_shared<urdf::JointLimits>();
       out->limits->lower = joint.limits->lower;
       out->limits->upper = joint.limits->upper;
-      out->limits->effort = joint.limits->effort;
-      out->limits->velocity = joint.limits->velocity;
+      out->limits->effort = joint.limits->effort > 0 ? joint.limits->effort : kUnsetEffort;
+      out->limits->velocity = joint.limits->velocity > 0 ? joint.limits->velocity : kUnsetVelocity;
+      if (joint.limits->effort <= 0 || joint.limits->velocity <= 0) {
+        diag.info("URDF_LIMIT_DEFAULTED", node_pointer(joint.node),
+                  "joint '" + name + "' has no " +
+                      (joint.limits->effort <= 0 && joint.limits->velocity <= 0
+                           ? std::string("rdtf_effort or rdtf_velocity")
+                           : joint.limits->effort <= 0 ? std::string("rdtf_effort") : std::string("rdtf_velocity")) +
+                      ": the URDF's <limit> (which requires both) says effort " +
+                      exact_number(out->limits->effort) + " and velocity " +
+                      exact_number(out->limits->velocity) + ", which never bind; set them to the real limits");
+      }
     }
     if (joint.spring_stiffness != 0) {
       diag.warning("URDF_SPRING_DROPPED", node_pointer(joint.node),

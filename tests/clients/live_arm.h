@@ -111,6 +111,7 @@ inline std::string write_arm3_across_gravity(const fs::path& folder) {
   for (auto& node : document["nodes"]) {
     if (node.value("name", "") == "shoulder" || node.value("name", "") == "elbow") {
       node["extras"]["rdtf_axis"] = {0.0, 0.0, 1.0};
+      node["extras"]["rdtf_axes"] = "gltf";  // glTF's axes, though Blender wrote the file.
     }
   }
   const std::string gltf = document.dump(1);

@@ -21,7 +21,7 @@ struct Fixture {
 std::vector<Fixture> models() {
   std::vector<Fixture> result;
   for (const char* file : {"two_cylinder.gltf", "arm3.gltf", "arm3.glb", "transforms.gltf",
-                           "skinned_arm.gltf"}) {
+                           "skinned_arm.gltf", "modelled_arm.gltf", "modelled_bones.gltf"}) {
     result.push_back({"blender", file});
   }
   for (const char* file : {"Box.gltf", "Triangle.gltf", "TriangleWithoutIndices.gltf",

@@ -19,4 +19,11 @@ void complete_nodes(Json& document, std::vector<NodeType>& types, Diagnostics& d
 // The name a node goes by in generated names and the robot: its name, else "node<index>".
 std::string node_name(const Json& document, std::size_t node);
 
+// How a diagnostic names a node: "node 7 'elbow'" (the glTF name, which is the Blender object's
+// name), or "node 7" when it has none.
+std::string node_label(const Json& document, std::size_t node);
+
+// An offending value as a diagnostic shows it: compact JSON, ASCII only, at most 80 characters.
+std::string value_text(const Json& value);
+
 }  // namespace rdtf

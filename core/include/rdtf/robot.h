@@ -51,7 +51,14 @@ struct JointLimits {
 
 struct Joint {
   std::string name;
-  int node = -1;  // glTF node index of the joint node.
+  int node = -1;  // glTF node index of the joint node (the one nearest the child link).
+  // The node whose frame is the joint frame (the pivot): the joint node nearest the child with a
+  // transform of its own or joint properties in its extras, else the child link node.
+  int frame_node = -1;
+  // Where the properties came from: the node whose extras.RDTF entry (source_is_entry) or node
+  // extras held them; -1 when none did (a fixed joint, List 4's default).
+  int source_node = -1;
+  bool source_is_entry = false;
   int parent_link = -1;
   int child_link = -1;
   JointKind kind = JointKind::kFixed;
@@ -80,10 +87,32 @@ struct Robot {
 
 namespace rdtf {
 
+// The node-extras keys (Blender custom properties) that describe a joint.
+inline constexpr const char* kJointExtrasKeys[] = {
+    "rdtf_joint",   "rdtf_axis",     "rdtf_lower",    "rdtf_upper",           "rdtf_damping",
+    "rdtf_friction", "rdtf_effort", "rdtf_velocity", "rdtf_spring_stiffness"};
+
+// True when Blender's glTF exporter wrote the document (asset.generator "Khronos glTF Blender I/O
+// ..."): its custom-property vectors were typed in Blender's axes.
+bool written_by_blender(const Json& document);
+
+// Blender's axes (Z up) to glTF's (Y up), as Blender's exporter turns every frame:
+// glTF (x, y, z) = Blender (x, z, -y).
+Eigen::Matrix3d blender_to_gltf_axes();
+
 // The links and joints of a completed document (mass properties not yet filled in). Joint kinds,
 // axes, limits and dynamics come from extras.RDTF, then node extras (docs/format.md lists the
 // keys), else a fixed joint as in the paper's List 4.
 Robot build_robot(const Json& document, const std::vector<NodeType>& types, std::size_t scene,
                   Diagnostics& diag);
+
+// Warnings about a model that converts but is probably not what was meant (docs/format.md,
+// "Checks on the modelled robot").
+// Empties with children (they look like joints) or a skin, in a typed document (before
+// completion) with no rdtf_* property anywhere: the exporter probably left custom properties out.
+void check_missing_properties(const Json& document, const std::vector<NodeType>& types,
+                              Diagnostics& diag);
+// Extent or masses implausible for metres: probably a model drawn in millimetres.
+void check_units(const Json& document, const Robot& robot, Diagnostics& diag);
 
 }  // namespace rdtf

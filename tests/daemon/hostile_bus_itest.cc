@@ -13,6 +13,8 @@
 #include <cmath>
 #include <limits>
 
+#include <rdtf/link_state_t.hpp>
+
 #include "clients/live_arm.h"
 
 namespace rdtf::itest {
@@ -175,7 +177,7 @@ TEST(HostileBus, FloodOfMalformedDatagramsIsLoggedOnceASecond) {
   for (int k = 0; k < kCount; ++k) sender.send(sender.short_message("RDTF/REQUEST", request_head().i32(0)));
   // Not every datagram need arrive (the socket buffer); every one that did is counted.
   request_all(s, "after the flood");
-  ASSERT_TRUE(s.wait_log("on request of 'after the flood'", 20s));
+  ASSERT_TRUE(s.daemon->wait_log("on request of 'after the flood'", 20s));
   ASSERT_TRUE(s.wait_for([&](const auto& all) { return dropped(all) > 0; }));
   const auto all = s.messages();
   const std::string log = s.daemon->log();
@@ -219,7 +221,7 @@ TEST(HostileBus, RequesterIsEscapedInTheLog) {
   Session s;
   s.start();
   request_all(s, "mallory\n2030-01-01T00:00:00.000Z rdtfd stopped\x1b[2J");
-  ASSERT_TRUE(s.wait_log("on request of 'mallory"));
+  ASSERT_TRUE(s.daemon->wait_log("on request of 'mallory"));
   const std::string log = s.daemon->log();
   EXPECT_NE(log.find("on request of 'mallory\\x0a2030-01-01T00:00:00.000Z rdtfd stopped\\x1b[2J'"), std::string::npos)
       << log;

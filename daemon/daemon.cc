@@ -690,6 +690,9 @@ void Daemon::publish_status() {
   status.coalesced_requests = static_cast<std::int64_t>(request_throttle_.coalesced());
   status.send_queue_bytes = static_cast<std::int64_t>(publisher_->queued_bytes());
   status.send_dropped = static_cast<std::int64_t>(publisher_->dropped());
+  status.live_real_time_factor = 0;  // lcm-gen leaves fields uninitialised.
+  status.simulations_behind = 0;
+  status.simulations_failed = 0;
   if (simulation_) {
     const LiveTiming timing = simulation_->timing();
     status.live_real_time_factor = timing.real_time_factor;

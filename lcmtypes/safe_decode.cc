@@ -204,6 +204,13 @@ class Walker {
       why = field.name + ": string not NUL-terminated";
       return false;
     }
+    // LCM strings are C strings: a NUL inside one decodes (lcm-gen keeps it) but encodes cut at
+    // it, so a subscriber that sends the string on (a controller, a joint's name) sent a message
+    // whose lengths no longer match its bytes (found by fuzz/bus_fuzzer.cc).
+    if (std::memchr(data_ + pos, 0, static_cast<std::size_t>(length) - 1) != nullptr) {
+      why = field.name + ": NUL inside the string";
+      return false;
+    }
     pos += static_cast<std::size_t>(length);
     return true;
   }

@@ -3,8 +3,8 @@
 // or 2^31-1 calls resize() with it before a single element is checked against the buffer (an
 // exception out of the LCM handler, or gigabytes for a 111-byte datagram). So every rdtf program
 // that subscribes walks a datagram against its type's schema first (parsed from lcmtypes/*.lcm,
-// compiled in) and decodes only what fits: every string 1 <= length <= the bytes left and
-// NUL-terminated, every array count >= 0 with all its elements present, no byte left over.
+// compiled in) and decodes only what fits: every string 1 <= length <= the bytes left,
+// NUL-terminated and with no other NUL, every array count >= 0 with all its elements present, no byte left over.
 #pragma once
 
 #include <chrono>

@@ -123,6 +123,12 @@ TEST(SafeDecode, LengthsThatDoNotFitTheBytesLeftAreRefusedBeforeDecoding) {
   std::string why;
   EXPECT_FALSE(lcm_safe::decode<rdtf::request_t>(bytes.data(), bytes.size(), why));
   EXPECT_NE(why.find("NUL"), std::string::npos) << why;
+  // A NUL inside a string: lcm-gen keeps it, its encoder cuts there (a controller that sent such a
+  // joint name back sent a message whose lengths do not match; found by the bus fuzz target).
+  rdtf::request_t inner;
+  inner.model_id = std::string("ab\0c", 4);
+  bytes = encode(inner);
+  EXPECT_FALSE(lcm_safe::decode<rdtf::request_t>(bytes.data(), bytes.size(), why));
   const auto status = encode(rdtf::status_t{});
   EXPECT_FALSE(lcm_safe::decode<rdtf::request_t>(status.data(), status.size(), why));
   EXPECT_FALSE(lcm_safe::decode<rdtf::request_t>(status.data(), 7, why));

@@ -205,15 +205,22 @@ TEST(HostileBus, FragmentWhoseOffsetWraps32BitsIsRefusedByLiblcm) {
   ASSERT_TRUE(wait_until([&] { return echo.output().find("RDTF/STATUS") != std::string::npos; }, 10s));
   RawSender sender;
   // Fragment 0 of a 1000-byte message on a subscribed channel, then one at offset 0xfffffff0:
-  // 0xfffffff0 + 100 wraps to 84 < 1000 in liblcm 1.3.1's check, and its memcpy wrote 16 bytes
-  // before the buffer and the rest 4 GB past it (SIGSEGV). Both channels: rdtfd's and rdtf-echo's.
+  // 0xfffffff0 + 100 wraps to 84 < 1000 in liblcm 1.3.1's check, and its memcpy wrote 100 bytes
+  // at fbuf->data + 0xfffffff0 (pointer arithmetic on a 64-bit host: about 4 GiB past the buffer,
+  // SIGSEGV). Both processes: rdtfd and rdtf-echo subscribe to RDTF/REQUEST.
   for (int round = 0; round < 3; ++round) {
     const auto seq = static_cast<std::uint32_t>(100 + round);
     sender.send(RawSender::fragment(seq, 1000, 0, 0, 2, "RDTF/REQUEST", 100));
     sender.send(RawSender::fragment(seq, 1000, 0xfffffff0u, 1, 2, "", 100));
-    // Shorter than the long header; a fragment count of 0; a channel longer than the datagram.
+    // Shorter than the long header; a fragment count of 0.
     sender.send({0x4c, 0x43, 0x30, 0x33, 0, 0, 0, 1, 0, 0});
     sender.send(RawSender::fragment(seq + 10, 1000, 0, 0, 0, "RDTF/REQUEST", 10));
+    // A channel longer than the datagram: fragment 0 ends inside its channel name, whose NUL
+    // liblcm's strlen finds in the stale zeros a bad-magic datagram left in the receive buffer.
+    sender.send(std::vector<std::uint8_t>(64, 0));
+    auto cut = RawSender::fragment(seq + 20, 1000, 0, 0, 2, "RDTF/REQUEST", 0);
+    cut.pop_back();  // the NUL
+    sender.send(cut);
   }
   // rdtfd still answers; rdtf-echo still prints.
   const std::size_t from = s.messages().size();
@@ -228,6 +235,39 @@ TEST(HostileBus, FragmentWhoseOffsetWraps32BitsIsRefusedByLiblcm) {
   EXPECT_TRUE(wait_until([&] { return echo.output().find("after the fragments") != std::string::npos; }, 5s))
       << echo.output();
   EXPECT_FALSE(echo.wait_exit(0s).has_value()) << "rdtf-echo exited:\n" << echo.output();
+}
+
+// liblcm 1.3.1 takes the subscriber's queue slot (lcm_try_enqueue_message) before the patched
+// check that the channel name ends inside the datagram: a return after it leaked the slot, and
+// 31 such datagrams left RDTF/REQUEST's queue (30) full for good, every later request dropped.
+// Each one: a bad-magic datagram with a zero at byte 20, then the 20 bytes "LC02", sequence,
+// "RDTF/REQUEST" with no NUL (liblcm reuses the buffer after bad magic; strlen finds the zero).
+TEST(HostileBus, ChannelNamesPastTheDatagramNeverLeaveTheDaemonDeaf) {
+  Session s;
+  copy_fixture(s.watch, "arm3");
+  s.start();
+  ASSERT_TRUE(s.wait_revision(kArm, 1, fixture_hash("arm3")));
+  RawSender sender;
+  const int kPairs = 100;
+  for (int k = 0; k < kPairs; ++k) {
+    sender.send(std::vector<std::uint8_t>(32, 0));
+    auto cut = sender.short_message("RDTF/REQUEST", Bytes());
+    cut.pop_back();  // the channel's NUL
+    ASSERT_EQ(cut.size(), 20u);
+    sender.send(cut);
+  }
+  // A request sent after them is answered. Resent until answered (UDP may drop one), but a deaf
+  // subscription drops every one: the deadline ends the test.
+  const std::size_t from = s.messages().size();
+  ASSERT_TRUE(wait_until(
+      [&] {
+        request_all(s, "after the cut channels");
+        return s.daemon->wait_log("on request of 'after the cut channels'", 500ms);
+      },
+      10s))
+      << s.daemon->log();
+  EXPECT_TRUE(answered(s, from));
+  EXPECT_TRUE(s.daemon->running());
 }
 
 TEST(HostileBus, RequesterIsEscapedInTheLog) {

@@ -143,7 +143,8 @@ Daemon::Daemon(DaemonConfig config, ConfigLoader reload)
       settle_(config_.settle, config_.max_open_wait),
       bus_(BusInput::Handlers{[this](const rdtf::request_t& request) { on_request(request); },
                               [this](const rdtf::joint_command_t& command) {
-                                if (simulation_) simulation_->command(command);
+                                // Without live simulations (--no-simulate) commands go unheard.
+                                return simulation_ ? simulation_->command(command) : std::string();
                               },
                               [](const std::string& line) { log_line(line); }}),
       request_throttle_(kRequestAnswerPeriod) {}

@@ -393,6 +393,54 @@ TEST(HostileBus, HugeFiniteCommandsNeverStopTheSimulationNorPublishNonFiniteValu
   EXPECT_EQ(count_lines(s.daemon->log(), "restarted from the rest pose") > 0, failures > 0);
 }
 
+// A command is queued for the simulation thread only when it fits one datagram (64 KiB) and has
+// no more joints than the model: the queue's bound by count then bounds its bytes. A rejection's
+// ERROR carries the bus's text escaped and cut, and the live model's content hash.
+TEST(HostileBus, OversizedCommandsAreDroppedAndRejectionsCarryNoBusBytes) {
+  Session s;
+  copy_fixture(s.watch, "arm3");
+  s.start(simulating());
+  const std::string hash = fixture_hash("arm3");
+  ASSERT_TRUE(s.wait_revision(kArm, 1, hash));
+  ASSERT_TRUE(s.wait_for([](const auto& all) { return last_state(all, 1).has_value(); }));
+  const std::int64_t dropped_before = dropped(s.messages());
+  // 70,000 bytes of content hash (LCM sends it in fragments); four joints for arm3's three.
+  s.subscriber.publish("RDTF/arm3.gltf/JOINT_COMMAND",
+                       make_command(kArm, 1, std::string(70000, 'h'), {{"shoulder", rdtf::joint_command_t::TORQUE, 1}}));
+  s.subscriber.publish("RDTF/arm3.gltf/JOINT_COMMAND",
+                       make_command(kArm, 1, hash,
+                                    {{"shoulder", rdtf::joint_command_t::TORQUE, 1},
+                                     {"elbow", rdtf::joint_command_t::TORQUE, 1},
+                                     {"a", rdtf::joint_command_t::TORQUE, 1},
+                                     {"b", rdtf::joint_command_t::TORQUE, 1}}));
+  ASSERT_TRUE(s.wait_for([&](const auto& all) { return dropped(all) >= dropped_before + 2; }))
+      << "STATUS counts " << dropped(s.messages()) - dropped_before << " dropped of 2";
+  ASSERT_TRUE(s.daemon->wait_log("above rdtfd's input limit of 65536")) << s.daemon->log();
+  // 30,000 bytes of hash with control bytes, in one datagram: rejected, the text escaped and cut.
+  std::string bad_hash(30000, 'x');
+  bad_hash[10] = '\n';
+  bad_hash[11] = '\x1b';
+  const std::size_t from = s.messages().size();
+  s.subscriber.publish("RDTF/arm3.gltf/JOINT_COMMAND",
+                       make_command(kArm, 1, bad_hash, {{"shoulder", rdtf::joint_command_t::TORQUE, 1}}));
+  ASSERT_TRUE(s.wait_for([&](const auto& all) {
+    return !rejections(std::vector<Message>(all.begin() + static_cast<std::ptrdiff_t>(from), all.end())).empty();
+  }));
+  const auto all = s.messages();
+  const auto errors = decoded<rdtf::model_error_t>(std::vector<Message>(all.begin() + static_cast<std::ptrdiff_t>(from), all.end()),
+                                                   "ERROR", kArm);
+  ASSERT_FALSE(errors.empty());
+  const auto& error = errors.front();
+  EXPECT_EQ(error.content_hash, hash);
+  ASSERT_EQ(error.diagnostics.size(), 1u);
+  const std::string& text = error.diagnostics[0].message;
+  EXPECT_LT(text.size(), 400u) << text;
+  EXPECT_EQ(text.find('\n'), std::string::npos) << text;
+  EXPECT_EQ(text.find('\x1b'), std::string::npos) << text;
+  EXPECT_NE(text.find("xx\\x0a\\x1bxx"), std::string::npos) << text;
+  EXPECT_TRUE(s.daemon->running());
+}
+
 TEST(HostileBus, LiveSimulationThatCannotKeepRealTimeSaysSo) {
   Session s;
   copy_fixture(s.watch, "arm3");

@@ -2,13 +2,19 @@
 
 namespace rdtf::daemon {
 
+void BusInput::drop(const std::string& channel, const std::string& why) {
+  if (auto line = drops_.drop(channel, why, Clock::now()); line && handlers_.log) handlers_.log(*line);
+}
+
 template <typename Message>
 std::optional<Message> BusInput::decode(const std::string& channel, const void* data, std::size_t size) {
+  if (size > kMaxInputBytes) {
+    drop(channel, std::to_string(size) + " bytes, above rdtfd's input limit of " + std::to_string(kMaxInputBytes));
+    return std::nullopt;
+  }
   std::string why;
   auto message = lcm_safe::decode<Message>(data, size, why);
-  if (!message) {
-    if (auto line = drops_.drop(channel, why, Clock::now()); line && handlers_.log) handlers_.log(*line);
-  }
+  if (!message) drop(channel, why);
   return message;
 }
 
@@ -26,14 +32,13 @@ void BusInput::command_datagram(const std::string& channel, const void* data, st
   const std::string expected_suffix = "/" + command->model_id + "/JOINT_COMMAND";
   if (channel.size() < expected_suffix.size() ||
       channel.compare(channel.size() - expected_suffix.size(), expected_suffix.size(), expected_suffix) != 0) {
-    if (auto line = drops_.drop(channel, "joint_command_t for model '" + command->model_id + "' on another model's channel",
-                                Clock::now());
-        line && handlers_.log) {
-      handlers_.log(*line);
-    }
+    drop(channel, "joint_command_t for model '" + lcm_safe::printable(command->model_id, 80) +
+                      "' on another model's channel");
     return;
   }
-  if (handlers_.command) handlers_.command(*command);
+  if (handlers_.command) {
+    if (const std::string why = handlers_.command(*command); !why.empty()) drop(channel, why);
+  }
 }
 
 bool RequestThrottle::admit(const std::string& model_id, Clock::time_point now) {

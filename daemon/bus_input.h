@@ -24,7 +24,8 @@ class BusInput {
   using Clock = std::chrono::steady_clock;
   struct Handlers {
     std::function<void(const rdtf::request_t&)> request;
-    std::function<void(const rdtf::joint_command_t&)> command;
+    // Returns "" when the command was taken, else why it was dropped (counted and logged).
+    std::function<std::string(const rdtf::joint_command_t&)> command;
     std::function<void(const std::string&)> log;
   };
   explicit BusInput(Handlers handlers) : handlers_(std::move(handlers)) {}
@@ -35,7 +36,12 @@ class BusInput {
 
   std::uint64_t dropped() const { return drops_.total(); }
 
+  // Every datagram rdtfd subscribes to fits one UDP datagram: a larger message (LCM reassembles
+  // up to 256 MiB from fragments) is dropped before it is decoded.
+  static constexpr std::size_t kMaxInputBytes = 64 * 1024;
+
  private:
+  void drop(const std::string& channel, const std::string& why);
   template <typename Message>
   std::optional<Message> decode(const std::string& channel, const void* data, std::size_t size);
 

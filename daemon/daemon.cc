@@ -194,7 +194,8 @@ Daemon::Daemon(DaemonConfig config, ConfigLoader reload)
       settle_(config_.settle, config_.max_open_wait),
       bus_(BusInput::Handlers{[this](const rdtf::request_t& request) { on_request(request); },
                               [this](const rdtf::joint_command_t& command) {
-                                if (simulation_) simulation_->command(command);
+                                // Without live simulations (--no-simulate) commands go unheard.
+                                return simulation_ ? simulation_->command(command) : std::string();
                               },
                               [](const std::string& line) { log_line(line); }}),
       request_throttle_(kRequestAnswerPeriod),
@@ -800,6 +801,9 @@ void Daemon::publish_status() {
   status.coalesced_requests = static_cast<std::int64_t>(request_throttle_.coalesced());
   status.send_queue_bytes = static_cast<std::int64_t>(publisher_->queued_bytes());
   status.send_dropped = static_cast<std::int64_t>(publisher_->dropped());
+  status.live_real_time_factor = 0;  // lcm-gen leaves fields uninitialised.
+  status.simulations_behind = 0;
+  status.simulations_failed = 0;
   if (simulation_) {
     const LiveTiming timing = simulation_->timing();
     status.live_real_time_factor = timing.real_time_factor;

@@ -100,22 +100,35 @@ void SimulationHost::load(const std::string& model_id, std::int64_t revision,
   model->revision = revision;
   model->content_hash = content_hash;
   std::lock_guard lock(mutex_);
+  joint_counts_[model_id] = robot.joints.size();
   pending_robots_[model_id] = robot;
   inbox_.loads.emplace_back(model_id, std::move(model));
 }
 
 void SimulationHost::remove(const std::string& model_id) {
   std::lock_guard lock(mutex_);
+  joint_counts_.erase(model_id);
   inbox_.removals.push_back(model_id);
 }
 
-void SimulationHost::command(const rdtf::joint_command_t& command) {
+std::string SimulationHost::command(const rdtf::joint_command_t& command) {
   std::lock_guard lock(mutex_);
+  const auto joints = joint_counts_.find(command.model_id);
+  if (joints == joint_counts_.end()) {
+    ++dropped_commands_;
+    return "joint_command_t for model '" + lcm_safe::printable(command.model_id, 80) + "', which is not simulated";
+  }
+  if (command.num_joints < 0 || static_cast<std::size_t>(command.num_joints) > joints->second) {
+    ++dropped_commands_;
+    return "joint_command_t with " + std::to_string(command.num_joints) + " joints for model '" +
+           lcm_safe::printable(command.model_id, 80) + "', which has " + std::to_string(joints->second);
+  }
   if (inbox_.commands.size() >= kMaxPendingCommands) {
     ++dropped_commands_;
-    return;
+    return "joint_command_t dropped: " + std::to_string(kMaxPendingCommands) + " commands already wait";
   }
   inbox_.commands.push_back(command);
+  return "";
 }
 
 LiveTiming SimulationHost::timing() const {
@@ -191,7 +204,8 @@ void SimulationHost::reject(const rdtf::joint_command_t& command, const std::str
   message.model_id = command.model_id;
   const auto live = models_.find(command.model_id);
   message.live_revision = live == models_.end() ? 0 : live->second->revision;
-  message.content_hash = command.content_hash;
+  // The live model's hash, never the bus's (which may be megabytes of anything).
+  message.content_hash = live == models_.end() ? std::string() : live->second->content_hash;
   rdtf::diagnostic_t d;
   d.severity = rdtf::diagnostic_t::ERROR;
   d.code = "COMMAND_REJECTED";
@@ -204,14 +218,16 @@ void SimulationHost::reject(const rdtf::joint_command_t& command, const std::str
 
 void SimulationHost::apply_command(const rdtf::joint_command_t& command) {
   const auto found = models_.find(command.model_id);
-  if (found == models_.end()) return reject(command, "no live simulation of model '" + command.model_id + "'");
+  if (found == models_.end()) {
+    return reject(command, "no live simulation of model '" + lcm_safe::printable(command.model_id, 80) + "'");
+  }
   LiveModel& model = *found->second;
   if (command.revision != model.revision) {
     return reject(command, "command for revision " + std::to_string(command.revision) + " but revision " +
                                std::to_string(model.revision) + " is live");
   }
   if (command.content_hash != model.content_hash) {
-    return reject(command, "command for content hash '" + command.content_hash + "' but revision " +
+    return reject(command, "command for content hash '" + lcm_safe::printable(command.content_hash, 80) + "' but revision " +
                                std::to_string(model.revision) + " has content hash '" + model.content_hash + "'");
   }
   std::vector<JointCommand> commands;

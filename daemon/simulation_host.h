@@ -134,8 +134,10 @@ class SimulationHost {
             const Robot& robot);
   void remove(const std::string& model_id);
   // A controller's command; rejected (reported on <prefix>/<model>/ERROR) when its revision or
-  // content hash is not the live one or it names unknown joints.
-  void command(const rdtf::joint_command_t& command);
+  // content hash is not the live one or it names unknown joints. Not even queued (the reason is
+  // returned, for the caller to count) when the queue is full or it has more joints than the
+  // model loaded last: a queued command then costs at most that model's joints.
+  std::string command(const rdtf::joint_command_t& command);
 
   std::size_t model_count() const;
   LiveTiming timing() const;
@@ -171,6 +173,7 @@ class SimulationHost {
   mutable std::mutex mutex_;
   Inbox inbox_;
   std::map<std::string, Robot> pending_robots_;  // Under mutex_: robots of inbox_.loads.
+  std::map<std::string, std::size_t> joint_counts_;  // Under mutex_: joints of each model loaded last.
   LiveModels models_;                                         // Owned by the host thread.
   std::size_t model_count_ = 0;                               // Under mutex_.
   LiveTiming timing_;                                         // Under mutex_.

@@ -78,9 +78,10 @@ void daemon_command(const std::uint8_t* data, std::size_t size) {
          const std::string why = rdtf::daemon::joint_commands_of(command, *simulation, commands);
          if (!why.empty()) {
            require(printable_ascii(why), "a rejection with unescaped bytes");
-           return;
+           return std::string();
          }
          for (const auto& c : commands) require(simulation->set_command(c), "a checked command was refused");
+         return std::string();
        },
        check_logged});
   // The channel names the model the payload claims, as a subscriber's pattern would match it.

@@ -155,8 +155,10 @@ class Walker {
           return false;
         }
         // Every element takes at least one byte, so a count above the bytes left cannot fit (and
-        // the product of two such counts stays far below 2^64).
-        if (static_cast<std::uint64_t>(n) > size_ - pos || count * static_cast<std::uint64_t>(n) > size_ - pos) {
+        // the product of two such counts stays far below 2^64). An outer dimension of 0 leaves
+        // no element at all, whatever the inner ones (position[num_links][3] with num_links 0).
+        if (count != 0 &&
+            (static_cast<std::uint64_t>(n) > size_ - pos || count * static_cast<std::uint64_t>(n) > size_ - pos)) {
           why = field.name + ": " + std::to_string(n) + " elements (from " +
                 (d.field.empty() ? std::string("a constant") : d.field) + ") in " + std::to_string(size_ - pos) +
                 " bytes left";
@@ -204,6 +206,13 @@ class Walker {
       why = field.name + ": string not NUL-terminated";
       return false;
     }
+    // LCM strings are C strings: a NUL inside one decodes (lcm-gen keeps it) but encodes cut at
+    // it, so a subscriber that sends the string on (a controller, a joint's name) sent a message
+    // whose lengths no longer match its bytes (found by fuzz/bus_fuzzer.cc).
+    if (std::memchr(data_ + pos, 0, static_cast<std::size_t>(length) - 1) != nullptr) {
+      why = field.name + ": NUL inside the string";
+      return false;
+    }
     pos += static_cast<std::size_t>(length);
     return true;
   }
@@ -226,11 +235,29 @@ std::string check_encoded(std::string_view type_name, std::int64_t fingerprint, 
   return "";
 }
 
+bool is_message_type(std::string_view type_name) {
+  // A struct that another rdtf struct contains (diagnostic_t, link_inertia_t) is only ever
+  // encoded inside it, without a fingerprint: one at a datagram's start is no rdtf message, and
+  // no subscriber has a handler for it.
+  for (const auto& [name, fields] : schemas()) {
+    for (const auto& field : fields) {
+      if (field.type == type_name) return false;
+    }
+  }
+  return schemas().find(type_name) != schemas().end();
+}
+
+std::vector<std::string_view> lcm_type_names() {
+  std::vector<std::string_view> names;
+  for (std::size_t k = 0; k < kLcmTypeCount; ++k) names.emplace_back(kLcmTypes[k].name);
+  return names;
+}
+
 std::string_view type_of(const void* data, std::size_t size) {
   if (data == nullptr || size < 8) return "";
   const std::int64_t fingerprint = read_big_endian(static_cast<const std::uint8_t*>(data), 8);
   for (std::size_t k = 0; k < kLcmTypeCount; ++k) {
-    if (kLcmTypes[k].fingerprint == fingerprint) return kLcmTypes[k].name;
+    if (kLcmTypes[k].fingerprint == fingerprint) return is_message_type(kLcmTypes[k].name) ? kLcmTypes[k].name : "";
   }
   return "";
 }

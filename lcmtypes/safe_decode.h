@@ -3,8 +3,8 @@
 // or 2^31-1 calls resize() with it before a single element is checked against the buffer (an
 // exception out of the LCM handler, or gigabytes for a 111-byte datagram). So every rdtf program
 // that subscribes walks a datagram against its type's schema first (parsed from lcmtypes/*.lcm,
-// compiled in) and decodes only what fits: every string 1 <= length <= the bytes left and
-// NUL-terminated, every array count >= 0 with all its elements present, no byte left over.
+// compiled in) and decodes only what fits: every string 1 <= length <= the bytes left,
+// NUL-terminated and with no other NUL, every array count >= 0 with all its elements present, no byte left over.
 #pragma once
 
 #include <chrono>
@@ -13,6 +13,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace rdtf::lcm_safe {
 
@@ -23,7 +24,14 @@ constexpr std::size_t kMaxMessageBytes = 4 * 1024 * 1024;
 // named `type_name` (e.g. "joint_command_t"). Empty when it may be decoded; else why not.
 std::string check_encoded(std::string_view type_name, std::int64_t fingerprint, const void* data, std::size_t size);
 
-// The rdtf type whose fingerprint starts `data`, or "" for none (not an rdtf message).
+// Whether `type_name` is an rdtf message type: an rdtf struct no other rdtf struct contains.
+bool is_message_type(std::string_view type_name);
+
+// The names of every rdtf struct in lcmtypes/ (message types and nested ones).
+std::vector<std::string_view> lcm_type_names();
+
+// The rdtf message type whose fingerprint starts `data`, or "" for none (not an rdtf message;
+// a nested struct's fingerprint, e.g. diagnostic_t's, is none either).
 std::string_view type_of(const void* data, std::size_t size);
 
 // For a message whose fingerprint names an rdtf type: check_encoded against that type.

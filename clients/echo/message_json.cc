@@ -15,6 +15,8 @@
 #include <rdtf/status_t.hpp>
 #include <rdtf/validation_report_t.hpp>
 
+#include "safe_decode.h"
+
 namespace rdtf::clients {
 namespace {
 
@@ -141,9 +143,12 @@ using Decoder = std::function<std::optional<Json>(const void*, std::uint32_t)>;
 template <typename Message>
 std::pair<std::int64_t, Decoder> decoder() {
   return {Message::getHash(), [](const void* data, std::uint32_t size) -> std::optional<Json> {
-            Message message;
-            if (message.decode(data, 0, static_cast<int>(size)) < 0) return std::nullopt;
-            return to_json(message);
+            // Schema check first: lcm-gen's decoder alone throws or allocates gigabytes on a
+            // crafted length (lcmtypes/safe_decode.h).
+            std::string why;
+            auto message = lcm_safe::decode<Message>(data, size, why);
+            if (!message) return std::nullopt;
+            return to_json(*message);
           }};
 }
 

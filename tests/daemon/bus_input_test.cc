@@ -123,6 +123,12 @@ TEST(SafeDecode, LengthsThatDoNotFitTheBytesLeftAreRefusedBeforeDecoding) {
   std::string why;
   EXPECT_FALSE(lcm_safe::decode<rdtf::request_t>(bytes.data(), bytes.size(), why));
   EXPECT_NE(why.find("NUL"), std::string::npos) << why;
+  // A NUL inside a string: lcm-gen keeps it, its encoder cuts there (a controller that sent such a
+  // joint name back sent a message whose lengths do not match; found by the bus fuzz target).
+  rdtf::request_t inner;
+  inner.model_id = std::string("ab\0c", 4);
+  bytes = encode(inner);
+  EXPECT_FALSE(lcm_safe::decode<rdtf::request_t>(bytes.data(), bytes.size(), why));
   const auto status = encode(rdtf::status_t{});
   EXPECT_FALSE(lcm_safe::decode<rdtf::request_t>(status.data(), status.size(), why));
   EXPECT_FALSE(lcm_safe::decode<rdtf::request_t>(status.data(), 7, why));
@@ -149,7 +155,10 @@ TEST(SafeDecode, DropsAreLoggedAtMostOnceAPeriodWithTheirCount) {
 TEST(BusInput, MalformedDatagramsNeverReachTheHandlers) {
   int requests = 0, commands = 0;
   std::vector<std::string> lines;
-  BusInput input({[&](const rdtf::request_t&) { ++requests; }, [&](const rdtf::joint_command_t&) { ++commands; },
+  BusInput input({[&](const rdtf::request_t&) { ++requests; }, [&](const rdtf::joint_command_t&) {
+                    ++commands;
+                    return std::string();
+                  },
                   [&](const std::string& line) { lines.push_back(line); }});
   const auto good = encode(two_joint_command());
   input.command_datagram("RDTF/arm3.gltf/JOINT_COMMAND", good.data(), good.size());
@@ -163,6 +172,36 @@ TEST(BusInput, MalformedDatagramsNeverReachTheHandlers) {
   EXPECT_EQ(requests, 0);
   EXPECT_EQ(input.dropped(), 3u);
   EXPECT_EQ(lines.size(), 1u);  // The first drop; the others within the second.
+}
+
+TEST(BusInput, DatagramsAboveOneUdpDatagramAndCommandsTheHostRefusesAreDroppedAndCounted) {
+  int commands = 0;
+  std::vector<std::string> lines;
+  std::string refusal;
+  BusInput input({nullptr,
+                  [&](const rdtf::joint_command_t&) {
+                    ++commands;
+                    return refusal;
+                  },
+                  [&](const std::string& line) { lines.push_back(line); }});
+  auto big = two_joint_command();
+  big.content_hash = std::string(BusInput::kMaxInputBytes, 'h');
+  const auto bytes = encode(big);
+  ASSERT_GT(bytes.size(), BusInput::kMaxInputBytes);
+  ASSERT_EQ(lcm_safe::check_known(bytes.data(), bytes.size()), "");  // Well-formed, only too big.
+  input.command_datagram("RDTF/arm3.gltf/JOINT_COMMAND", bytes.data(), bytes.size());
+  EXPECT_EQ(commands, 0);
+  EXPECT_EQ(input.dropped(), 1u);
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_NE(lines[0].find("above rdtfd's input limit of 65536"), std::string::npos) << lines[0];
+  // The handler's refusal (a full queue, too many joints) is a drop too.
+  const auto good = encode(two_joint_command());
+  input.command_datagram("RDTF/arm3.gltf/JOINT_COMMAND", good.data(), good.size());
+  EXPECT_EQ(input.dropped(), 1u);
+  refusal = "too many joints";
+  input.command_datagram("RDTF/arm3.gltf/JOINT_COMMAND", good.data(), good.size());
+  EXPECT_EQ(commands, 2);
+  EXPECT_EQ(input.dropped(), 2u);
 }
 
 TEST(RequestThrottle, RepeatedRequestsGetOneDeferredAnswerPerPeriod) {

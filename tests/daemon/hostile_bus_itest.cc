@@ -13,6 +13,8 @@
 #include <cmath>
 #include <limits>
 
+#include <rdtf/link_state_t.hpp>
+
 #include "clients/live_arm.h"
 
 namespace rdtf::itest {
@@ -173,9 +175,15 @@ TEST(HostileBus, FloodOfMalformedDatagramsIsLoggedOnceASecond) {
   RawSender sender;
   const int kCount = 3000;
   for (int k = 0; k < kCount; ++k) sender.send(sender.short_message("RDTF/REQUEST", request_head().i32(0)));
-  // Not every datagram need arrive (the socket buffer); every one that did is counted.
-  request_all(s, "after the flood");
-  ASSERT_TRUE(s.wait_log("on request of 'after the flood'", 20s));
+  // Not every datagram need arrive (the socket buffer, LCM's queue of 30 per subscription); every
+  // one that did is counted. A request right after the flood may meet a full queue: sent again
+  // until the daemon answers.
+  ASSERT_TRUE(wait_until(
+      [&] {
+        request_all(s, "after the flood");
+        return s.daemon->wait_log("on request of 'after the flood'", 200ms);
+      },
+      20s));
   ASSERT_TRUE(s.wait_for([&](const auto& all) { return dropped(all) > 0; }));
   const auto all = s.messages();
   const std::string log = s.daemon->log();
@@ -193,33 +201,80 @@ TEST(HostileBus, FragmentWhoseOffsetWraps32BitsIsRefusedByLiblcm) {
   s.start();
   ASSERT_TRUE(s.wait_revision(kArm, 1, fixture_hash("arm3")));
   ChildProcess echo({RDTF_ECHO_PATH, "--omit-documents"}, s.root / "echo.out");
+  // rdtf-echo listens once it prints the heartbeat.
+  ASSERT_TRUE(wait_until([&] { return echo.output().find("RDTF/STATUS") != std::string::npos; }, 10s));
   RawSender sender;
   // Fragment 0 of a 1000-byte message on a subscribed channel, then one at offset 0xfffffff0:
-  // 0xfffffff0 + 100 wraps to 84 < 1000 in liblcm 1.3.1's check, and its memcpy wrote 16 bytes
-  // before the buffer and the rest 4 GB past it (SIGSEGV). Both channels: rdtfd's and rdtf-echo's.
+  // 0xfffffff0 + 100 wraps to 84 < 1000 in liblcm 1.3.1's check, and its memcpy wrote 100 bytes
+  // at fbuf->data + 0xfffffff0 (pointer arithmetic on a 64-bit host: about 4 GiB past the buffer,
+  // SIGSEGV). Both processes: rdtfd and rdtf-echo subscribe to RDTF/REQUEST.
   for (int round = 0; round < 3; ++round) {
     const auto seq = static_cast<std::uint32_t>(100 + round);
     sender.send(RawSender::fragment(seq, 1000, 0, 0, 2, "RDTF/REQUEST", 100));
     sender.send(RawSender::fragment(seq, 1000, 0xfffffff0u, 1, 2, "", 100));
-    // Shorter than the long header; a fragment count of 0; a channel longer than the datagram.
+    // Shorter than the long header; a fragment count of 0.
     sender.send({0x4c, 0x43, 0x30, 0x33, 0, 0, 0, 1, 0, 0});
     sender.send(RawSender::fragment(seq + 10, 1000, 0, 0, 0, "RDTF/REQUEST", 10));
+    // A channel longer than the datagram: fragment 0 ends inside its channel name, whose NUL
+    // liblcm's strlen finds in the stale zeros a bad-magic datagram left in the receive buffer.
+    sender.send(std::vector<std::uint8_t>(64, 0));
+    auto cut = RawSender::fragment(seq + 20, 1000, 0, 0, 2, "RDTF/REQUEST", 0);
+    cut.pop_back();  // the NUL
+    sender.send(cut);
   }
   // rdtfd still answers; rdtf-echo still prints.
   const std::size_t from = s.messages().size();
   request_all(s, "after the fragments");
-  EXPECT_TRUE(answered(s, from));
+  EXPECT_TRUE(answered(s, from)) << [&] {
+    std::string kinds;
+    const auto all = s.messages();
+    for (std::size_t i = from; i < all.size(); ++i) kinds += all[i].channel + " ";
+    return kinds;
+  }();
   EXPECT_TRUE(s.daemon->running());
   EXPECT_TRUE(wait_until([&] { return echo.output().find("after the fragments") != std::string::npos; }, 5s))
       << echo.output();
   EXPECT_FALSE(echo.wait_exit(0s).has_value()) << "rdtf-echo exited:\n" << echo.output();
 }
 
+// liblcm 1.3.1 takes the subscriber's queue slot (lcm_try_enqueue_message) before the patched
+// check that the channel name ends inside the datagram: a return after it leaked the slot, and
+// 31 such datagrams left RDTF/REQUEST's queue (30) full for good, every later request dropped.
+// Each one: a bad-magic datagram with a zero at byte 20, then the 20 bytes "LC02", sequence,
+// "RDTF/REQUEST" with no NUL (liblcm reuses the buffer after bad magic; strlen finds the zero).
+TEST(HostileBus, ChannelNamesPastTheDatagramNeverLeaveTheDaemonDeaf) {
+  Session s;
+  copy_fixture(s.watch, "arm3");
+  s.start();
+  ASSERT_TRUE(s.wait_revision(kArm, 1, fixture_hash("arm3")));
+  RawSender sender;
+  const int kPairs = 100;
+  for (int k = 0; k < kPairs; ++k) {
+    sender.send(std::vector<std::uint8_t>(32, 0));
+    auto cut = sender.short_message("RDTF/REQUEST", Bytes());
+    cut.pop_back();  // the channel's NUL
+    ASSERT_EQ(cut.size(), 20u);
+    sender.send(cut);
+  }
+  // A request sent after them is answered. Resent until answered (UDP may drop one), but a deaf
+  // subscription drops every one: the deadline ends the test.
+  const std::size_t from = s.messages().size();
+  ASSERT_TRUE(wait_until(
+      [&] {
+        request_all(s, "after the cut channels");
+        return s.daemon->wait_log("on request of 'after the cut channels'", 500ms);
+      },
+      10s))
+      << s.daemon->log();
+  EXPECT_TRUE(answered(s, from));
+  EXPECT_TRUE(s.daemon->running());
+}
+
 TEST(HostileBus, RequesterIsEscapedInTheLog) {
   Session s;
   s.start();
   request_all(s, "mallory\n2030-01-01T00:00:00.000Z rdtfd stopped\x1b[2J");
-  ASSERT_TRUE(s.wait_log("on request of 'mallory"));
+  ASSERT_TRUE(s.daemon->wait_log("on request of 'mallory"));
   const std::string log = s.daemon->log();
   EXPECT_NE(log.find("on request of 'mallory\\x0a2030-01-01T00:00:00.000Z rdtfd stopped\\x1b[2J'"), std::string::npos)
       << log;
@@ -336,6 +391,54 @@ TEST(HostileBus, HugeFiniteCommandsNeverStopTheSimulationNorPublishNonFiniteValu
   const std::int64_t failures = failures_on_error(s.messages());
   std::printf("simulation failures reported: %lld\n", static_cast<long long>(failures));
   EXPECT_EQ(count_lines(s.daemon->log(), "restarted from the rest pose") > 0, failures > 0);
+}
+
+// A command is queued for the simulation thread only when it fits one datagram (64 KiB) and has
+// no more joints than the model: the queue's bound by count then bounds its bytes. A rejection's
+// ERROR carries the bus's text escaped and cut, and the live model's content hash.
+TEST(HostileBus, OversizedCommandsAreDroppedAndRejectionsCarryNoBusBytes) {
+  Session s;
+  copy_fixture(s.watch, "arm3");
+  s.start(simulating());
+  const std::string hash = fixture_hash("arm3");
+  ASSERT_TRUE(s.wait_revision(kArm, 1, hash));
+  ASSERT_TRUE(s.wait_for([](const auto& all) { return last_state(all, 1).has_value(); }));
+  const std::int64_t dropped_before = dropped(s.messages());
+  // 70,000 bytes of content hash (LCM sends it in fragments); four joints for arm3's three.
+  s.subscriber.publish("RDTF/arm3.gltf/JOINT_COMMAND",
+                       make_command(kArm, 1, std::string(70000, 'h'), {{"shoulder", rdtf::joint_command_t::TORQUE, 1}}));
+  s.subscriber.publish("RDTF/arm3.gltf/JOINT_COMMAND",
+                       make_command(kArm, 1, hash,
+                                    {{"shoulder", rdtf::joint_command_t::TORQUE, 1},
+                                     {"elbow", rdtf::joint_command_t::TORQUE, 1},
+                                     {"a", rdtf::joint_command_t::TORQUE, 1},
+                                     {"b", rdtf::joint_command_t::TORQUE, 1}}));
+  ASSERT_TRUE(s.wait_for([&](const auto& all) { return dropped(all) >= dropped_before + 2; }))
+      << "STATUS counts " << dropped(s.messages()) - dropped_before << " dropped of 2";
+  ASSERT_TRUE(s.daemon->wait_log("above rdtfd's input limit of 65536")) << s.daemon->log();
+  // 30,000 bytes of hash with control bytes, in one datagram: rejected, the text escaped and cut.
+  std::string bad_hash(30000, 'x');
+  bad_hash[10] = '\n';
+  bad_hash[11] = '\x1b';
+  const std::size_t from = s.messages().size();
+  s.subscriber.publish("RDTF/arm3.gltf/JOINT_COMMAND",
+                       make_command(kArm, 1, bad_hash, {{"shoulder", rdtf::joint_command_t::TORQUE, 1}}));
+  ASSERT_TRUE(s.wait_for([&](const auto& all) {
+    return !rejections(std::vector<Message>(all.begin() + static_cast<std::ptrdiff_t>(from), all.end())).empty();
+  }));
+  const auto all = s.messages();
+  const auto errors = decoded<rdtf::model_error_t>(std::vector<Message>(all.begin() + static_cast<std::ptrdiff_t>(from), all.end()),
+                                                   "ERROR", kArm);
+  ASSERT_FALSE(errors.empty());
+  const auto& error = errors.front();
+  EXPECT_EQ(error.content_hash, hash);
+  ASSERT_EQ(error.diagnostics.size(), 1u);
+  const std::string& text = error.diagnostics[0].message;
+  EXPECT_LT(text.size(), 400u) << text;
+  EXPECT_EQ(text.find('\n'), std::string::npos) << text;
+  EXPECT_EQ(text.find('\x1b'), std::string::npos) << text;
+  EXPECT_NE(text.find("xx\\x0a\\x1bxx"), std::string::npos) << text;
+  EXPECT_TRUE(s.daemon->running());
 }
 
 TEST(HostileBus, LiveSimulationThatCannotKeepRealTimeSaysSo) {

@@ -77,6 +77,27 @@ TEST(DynamicsCommands, EffortIsClampedToTheLimit) {
   EXPECT_NEAR(state.velocity, -0.1 * 0.1 / kInertiaAboutPivot, 1e-9 * 0.1 * 0.1 / kInertiaAboutPivot);
 }
 
+// Without an authored effort limit, any finite command is clamped to kDefaultEffortLimit, each
+// term before the sum: a torque of 1e300, and a position command whose kp (1e308) times its error
+// overflows to inf, both give the bound exactly, and the simulation goes on with a finite state.
+TEST(DynamicsCommands, HugeFiniteCommandsAreClampedToTheDefaultBound) {
+  for (const JointCommand& command : {JointCommand{"pivot", CommandMode::kTorque, 1e300},
+                                      JointCommand{"pivot", CommandMode::kTorque, -1e300},
+                                      JointCommand{"pivot", CommandMode::kPosition, 1e308, 1e308, 0.0, 1e308, 1e308},
+                                      JointCommand{"pivot", CommandMode::kPosition, 0.0, -1e308, 0.0, 1e308, 0.0},
+                                      JointCommand{"pivot", CommandMode::kVelocity, 0.0, 0.0, -1e308, 0.0, 1e308}}) {
+    auto sim = weightless(bar_builder().robot());
+    ASSERT_TRUE(sim->set_command(command));
+    sim->step();
+    const JointState state = *sim->joint_state("pivot");
+    EXPECT_EQ(std::abs(state.effort), kDefaultEffortLimit) << state.effort;
+    for (int n = 0; n < 100; ++n) sim->step();
+    EXPECT_TRUE(sim->health().finite);
+    EXPECT_NEAR(sim->time(), 101 * 1e-3, 1e-12);
+    EXPECT_LE(std::abs(sim->joint_state("pivot")->effort), kDefaultEffortLimit);
+  }
+}
+
 // Critically damped (kd = 2 sqrt(kp I)): the error decays as (1 + w t) exp(-w t), w = sqrt(kp / I)
 // = 7.7 rad/s, below 1e-12 of the step after 5 s.
 TEST(DynamicsCommands, PositionModeReachesTheTarget) {
@@ -132,8 +153,12 @@ TEST(DynamicsCommands, BadCommandsAreRejectedAndChangeNothing) {
 
 // A state that blew up stops the simulation instead of letting ODE abort the process on it.
 TEST(DynamicsCommands, ABlownUpSimulationStops) {
-  auto sim = weightless(bar_builder().robot());
-  // 1e120 N m: after one step the bar turns at 6e117 rad/s, beyond what may be stepped (1e100).
+  // An authored effort limit of 1e120 (no stops: the limits are wider than a turn) lets the
+  // command through unclamped: 1e120 N m, after one step the bar turns at 6e117 rad/s, beyond
+  // what may be stepped (1e100).
+  RobotBuilder b = bar_builder();
+  b.joint(0).limits = JointLimits{-1e9, 1e9, 1e120, 0};
+  auto sim = weightless(b.robot());
   ASSERT_TRUE(sim->set_command({"pivot", CommandMode::kTorque, 1e120}));
   for (int n = 0; n < 20; ++n) sim->step();
   EXPECT_FALSE(sim->health().finite);

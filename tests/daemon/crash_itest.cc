@@ -371,10 +371,14 @@ void kill_at_random_moments(int kills, unsigned seed) {
             << " between an output's secondary files and its primary file (new content-addressed files beside an "
             << "older output); outputs checked: " << outputs_checked << std::endl;
   // A long run whose kills never cut a write would have tested nothing.
-  if (kills >= 100) EXPECT_GT(killed_mid_write, 0);
+  if (kills >= 100) {
+    EXPECT_GT(killed_mid_write, 0);
+  }
   // Outputs are staged: only the renames out of the stage are left between an output's files and
   // its primary file, about 2% of the kills (18 of 1,000 measured), too few to expect in 200.
-  if (kills >= 1000) EXPECT_GT(killed_between_files, 0);
+  if (kills >= 1000) {
+    EXPECT_GT(killed_between_files, 0);
+  }
 
   // The last start: temporaries gone, every model converted and published again. What the outputs
   // on disk refer to now is what the start keeps; each model's one conversion then keeps it as the

@@ -8,48 +8,15 @@
 // the namespace's multicast route, so every send fails with ENETUNREACH, then restores it. The
 // inotify limit (fs.inotify.max_user_watches is system-wide on this kernel, even from a user
 // namespace) is injected through the watcher's seam RDTFD_TEST_INOTIFY_LIMIT_FILE.
-#include <sys/mount.h>
 #include <sys/stat.h>
 
+#include "daemon/fs_support.h"
 #include "daemon/harness.h"
 
 namespace rdtf::itest {
 namespace {
 
 int shell(const std::string& command) { return std::system(command.c_str()); }
-
-// A tmpfs of `bytes` over `folder` for the test's life (its mount namespace is private).
-class SmallDisk {
- public:
-  SmallDisk(const fs::path& folder, std::size_t bytes) : folder_(folder) {
-    const std::string options = "size=" + std::to_string(bytes);
-    mounted_ = ::mount("tmpfs", folder.c_str(), "tmpfs", 0, options.c_str()) == 0;
-  }
-  ~SmallDisk() {
-    if (mounted_) ::umount2(folder_.c_str(), MNT_DETACH);
-  }
-  SmallDisk(const SmallDisk&) = delete;
-  SmallDisk& operator=(const SmallDisk&) = delete;
-  bool mounted() const { return mounted_; }
-  // Writes `file` until the disk is full; returns the bytes written.
-  std::size_t fill(const fs::path& file) const {
-    const int fd = ::open(file.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-    if (fd < 0) throw std::runtime_error("open " + file.string());
-    const std::string block(4096, 'x');
-    std::size_t total = 0;
-    for (;;) {
-      const ssize_t n = ::write(fd, block.data(), block.size());
-      if (n <= 0) break;
-      total += static_cast<std::size_t>(n);
-    }
-    ::close(fd);
-    return total;
-  }
-
- private:
-  fs::path folder_;
-  bool mounted_ = false;
-};
 
 std::string diagnostics_text(const rdtf::model_error_t& error) {
   std::string text;
@@ -66,7 +33,7 @@ bool has_code(const rdtf::model_error_t& error, const std::string& code) {
 
 TEST(DaemonFault, DiskFullOnTheOutputIsReportedAndConvertsOnceSpaceReturns) {
   Session s;
-  SmallDisk disk(s.output, 256 * 1024);
+  Tmpfs disk(s.output, 256 * 1024);
   ASSERT_TRUE(disk.mounted()) << "cannot mount a tmpfs: run in tests/support/in_netns.sh";
   ASSERT_GT(disk.fill(s.output / "filler"), 0u);
   const auto model = box_model("full_base", 0.1, 3);

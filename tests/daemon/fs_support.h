@@ -1,4 +1,4 @@
-// Helpers of the filesystem tests (filesystem_itest.cc, config_reload_itest.cc): a small disk in
+// Helpers of the filesystem tests (filesystem_itest.cc, config_reload_itest.cc, faults_itest.cc): a small disk in
 // the test's own mount namespace, file pages, process memory, a model's referenced files.
 #pragma once
 
@@ -23,9 +23,8 @@ class Tmpfs {
   Tmpfs& operator=(const Tmpfs&) = delete;
   bool mounted() const { return mounted_; }
 
-  // Fills the disk with `file`, then gives back `free_pages` pages of 4 KiB: exactly that much
-  // room is left for whatever is written next.
-  void fill_leaving(const fs::path& file, std::size_t free_pages) const {
+  // Writes `file` until the disk is full; returns the bytes written.
+  std::size_t fill(const fs::path& file) const {
     const int fd = ::open(file.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
     if (fd < 0) throw std::runtime_error("open " + file.string());
     const std::string block(4096, 'x');
@@ -35,9 +34,16 @@ class Tmpfs {
       if (n <= 0) break;
       total += static_cast<std::size_t>(n);
     }
-    const std::size_t keep = total > free_pages * 4096 ? total - free_pages * 4096 : 0;
-    if (::ftruncate(fd, static_cast<off_t>(keep)) != 0) throw std::runtime_error("ftruncate " + file.string());
     ::close(fd);
+    return total;
+  }
+
+  // Fills the disk with `file`, then gives back `free_pages` pages of 4 KiB: exactly that much
+  // room is left for whatever is written next.
+  void fill_leaving(const fs::path& file, std::size_t free_pages) const {
+    const std::size_t total = fill(file);
+    const std::size_t keep = total > free_pages * 4096 ? total - free_pages * 4096 : 0;
+    if (::truncate(file.c_str(), static_cast<off_t>(keep)) != 0) throw std::runtime_error("truncate " + file.string());
   }
 
  private:

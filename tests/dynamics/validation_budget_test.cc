@@ -34,7 +34,9 @@ TEST(ValidationBudget, ABigModelWithATinyBudgetGetsItsVerdict) {
   EXPECT_NE(exceeded[0].message.find(" steps of 199 bodies, dWorldQuickStep"), std::string::npos) << exceeded[0].message;
   // The run stopped at the first check past the budget: nothing else was judged.
   for (const Diagnostic& d : report.diagnostics.all()) {
-    if (d.severity == Severity::kError) EXPECT_EQ(d.code, "SIM_BUDGET_EXCEEDED") << format(d);
+    if (d.severity == Severity::kError) {
+      EXPECT_EQ(d.code, "SIM_BUDGET_EXCEEDED") << format(d);
+    }
   }
 }
 

@@ -247,17 +247,33 @@ TEST(Publisher, QueueIsBoundedInBytesAndUrgentMessagesGoFirst) {
       1e12, 1 << 30);
   std::vector<PublisherEvent> events;
   publisher.on_event([&](const PublisherEvent& e) { events.push_back(e); });
+  // An injected clock: the drop reports' pacing must not depend on how fast this machine is.
+  auto now = std::chrono::steady_clock::time_point{} + 1000s;
+  publisher.set_clock([&] { return now; });
+  const auto drop_reports = [&] {
+    std::size_t n = 0;
+    for (const auto& e : events) n += e.kind == PublisherEvent::Kind::kDropped;
+    return n;
+  };
   rdtf::description_t big;
   big.rdtf_json.assign(1 << 20, 'x');  // 1 MiB each
   for (int k = 0; k < 100; ++k) publisher.publish("BIG", big);
   EXPECT_LE(publisher.queued_bytes(), Publisher::kMaxQueuedBytes);
   EXPECT_GT(publisher.dropped(), 30u);
-  std::size_t drop_reports = 0;
-  for (const auto& e : events) drop_reports += e.kind == PublisherEvent::Kind::kDropped;
-  EXPECT_EQ(drop_reports, 1u);  // Once a second, not once a message.
+  EXPECT_EQ(drop_reports(), 1u);  // Once a second, not once a message.
+  now += 999ms;
+  publisher.publish("BIG", big);
+  EXPECT_EQ(drop_reports(), 1u);
+  now += 1ms;
+  publisher.publish("BIG", big);
+  EXPECT_EQ(drop_reports(), 2u);  // A second after the first report.
+  // Every drop since the first report, which reported one.
+  EXPECT_NE(events.back().text.find("dropped " + std::to_string(publisher.dropped() - 1) + " oldest message(s) (" +
+                                    std::to_string(publisher.dropped()) + " since start)"),
+            std::string::npos)
+      << events.back().text;
   publisher.publish("STATUS", rdtf::status_t{}, Publisher::Priority::kUrgent);
   refuse = false;
-  const auto now = std::chrono::steady_clock::now();
   publisher.drain(now + 1s);
   ASSERT_FALSE(sent.empty());
   EXPECT_EQ(sent.front(), "STATUS");

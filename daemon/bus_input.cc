@@ -19,12 +19,27 @@ std::optional<Message> BusInput::decode(const std::string& channel, const void* 
 }
 
 void BusInput::request_datagram(const std::string& channel, const void* data, std::size_t size) {
-  if (auto request = decode<rdtf::request_t>(channel, data, size); request && handlers_.request) {
-    handlers_.request(*request);
-  }
+  lcm_safe::guarded(
+      drops_, channel,
+      [&] {
+        if (auto request = decode<rdtf::request_t>(channel, data, size); request && handlers_.request) {
+          handlers_.request(*request);
+        }
+      },
+      [&](const std::string& line) {
+        if (handlers_.log) handlers_.log(line);
+      });
 }
 
 void BusInput::command_datagram(const std::string& channel, const void* data, std::size_t size) {
+  lcm_safe::guarded(
+      drops_, channel, [&] { take_command(channel, data, size); },
+      [&](const std::string& line) {
+        if (handlers_.log) handlers_.log(line);
+      });
+}
+
+void BusInput::take_command(const std::string& channel, const void* data, std::size_t size) {
   auto command = decode<rdtf::joint_command_t>(channel, data, size);
   if (!command) return;
   // The channel is the model's: a command naming another model would reach a simulation its

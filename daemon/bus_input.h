@@ -30,7 +30,8 @@ class BusInput {
   };
   explicit BusInput(Handlers handlers) : handlers_(std::move(handlers)) {}
 
-  // One datagram's payload received on `channel` (the subscription's pattern matched it).
+  // One datagram's payload received on `channel` (the subscription's pattern matched it). Never
+  // throws: an exception from a handler is counted and logged as a drop (lcm_safe::guarded).
   void request_datagram(const std::string& channel, const void* data, std::size_t size);
   void command_datagram(const std::string& channel, const void* data, std::size_t size);
 
@@ -42,6 +43,7 @@ class BusInput {
 
  private:
   void drop(const std::string& channel, const std::string& why);
+  void take_command(const std::string& channel, const void* data, std::size_t size);
   template <typename Message>
   std::optional<Message> decode(const std::string& channel, const void* data, std::size_t size);
 

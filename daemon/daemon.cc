@@ -814,12 +814,30 @@ void Daemon::publish_status() {
   publisher_->publish(config_.channel_prefix + "/STATUS", status, Publisher::Priority::kUrgent);
 }
 
-void Daemon::on_request_datagram(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
-  bus_.request_datagram(channel, buffer->data, buffer->data_size);
+// BusInput catches what its handlers throw (counted and logged as drops); these catch the rest, so
+// that no exception unwinds through liblcm's C frames.
+void Daemon::on_request_datagram(const lcm::ReceiveBuffer* buffer, const std::string& channel) noexcept {
+  try {
+    bus_.request_datagram(channel, buffer->data, buffer->data_size);
+  } catch (...) {
+    handler_failed();
+  }
 }
 
-void Daemon::on_command_datagram(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
-  bus_.command_datagram(channel, buffer->data, buffer->data_size);
+void Daemon::on_command_datagram(const lcm::ReceiveBuffer* buffer, const std::string& channel) noexcept {
+  try {
+    bus_.command_datagram(channel, buffer->data, buffer->data_size);
+  } catch (...) {
+    handler_failed();
+  }
+}
+
+void Daemon::handler_failed() noexcept {
+  ++handler_failures_;
+  try {
+    log_line("an LCM handler failed outside the bus input (" + std::to_string(handler_failures_) + " since start)");
+  } catch (...) {
+  }
 }
 
 void Daemon::on_request(const rdtf::request_t& request) {

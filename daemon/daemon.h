@@ -80,8 +80,9 @@ class Daemon {
   std::size_t publish_all();                             // How many models were published.
   void publish_status();
   // Raw datagrams: decoded by bus_ only after the schema check (never lcm-gen's decoder alone).
-  void on_request_datagram(const lcm::ReceiveBuffer* buffer, const std::string& channel);
-  void on_command_datagram(const lcm::ReceiveBuffer* buffer, const std::string& channel);
+  void on_request_datagram(const lcm::ReceiveBuffer* buffer, const std::string& channel) noexcept;
+  void on_command_datagram(const lcm::ReceiveBuffer* buffer, const std::string& channel) noexcept;
+  void handler_failed() noexcept;
   void on_request(const rdtf::request_t& request);
   void answer_request(const std::string& model_id, const std::string& requester);
   void answer_deferred_requests(Clock::time_point now);
@@ -106,6 +107,7 @@ class Daemon {
   std::unique_ptr<SimulationHost> simulation_;  // Null when `simulate` is off.
   BusInput bus_;
   RequestThrottle request_throttle_;
+  std::uint64_t handler_failures_ = 0;  // LCM thread: exceptions caught outside BusInput.
   Counters counters_;
   // Files modified and not yet closed by their writer, since when.
   OpenWrites open_for_writing_;

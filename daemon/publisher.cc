@@ -29,7 +29,7 @@ void Publisher::drop_oldest(const char* why) {
   std::deque<Pending>& from = queue_.empty() ? urgent_ : queue_;
   ++dropped_;
   ++dropped_unreported_;
-  const auto now = Clock::now();
+  const auto now = now_();
   // One line per second at most: under a flood, one per message would be a flood of its own.
   if (now >= next_drop_report_) {
     next_drop_report_ = now + std::chrono::seconds(1);

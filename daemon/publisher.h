@@ -72,6 +72,8 @@ class Publisher {
   bool failing() const { return failures_in_a_row_ > 0; }
   void set_rate(double bytes_per_second) { rate_ = bytes_per_second; }
   void on_event(std::function<void(const PublisherEvent&)> handler) { on_event_ = std::move(handler); }
+  // The clock that paces the drop reports (tests inject one; drain() takes its time as argument).
+  void set_clock(std::function<Clock::time_point()> now) { now_ = std::move(now); }
 
  private:
   struct Pending {
@@ -102,6 +104,7 @@ class Publisher {
   Clock::time_point retry_at_{};
   Clock::duration backoff_{};
   std::function<void(const PublisherEvent&)> on_event_;
+  std::function<Clock::time_point()> now_ = [] { return Clock::now(); };
 };
 
 }  // namespace rdtf::daemon

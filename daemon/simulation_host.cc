@@ -182,23 +182,9 @@ void SimulationHost::apply_inbox() {
 }
 
 void SimulationHost::reject(const rdtf::joint_command_t& command, const std::string& why) {
-  // At most kRejectionsPerSecond reports a second: a flood of bad commands is not answered by a
-  // flood of ERRORs. The next report says how many went unreported.
-  const auto now = Clock::now();
-  if (now - rejection_window_ >= std::chrono::seconds(1)) {
-    rejection_window_ = now;
-    rejections_in_window_ = 0;
-  }
-  if (++rejections_in_window_ > kRejectionsPerSecond) {
-    ++unreported_rejections_;
-    return;
-  }
-  std::string text = why;
-  if (unreported_rejections_ > 0) {
-    text += " (and " + std::to_string(unreported_rejections_) + " earlier rejections not reported: over " +
-            std::to_string(kRejectionsPerSecond) + " a second)";
-    unreported_rejections_ = 0;
-  }
+  const auto admitted = rejections_.admit(why, Clock::now());
+  if (!admitted) return;
+  const std::string& text = *admitted;
   rdtf::model_error_t message;
   message.utime = now_utime();
   message.model_id = command.model_id;
@@ -296,19 +282,52 @@ std::string joint_commands_of(const rdtf::joint_command_t& command, const Simula
   return "";
 }
 
+std::optional<std::string> ReportLimiter::admit(const std::string& text, Clock::time_point now) {
+  if (now - window_ >= std::chrono::seconds(1)) {
+    window_ = now;
+    in_window_ = 0;
+  }
+  if (++in_window_ > per_second_) {
+    ++unreported_;
+    return std::nullopt;
+  }
+  if (unreported_ == 0) return text;
+  std::string out = text + " (and " + std::to_string(unreported_) + " earlier " + what_ +
+                    " not reported: over " + std::to_string(per_second_) + " a second)";
+  unreported_ = 0;
+  return out;
+}
+
+Clock::duration restart_delay(int n) {
+  Clock::duration delay = kFirstRestartDelay;
+  for (int k = 1; k < n && delay < kMaxRestartDelay; ++k) delay *= 2;
+  return std::min<Clock::duration>(delay, kMaxRestartDelay);
+}
+
 void SimulationHost::publish_state(const std::string& model_id, LiveModel& model) {
+  // Both messages of the pair are checked before either goes out: a state that is non-finite,
+  // or finite but beyond what ODE may step (an explosion, e.g. 1e117 rad/s), is published in
+  // neither; the simulation has failed and is restarted.
+  const auto joints = model.simulation->joint_states();
+  const auto poses = model.simulation->link_poses();
+  bool finite = model.simulation->steppable();
+  for (const JointState& state : joints) {
+    finite = finite && std::isfinite(state.position) && std::isfinite(state.velocity) && std::isfinite(state.effort);
+  }
+  for (const LinkPose& pose : poses) {
+    finite = finite && pose.X_SL.matrix().allFinite() && pose.v_SLo_S.allFinite() && pose.w_SL_S.allFinite();
+  }
+  if (!finite) {
+    model.failed = true;
+    return;
+  }
   rdtf::joint_state_t message;
   message.utime = now_utime();
   message.model_id = model_id;
   message.revision = model.revision;
   message.content_hash = model.content_hash;
   message.sim_time = model.sim_time();
-  for (const JointState& state : model.simulation->joint_states()) {
-    // A non-finite value is never published: the simulation has failed and is restarted.
-    if (!std::isfinite(state.position) || !std::isfinite(state.velocity) || !std::isfinite(state.effort)) {
-      model.failed = true;
-      return;
-    }
+  for (const JointState& state : joints) {
     message.name.push_back(state.name);
     message.position.push_back(state.position);
     message.velocity.push_back(state.velocity);
@@ -316,11 +335,11 @@ void SimulationHost::publish_state(const std::string& model_id, LiveModel& model
   }
   message.num_joints = static_cast<std::int32_t>(message.name.size());
   lcm_.publish(options_.channel_prefix + "/" + model_id + "/JOINT_STATE", &message);
-  publish_links(model_id, model, message.utime, message.sim_time);
+  publish_links(model_id, model, poses, message.utime, message.sim_time);
 }
 
-void SimulationHost::publish_links(const std::string& model_id, LiveModel& model, std::int64_t utime,
-                                   double sim_time) {
+void SimulationHost::publish_links(const std::string& model_id, const LiveModel& model,
+                                   const std::vector<LinkPose>& poses, std::int64_t utime, double sim_time) {
   rdtf::link_state_t message;
   // The joint state's stamp and simulated time, so that a subscriber pairs the two exactly.
   message.utime = utime;
@@ -328,13 +347,6 @@ void SimulationHost::publish_links(const std::string& model_id, LiveModel& model
   message.revision = model.revision;
   message.content_hash = model.content_hash;
   message.sim_time = sim_time;
-  const auto poses = model.simulation->link_poses();
-  for (const LinkPose& pose : poses) {
-    if (!pose.X_SL.matrix().allFinite() || !pose.v_SLo_S.allFinite() || !pose.w_SL_S.allFinite()) {
-      model.failed = true;  // The joint state of this step went out; this pair's link state does not.
-      return;
-    }
-  }
   for (const LinkPose& pose : poses) {
     message.name.push_back(pose.name);
     const Eigen::Vector3d p = pose.X_SL.translation();
@@ -367,20 +379,31 @@ void SimulationHost::publish_problem(const std::string& model_id, const LiveMode
   lcm_.publish(options_.channel_prefix + "/" + model_id + "/ERROR", &message);
 }
 
-void SimulationHost::restart(const std::string& model_id, LiveModel& model) {
+void SimulationHost::report_failure(const std::string& model_id, LiveModel& model, Clock::time_point now) {
   ++failures_;
+  // Back-off: a sender that makes it fail again and again gets ever fewer restarts, and so ever
+  // fewer reports, instead of one per restart at the step rate.
+  model.failure_streak = now - model.running_since >= kFailureStreakReset ? 1 : model.failure_streak + 1;
+  const auto delay = restart_delay(model.failure_streak);
+  model.restart_at = now + delay;
   std::string why = "its state became non-finite or blew up";
   if (!model.simulation->ode_messages().empty()) why += " (" + model.simulation->ode_messages().back() + ")";
-  const std::string text = "live simulation of " + model_id + " revision " + std::to_string(model.revision) +
-                           " failed at t = " + std::to_string(model.sim_time()) + " s: " + why +
-                           "; restarted from the rest pose, commands cleared";
-  const auto now = Clock::now();
-  // A sender that makes it fail again and again gets one log line a second, not one per failure.
+  const std::string text =
+      "live simulation of " + model_id + " revision " + std::to_string(model.revision) + " failed at t = " +
+      std::to_string(model.sim_time()) + " s: " + why + "; restarts from the rest pose in " +
+      std::to_string(std::chrono::duration_cast<std::chrono::milliseconds>(delay).count()) + " ms (failure " +
+      std::to_string(model.failure_streak) + " in a row), commands cleared";
+  // One log line a second, not one per failure.
   if (now >= next_failure_log_) {
     next_failure_log_ = now + std::chrono::seconds(1);
     log_line(text + " (" + std::to_string(failures_) + " failures since start)");
   }
-  publish_problem(model_id, model, "SIMULATION_FAILED", rdtf::diagnostic_t::ERROR, text);
+  if (const auto admitted = failure_reports_.admit(text, now)) {
+    publish_problem(model_id, model, "SIMULATION_FAILED", rdtf::diagnostic_t::ERROR, *admitted);
+  }
+}
+
+void SimulationHost::restart(const std::string& model_id, LiveModel& model, Clock::time_point now) {
   Diagnostics diag;
   // Simulated time goes on from where it was, so that subscribers see it keep advancing.
   const double offset = model.sim_time();
@@ -394,11 +417,15 @@ void SimulationHost::restart(const std::string& model_id, LiveModel& model) {
   model.simulation = std::move(fresh);
   model.time_offset = offset;
   model.failed = false;
+  model.restart_at = {};
+  model.running_since = now;
 }
 
 void SimulationHost::supervise(Clock::time_point now) {
   for (auto it = models_.begin(); it != models_.end();) {
-    if (it->second->failed) restart(it->first, *it->second);
+    LiveModel& model = *it->second;
+    if (model.failed && model.restart_at == Clock::time_point{}) report_failure(it->first, model, now);
+    if (model.failed && now >= model.restart_at) restart(it->first, model, now);
     if (!it->second->simulation) {
       it = models_.erase(it);
     } else {
@@ -418,6 +445,10 @@ void SimulationHost::supervise(Clock::time_point now) {
   bool first = true;
   for (auto& [id, model] : models_) {
     costs.push_back(model->step_seconds);
+    if (model->failed) {  // Waiting for its restart: not behind, measured again after it.
+      model->measured = false;
+      continue;
+    }
     if (!model->measured) {  // Loaded during this window: measured from the next one on.
       model->measured = true;
       model->window_start_time = model->sim_time();

@@ -80,6 +80,9 @@ struct LiveModel {
   std::shared_ptr<const Robot> robot;  // To start again from rest after a failure.
   double time_offset = 0;              // s: simulated time of the runs before a restart.
   bool failed = false;                 // Its state became non-finite or blew up (not stepped).
+  int failure_streak = 0;              // Failures in a row (runs shorter than kFailureStreakReset).
+  Clock::time_point restart_at{};      // When failed: when it starts again (back-off).
+  Clock::time_point running_since{};   // Wall time of its last (re)start.
   // The CPU budget: the fraction of the host's steps this model takes (budget_step_rates), the
   // credit towards its next step, and the measured wall time of one of its steps.
   double rate = 1;
@@ -111,6 +114,30 @@ std::string joint_commands_of(const rdtf::joint_command_t& command, const Simula
 // rest to the others; a model costlier than its share takes only its share, so one huge model
 // falls behind real time alone instead of slowing every simulation.
 std::vector<double> budget_step_rates(const std::vector<double>& step_seconds, double budget_seconds);
+
+// At most `per_second` reports in any one-second window: a flood of bad commands or failures is
+// not answered by a flood of ERRORs. The next report admitted says how many were left out.
+class ReportLimiter {
+ public:
+  ReportLimiter(int per_second, std::string what) : per_second_(per_second), what_(std::move(what)) {}
+  // `text` to send at `now` (with the count left out before it), or nothing: left out, counted.
+  std::optional<std::string> admit(const std::string& text, Clock::time_point now);
+
+ private:
+  int per_second_;
+  std::string what_;  // "rejections", "failures"
+  Clock::time_point window_{};
+  int in_window_ = 0;
+  std::uint64_t unreported_ = 0;
+};
+
+// The wait before restarting a live simulation that failed for the `n`th time in a row (n >= 1):
+// kFirstRestartDelay doubled with each failure, at most kMaxRestartDelay. A run that lasted
+// kFailureStreakReset of wall time ends the streak.
+inline constexpr auto kFirstRestartDelay = std::chrono::milliseconds(100);
+inline constexpr auto kMaxRestartDelay = std::chrono::seconds(30);
+inline constexpr auto kFailureStreakReset = std::chrono::seconds(10);
+Clock::duration restart_delay(int n);
 
 // How the live simulations keep real time, for STATUS.
 struct LiveTiming {
@@ -146,6 +173,8 @@ class SimulationHost {
   static constexpr std::size_t kMaxPendingCommands = 4096;
   // COMMAND_REJECTED reports a second, at most.
   static constexpr int kRejectionsPerSecond = 20;
+  // SIMULATION_FAILED reports a second (all models), at most.
+  static constexpr int kFailureReportsPerSecond = 5;
 
  private:
   struct Inbox {
@@ -159,14 +188,18 @@ class SimulationHost {
   // Restarts failed simulations from rest, with a report; measures how each model keeps time and
   // sets its step rate from the budget, once per window.
   void supervise(Clock::time_point now);
-  void restart(const std::string& model_id, LiveModel& model);
+  // A failed simulation: counted, logged and reported (both rate-limited), its restart scheduled
+  // after the back-off; then started again from rest.
+  void report_failure(const std::string& model_id, LiveModel& model, Clock::time_point now);
+  void restart(const std::string& model_id, LiveModel& model, Clock::time_point now);
   void publish_problem(const std::string& model_id, const LiveModel& model, const char* code, std::int8_t severity,
                        const std::string& text);
   void apply_command(const rdtf::joint_command_t& command);
   void reject(const rdtf::joint_command_t& command, const std::string& why);
   // JOINT_STATE, then LINK_STATE with the same utime and sim_time.
   void publish_state(const std::string& model_id, LiveModel& model);
-  void publish_links(const std::string& model_id, LiveModel& model, std::int64_t utime, double sim_time);
+  void publish_links(const std::string& model_id, const LiveModel& model, const std::vector<LinkPose>& poses,
+                     std::int64_t utime, double sim_time);
 
   SimulationHostOptions options_;
   lcm::LCM lcm_;
@@ -181,9 +214,8 @@ class SimulationHost {
   std::uint64_t failures_ = 0;                                // Host thread.
   Clock::time_point window_start_{};                          // Host thread.
   Clock::time_point next_failure_log_{};                      // Host thread.
-  Clock::time_point rejection_window_{};                      // Host thread.
-  int rejections_in_window_ = 0;                              // Host thread.
-  std::uint64_t unreported_rejections_ = 0;                   // Host thread.
+  ReportLimiter rejections_{kRejectionsPerSecond, "rejections"};     // Host thread.
+  ReportLimiter failure_reports_{kFailureReportsPerSecond, "failures"};  // Host thread.
   std::atomic<bool> stop_{false};
   std::thread thread_;
 };

@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cstdint>
 #include <cstring>
+#include <exception>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -76,5 +77,27 @@ class DropCounter {
   std::uint64_t total_ = 0;
   std::uint64_t unreported_ = 0;
 };
+
+// Runs `handler` for one datagram of `channel`. An exception from it must never unwind through
+// liblcm's C frames (undefined behaviour, and the end of the process): it is counted in `drops`
+// as that datagram's drop, with its message; the log line due, if any, goes to `log`. Even a
+// failure to count it (bad_alloc) stops here.
+template <typename Handler, typename Log>
+void guarded(DropCounter& drops, std::string_view channel, Handler&& handler, Log&& log) noexcept {
+  std::string why;
+  try {
+    handler();
+    return;
+  } catch (const std::exception& e) {
+    why = "handler failed: ";
+    why += e.what();
+  } catch (...) {
+    why = "handler failed: unknown exception";
+  }
+  try {
+    if (auto line = drops.drop(channel, why, std::chrono::steady_clock::now())) log(*line);
+  } catch (...) {
+  }
+}
 
 }  // namespace rdtf::lcm_safe

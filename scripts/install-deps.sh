@@ -96,14 +96,16 @@ else
   work=$(mktemp -d)
   # Root downloads into a folder _apt cannot enter: apt says so and downloads unsandboxed.
   if ! (cd "$work" && apt_get source -q --download-only "lcm=$lcm_version" >/dev/null 2>"$work/apt.log"); then
-    # Some mirrors serve the .orig tarball but not the .debian.tar.xz (Debian's packaging, no
-    # change to liblcm's C sources); apt has checked whatever it did download against the index.
+    # Some mirrors serve the .orig tarball but not the .debian.tar.xz (seen here: 404). The build
+    # then lacks debian/patches, which could not be checked for changes to lcm/*.c (the
+    # installed changelog's entries, 1.3.1+repack1-2.1 to -3, name none; older ones are cut):
+    # docs/security.md. apt has checked whatever it did download against the signed index.
     say "lcm: apt-get source incomplete ($(grep -m1 '^E:' "$work/apt.log" || echo 'see apt'))"
   fi
   if compgen -G "$work/*.debian.tar.*" >/dev/null; then
     (cd "$work" && dpkg-source -q -x ./*.dsc src >/dev/null)
   elif compgen -G "$work/*.orig.tar.*" >/dev/null; then
-    say "lcm: using the .orig tarball alone"
+    say "lcm: using the .orig tarball alone (without Debian's patches: see docs/security.md)"
     mkdir "$work/src" && tar -xf "$work"/*.orig.tar.* -C "$work/src" --strip-components=1
   else
     say "lcm: could not fetch Debian's source of lcm $lcm_version" >&2

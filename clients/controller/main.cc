@@ -80,14 +80,26 @@ class ControllerNode {
     }
     return message;
   }
+  // No exception unwinds through liblcm's C frames: one from a handler is a counted drop.
+  template <typename Handler>
+  void guarded(const std::string& channel, Handler&& handler) {
+    rdtf::lcm_safe::guarded(drops_, channel, std::forward<Handler>(handler),
+                            [](const std::string& line) { std::cerr << "rdtf-pd-controller: " << line << "\n"; });
+  }
   void on_description_datagram(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
-    if (auto d = decode<rdtf::description_t>(buffer, channel)) controller_.on_description(d->revision);
+    guarded(channel, [&] {
+      if (auto d = decode<rdtf::description_t>(buffer, channel)) controller_.on_description(d->revision);
+    });
   }
   void on_state_datagram(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
-    if (auto state = decode<rdtf::joint_state_t>(buffer, channel)) on_state(*state);
+    guarded(channel, [&] {
+      if (auto state = decode<rdtf::joint_state_t>(buffer, channel)) on_state(*state);
+    });
   }
   void on_error_datagram(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
-    if (auto error = decode<rdtf::model_error_t>(buffer, channel)) on_error(*error);
+    guarded(channel, [&] {
+      if (auto error = decode<rdtf::model_error_t>(buffer, channel)) on_error(*error);
+    });
   }
 
   void on_state(const rdtf::joint_state_t& state) {

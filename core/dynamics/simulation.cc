@@ -234,6 +234,14 @@ std::string_view Simulation::stepper_name() const {
   return model_->quickstep ? "dWorldQuickStep" : "dWorldStep";
 }
 int Simulation::body_count() const { return static_cast<int>(model_->bodies.size()); }
+
+bool Simulation::steppable() const {
+  if (model_->failed) return false;
+  for (const BodyModel& body : model_->bodies) {
+    if (!body_steppable(body.id)) return false;
+  }
+  return true;
+}
 const std::vector<std::string>& Simulation::ode_messages() const { return model_->messages; }
 
 std::vector<JointState> Simulation::joint_states() const {

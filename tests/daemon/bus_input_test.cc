@@ -204,6 +204,20 @@ TEST(BusInput, DatagramsAboveOneUdpDatagramAndCommandsTheHostRefusesAreDroppedAn
   EXPECT_EQ(input.dropped(), 2u);
 }
 
+TEST(BusInput, AHandlerThatThrowsIsACountedDropNeverAnExceptionIntoLiblcm) {
+  std::vector<std::string> lines;
+  BusInput input({[](const rdtf::request_t&) { throw std::runtime_error("request handler broke"); },
+                  [](const rdtf::joint_command_t&) -> std::string { throw 42; },
+                  [&](const std::string& line) { lines.push_back(line); }});
+  const auto request = encode(rdtf::request_t{});
+  const auto command = encode(two_joint_command());
+  EXPECT_NO_THROW(input.request_datagram("RDTF/REQUEST", request.data(), request.size()));
+  EXPECT_NO_THROW(input.command_datagram("RDTF/arm3.gltf/JOINT_COMMAND", command.data(), command.size()));
+  EXPECT_EQ(input.dropped(), 2u);
+  ASSERT_EQ(lines.size(), 1u);  // The first drop; the second within the second.
+  EXPECT_NE(lines[0].find("handler failed: request handler broke"), std::string::npos) << lines[0];
+}
+
 TEST(RequestThrottle, RepeatedRequestsGetOneDeferredAnswerPerPeriod) {
   RequestThrottle throttle(1s);
   const auto t0 = std::chrono::steady_clock::now();
@@ -233,21 +247,57 @@ TEST(Publisher, QueueIsBoundedInBytesAndUrgentMessagesGoFirst) {
       1e12, 1 << 30);
   std::vector<PublisherEvent> events;
   publisher.on_event([&](const PublisherEvent& e) { events.push_back(e); });
+  // An injected clock: the drop reports' pacing must not depend on how fast this machine is.
+  auto now = std::chrono::steady_clock::time_point{} + 1000s;
+  publisher.set_clock([&] { return now; });
+  const auto drop_reports = [&] {
+    std::size_t n = 0;
+    for (const auto& e : events) n += e.kind == PublisherEvent::Kind::kDropped;
+    return n;
+  };
   rdtf::description_t big;
   big.rdtf_json.assign(1 << 20, 'x');  // 1 MiB each
   for (int k = 0; k < 100; ++k) publisher.publish("BIG", big);
   EXPECT_LE(publisher.queued_bytes(), Publisher::kMaxQueuedBytes);
   EXPECT_GT(publisher.dropped(), 30u);
-  std::size_t drop_reports = 0;
-  for (const auto& e : events) drop_reports += e.kind == PublisherEvent::Kind::kDropped;
-  EXPECT_EQ(drop_reports, 1u);  // Once a second, not once a message.
+  EXPECT_EQ(drop_reports(), 1u);  // Once a second, not once a message.
+  now += 999ms;
+  publisher.publish("BIG", big);
+  EXPECT_EQ(drop_reports(), 1u);
+  now += 1ms;
+  publisher.publish("BIG", big);
+  EXPECT_EQ(drop_reports(), 2u);  // A second after the first report.
+  // Every drop since the first report, which reported one.
+  EXPECT_NE(events.back().text.find("dropped " + std::to_string(publisher.dropped() - 1) + " oldest message(s) (" +
+                                    std::to_string(publisher.dropped()) + " since start)"),
+            std::string::npos)
+      << events.back().text;
   publisher.publish("STATUS", rdtf::status_t{}, Publisher::Priority::kUrgent);
   refuse = false;
-  const auto now = std::chrono::steady_clock::now();
   publisher.drain(now + 1s);
   ASSERT_FALSE(sent.empty());
   EXPECT_EQ(sent.front(), "STATUS");
   EXPECT_EQ(publisher.queued_bytes(), 0u);
+}
+
+TEST(ReportLimiter, AtMostNAWindowAndTheNextReportCountsTheLeftOut) {
+  ReportLimiter limiter(2, "failures");
+  const Clock::time_point t0 = Clock::now();
+  EXPECT_EQ(limiter.admit("a", t0), "a");
+  EXPECT_EQ(limiter.admit("b", t0 + 100ms), "b");
+  EXPECT_FALSE(limiter.admit("c", t0 + 200ms).has_value());
+  EXPECT_FALSE(limiter.admit("d", t0 + 999ms).has_value());
+  EXPECT_EQ(limiter.admit("e", t0 + 1000ms), "e (and 2 earlier failures not reported: over 2 a second)");
+  EXPECT_EQ(limiter.admit("f", t0 + 1500ms), "f");
+}
+
+TEST(RestartDelay, DoublesFromTheFirstDelayUpToTheMaximum) {
+  EXPECT_EQ(restart_delay(1), kFirstRestartDelay);
+  EXPECT_EQ(restart_delay(2), 2 * kFirstRestartDelay);
+  EXPECT_EQ(restart_delay(5), 16 * kFirstRestartDelay);
+  EXPECT_EQ(restart_delay(9), 256 * kFirstRestartDelay);  // 25.6 s
+  EXPECT_EQ(restart_delay(10), Clock::duration(kMaxRestartDelay));
+  EXPECT_EQ(restart_delay(1000), Clock::duration(kMaxRestartDelay));
 }
 
 TEST(LiveBudget, ModelsCheaperThanTheirShareRunFullyAndTheCostlyOneTakesTheRest) {

@@ -441,6 +441,70 @@ TEST(HostileBus, OversizedCommandsAreDroppedAndRejectionsCarryNoBusBytes) {
   EXPECT_TRUE(s.daemon->running());
 }
 
+// arm3 whose two joints have an authored effort limit of 1e120: a torque command of 1e120 gets
+// through the clamp and blows the simulation up (1e117 rad/s after one step, beyond the 1e100 ODE
+// may step), so a restart is certain, not left to chance.
+TEST(HostileBus, ABlownUpLiveSimulationIsReportedAndRestartedAfterItsBackOff) {
+  Session s;
+  copy_fixture(s.watch, "arm3");
+  Json document = Json::parse(read(s.watch / "arm3.gltf"));
+  for (auto& node : document["nodes"]) {
+    if (node.value("name", "") == "shoulder" || node.value("name", "") == "elbow") node["extras"]["rdtf_effort"] = 1e120;
+  }
+  const std::string gltf = document.dump(1);
+  write_in_place(s.watch / "arm3.gltf", gltf);
+  const std::string hash = content_hash(gltf, {read(s.watch / "arm3.bin")});
+  s.start(simulating());
+  ASSERT_TRUE(s.wait_revision(kArm, 1, hash));
+  ASSERT_TRUE(s.wait_for([](const auto& all) { return last_state(all, 1).has_value(); }));
+  const auto failures_on_error = [](const std::vector<Message>& all) {
+    std::int64_t failures = 0;
+    for (const auto& e : decoded<rdtf::model_error_t>(all, "ERROR", kArm)) {
+      failures += !e.diagnostics.empty() && e.diagnostics[0].code == "SIMULATION_FAILED";
+    }
+    return failures;
+  };
+  const std::size_t from = s.messages().size();
+  s.subscriber.publish("RDTF/arm3.gltf/JOINT_COMMAND",
+                       make_command(kArm, 1, hash, {{"shoulder", rdtf::joint_command_t::TORQUE, 1e120}}));
+  ASSERT_TRUE(s.wait_for([&](const auto& all) { return failures_on_error(all) >= 1; })) << s.daemon->log();
+  ASSERT_TRUE(s.daemon->wait_log("restarts from the rest pose in 100 ms (failure 1 in a row)")) << s.daemon->log();
+  // STATUS counts what ERROR reported (commands are cleared on restart: this one failure).
+  ASSERT_TRUE(s.wait_for([&](const auto& all) {
+    const auto st = statuses(all);
+    return !st.empty() && st.back().simulations_failed == failures_on_error(all);
+  }));
+  EXPECT_EQ(failures_on_error(s.messages()), 1);
+  // After the restart simulated time goes on, and every state published since the command is
+  // finite and within what may be stepped: the exploded step went out in neither message.
+  const double t_failed = last_state(s.messages(), 1)->sim_time;
+  ASSERT_TRUE(s.wait_for(
+      [&](const auto& all) {
+        const auto last = last_state(all, 1);
+        return last && last->sim_time > t_failed + 0.5;
+      },
+      20s))
+      << "simulated time stopped after the failure";
+  const auto all = s.messages();
+  for (std::size_t i = from; i < all.size(); ++i) {
+    if (all[i].kind() == "JOINT_STATE") {
+      const auto state = all[i].as<rdtf::joint_state_t>();
+      for (const auto* values : {&state.position, &state.velocity, &state.effort}) {
+        for (double x : *values) EXPECT_TRUE(std::isfinite(x) && std::abs(x) <= 1e100) << x << " at t = " << state.sim_time;
+      }
+    }
+    if (all[i].kind() == "LINK_STATE") {
+      const auto links = all[i].as<rdtf::link_state_t>();
+      for (const auto* rows : {&links.position, &links.linear_velocity, &links.angular_velocity}) {
+        for (const auto& row : *rows) {
+          for (double x : row) EXPECT_TRUE(std::isfinite(x) && std::abs(x) <= 1e100) << x;
+        }
+      }
+    }
+  }
+  EXPECT_TRUE(s.daemon->running());
+}
+
 TEST(HostileBus, LiveSimulationThatCannotKeepRealTimeSaysSo) {
   Session s;
   copy_fixture(s.watch, "arm3");

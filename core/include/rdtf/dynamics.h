@@ -221,6 +221,9 @@ class Simulation {
   void clear_commands();
 
   SimulationHealth health(const HealthTolerances& tolerances = {}) const;
+  // Whether the next step() would step: not stopped, and every body's state finite and within
+  // the bound ODE may step (1e100). Cheap (no energies), for a caller about to publish the state.
+  bool steppable() const;
   // ODE messages received while this simulation stepped (see init_ode).
   const std::vector<std::string>& ode_messages() const;
 

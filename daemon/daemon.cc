@@ -845,7 +845,8 @@ void Daemon::on_request(const rdtf::request_t& request) {
   // costs nothing.
   if (!request.model_id.empty() && registry_.find_id(request.model_id) == nullptr) return;
   if (!request_throttle_.admit(request.model_id, Clock::now())) return;
-  answer_request(request.model_id, lcm_safe::printable(request.requester, 80));
+  // Cut, not escaped: log_line escapes every line it writes (escaping here too would double it).
+  answer_request(request.model_id, request.requester.substr(0, 80));
 }
 
 // `requester` is already escaped for the log (it comes from the bus).

@@ -320,6 +320,16 @@ TEST(HostileBus, RequestFloodIsAnsweredOncePerSecondWithStatusOnTime) {
   EXPECT_LT(most_queued, 1 << 20);
 }
 
+// Waits until model revision 1's JOINT_STATE reports a simulated time past `t` (s).
+bool wait_sim_time_past(Session& s, double t) {
+  return s.wait_for(
+      [&](const auto& all) {
+        const auto last = last_state(all, 1);
+        return last && last->sim_time > t;
+      },
+      20s);
+}
+
 DaemonOptions simulating() { return DaemonOptions().with("simulate", true).with("state_rate_hz", 100); }
 
 bool all_finite(const rdtf::joint_state_t& s) {
@@ -347,13 +357,7 @@ TEST(HostileBus, HugeFiniteCommandsNeverStopTheSimulationNorPublishNonFiniteValu
     s.subscriber.publish("RDTF/arm3.gltf/JOINT_COMMAND", make_command(kArm, 1, hash, orders));
     // Two seconds of simulated time after the command.
     const double t0 = last_state(s.messages(), 1)->sim_time;
-    ASSERT_TRUE(s.wait_for(
-        [&](const auto& all) {
-          const auto last = last_state(all, 1);
-          return last && last->sim_time > t0 + 2.0;
-        },
-        20s))
-        << "simulated time stopped";
+    ASSERT_TRUE(wait_sim_time_past(s, t0 + 2.0)) << "simulated time stopped";
     const auto all = s.messages();
     double previous = -1;
     for (std::size_t i = from; i < all.size(); ++i) {
@@ -478,13 +482,7 @@ TEST(HostileBus, ABlownUpLiveSimulationIsReportedAndRestartedAfterItsBackOff) {
   // After the restart simulated time goes on, and every state published since the command is
   // finite and within what may be stepped: the exploded step went out in neither message.
   const double t_failed = last_state(s.messages(), 1)->sim_time;
-  ASSERT_TRUE(s.wait_for(
-      [&](const auto& all) {
-        const auto last = last_state(all, 1);
-        return last && last->sim_time > t_failed + 0.5;
-      },
-      20s))
-      << "simulated time stopped after the failure";
+  ASSERT_TRUE(wait_sim_time_past(s, t_failed + 0.5)) << "simulated time stopped after the failure";
   const auto all = s.messages();
   for (std::size_t i = from; i < all.size(); ++i) {
     if (all[i].kind() == "JOINT_STATE") {

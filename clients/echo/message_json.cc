@@ -3,12 +3,16 @@
 #include <functional>
 #include <map>
 
+#include <rdtf/blob_chunk_t.hpp>
+#include <rdtf/blob_request_t.hpp>
+#include <rdtf/blob_unavailable_t.hpp>
 #include <rdtf/description_chunk_t.hpp>
 #include <rdtf/description_t.hpp>
 #include <rdtf/inertia_table_t.hpp>
 #include <rdtf/joint_command_t.hpp>
 #include <rdtf/joint_state_t.hpp>
 #include <rdtf/link_state_t.hpp>
+#include <rdtf/manifest_t.hpp>
 #include <rdtf/model_error_t.hpp>
 #include <rdtf/model_removed_t.hpp>
 #include <rdtf/request_t.hpp>
@@ -52,6 +56,43 @@ Json to_json(const rdtf::description_chunk_t& m) {
             {"count", m.count}, {"size", m.size},
             {"data", std::string(m.data.begin(), m.data.end())}});
   return j;
+}
+
+Json to_json(const rdtf::manifest_t& m) {
+  Json files = Json::array();
+  for (const auto& f : m.files) {
+    files.push_back({{"path", f.path}, {"sha256", f.sha256}, {"size", f.size}, {"role", f.role}});
+  }
+  Json j = header("rdtf.manifest_t", m.utime, m.model_id);
+  j.update({{"revision", m.revision}, {"content_hash", m.content_hash}, {"part", m.part},
+            {"num_parts", m.num_parts}, {"total_files", m.total_files}, {"files", files}});
+  return j;
+}
+
+Json to_json(const rdtf::blob_request_t& m) {
+  Json ranges = Json::array();
+  for (std::size_t i = 0; i < m.sha256.size(); ++i) {
+    ranges.push_back({{"sha256", m.sha256[i]}, {"first_chunk", m.first_chunk[i]},
+                      {"num_chunks", m.num_chunks[i]}});
+  }
+  return {{"type", "rdtf.blob_request_t"}, {"utime", m.utime}, {"requester", m.requester},
+          {"ranges", ranges}};
+}
+
+// The bytes are left out: a blob is binary (a buffer, a mesh) and rdtf-echo prints lines of JSON.
+Json to_json(const rdtf::blob_chunk_t& m) {
+  return {{"type", "rdtf.blob_chunk_t"}, {"utime", m.utime}, {"sha256", m.sha256},
+          {"blob_size", m.blob_size}, {"chunk_size", m.chunk_size}, {"index", m.index},
+          {"count", m.count}, {"size", m.size}};
+}
+
+Json to_json(const rdtf::blob_unavailable_t& m) {
+  Json blobs = Json::array();
+  for (std::size_t i = 0; i < m.sha256.size(); ++i) {
+    blobs.push_back({{"sha256", m.sha256[i]}, {"reason", m.reason[i]}});
+  }
+  return {{"type", "rdtf.blob_unavailable_t"}, {"utime", m.utime}, {"requester", m.requester},
+          {"blobs", blobs}};
 }
 
 Json to_json(const rdtf::inertia_table_t& m) {
@@ -161,7 +202,9 @@ std::optional<nlohmann::ordered_json> message_to_json(const void* data, std::uin
       decoder<rdtf::model_removed_t>(),  decoder<rdtf::request_t>(),
       decoder<rdtf::status_t>(),         decoder<rdtf::joint_state_t>(),
       decoder<rdtf::link_state_t>(),
-      decoder<rdtf::joint_command_t>(),  decoder<rdtf::validation_report_t>()};
+      decoder<rdtf::joint_command_t>(),  decoder<rdtf::validation_report_t>(),
+      decoder<rdtf::manifest_t>(),       decoder<rdtf::blob_request_t>(),
+      decoder<rdtf::blob_chunk_t>(),     decoder<rdtf::blob_unavailable_t>()};
   if (size < 8) return std::nullopt;
   const auto* bytes = static_cast<const std::uint8_t*>(data);
   std::uint64_t hash = 0;

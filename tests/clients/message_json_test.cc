@@ -9,7 +9,12 @@
 
 #include <gtest/gtest.h>
 
+#include <rdtf/blob_chunk_t.hpp>
+#include <rdtf/blob_request_t.hpp>
+#include <rdtf/blob_unavailable_t.hpp>
 #include <rdtf/description_chunk_t.hpp>
+#include <rdtf/file_t.hpp>
+#include <rdtf/manifest_t.hpp>
 #include <rdtf/description_t.hpp>
 #include <rdtf/diagnostic_t.hpp>
 #include <rdtf/inertia_table_t.hpp>
@@ -41,14 +46,19 @@ std::vector<std::uint8_t> encoded_empty() {
 
 TEST(MessageJson, EveryTypeTheSchemaCheckAcceptsHasADecoderAndNestedStructsAreNoMessages) {
   const std::map<std::string, std::function<std::vector<std::uint8_t>()>, std::less<>> encoders = {
+      {"blob_chunk_t", encoded_empty<rdtf::blob_chunk_t>},
+      {"blob_request_t", encoded_empty<rdtf::blob_request_t>},
+      {"blob_unavailable_t", encoded_empty<rdtf::blob_unavailable_t>},
       {"description_t", encoded_empty<rdtf::description_t>},
       {"description_chunk_t", encoded_empty<rdtf::description_chunk_t>},
       {"diagnostic_t", encoded_empty<rdtf::diagnostic_t>},
+      {"file_t", encoded_empty<rdtf::file_t>},
       {"inertia_table_t", encoded_empty<rdtf::inertia_table_t>},
       {"joint_command_t", encoded_empty<rdtf::joint_command_t>},
       {"joint_state_t", encoded_empty<rdtf::joint_state_t>},
       {"link_inertia_t", encoded_empty<rdtf::link_inertia_t>},
       {"link_state_t", encoded_empty<rdtf::link_state_t>},
+      {"manifest_t", encoded_empty<rdtf::manifest_t>},
       {"model_error_t", encoded_empty<rdtf::model_error_t>},
       {"model_removed_t", encoded_empty<rdtf::model_removed_t>},
       {"request_t", encoded_empty<rdtf::request_t>},
@@ -73,12 +83,13 @@ TEST(MessageJson, EveryTypeTheSchemaCheckAcceptsHasADecoderAndNestedStructsAreNo
       EXPECT_FALSE(json.has_value()) << name;
     }
   }
-  EXPECT_EQ(messages, 11u);
+  EXPECT_EQ(messages, 15u);
   // Empty arrays with constant inner dimensions (link_state_t's position[num_links][3]) pass.
   const auto links = encoded_empty<rdtf::link_state_t>();
   EXPECT_EQ(lcm_safe::check_known(links.data(), links.size()), "");
   EXPECT_FALSE(lcm_safe::is_message_type("diagnostic_t"));
   EXPECT_FALSE(lcm_safe::is_message_type("link_inertia_t"));
+  EXPECT_FALSE(lcm_safe::is_message_type("file_t"));
   EXPECT_FALSE(lcm_safe::is_message_type("no_such_t"));
 }
 

@@ -2,6 +2,8 @@
 
 #include <chrono>
 
+#include "rdtf/urdf_names.h"
+
 namespace rdtf::daemon {
 
 std::int64_t now_utime() {
@@ -122,9 +124,13 @@ std::vector<rdtf::inertia_table_t> make_inertia_tables(const ModelRecord& record
   const std::size_t fields = static_cast<std::size_t>(table.getEncodedSize());
   std::vector<rdtf::inertia_table_t> tables;
   std::size_t size = fields;
-  for (const Link& link : model.robot.links) {
+  // The URDF's link names, as in LINK_STATE (urdf_names.h), with the glTF ones beside them.
+  const UrdfNames names = urdf_names(model.robot);
+  for (std::size_t l = 0; l < model.robot.links.size(); ++l) {
+    const Link& link = model.robot.links[l];
     rdtf::link_inertia_t row;
-    row.name = link.name;
+    row.name = names.links[l];
+    row.gltf_name = link.name;
     row.node = link.node;
     row.mass = link.inertial.mass;
     row.volume = link.inertial.volume;

@@ -10,6 +10,7 @@
 
 #include "daemon.h"
 #include "messages.h"
+#include "rdtf/urdf_names.h"
 #include "safe_decode.h"
 
 namespace rdtf::daemon {
@@ -38,6 +39,9 @@ bool StateSchedule::after_step() {
 
 void advance_live_models(StepClock& clock, LiveModels& models, Clock::time_point now, double time_step,
                          const std::function<void(const std::string&, LiveModel&)>& publish) {
+  for (auto& [id, model] : models) {
+    if (!model->failed && model->simulation) release_expired_commands(*model, now);
+  }
   // Each model's state is published right after the step it belongs to. Checked once per wake-up
   // against the wall clock instead (as before), a wake-up late by a step or more (common on a
   // loaded machine) sent one state for all the steps it took, and the schedule's restart put the
@@ -99,9 +103,11 @@ void SimulationHost::load(const std::string& model_id, std::int64_t revision,
   auto model = std::make_unique<LiveModel>();
   model->revision = revision;
   model->content_hash = content_hash;
+  model->command_lifetime = options_.joint_command_lifetime;
+  Robot renamed = with_urdf_names(robot, model->names);
   std::lock_guard lock(mutex_);
   joint_counts_[model_id] = robot.joints.size();
-  pending_robots_[model_id] = robot;
+  pending_robots_[model_id] = std::move(renamed);
   inbox_.loads.emplace_back(model_id, std::move(model));
 }
 
@@ -175,7 +181,8 @@ void SimulationHost::apply_inbox() {
     model->robot = std::make_shared<const Robot>(robot->second);
     models_[id] = std::move(model);
   }
-  for (const auto& command : inbox.commands) apply_command(command);
+  const auto now = Clock::now();
+  for (const auto& command : inbox.commands) apply_command(command, now);
   std::lock_guard lock(mutex_);
   model_count_ = models_.size();
   if (models_.empty()) timing_ = LiveTiming{0, 0, failures_};
@@ -202,32 +209,83 @@ void SimulationHost::reject(const rdtf::joint_command_t& command, const std::str
   lcm_.publish(options_.channel_prefix + "/" + command.model_id + "/ERROR", &message);
 }
 
-void SimulationHost::apply_command(const rdtf::joint_command_t& command) {
+void SimulationHost::apply_command(const rdtf::joint_command_t& command, Clock::time_point now) {
   const auto found = models_.find(command.model_id);
   if (found == models_.end()) {
     return reject(command, "no live simulation of model '" + lcm_safe::printable(command.model_id, 80) + "'");
   }
-  LiveModel& model = *found->second;
+  if (const std::string why = command_live_model(*found->second, command, now); !why.empty()) reject(command, why);
+}
+
+std::string command_live_model(LiveModel& model, const rdtf::joint_command_t& command, Clock::time_point now) {
   if (command.revision != model.revision) {
-    return reject(command, "command for revision " + std::to_string(command.revision) + " but revision " +
-                               std::to_string(model.revision) + " is live");
+    return "command for revision " + std::to_string(command.revision) + " but revision " +
+           std::to_string(model.revision) + " is live";
   }
   if (command.content_hash != model.content_hash) {
-    return reject(command, "command for content hash '" + lcm_safe::printable(command.content_hash, 80) + "' but revision " +
-                               std::to_string(model.revision) + " has content hash '" + model.content_hash + "'");
+    return "command for content hash '" + lcm_safe::printable(command.content_hash, 80) + "' but revision " +
+           std::to_string(model.revision) + " has content hash '" + model.content_hash + "'";
   }
   std::vector<JointCommand> commands;
-  if (const std::string why = joint_commands_of(command, *model.simulation, commands); !why.empty()) {
-    return reject(command, why);
+  if (std::string why = joint_commands_of(command, model.names, *model.simulation, commands); !why.empty()) {
+    return why;
   }
   for (const JointCommand& c : commands) {
     std::string error;
-    if (!model.simulation->set_command(c, &error)) return reject(command, error);
+    if (!model.simulation->set_command(c, &error)) return error;
+    model.command_expiry[c.joint] = now + model.command_lifetime;
+  }
+  return "";
+}
+
+void release_expired_commands(LiveModel& model, Clock::time_point now) {
+  for (auto it = model.command_expiry.begin(); it != model.command_expiry.end();) {
+    if (now < it->second) {
+      ++it;
+      continue;
+    }
+    model.simulation->clear_command(it->first);
+    it = model.command_expiry.erase(it);
   }
 }
 
-std::string joint_commands_of(const rdtf::joint_command_t& command, const Simulation& simulation,
-                              std::vector<JointCommand>& commands) {
+Robot with_urdf_names(const Robot& robot, LiveNames& names) {
+  const UrdfNames urdf = urdf_names(robot);
+  Robot renamed = robot;
+  names = LiveNames{};
+  for (std::size_t l = 0; l < robot.links.size(); ++l) {
+    names.link_gltf.push_back(robot.links[l].name);
+    renamed.links[l].name = urdf.links[l];
+  }
+  for (std::size_t j = 0; j < robot.joints.size(); ++j) {
+    names.joint_gltf[urdf.joints[j]] = robot.joints[j].name;
+    names.joints_by_gltf[robot.joints[j].name].push_back(urdf.joints[j]);
+    renamed.joints[j].name = urdf.joints[j];
+  }
+  return renamed;
+}
+
+std::optional<std::string> LiveNames::joint(std::string_view name, std::string& why) const {
+  if (const auto urdf = joint_gltf.find(name); urdf != joint_gltf.end()) return urdf->first;
+  const auto gltf = joints_by_gltf.find(name);
+  // Names from the bus go into ERROR messages and logs escaped.
+  const std::string shown = lcm_safe::printable(name, 80);
+  if (gltf == joints_by_gltf.end()) {
+    why = "unknown joint '" + shown + "' (neither a joint's URDF name nor its glTF name)";
+    return std::nullopt;
+  }
+  if (gltf->second.size() > 1) {
+    why = "joint name '" + shown + "' is the glTF name of " + std::to_string(gltf->second.size()) +
+          " joints (URDF names";
+    for (std::size_t k = 0; k < gltf->second.size(); ++k) why += (k ? ", '" : " '") + gltf->second[k] + "'";
+    why += "): name the joint by its URDF name";
+    return std::nullopt;
+  }
+  return gltf->second.front();
+}
+
+std::string joint_commands_of(const rdtf::joint_command_t& command, const LiveNames& names,
+                              const Simulation& simulation, std::vector<JointCommand>& commands) {
   commands.clear();
   if (command.num_joints < 0) return "num_joints is negative";
   const auto n = static_cast<std::size_t>(command.num_joints);
@@ -239,12 +297,18 @@ std::string joint_commands_of(const rdtf::joint_command_t& command, const Simula
   for (std::size_t i = 0; i < n; ++i) {
     // Names from the bus go into ERROR messages and logs escaped.
     const std::string name = lcm_safe::printable(command.name[i], 80);
-    if (!simulation.joint_state(command.name[i])) {
+    std::string why;
+    const auto joint = names.joint(command.name[i], why);
+    if (!joint) {
       commands.clear();
-      return "unknown joint '" + name + "' (or not a one-degree-of-freedom joint)";
+      return why;
+    }
+    if (!simulation.joint_state(*joint)) {
+      commands.clear();
+      return "joint '" + name + "' takes no command (not a one-degree-of-freedom joint)";
     }
     JointCommand c;
-    c.joint = command.name[i];
+    c.joint = *joint;
     switch (command.mode[i]) {
       case rdtf::joint_command_t::TORQUE:
         c.mode = CommandMode::kTorque;
@@ -329,6 +393,8 @@ void SimulationHost::publish_state(const std::string& model_id, LiveModel& model
   message.sim_time = model.sim_time();
   for (const JointState& state : joints) {
     message.name.push_back(state.name);
+    const auto gltf = model.names.joint_gltf.find(state.name);
+    message.gltf_name.push_back(gltf == model.names.joint_gltf.end() ? state.name : gltf->second);
     message.position.push_back(state.position);
     message.velocity.push_back(state.velocity);
     message.effort.push_back(state.effort);
@@ -347,8 +413,10 @@ void SimulationHost::publish_links(const std::string& model_id, const LiveModel&
   message.revision = model.revision;
   message.content_hash = model.content_hash;
   message.sim_time = sim_time;
-  for (const LinkPose& pose : poses) {
+  for (std::size_t l = 0; l < poses.size(); ++l) {
+    const LinkPose& pose = poses[l];
     message.name.push_back(pose.name);
+    message.gltf_name.push_back(l < model.names.link_gltf.size() ? model.names.link_gltf[l] : pose.name);
     const Eigen::Vector3d p = pose.X_SL.translation();
     // The rotation comes out of ODE's bodies as a matrix; renormalised so that subscribers get a
     // unit quaternion whatever the rounding of the conversion.
@@ -415,6 +483,7 @@ void SimulationHost::restart(const std::string& model_id, LiveModel& model, Cloc
     return;
   }
   model.simulation = std::move(fresh);
+  model.command_expiry.clear();  // The fresh simulation holds no command.
   model.time_offset = offset;
   model.failed = false;
   model.restart_at = {};

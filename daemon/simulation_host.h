@@ -13,6 +13,7 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <thread>
 #include <vector>
 
@@ -21,10 +22,15 @@
 #include <rdtf/joint_command_t.hpp>
 
 #include "rdtf/dynamics.h"
+#include "rdtf/robot.h"
 
 namespace rdtf::daemon {
 
 using Clock = std::chrono::steady_clock;
+
+// How long a joint's command holds after the last command naming it was applied, when the
+// setting joint_command_timeout_s does not say (docs/controller.md, "Command lifetime").
+inline constexpr Clock::duration kDefaultJointCommandLifetime = std::chrono::milliseconds(500);
 
 struct SimulationHostOptions {
   std::string lcm_url;
@@ -34,7 +40,29 @@ struct SimulationHostOptions {
   // real time), at most one per step: 1 / time_step x real_time_factor.
   double state_rate_hz = 100;
   double real_time_factor = 1.0;   // Simulated seconds per wall-clock second.
+  // A joint whose commands stop arriving for this long (the daemon's steady clock) is released.
+  Clock::duration joint_command_lifetime = kDefaultJointCommandLifetime;
 };
+
+// A live model's names. Its simulation runs on the robot with every link and joint renamed to
+// its URDF name (rdtf/urdf_names.h: unique, and the names the URDF of the same revision has), so
+// JOINT_STATE and LINK_STATE carry those and commands find joints by them; the glTF names ride
+// along for the states' gltf_name.
+struct LiveNames {
+  std::vector<std::string> link_gltf;                          // glTF name of Robot::links[i]
+  std::map<std::string, std::string, std::less<>> joint_gltf;  // URDF name -> glTF name
+  // glTF name -> the URDF names of the joints that have it (several when it is not unique).
+  std::map<std::string, std::vector<std::string>, std::less<>> joints_by_gltf;
+
+  // The URDF name of the joint a command names: a joint's URDF name means that joint; any other
+  // name may be a glTF name, which must be exactly one joint's. Nothing, and `why`, otherwise.
+  std::optional<std::string> joint(std::string_view name, std::string& why) const;
+};
+
+// `robot` with its links and joints under their URDF names (what a live simulation runs), and
+// both names of each in `names`.
+Robot with_urdf_names(const Robot& robot, LiveNames& names);
+
 
 // The live simulation's timing, apart from threads, LCM and the clock so that a test can drive it
 // with times of its own (tests/dynamics/live_schedule_test.cc).
@@ -92,21 +120,36 @@ struct LiveModel {
   bool behind = false;
   bool measured = false;  // Has had a whole window.
   double sim_time() const { return time_offset + (simulation ? simulation->time() : 0.0); }
+  LiveNames names;
+  // Commands' lifetime: each commanded joint (by URDF name) holds its command until its expiry
+  // on the host's clock, renewed by every command naming it (docs/controller.md).
+  Clock::duration command_lifetime = kDefaultJointCommandLifetime;
+  std::map<std::string, Clock::time_point, std::less<>> command_expiry;
 };
 using LiveModels = std::map<std::string, std::unique_ptr<LiveModel>>;
 
-// One pass of the simulation thread at wall time `now`: every step due on `clock`, every model in
-// lockstep (a model whose `rate` is below 1 takes that fraction of the steps), and `publish` for
+// One pass of the simulation thread at wall time `now`: joints whose commands ran out released
+// (release_expired_commands), then every step due on `clock`, every model in lockstep (a model whose `rate` is below 1 takes that fraction of the steps), and `publish` for
 // each state due after each step. A model whose simulation stops advancing (ODE failed on a
 // non-finite or blown-up state) is marked `failed` and left alone.
 void advance_live_models(StepClock& clock, LiveModels& models, Clock::time_point now, double time_step,
                          const std::function<void(const std::string&, LiveModel&)>& publish);
 
-// The joint commands a controller's message asks of `simulation`, all or nothing: empty with the
-// reason when a joint is unknown, a mode unknown or the arrays disagree with num_joints.
-// (Revision and content hash are checked by the host.)
-std::string joint_commands_of(const rdtf::joint_command_t& command, const Simulation& simulation,
-                              std::vector<JointCommand>& commands);
+// The joint commands a controller's message asks of `simulation` (which runs on the URDF names
+// of `names`), all or nothing: empty with the reason when a joint is unknown or ambiguous
+// (LiveNames::joint), a mode unknown or the arrays disagree with num_joints. Each command names
+// its joint by URDF name. (Revision and content hash are checked by command_live_model.)
+std::string joint_commands_of(const rdtf::joint_command_t& command, const LiveNames& names,
+                              const Simulation& simulation, std::vector<JointCommand>& commands);
+
+// A controller's command applied to `model` at `now` (the host thread's clock), all or nothing:
+// its revision and content hash must be the model's, and every joint known. Each joint it names
+// holds its command until now + model.command_lifetime. "" when applied, else why not.
+std::string command_live_model(LiveModel& model, const rdtf::joint_command_t& command, Clock::time_point now);
+
+// Releases every joint of `model` whose command expired by `now`: the joint is passive again (no
+// actuator effort; its authored damping, friction, spring and limits, and gravity, act on it).
+void release_expired_commands(LiveModel& model, Clock::time_point now);
 
 // The CPU budget of the live simulations: the fraction of the host's steps each model may take
 // when one step of every model costs `step_seconds` and `budget_seconds` is available per step.
@@ -194,7 +237,7 @@ class SimulationHost {
   void restart(const std::string& model_id, LiveModel& model, Clock::time_point now);
   void publish_problem(const std::string& model_id, const LiveModel& model, const char* code, std::int8_t severity,
                        const std::string& text);
-  void apply_command(const rdtf::joint_command_t& command);
+  void apply_command(const rdtf::joint_command_t& command, Clock::time_point now);
   void reject(const rdtf::joint_command_t& command, const std::string& why);
   // JOINT_STATE, then LINK_STATE with the same utime and sim_time.
   void publish_state(const std::string& model_id, LiveModel& model);

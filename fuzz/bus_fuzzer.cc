@@ -69,13 +69,15 @@ void daemon_request(const std::uint8_t* data, std::size_t size) {
 void daemon_command(const std::uint8_t* data, std::size_t size) {
   rdtf::init_ode();
   rdtf::Diagnostics diag;
-  auto simulation = rdtf::Simulation::create(arm3(), rdtf::SimulationOptions{}, {}, diag);
+  // As the daemon runs it: under the URDF names, glTF names accepted where unambiguous.
+  rdtf::daemon::LiveNames names;
+  auto simulation = rdtf::Simulation::create(rdtf::daemon::with_urdf_names(arm3(), names), rdtf::SimulationOptions{}, {}, diag);
   require(simulation != nullptr, "arm3 does not simulate");
   rdtf::daemon::BusInput input(
       {nullptr,
        [&](const rdtf::joint_command_t& command) {
          std::vector<rdtf::JointCommand> commands;
-         const std::string why = rdtf::daemon::joint_commands_of(command, *simulation, commands);
+         const std::string why = rdtf::daemon::joint_commands_of(command, names, *simulation, commands);
          if (!why.empty()) {
            require(printable_ascii(why), "a rejection with unescaped bytes");
            return std::string();

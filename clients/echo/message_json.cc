@@ -98,7 +98,7 @@ Json to_json(const rdtf::blob_unavailable_t& m) {
 Json to_json(const rdtf::inertia_table_t& m) {
   Json links = Json::array();
   for (const auto& l : m.links) {
-    links.push_back({{"name", l.name}, {"node", l.node}, {"mass", l.mass}, {"volume", l.volume},
+    links.push_back({{"name", l.name}, {"gltf_name", l.gltf_name}, {"node", l.node}, {"mass", l.mass}, {"volume", l.volume},
                      {"center_of_mass", {l.center_of_mass[0], l.center_of_mass[1], l.center_of_mass[2]}},
                      {"ixx", l.ixx}, {"ixy", l.ixy}, {"ixz", l.ixz}, {"iyy", l.iyy},
                      {"iyz", l.iyz}, {"izz", l.izz}, {"authored", l.authored}});
@@ -147,7 +147,7 @@ Json to_json(const rdtf::status_t& m) {
 Json to_json(const rdtf::joint_state_t& m) {
   Json j = header("rdtf.joint_state_t", m.utime, m.model_id);
   j.update({{"revision", m.revision}, {"content_hash", m.content_hash}, {"sim_time", m.sim_time},
-            {"name", m.name}, {"position", m.position}, {"velocity", m.velocity},
+            {"name", m.name}, {"gltf_name", m.gltf_name}, {"position", m.position}, {"velocity", m.velocity},
             {"effort", m.effort}});
   return j;
 }
@@ -155,7 +155,7 @@ Json to_json(const rdtf::joint_state_t& m) {
 Json to_json(const rdtf::link_state_t& m) {
   Json j = header("rdtf.link_state_t", m.utime, m.model_id);
   j.update({{"revision", m.revision}, {"content_hash", m.content_hash}, {"sim_time", m.sim_time},
-            {"name", m.name}, {"position", m.position}, {"orientation", m.orientation},
+            {"name", m.name}, {"gltf_name", m.gltf_name}, {"position", m.position}, {"orientation", m.orientation},
             {"linear_velocity", m.linear_velocity}, {"angular_velocity", m.angular_velocity}});
   return j;
 }

@@ -93,5 +93,55 @@ TEST(MessageJson, EveryTypeTheSchemaCheckAcceptsHasADecoderAndNestedStructsAreNo
   EXPECT_FALSE(lcm_safe::is_message_type("no_such_t"));
 }
 
+template <typename Message>
+nlohmann::ordered_json json_of(const Message& message) {
+  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(message.getEncodedSize()));
+  message.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  const auto json = clients::message_to_json(bytes.data(), static_cast<std::uint32_t>(bytes.size()));
+  if (!json) throw std::runtime_error(std::string(Message::getTypeName()) + " not decoded");
+  return *json;
+}
+
+// Every per-joint and per-link message prints both names: the URDF's (name) and the glTF node's.
+TEST(MessageJson, StatesAndInertiaPrintTheUrdfAndTheGltfNames) {
+  rdtf::joint_state_t joints{};
+  joints.num_joints = 1;
+  joints.name = {"elbow_joint"};
+  joints.gltf_name = {"elbow joint"};
+  joints.position = {0.25};
+  joints.velocity = {0.5};
+  joints.effort = {-1};
+  const auto j = json_of(joints);
+  EXPECT_EQ(j["name"], nlohmann::ordered_json::array({"elbow_joint"}));
+  EXPECT_EQ(j["gltf_name"], nlohmann::ordered_json::array({"elbow joint"}));
+  EXPECT_EQ(j["position"], nlohmann::ordered_json::array({0.25}));
+
+  rdtf::link_state_t links{};
+  links.num_links = 2;
+  links.name = {"upper_arm", "upper_arm_2"};
+  links.gltf_name = {"upper arm", "upper_arm"};
+  links.position = {{1, 2, 3}, {4, 5, 6}};
+  links.orientation = {{1, 0, 0, 0}, {1, 0, 0, 0}};
+  links.linear_velocity = {{0, 0, 0}, {0, 0, 0}};
+  links.angular_velocity = {{0, 0, 0}, {0, 0, 0}};
+  const auto l = json_of(links);
+  EXPECT_EQ(l["name"], nlohmann::ordered_json::array({"upper_arm", "upper_arm_2"}));
+  EXPECT_EQ(l["gltf_name"], nlohmann::ordered_json::array({"upper arm", "upper_arm"}));
+
+  rdtf::inertia_table_t table{};
+  rdtf::link_inertia_t row{};
+  row.name = "upper_arm";
+  row.gltf_name = "upper arm";
+  row.node = 3;
+  row.mass = 1.5;
+  table.links = {row};
+  table.num_links = 1;
+  const auto t = json_of(table);
+  ASSERT_EQ(t["links"].size(), 1u);
+  EXPECT_EQ(t["links"][0]["name"], "upper_arm");
+  EXPECT_EQ(t["links"][0]["gltf_name"], "upper arm");
+  EXPECT_EQ(t["links"][0]["node"], 3);
+}
+
 }  // namespace
 }  // namespace rdtf

@@ -18,8 +18,10 @@ namespace {
 
 constexpr double kAtRest = 1e-9;  // rad
 
+// These tests send a command once and watch what it does for seconds: the commands' lifetime is
+// the longest there is (its release is tested in tests/dynamics/command_lifetime_test.cc).
 DaemonOptions simulating(double state_rate_hz = 100) {
-  return DaemonOptions().with("simulate", true).with("state_rate_hz", state_rate_hz);
+  return DaemonOptions().with("simulate", true).with("state_rate_hz", state_rate_hz).with("joint_command_timeout_s", 60);
 }
 
 // Starts rdtfd on arm3 and waits for its first joint state. Returns the content hash.
@@ -132,7 +134,7 @@ TEST(Simulation, CommandNamingAnUnknownJointIsRejectedAsAWhole) {
                                      {"wrist", rdtf::joint_command_t::TORQUE, 0.5}}));
   ASSERT_TRUE(s.wait_for([](const auto& all) { return !rejections(all).empty(); }, 5s));
   EXPECT_EQ(rejections(s.messages()),
-            (std::vector<std::string>{"unknown joint 'wrist' (or not a one-degree-of-freedom joint)"}));
+            (std::vector<std::string>{"unknown joint 'wrist' (neither a joint's URDF name nor its glTF name)"}));
   ASSERT_TRUE(wait_states(s, 1, 50));
   EXPECT_LT(largest_excursion(s.messages(), 1), kAtRest);
 }

@@ -83,7 +83,7 @@ const std::vector<std::string>& config_keys() {
       "stepper", "max_mass_ratio", "validation_start_offset_rad", "energy_tolerance",
       "joint_separation_tolerance_m", "limit_tolerance_rad", "limit_tolerance_m", "bound_mass_kg",
       "bound_inertia_kgm2", "massless_link_severity", "validation_cpu_budget_s", "urdf", "urdf_y_up",
-      "max_read_bytes", "max_read_bytes_in_flight"};
+      "max_read_bytes", "max_read_bytes_in_flight", "joint_command_timeout_s"};
   return keys;
 }
 
@@ -107,6 +107,7 @@ const std::vector<KeyRange>& config_ranges() {
       {"validation_seconds", 1e-3, 60},
       {"state_rate_hz", 0.1, 10000},
       {"real_time_factor", 0.01, 100},
+      {"joint_command_timeout_s", 0.01, 60},
       {"time_step", 1e-4, 0.1},
       {"max_mass_ratio", 1, 1e12},
       {"validation_start_offset_rad", -6.2832, 6.2832},
@@ -145,6 +146,7 @@ std::vector<double> ranged_values(const DaemonConfig& c, const char* key) {
   if (k == "validation_seconds") return {c.validation_seconds};
   if (k == "state_rate_hz") return {c.state_rate_hz};
   if (k == "real_time_factor") return {c.real_time_factor};
+  if (k == "joint_command_timeout_s") return {c.joint_command_timeout_s};
   if (k == "time_step") return {c.time_step};
   if (k == "max_mass_ratio") return {c.max_mass_ratio};
   if (k == "validation_start_offset_rad") return {c.validation_start_offset_rad};
@@ -295,6 +297,7 @@ std::optional<DaemonConfig> apply_config_json(const nlohmann::json& json, const 
             read_key(json, "simulate", config.simulate, error) &&
             read_key(json, "state_rate_hz", config.state_rate_hz, error) &&
             read_key(json, "real_time_factor", config.real_time_factor, error) &&
+            read_key(json, "joint_command_timeout_s", config.joint_command_timeout_s, error) &&
             read_key(json, "floating_root", config.floating_root, error) &&
             read_key(json, "time_step", config.time_step, error) &&
             read_key(json, "max_mass_ratio", config.max_mass_ratio, error) &&

@@ -42,6 +42,9 @@ struct DaemonConfig {
   bool simulate = true;                   // Run every live model and publish its joint states.
   double state_rate_hz = 100;             // Joint-state messages per second and model.
   double real_time_factor = 1.0;
+  // A joint whose commands stop arriving for this long (s of the daemon's clock) is released:
+  // passive again (docs/controller.md, "Command lifetime").
+  double joint_command_timeout_s = 0.5;
   bool floating_root = false;             // Default: root links are fixed to the world.
   Eigen::Vector3d gravity{0, -9.80665, 0};  // Scene frame; glTF is Y up. Z-up content: {0, 0, -9.80665}.
   double time_step = 1e-3;                // s, of the validation run and the live simulation.

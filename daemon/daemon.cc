@@ -113,7 +113,7 @@ auto conversion_settings(const DaemonConfig& c) {
 
 // What the live simulations depend on: a reload that changes none of these keeps them running.
 auto simulation_settings(const DaemonConfig& c) {
-  return std::make_tuple(c.simulate, c.state_rate_hz, c.real_time_factor, c.floating_root, c.gravity.x(),
+  return std::make_tuple(c.simulate, c.state_rate_hz, c.real_time_factor, c.joint_command_timeout_s, c.floating_root, c.gravity.x(),
                          c.gravity.y(), c.gravity.z(), c.time_step, static_cast<int>(c.stepper), c.lcm_url,
                          c.channel_prefix, c.bound_mass_kg, c.bound_inertia_kgm2);
 }
@@ -881,6 +881,8 @@ void Daemon::start_simulation_host() {
   options.simulation = simulation_options(config_);
   options.state_rate_hz = config_.state_rate_hz;
   options.real_time_factor = config_.real_time_factor;
+  options.joint_command_lifetime =
+      std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(config_.joint_command_timeout_s));
   simulation_ = std::make_unique<SimulationHost>(options);
   for (const auto& [source, record] : registry_.all()) {
     const bool usable = record.live && !(record.live->validation && !record.live->validation->passed);

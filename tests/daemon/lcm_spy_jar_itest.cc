@@ -19,7 +19,8 @@ namespace {
 
 // Reads an LCM log and prints one tab-separated line per rdtf event:
 //   channel utime model_id revision content_hash detail
-// where detail is a field or two particular to the type. Anything it cannot decode ends it with
+// where detail is a field or two particular to the type (names without spaces: the models here
+// have none). Anything it cannot decode ends it with
 // exit code 1 (the event and the exception printed).
 constexpr const char* kDecoder = R"java(
 import java.io.EOFException;
@@ -70,7 +71,8 @@ public class DecodeLog {
       }
       case "INERTIA": {
         rdtf.inertia_table_t m = new rdtf.inertia_table_t(d);
-        return row(m.utime, m.model_id, m.revision, m.content_hash, m.num_links + " " + m.links[0].name);
+        return row(m.utime, m.model_id, m.revision, m.content_hash,
+                   m.num_links + " " + m.links[0].name + " " + m.links[0].gltf_name);
       }
       case "VALIDATION": {
         rdtf.validation_report_t m = new rdtf.validation_report_t(d);
@@ -83,12 +85,12 @@ public class DecodeLog {
       case "JOINT_STATE": {
         rdtf.joint_state_t m = new rdtf.joint_state_t(d);
         return row(m.utime, m.model_id, m.revision, m.content_hash,
-                   Double.toString(m.sim_time) + " " + m.num_joints + " " + first(m.name));
+                   Double.toString(m.sim_time) + " " + m.num_joints + " " + first(m.name) + " " + first(m.gltf_name));
       }
       case "LINK_STATE": {
         rdtf.link_state_t m = new rdtf.link_state_t(d);
         return row(m.utime, m.model_id, m.revision, m.content_hash,
-                   Double.toString(m.sim_time) + " " + m.num_links + " " + m.name[0] + " " +
+                   Double.toString(m.sim_time) + " " + m.num_links + " " + m.name[0] + " " + m.gltf_name[0] + " " +
                    Double.toString(m.position[m.num_links - 1][1]) + " " +
                    Double.toString(m.orientation[m.num_links - 1][0]));
       }
@@ -152,7 +154,7 @@ std::optional<std::string> expected_line(const Message& m) {
   if (k == "INERTIA") {
     const auto d = m.as<rdtf::inertia_table_t>();
     return head(m, d.utime, d.model_id, d.revision, d.content_hash) + "\t" +
-           join({std::to_string(d.num_links), d.links.at(0).name});
+           join({std::to_string(d.num_links), d.links.at(0).name, d.links.at(0).gltf_name});
   }
   if (k == "VALIDATION") {
     const auto d = m.as<rdtf::validation_report_t>();
@@ -251,20 +253,22 @@ TEST(LcmSpyJar, DecodesEveryChannelOfARecordedSession) {
       const auto d = m.as<rdtf::joint_state_t>();
       EXPECT_EQ(head(m, d.utime, d.model_id, d.revision, d.content_hash),
                 fields[0] + "\t" + fields[1] + "\t" + fields[2] + "\t" + fields[3] + "\t" + fields[4]);
-      ASSERT_EQ(detail.size(), 3u);
+      ASSERT_EQ(detail.size(), 4u);
       EXPECT_EQ(parse_double(detail[0]), d.sim_time);
       EXPECT_EQ(detail[1], std::to_string(d.num_joints));
       EXPECT_EQ(detail[2], d.name.empty() ? "-" : d.name.front());
+      EXPECT_EQ(detail[3], d.gltf_name.empty() ? "-" : d.gltf_name.front());
     } else if (kind == "LINK_STATE") {
       const auto d = m.as<rdtf::link_state_t>();
       EXPECT_EQ(head(m, d.utime, d.model_id, d.revision, d.content_hash),
                 fields[0] + "\t" + fields[1] + "\t" + fields[2] + "\t" + fields[3] + "\t" + fields[4]);
-      ASSERT_EQ(detail.size(), 5u);
+      ASSERT_EQ(detail.size(), 6u);
       EXPECT_EQ(parse_double(detail[0]), d.sim_time);
       EXPECT_EQ(detail[1], std::to_string(d.num_links));
       EXPECT_EQ(detail[2], d.name.at(0));
-      EXPECT_EQ(parse_double(detail[3]), d.position.back().at(1));
-      EXPECT_EQ(parse_double(detail[4]), d.orientation.back().at(0));
+      EXPECT_EQ(detail[3], d.gltf_name.at(0));
+      EXPECT_EQ(parse_double(detail[4]), d.position.back().at(1));
+      EXPECT_EQ(parse_double(detail[5]), d.orientation.back().at(0));
     } else {
       ADD_FAILURE() << "no check for kind " << kind;
     }

@@ -115,5 +115,32 @@ TEST(RosNames, StatesAndInertiaCarryTheUrdfNamesAndCommandsUseThem) {
   EXPECT_TRUE(rejections(s.messages()).empty()) << ::testing::PrintToString(rejections(s.messages()));
 }
 
+// The names do not depend on the URDF being written: with "urdf": false the description has no
+// URDF, and the states and the inertia table carry the same names as above.
+TEST(RosNames, WithoutAUrdfTheStatesCarryTheSameNames) {
+  Session s;
+  const std::string hash = write_renamed_arm(s.watch);
+  s.start(DaemonOptions().with("simulate", true).with("state_rate_hz", 100).with("urdf", false));
+  ASSERT_TRUE(s.wait_revision(kArm, 1, hash));
+  ASSERT_TRUE(s.wait_for(
+      [](const auto& all) { return last_state(all, 1).has_value() && !on_kind(all, "LINK_STATE", kArm).empty(); }));
+  const auto description = last_description(s.messages(), kArm);
+  ASSERT_TRUE(description);
+  EXPECT_EQ(description->urdf_size, 0);
+  const rdtf::joint_state_t joints = *last_state(s.messages(), 1);
+  EXPECT_EQ(joints.name, (std::vector<std::string>{"shoulder_joint", "shoulder_joint_2"}));
+  EXPECT_EQ(joints.gltf_name, (std::vector<std::string>{"shoulder joint", "shoulder_joint"}));
+  const auto links = decoded<rdtf::link_state_t>(s.messages(), "LINK_STATE", kArm).back();
+  EXPECT_EQ(links.name, (std::vector<std::string>{"base_link", "upper_arm", "upper_arm_2"}));
+  EXPECT_EQ(links.gltf_name, (std::vector<std::string>{"base link", "upper arm", "upper_arm"}));
+  const auto inertia = last_inertia(s.messages(), kArm);
+  ASSERT_TRUE(inertia);
+  ASSERT_EQ(inertia->links.size(), 3u);
+  for (std::size_t l = 0; l < 3; ++l) {
+    EXPECT_EQ(inertia->links[l].name, links.name[l]);
+    EXPECT_EQ(inertia->links[l].gltf_name, links.gltf_name[l]);
+  }
+}
+
 }  // namespace
 }  // namespace rdtf::itest

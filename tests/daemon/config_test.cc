@@ -483,3 +483,32 @@ TEST(DaemonConfigFile, OnlyARegularFileOfBoundedSizeIsRead) {
 
 }  // namespace
 }  // namespace rdtf::daemon
+
+namespace rdtf::daemon {
+namespace {
+
+// The commands' lifetime (docs/controller.md, "Command lifetime"): 0.5 s by default, read from
+// the file, and kept within 0.01 .. 60 s (a controller's death is noticed, and a lifetime of 0
+// would release every command before its first step).
+TEST(DaemonConfig, JointCommandTimeoutIsReadAndKeptInItsRange) {
+  EXPECT_EQ(default_config().joint_command_timeout_s, 0.5);
+  testing::TempDir folder;
+  std::string error;
+  auto config = load_text(folder, R"({"joint_command_timeout_s": 2.5})", error);
+  ASSERT_TRUE(config) << error;
+  EXPECT_EQ(config->joint_command_timeout_s, 2.5);
+  for (const double refused : {0.0, 0.005, 61.0}) {
+    SCOPED_TRACE(refused);
+    config->joint_command_timeout_s = refused;
+    config->watch = {folder / "w"};
+    config->output = folder / "o";
+    EXPECT_FALSE(check_config(*config, error));
+    EXPECT_NE(error.find("\"joint_command_timeout_s\""), std::string::npos) << error;
+    EXPECT_NE(error.find("[0.01, 60]"), std::string::npos) << error;
+  }
+  config->joint_command_timeout_s = 60;
+  EXPECT_TRUE(check_config(*config, error)) << error;
+}
+
+}  // namespace
+}  // namespace rdtf::daemon

@@ -1,0 +1,107 @@
+#include "live_names.h"
+
+#include <cmath>
+
+#include "rdtf/urdf_names.h"
+#include "safe_decode.h"
+
+namespace rdtf::daemon {
+
+Robot with_urdf_names(const Robot& robot, LiveNames& names) {
+  const UrdfNames urdf = urdf_names(robot);
+  Robot renamed = robot;
+  names = LiveNames{};
+  for (std::size_t l = 0; l < robot.links.size(); ++l) {
+    names.link_gltf.push_back(robot.links[l].name);
+    renamed.links[l].name = urdf.links[l];
+  }
+  for (std::size_t j = 0; j < robot.joints.size(); ++j) {
+    names.joint_gltf[urdf.joints[j]] = robot.joints[j].name;
+    names.joints_by_gltf[robot.joints[j].name].push_back(urdf.joints[j]);
+    renamed.joints[j].name = urdf.joints[j];
+  }
+  return renamed;
+}
+
+std::optional<std::string> LiveNames::joint(std::string_view name, std::string& why) const {
+  if (const auto urdf = joint_gltf.find(name); urdf != joint_gltf.end()) return urdf->first;
+  const auto gltf = joints_by_gltf.find(name);
+  // Names from the bus go into ERROR messages and logs escaped.
+  const std::string shown = lcm_safe::printable(name, 80);
+  if (gltf == joints_by_gltf.end()) {
+    why = "unknown joint '" + shown + "' (neither a joint's URDF name nor its glTF name)";
+    return std::nullopt;
+  }
+  if (gltf->second.size() > 1) {
+    why = "joint name '" + shown + "' is the glTF name of " + std::to_string(gltf->second.size()) +
+          " joints (URDF names";
+    for (std::size_t k = 0; k < gltf->second.size(); ++k) why += (k ? ", '" : " '") + gltf->second[k] + "'";
+    why += "): name the joint by its URDF name";
+    return std::nullopt;
+  }
+  return gltf->second.front();
+}
+
+std::string joint_commands_of(const rdtf::joint_command_t& command, const LiveNames& names,
+                              const Simulation& simulation, std::vector<JointCommand>& commands) {
+  commands.clear();
+  if (command.num_joints < 0) return "num_joints is negative";
+  const auto n = static_cast<std::size_t>(command.num_joints);
+  if (command.name.size() != n || command.mode.size() != n || command.value.size() != n ||
+      command.kp.size() != n || command.kd.size() != n) {
+    return "array lengths do not match num_joints";
+  }
+  // All or nothing: check every joint before applying any.
+  for (std::size_t i = 0; i < n; ++i) {
+    // Names from the bus go into ERROR messages and logs escaped.
+    const std::string name = lcm_safe::printable(command.name[i], 80);
+    std::string why;
+    const auto joint = names.joint(command.name[i], why);
+    if (!joint) {
+      commands.clear();
+      return why;
+    }
+    if (!simulation.joint_state(*joint)) {
+      commands.clear();
+      return "joint '" + name + "' takes no command (not a one-degree-of-freedom joint)";
+    }
+    JointCommand c;
+    c.joint = *joint;
+    switch (command.mode[i]) {
+      case rdtf::joint_command_t::TORQUE:
+        c.mode = CommandMode::kTorque;
+        c.effort = command.value[i];
+        break;
+      case rdtf::joint_command_t::POSITION:
+        c.mode = CommandMode::kPosition;
+        c.position = command.value[i];
+        c.kp = command.kp[i];
+        c.kd = command.kd[i];
+        break;
+      case rdtf::joint_command_t::VELOCITY:
+        c.mode = CommandMode::kVelocity;
+        c.velocity = command.value[i];
+        c.kd = command.kd[i];
+        break;
+      default:
+        commands.clear();
+        return "unknown mode " + std::to_string(command.mode[i]) + " for joint '" + name + "'";
+    }
+    // Checked here too (set_command checks them again) so that a bad value for the last joint
+    // leaves the others' commands unapplied.
+    for (double v : {c.effort, c.position, c.velocity, c.kp, c.kd}) {
+      if (!std::isfinite(v)) {
+        commands.clear();
+        return "command for '" + name + "' rejected: values must be finite";
+      }
+    }
+    if (c.kp < 0 || c.kd < 0) {
+      commands.clear();
+      return "command for '" + name + "' rejected: gains must not be negative";
+    }
+    commands.push_back(c);
+  }
+  return "";
+}
+
+}  // namespace rdtf::daemon

@@ -8,6 +8,7 @@
 
 #include "rdtf/atomic_file.h"
 #include "rdtf/urdf.h"
+#include "rdtf/urdf_names.h"
 #include "urdf_check.h"
 #include "urdf_internal.h"
 
@@ -19,27 +20,6 @@ using namespace urdf_internal;
 urdf::Vector3 to_urdf(const Eigen::Vector3d& v) { return urdf::Vector3(v.x(), v.y(), v.z()); }
 
 std::string node_pointer(int node) { return node >= 0 ? json_pointer("/nodes", node) : ""; }
-
-// URDF names for every link and joint: valid and unique, with a warning when changed.
-void choose_names(const Robot& robot, Diagnostics& diag, std::vector<std::string>& links,
-                  std::vector<std::string>& joints, std::vector<std::string>& taken_links,
-                  std::vector<std::string>& taken_joints) {
-  auto choose = [&](const std::string& name, int node, const char* what, const char* fallback,
-                    std::vector<std::string>& taken) {
-    const std::string chosen = unique_name(valid_urdf_name(name, fallback), taken);
-    if (chosen != name) {
-      diag.warning("URDF_NAME_CHANGED", node_pointer(node),
-                   std::string(what) + " '" + name + "' is named '" + chosen +
-                       "' in the URDF (URDF names here are unique and use letters, digits, '_', "
-                       "'-' and '.')");
-    }
-    return chosen;
-  };
-  for (const Link& link : robot.links) links.push_back(choose(link.name, link.node, "link", "link", taken_links));
-  for (const Joint& joint : robot.joints) {
-    joints.push_back(choose(joint.name, joint.node, "joint", "joint", taken_joints));
-  }
-}
 
 // URDF's <limit> requires effort and velocity, and tools read 0 as "cannot move" (Gazebo,
 // ros2_control, PyBullet). A joint that authored neither gets these instead: far above what any
@@ -256,8 +236,12 @@ std::optional<UrdfExport> export_urdf(const Conversion& conversion, const UrdfOp
   }
   const Eigen::Matrix3d C = options.y_up ? Eigen::Matrix3d::Identity() : y_up_to_z_up();
   UrdfExport result;
-  std::vector<std::string> taken_links, taken_joints;
-  choose_names(robot, diag, result.link_names, result.joint_names, taken_links, taken_joints);
+  // The names rdtfd's states and inertia tables carry too (urdf_names.h).
+  UrdfNames names = urdf_names(robot, &diag);
+  result.link_names = std::move(names.links);
+  result.joint_names = std::move(names.joints);
+  // Names of the added root link and joints must not take one of these.
+  std::vector<std::string> taken_links = result.link_names, taken_joints = result.joint_names;
   const auto surfaces = link_surfaces(conversion.asset, robot);
 
   auto model = std::make_shared<urdf::ModelInterface>();

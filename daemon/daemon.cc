@@ -676,9 +676,10 @@ void Daemon::apply(ConversionOutcome outcome) {
       // The first conversion after a restart that gives the result the earlier run served keeps
       // its number; any other content that gets a VALIDATION gets a number of its own, accepted or
       // not, saved before anything publishes it (docs/lcm.md, "Revision numbers").
+      const std::string candidate_result = result_digest(candidate);
       const bool kept = !record->live && record->restored &&
                         record->restored->content_hash == candidate.content_hash &&
-                        record->restored->result_digest == result_digest(candidate);
+                        record->restored->result_digest == candidate_result;
       const std::optional<StoredRevision> previous = stored_live(*record);
       const std::int64_t number = kept ? record->restored->revision : ++record->numbered;
       if (!kept) {
@@ -686,7 +687,7 @@ void Daemon::apply(ConversionOutcome outcome) {
         const std::optional<StoredRevision> live =
             failed && !config_.publish_failed
                 ? previous
-                : StoredRevision{number, candidate.content_hash, result_digest(candidate), candidate.facts};
+                : StoredRevision{number, candidate.content_hash, candidate_result, candidate.facts};
         const std::string why = save_revisions(config_.output, *record, live);
         if (!why.empty()) {
           log_line("could not save the revision state of " + id + " (revision " + std::to_string(number) +
@@ -718,6 +719,7 @@ void Daemon::apply(ConversionOutcome outcome) {
       if (!kept) changes = diff_robots(previous ? previous->facts : RobotFacts{}, candidate.facts);
       record->revisions = number;
       record->restored.reset();
+      record->live_result = candidate_result;
       record->live = std::move(outcome.converted);
       record->live->validation = std::move(report);
       log_line("converted " + id + " revision " + std::to_string(record->revisions) + " (" +

@@ -120,7 +120,7 @@ std::optional<StoredRevision> stored_live(const ModelRecord& record) {
   StoredRevision stored;
   stored.revision = record.revisions;
   stored.content_hash = record.live->content_hash;
-  stored.result_digest = result_digest(*record.live);
+  stored.result_digest = record.live_result.empty() ? result_digest(*record.live) : record.live_result;
   stored.facts = record.live->facts;
   return stored;
 }

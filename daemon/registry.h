@@ -29,6 +29,7 @@ struct ModelRecord {
   // The live revision of an earlier run (the state file), until the first conversion: the same
   // result keeps its number, another one is diffed against it.
   std::optional<StoredRevision> restored;
+  std::string live_result;  // result_digest() of `live`, computed once.
 };
 
 // Model ids: the model's path below its watched folder ("arm3.gltf", "sub/robot.glb"), prefixed

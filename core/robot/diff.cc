@@ -91,21 +91,42 @@ void append_text(std::vector<std::uint8_t>& bytes, const std::string& text) {
   bytes.insert(bytes.end(), text.begin(), text.end());
 }
 
-// The digest of one mesh: every primitive's positions and triangles as the conversion reads them.
+// The digest of `count` elements of `size` bytes, `stride` bytes apart: read where they lie when
+// they are dense (what exporters write), so a large mesh is not copied to be hashed.
+std::string strided_digest(const std::uint8_t* base, std::size_t stride, std::size_t size, std::size_t count,
+                           const ContentDigest& digest) {
+  if (base == nullptr || count == 0) return digest({});
+  if (stride == size) return digest(std::span<const std::uint8_t>(base, size * count));
+  std::vector<std::uint8_t> dense;
+  dense.reserve(size * count);
+  for (std::size_t i = 0; i < count; ++i) dense.insert(dense.end(), base + i * stride, base + i * stride + size);
+  return digest(dense);
+}
+
+// The digest of one mesh: every primitive's positions and triangles as the mass computation reads
+// them (in place as stored, or as the copy it makes of strips, fans and sparse accessors).
 std::string mesh_digest(const GltfAsset& asset, std::size_t mesh, const ContentDigest& digest) {
   std::vector<std::uint8_t> bytes;
   Diagnostics ignored;  // The conversion reported these already.
   const Json& primitives = asset.document["meshes"][mesh]["primitives"];
   for (std::size_t p = 0; p < primitives.size(); ++p) {
-    const auto triangles = read_primitive_triangles(asset, mesh, p, ignored);
-    const std::uint64_t counts[2] = {triangles ? triangles->positions.size() : 0,
-                                     triangles ? triangles->triangles.size() : 0};
-    const auto* count_bytes = reinterpret_cast<const std::uint8_t*>(counts);
-    bytes.insert(bytes.end(), count_bytes, count_bytes + sizeof(counts));
-    if (!triangles) continue;
-    for (const Eigen::Vector3d& position : triangles->positions) append_doubles(bytes, position.data(), 3);
-    const auto* corners = reinterpret_cast<const std::uint8_t*>(triangles->triangles.data());
-    bytes.insert(bytes.end(), corners, corners + triangles->triangles.size() * sizeof(triangles->triangles[0]));
+    const auto triangles = read_primitive_in_place(asset, mesh, p, ignored);
+    if (!triangles) {
+      bytes.push_back(0);
+      continue;
+    }
+    const TriangleMeshView v = triangles->view();
+    const std::size_t position_size = 3 * (v.position_type == TriangleMeshView::Positions::kFloat32 ? 4 : 8);
+    static constexpr std::size_t kIndexSize[] = {0, 1, 2, 4};
+    const std::size_t index_size = kIndexSize[static_cast<int>(v.index_type)];
+    const std::uint64_t header[4] = {v.vertex_count, v.triangle_count, position_size, index_size};
+    const auto* header_bytes = reinterpret_cast<const std::uint8_t*>(header);
+    bytes.push_back(1);
+    bytes.insert(bytes.end(), header_bytes, header_bytes + sizeof(header));
+    append_text(bytes, strided_digest(v.positions, v.position_stride, position_size, v.vertex_count, digest));
+    if (index_size > 0) {
+      append_text(bytes, strided_digest(v.indices, v.index_stride, index_size, 3 * v.triangle_count, digest));
+    }
   }
   return digest(bytes);
 }

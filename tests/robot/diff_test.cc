@@ -79,7 +79,8 @@ struct Chain {
       views.push_back({{"buffer", 0}, {"byteOffset", 96 * m}, {"byteLength", 96}});
       accessors.push_back({{"bufferView", m}, {"componentType", 5126}, {"count", 8}, {"type", "VEC3"},
                            {"min", {lo[0], lo[1], lo[2]}}, {"max", {hi[0], hi[1], hi[2]}}});
-      meshes.push_back({{"primitives", {{{"attributes", {{"POSITION", m}}}, {"indices", positions.size()}}}}}});
+      const json primitive = {{"attributes", {{"POSITION", m}}}, {"indices", positions.size()}};
+      meshes.push_back({{"primitives", json::array({primitive})}});
     }
     views.push_back({{"buffer", 0}, {"byteOffset", 96 * positions.size()}, {"byteLength", 72}});
     accessors.push_back({{"bufferView", positions.size()}, {"componentType", 5123}, {"count", 36}, {"type", "SCALAR"}});

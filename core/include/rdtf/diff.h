@@ -68,7 +68,8 @@ RobotFacts robot_facts(const Robot& robot, const std::vector<std::string>& urdf_
 // A digest of each link's geometry (Robot::links order): for each solid of the link (its mesh
 // nodes, Link::meshes) the node's placement (for a node at or below the link node the local
 // transforms below the link node, which an edit upstream leaves alone; else its pose in the link
-// frame), the positions and triangles of every primitive of its mesh and, for a skinned mesh, the
+// frame), the positions and indices of every primitive of its mesh as the mass computation reads
+// them (in place as stored; strips, fans and sparse accessors as copied) and, for a skinned mesh, the
 // skin's inverse bind matrices. A skinned mesh split among several links counts whole for each of
 // them. A scale on the link node or above it is not in the digest; it shows in the inertial.
 // `digest` as in atomic_file.h.

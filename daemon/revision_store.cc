@@ -174,6 +174,9 @@ std::optional<ModelState> state_from_json(std::string_view text_in, std::string&
     return state;
   } catch (const Refused& refused) {
     why = refused.why;
+  } catch (const Json::parse_error& error) {
+    // Where, not what: the parser's message would quote the file's bytes into the log.
+    why = "not valid JSON (at byte " + std::to_string(error.byte) + ")";
   } catch (const std::exception& error) {
     why = std::string("not valid JSON: ") + error.what();
   }

@@ -274,7 +274,7 @@ TEST(Revisions, ATornStateFileIsRefused) {
   expect_refused_state([](const fs::path& state) {
     const std::string text = read(state);
     write_in_place(state, text.substr(0, text.size() / 2));
-  }, "not valid JSON: ");
+  }, "not valid JSON (at byte ");
 }
 
 TEST(Revisions, AHostileStateFileIsRefused) {

@@ -13,6 +13,7 @@
 
 #include "../core/gltf/confined_files.h"
 #include "rdtf/atomic_file.h"
+#include "rdtf/urdf_names.h"
 #include "rdtf/write.h"
 
 namespace rdtf::daemon {
@@ -329,6 +330,9 @@ ConversionOutcome run_conversion(const ConversionJob& job) {
     if (!write_outputs(job, *conversion, converted, outcome.diagnostics, outcome.retry)) return finish();
     converted.written = true;
   }
+  const UrdfNames names = urdf_names(conversion->robot);
+  converted.facts = robot_facts(conversion->robot, names.links, names.joints,
+                                link_geometry_digests(conversion->asset, conversion->robot, output_digest));
   converted.totals = robot_totals(conversion->robot);
   converted.robot = std::move(conversion->robot);
   outcome.converted = std::move(converted);

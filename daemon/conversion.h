@@ -15,6 +15,7 @@
 
 #include "rdtf/convert.h"
 #include "rdtf/diagnostics.h"
+#include "rdtf/diff.h"
 #include "rdtf/dynamics.h"
 #include "rdtf/urdf.h"
 #include "rdtf/robot.h"
@@ -86,6 +87,7 @@ struct ConvertedModel {
   bool written = false;
   std::filesystem::path urdf_path;  // Empty when no URDF was written.
   std::string urdf;
+  RobotFacts facts;  // What a DELTA compares (rdtf/diff.h), with the URDF names and geometry digests.
 };
 
 struct ConversionOutcome {

@@ -19,6 +19,7 @@
 
 #include <rdtf/status_t.hpp>
 
+#include "delta_messages.h"
 #include "messages.h"
 #include "rdtf/atomic_file.h"
 #include "rdtf/gltf.h"
@@ -435,7 +436,11 @@ void Daemon::note_change(const std::filesystem::path& path, bool still_open, boo
     }
   };
   if (is_model_file(path)) {
-    if (registry_.find(path) == nullptr) registry_.ensure(path, unique_model_id(path));
+    if (registry_.find(path) == nullptr) {
+      ModelRecord& record = registry_.ensure(path, unique_model_id(path));
+      const std::string refused = restore_revisions(config_.output, record);
+      if (!refused.empty()) log_line(refused);
+    }
     touch(path);
     return;
   }
@@ -668,8 +673,27 @@ void Daemon::apply(ConversionOutcome outcome) {
                  std::to_string(record->revisions));
         break;
       }
-      // Every content that gets a VALIDATION gets a number of its own, accepted or not.
-      const std::int64_t number = ++record->numbered;
+      // The first conversion after a restart that gives the result the earlier run served keeps
+      // its number; any other content that gets a VALIDATION gets a number of its own, accepted or
+      // not, saved before anything publishes it (docs/lcm.md, "Revision numbers").
+      const std::string candidate_result = result_digest(candidate);
+      const bool kept = !record->live && record->restored &&
+                        record->restored->content_hash == candidate.content_hash &&
+                        record->restored->result_digest == candidate_result;
+      const std::optional<StoredRevision> previous = stored_live(*record);
+      const std::int64_t number = kept ? record->restored->revision : ++record->numbered;
+      if (!kept) {
+        // The live revision after this one: this one, unless the check rejects it unpublished.
+        const std::optional<StoredRevision> live =
+            failed && !config_.publish_failed
+                ? previous
+                : StoredRevision{number, candidate.content_hash, candidate_result, candidate.facts};
+        const std::string why = save_revisions(config_.output, *record, live);
+        if (!why.empty()) {
+          log_line("could not save the revision state of " + id + " (revision " + std::to_string(number) +
+                   " may be numbered again after a restart): " + why);
+        }
+      }
       // Warnings of a conversion that succeeded: one log line each, and on LCM with the verdict
       // (with the infos, which every Blender export has and which would only crowd the log).
       for (const Diagnostic& d : outcome.diagnostics.all()) {
@@ -691,14 +715,18 @@ void Daemon::apply(ConversionOutcome outcome) {
         break;
       }
       ++counters_.conversions;
+      std::vector<ElementChange> changes;
+      if (!kept) changes = diff_robots(previous ? previous->facts : RobotFacts{}, candidate.facts);
       record->revisions = number;
+      record->restored.reset();
+      record->live_result = candidate_result;
       record->live = std::move(outcome.converted);
       record->live->validation = std::move(report);
       log_line("converted " + id + " revision " + std::to_string(record->revisions) + " (" +
                std::to_string(record->live->robot.links.size()) + " links, " +
                std::to_string(record->live->robot.joints.size()) + " joints" +
                (record->live->validation ? std::string(", dynamics ") + (failed ? "FAILED" : "passed") : "") +
-               ") in " + milliseconds(outcome.duration));
+               ") in " + milliseconds(outcome.duration) + (kept ? " (the result the earlier run served: its number kept)" : ""));
       if (simulation_) {
         if (failed) {
           // A revision that failed the check would blow up in ODE, and the previous one is no
@@ -711,6 +739,14 @@ void Daemon::apply(ConversionOutcome outcome) {
         }
       }
       publish_model(*record);
+      if (!kept) {
+        // Once, after the revision's description: what changed since the revision it replaces.
+        const DeltaHeader header{id, previous ? previous->revision : 0, previous ? previous->content_hash : "",
+                                 number, record->live->content_hash};
+        for (const auto& part : make_deltas(header, changes, now_utime(), config_.max_chunk_bytes)) {
+          publisher_->publish(channel(id, "DELTA"), part);
+        }
+      }
       break;
     }
     case ConversionOutcome::Kind::kUnchanged:

@@ -92,3 +92,48 @@ std::vector<std::filesystem::path> Registry::dependents(const std::filesystem::p
 }
 
 }  // namespace rdtf::daemon
+
+namespace rdtf::daemon {
+
+std::string restore_revisions(const std::filesystem::path& output_root, ModelRecord& record) {
+  ModelState state;
+  std::string why;
+  switch (RevisionStore::load(output_root, record.id, state, why)) {
+    case RevisionStore::LoadResult::kAbsent:
+      return "";
+    case RevisionStore::LoadResult::kRefused:
+      record.numbered = std::max(record.numbered, revision_floor_now());
+      return "revision state of " + record.id + " ignored: " + why + "; its revisions are numbered from " +
+             std::to_string(record.numbered + 1) + ", above any number an earlier run can have handed out";
+    case RevisionStore::LoadResult::kLoaded:
+      break;
+  }
+  record.numbered = std::max(record.numbered, state.numbered);
+  // Another file under the same id (ids that sanitise alike are numbered in the order they are
+  // found) keeps the id's numbers but not the other file's revision.
+  if (state.live && state.source == record.source.string()) record.restored = std::move(state.live);
+  return "";
+}
+
+std::optional<StoredRevision> stored_live(const ModelRecord& record) {
+  if (!record.live) return record.restored;
+  StoredRevision stored;
+  stored.revision = record.revisions;
+  stored.content_hash = record.live->content_hash;
+  stored.result_digest = record.live_result.empty() ? result_digest(*record.live) : record.live_result;
+  stored.facts = record.live->facts;
+  return stored;
+}
+
+std::string save_revisions(const std::filesystem::path& output_root, const ModelRecord& record,
+                           const std::optional<StoredRevision>& live) {
+  ModelState state;
+  state.model_id = record.id;
+  state.source = record.source.string();
+  state.numbered = record.numbered;
+  state.live = live;
+  std::string why;
+  return RevisionStore::save(output_root, state, why) ? "" : why;
+}
+
+}  // namespace rdtf::daemon

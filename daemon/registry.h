@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "conversion.h"
+#include "revision_store.h"
 
 namespace rdtf::daemon {
 
@@ -25,6 +26,10 @@ struct ModelRecord {
   std::vector<std::filesystem::path> dependencies;
   bool in_flight = false;                  // A worker is converting it.
   bool again = false;                      // It changed while in flight: convert once more.
+  // The live revision of an earlier run (the state file), until the first conversion: the same
+  // result keeps its number, another one is diffed against it.
+  std::optional<StoredRevision> restored;
+  std::string live_result;  // result_digest() of `live`, computed once.
 };
 
 // Model ids: the model's path below its watched folder ("arm3.gltf", "sub/robot.glb"), prefixed
@@ -53,5 +58,24 @@ class Registry {
 };
 
 bool is_model_file(const std::filesystem::path& path);
+
+}  // namespace rdtf::daemon
+
+namespace rdtf::daemon {
+
+// Lasting revision numbers (revision_store.h) for the records of the registry.
+// Seeds a record just made from its state file: the highest number handed out and the live
+// revision of the earlier run (ModelRecord::restored, when the model file is the same). A state
+// file that cannot be trusted is ignored, and the record numbers from revision_floor_now(), above
+// any number it can have handed out. Returns a line for the log when it was refused, else "".
+std::string restore_revisions(const std::filesystem::path& output_root, ModelRecord& record);
+
+// The revision a record serves in its stored form: the live one, else the one of the earlier run.
+std::optional<StoredRevision> stored_live(const ModelRecord& record);
+
+// Writes the record's state: its id, source and `numbered`, and `live` as the live revision. ""
+// or why it failed.
+std::string save_revisions(const std::filesystem::path& output_root, const ModelRecord& record,
+                           const std::optional<StoredRevision>& live);
 
 }  // namespace rdtf::daemon

@@ -6,6 +6,7 @@
 #include <rdtf/blob_chunk_t.hpp>
 #include <rdtf/blob_request_t.hpp>
 #include <rdtf/blob_unavailable_t.hpp>
+#include <rdtf/delta_t.hpp>
 #include <rdtf/description_chunk_t.hpp>
 #include <rdtf/description_t.hpp>
 #include <rdtf/inertia_table_t.hpp>
@@ -111,6 +112,19 @@ Json to_json(const rdtf::inertia_table_t& m) {
   return j;
 }
 
+Json to_json(const rdtf::delta_t& m) {
+  Json changes = Json::array();
+  for (const auto& c : m.changes) {
+    changes.push_back({{"element", c.element}, {"change", c.change}, {"name", c.name},
+                       {"urdf_name", c.urdf_name}, {"aspects", c.aspects}});
+  }
+  Json j = header("rdtf.delta_t", m.utime, m.model_id);
+  j.update({{"previous_revision", m.previous_revision}, {"previous_content_hash", m.previous_content_hash},
+            {"revision", m.revision}, {"content_hash", m.content_hash}, {"part", m.part},
+            {"num_parts", m.num_parts}, {"total_changes", m.total_changes}, {"changes", changes}});
+  return j;
+}
+
 Json to_json(const rdtf::model_error_t& m) {
   Json diagnostics = Json::array();
   for (const auto& d : m.diagnostics) diagnostics.push_back(to_json(d));
@@ -204,7 +218,8 @@ std::optional<nlohmann::ordered_json> message_to_json(const void* data, std::uin
       decoder<rdtf::link_state_t>(),
       decoder<rdtf::joint_command_t>(),  decoder<rdtf::validation_report_t>(),
       decoder<rdtf::manifest_t>(),       decoder<rdtf::blob_request_t>(),
-      decoder<rdtf::blob_chunk_t>(),     decoder<rdtf::blob_unavailable_t>()};
+      decoder<rdtf::blob_chunk_t>(),     decoder<rdtf::blob_unavailable_t>(),
+      decoder<rdtf::delta_t>()};
   if (size < 8) return std::nullopt;
   const auto* bytes = static_cast<const std::uint8_t*>(data);
   std::uint64_t hash = 0;

@@ -12,6 +12,7 @@
 #include <rdtf/blob_chunk_t.hpp>
 #include <rdtf/blob_request_t.hpp>
 #include <rdtf/blob_unavailable_t.hpp>
+#include <rdtf/delta_t.hpp>
 #include <rdtf/description_chunk_t.hpp>
 #include <rdtf/file_t.hpp>
 #include <rdtf/manifest_t.hpp>
@@ -51,6 +52,8 @@ TEST(MessageJson, EveryTypeTheSchemaCheckAcceptsHasADecoderAndNestedStructsAreNo
       {"blob_unavailable_t", encoded_empty<rdtf::blob_unavailable_t>},
       {"description_t", encoded_empty<rdtf::description_t>},
       {"description_chunk_t", encoded_empty<rdtf::description_chunk_t>},
+      {"delta_t", encoded_empty<rdtf::delta_t>},
+      {"delta_change_t", encoded_empty<rdtf::delta_change_t>},
       {"diagnostic_t", encoded_empty<rdtf::diagnostic_t>},
       {"file_t", encoded_empty<rdtf::file_t>},
       {"inertia_table_t", encoded_empty<rdtf::inertia_table_t>},
@@ -83,13 +86,14 @@ TEST(MessageJson, EveryTypeTheSchemaCheckAcceptsHasADecoderAndNestedStructsAreNo
       EXPECT_FALSE(json.has_value()) << name;
     }
   }
-  EXPECT_EQ(messages, 15u);
+  EXPECT_EQ(messages, 16u);
   // Empty arrays with constant inner dimensions (link_state_t's position[num_links][3]) pass.
   const auto links = encoded_empty<rdtf::link_state_t>();
   EXPECT_EQ(lcm_safe::check_known(links.data(), links.size()), "");
   EXPECT_FALSE(lcm_safe::is_message_type("diagnostic_t"));
   EXPECT_FALSE(lcm_safe::is_message_type("link_inertia_t"));
   EXPECT_FALSE(lcm_safe::is_message_type("file_t"));
+  EXPECT_FALSE(lcm_safe::is_message_type("delta_change_t"));
   EXPECT_FALSE(lcm_safe::is_message_type("no_such_t"));
 }
 

@@ -139,18 +139,19 @@ TEST(DaemonFilesystem, AWatchedFolderDeletedAndMadeAgainIsWatchedAgain) {
   EXPECT_NE(diagnostics_text(error).find("missing"), std::string::npos) << diagnostics_text(error);
   EXPECT_EQ(diagnostics_text(error).find("inotify watches exhausted"), std::string::npos) << diagnostics_text(error);
 
-  // Made again, with the models back: published again (new models: revision 1).
+  // Made again, with the models back: published again, numbered on from their revision state
+  // (docs/lcm.md): b, the same content, keeps revision 1; a, another content, gets 2.
   fs::create_directories(s.watch / "sub");
   const auto a2 = box_model("a2_base", 0.12);
   write_model(s.watch, "a.gltf", a2);
   write_model(s.watch / "sub", "b.gltf", b);
-  ASSERT_TRUE(s.wait_revision("a.gltf", 1, content_hash(a2), 10s));
+  ASSERT_TRUE(s.wait_revision("a.gltf", 2, content_hash(a2), 10s));
   ASSERT_TRUE(s.wait_revision("sub/b.gltf", 1, content_hash(b), 10s));
   ASSERT_TRUE(s.daemon->wait_log("every folder is watched again"));
   // Watched, not just found: the next save is seen.
   const auto a3 = box_model("a3_base", 0.14);
   write_model(s.watch, "a.gltf", a3);
-  ASSERT_TRUE(s.wait_revision("a.gltf", 2, content_hash(a3)));
+  ASSERT_TRUE(s.wait_revision("a.gltf", 3, content_hash(a3)));
   EXPECT_EQ(decoded<rdtf::model_error_t>(s.messages(), "ERROR", "").size(), 1u);
   EXPECT_TRUE(s.daemon->running());
 }

@@ -9,6 +9,7 @@
 #include <set>
 #include <sstream>
 
+#include <rdtf/delta_t.hpp>
 #include <rdtf/joint_state_t.hpp>
 #include <rdtf/link_state_t.hpp>
 
@@ -77,6 +78,12 @@ public class DecodeLog {
       case "VALIDATION": {
         rdtf.validation_report_t m = new rdtf.validation_report_t(d);
         return row(m.utime, m.model_id, m.revision, m.content_hash, m.passed + " " + m.steps);
+      }
+      case "DELTA": {
+        rdtf.delta_t m = new rdtf.delta_t(d);
+        return row(m.utime, m.model_id, m.revision, m.content_hash,
+                   m.previous_revision + " " + m.total_changes + " " +
+                   (m.num_changes == 0 ? "-" : m.changes[0].name + ":" + m.changes[0].change));
       }
       case "STATUS": {
         rdtf.status_t m = new rdtf.status_t(d);
@@ -160,6 +167,12 @@ std::optional<std::string> expected_line(const Message& m) {
     const auto d = m.as<rdtf::validation_report_t>();
     return head(m, d.utime, d.model_id, d.revision, d.content_hash) + "\t" +
            join({d.passed ? "true" : "false", std::to_string(d.steps)});
+  }
+  if (k == "DELTA") {
+    const auto d = m.as<rdtf::delta_t>();
+    return head(m, d.utime, d.model_id, d.revision, d.content_hash) + "\t" +
+           join({std::to_string(d.previous_revision), std::to_string(d.total_changes),
+                 d.changes.empty() ? "-" : d.changes[0].name + ":" + d.changes[0].change});
   }
   if (k == "STATUS") {
     const auto d = m.as<rdtf::status_t>();
@@ -283,8 +296,8 @@ TEST(LcmSpyJar, DecodesEveryChannelOfARecordedSession) {
   for (const auto& m : all) {
     if (m.channel.rfind("RDTF/", 0) == 0 && m.kind() != "REQUEST") sent_kinds.insert(m.kind());
   }
-  const std::set<std::string> expected_kinds = {"DESCRIPTION", "DESCRIPTION_CHUNK", "INERTIA", "VALIDATION",
-                                                "STATUS",      "JOINT_STATE",       "LINK_STATE"};
+  const std::set<std::string> expected_kinds = {"DESCRIPTION", "DESCRIPTION_CHUNK", "INERTIA",   "VALIDATION",
+                                                "DELTA",       "STATUS",            "JOINT_STATE", "LINK_STATE"};
   EXPECT_EQ(sent_kinds, expected_kinds);
   for (const auto& kind : expected_kinds) EXPECT_GT(decoded_kinds[kind], 0) << kind << " not in the log";
   EXPECT_EQ(decoded_models, (std::set<std::string>{"arm3.gltf r1", "parts.gltf r1"}));

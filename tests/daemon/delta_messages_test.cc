@@ -1,0 +1,56 @@
+// make_deltas: a delta too long for one datagram goes in parts, each within the limit, together
+// every change once and in order.
+#include <gtest/gtest.h>
+
+#include "delta_messages.h"
+
+namespace rdtf::daemon {
+namespace {
+
+TEST(DeltaMessages, ManyChangesGoInPartsEachWithinTheLimit) {
+  std::vector<ElementChange> changes;
+  for (int i = 0; i < 500; ++i) {
+    changes.push_back({i % 2 ? ElementChange::Element::kJoint : ElementChange::Element::kLink,
+                       ElementChange::Kind::kChanged, "element_" + std::to_string(i), "urdf_" + std::to_string(i),
+                       kAspectOrigin | kAspectLimits});
+  }
+  const DeltaHeader header{"arm.gltf", 3, "aaa", 5, "bbb"};
+  constexpr std::size_t kLimit = 2000;
+  const auto parts = make_deltas(header, changes, 42, kLimit);
+  ASSERT_GT(parts.size(), 1u);
+  std::size_t next = 0;
+  for (std::size_t p = 0; p < parts.size(); ++p) {
+    const auto& part = parts[p];
+    EXPECT_LE(static_cast<std::size_t>(part.getEncodedSize()), kLimit);
+    EXPECT_EQ(part.part, static_cast<std::int32_t>(p));
+    EXPECT_EQ(part.num_parts, static_cast<std::int32_t>(parts.size()));
+    EXPECT_EQ(part.total_changes, 500);
+    EXPECT_EQ(part.num_changes, static_cast<std::int32_t>(part.changes.size()));
+    EXPECT_EQ(part.previous_revision, 3);
+    EXPECT_EQ(part.previous_content_hash, "aaa");
+    EXPECT_EQ(part.revision, 5);
+    EXPECT_EQ(part.content_hash, "bbb");
+    EXPECT_EQ(part.utime, 42);
+    for (const auto& c : part.changes) {
+      EXPECT_EQ(c.name, "element_" + std::to_string(next));
+      EXPECT_EQ(c.urdf_name, "urdf_" + std::to_string(next));
+      EXPECT_EQ(c.element, next % 2 ? "joint" : "link");
+      EXPECT_EQ(c.change, "changed");
+      EXPECT_EQ(c.aspects, (std::vector<std::string>{"origin", "limits"}));
+      EXPECT_EQ(c.num_aspects, 2);
+      ++next;
+    }
+  }
+  EXPECT_EQ(next, 500u);
+}
+
+TEST(DeltaMessages, NoChangeIsOneMessageWithNone) {
+  const auto parts = make_deltas(DeltaHeader{"a.gltf", 1, "x", 2, "y"}, {}, 1, 60000);
+  ASSERT_EQ(parts.size(), 1u);
+  EXPECT_EQ(parts[0].num_parts, 1);
+  EXPECT_EQ(parts[0].total_changes, 0);
+  EXPECT_TRUE(parts[0].changes.empty());
+}
+
+}  // namespace
+}  // namespace rdtf::daemon

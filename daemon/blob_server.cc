@@ -223,22 +223,29 @@ void BlobServer::note(const std::string& line) {
   notes_unlogged_ = 0;
 }
 
+namespace {
+
+// A token bucket: true (and one token less) when a token is there.
+template <typename Bucket, typename TimePoint>
+bool take(Bucket& bucket, TimePoint now, double rate, double burst) {
+  if (bucket.last == TimePoint{}) {
+    bucket.tokens = burst;
+  } else {
+    bucket.tokens = std::min(burst, bucket.tokens + rate * std::chrono::duration<double>(now - bucket.last).count());
+  }
+  bucket.last = now;
+  if (bucket.tokens < 1) return false;
+  bucket.tokens -= 1;
+  return true;
+}
+
+}  // namespace
+
 bool BlobServer::admit(const std::string& requester, Clock::time_point now) {
-  auto take = [now](Bucket& bucket, double rate, double burst) {
-    if (bucket.last == Clock::time_point{}) {
-      bucket.tokens = burst;
-    } else {
-      bucket.tokens = std::min(burst, bucket.tokens + rate * std::chrono::duration<double>(now - bucket.last).count());
-    }
-    bucket.last = now;
-    if (bucket.tokens < 1) return false;
-    bucket.tokens -= 1;
-    return true;
-  };
   // Made-up names cost a map entry each: past 1024 everyone starts afresh (the global bucket holds).
   if (buckets_.size() >= 1024 && buckets_.count(requester) == 0) buckets_.clear();
-  return take(all_, kAllRequestsPerSecond, kAllRequestBurst) &&
-         take(buckets_[requester], kRequestsPerSecond, kRequestBurst);
+  return take(all_, now, kAllRequestsPerSecond, kAllRequestBurst) &&
+         take(buckets_[requester], now, kRequestsPerSecond, kRequestBurst);
 }
 
 std::string BlobServer::request(const rdtf::blob_request_t& request, Clock::time_point now, Publisher& out,
@@ -248,6 +255,10 @@ std::string BlobServer::request(const rdtf::blob_request_t& request, Clock::time
     return "blob request from '" + cut(request.requester) + "': " + why;
   };
   if (request.num_ranges <= 0) return drop("no blobs asked for");
+  const auto ranges = static_cast<std::size_t>(request.num_ranges);
+  if (request.sha256.size() != ranges || request.first_chunk.size() != ranges || request.num_chunks.size() != ranges) {
+    return drop("num_ranges does not match its arrays");  // Only a message not from the decoder.
+  }
   if (request.num_ranges > kMaxRanges) {
     return drop(std::to_string(request.num_ranges) + " ranges, over the limit of " + std::to_string(kMaxRanges) +
                 " per request");
@@ -273,11 +284,23 @@ std::string BlobServer::request(const rdtf::blob_request_t& request, Clock::time
   ++counters_.requests;
   const std::string requester = request.requester.substr(0, 80);
   std::vector<std::pair<std::string, std::string>> refused;
-  for (std::size_t i = 0; i < static_cast<std::size_t>(request.num_ranges); ++i) {
+  std::size_t unanswered = 0;
+  for (std::size_t i = 0; i < ranges; ++i) {
     const std::int32_t count = request.num_chunks[i];
     const std::string why = add(request.sha256[i], request.first_chunk[i],
                                 count < 0 ? std::numeric_limits<std::int64_t>::max() : count, requester, out.departed());
-    if (!why.empty()) refused.emplace_back(request.sha256[i], why);
+    if (why.empty()) continue;
+    if (take(answers_, now, kUnavailablePerSecond, kUnavailableBurst)) {
+      refused.emplace_back(request.sha256[i], why);
+    } else {
+      ++unanswered;
+    }
+  }
+  if (unanswered > 0) {
+    ++counters_.dropped;
+    note("blob request from '" + cut(requester) + "': " + std::to_string(unanswered) +
+         " blobs it asked for are not served and go unanswered: over " +
+         std::to_string(static_cast<int>(kUnavailablePerSecond)) + " BLOB_UNAVAILABLE answers a second");
   }
   if (!refused.empty()) {
     unavailable(requester, refused, out, prefix);

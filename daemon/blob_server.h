@@ -81,6 +81,11 @@ class BlobServer {
   static constexpr double kRequestBurst = 100;
   static constexpr double kAllRequestsPerSecond = 500;        // ... and over all requesters.
   static constexpr double kAllRequestBurst = 1000;
+  // BLOB_UNAVAILABLE entries a second (a request of 256 unknown hashes is answered with 256): so
+  // that a flood of such requests cannot fill the send queue with answers. Beyond, the rest of a
+  // request goes unanswered, counted as dropped and logged.
+  static constexpr double kUnavailablePerSecond = 2000;
+  static constexpr double kUnavailableBurst = 4000;
 
   explicit BlobServer(Log log);
   ~BlobServer();
@@ -141,6 +146,7 @@ class BlobServer {
   std::map<std::string, std::unique_ptr<FileStamp>> verified_;  // Files whose bytes matched.
   std::map<std::string, Bucket> buckets_;             // Per requester.
   Bucket all_;
+  Bucket answers_;
   BlobCounters counters_;
   Clock::time_point next_note_{};
   std::uint64_t notes_unlogged_ = 0;

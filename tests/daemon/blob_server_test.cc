@@ -270,6 +270,30 @@ TEST(BlobServer, RequestsBeyondTheRateOfOneRequesterAreDropped) {
   EXPECT_EQ(taken, 50);
 }
 
+TEST(BlobServer, UnavailableAnswersAreBoundedPerSecond) {
+  Fixture f;
+  f.model({{"a.bin", "a"}});
+  // 20 requests of 256 unknown hashes each: 5,120 answers asked for, 4,000 at once allowed.
+  for (int r = 0; r < 20; ++r) {
+    std::vector<std::tuple<std::string, std::int32_t, std::int32_t>> ranges;
+    for (int i = 0; i < 256; ++i) ranges.emplace_back(sha256(std::to_string(r * 1000 + i)), 0, -1);
+    EXPECT_EQ(f.ask(ranges), "");
+  }
+  f.run();
+  std::size_t answered = 0;
+  for (const auto& m : f.sent.unavailable) {
+    EXPECT_LE(m.getEncodedSize(), 1024);
+    answered += m.sha256.size();
+  }
+  EXPECT_EQ(answered, static_cast<std::size_t>(BlobServer::kUnavailableBurst));
+  EXPECT_EQ(f.server.counters().unavailable, static_cast<std::int64_t>(BlobServer::kUnavailableBurst));
+  EXPECT_EQ(f.server.counters().dropped, 5);  // The requests that had answers left out.
+  f.now += 1s;  // 2,000 more.
+  EXPECT_EQ(f.ask({{sha256("later"), 0, -1}}), "");
+  f.run();
+  EXPECT_EQ(f.reason(sha256("later")), "not a file of any live revision");
+}
+
 TEST(BlobServer, UnknownChangedAndLinkedFilesAreUnavailable) {
   Fixture f;
   const std::string good = random_bytes(3000, 7);

@@ -21,6 +21,8 @@
 #include "rdtf/robot.h"
 #include "rdtf/summary.h"
 
+#include "blob_manifest.h"
+
 namespace rdtf::daemon {
 
 // The bytes conversions may read at once, across every worker: a conversion holds what it will
@@ -88,6 +90,8 @@ struct ConvertedModel {
   std::filesystem::path urdf_path;  // Empty when no URDF was written.
   std::string urdf;
   RobotFacts facts;  // What a DELTA compares (rdtf/diff.h), with the URDF names and geometry digests.
+  // Every file the revision's output folder holds (the manifest); empty when not written.
+  std::vector<OutputFile> files;
 };
 
 struct ConversionOutcome {

@@ -541,12 +541,12 @@ inline std::string describe(const Message& m) {
   return head;
 }
 
-// DELTAs are left out: one follows each new revision's INERTIA (never a republication), and
-// revisions_itest.cc checks them.
+// Left out: the MANIFEST that precedes every DESCRIPTION (blobs_itest.cc checks it and its place)
+// and the DELTA that follows each new revision's INERTIA, never a republication (revisions_itest.cc).
 inline std::vector<std::string> model_events(const std::vector<Message>& all, const std::string& model_id = "*") {
   std::vector<std::string> out;
   for (const auto& m : all) {
-    if (m.model_id().empty() || m.kind() == "DELTA") continue;
+    if (m.model_id().empty() || m.kind() == "MANIFEST" || m.kind() == "DELTA") continue;
     if (model_id != "*" && m.model_id() != model_id) continue;
     out.push_back(describe(m));
   }

@@ -12,6 +12,7 @@
 #include <rdtf/delta_t.hpp>
 #include <rdtf/joint_state_t.hpp>
 #include <rdtf/link_state_t.hpp>
+#include <rdtf/manifest_t.hpp>
 
 #include "daemon/harness.h"
 
@@ -69,6 +70,11 @@ public class DecodeLog {
       case "DESCRIPTION_CHUNK": {
         rdtf.description_chunk_t m = new rdtf.description_chunk_t(d);
         return row(m.utime, m.model_id, m.revision, m.content_hash, m.index + "/" + m.count + " " + m.size);
+      }
+      case "MANIFEST": {
+        rdtf.manifest_t m = new rdtf.manifest_t(d);
+        return row(m.utime, m.model_id, m.revision, m.content_hash,
+                   m.part + "/" + m.num_parts + " " + m.num_files + " " + m.files[0].path + " " + m.files[0].sha256);
       }
       case "INERTIA": {
         rdtf.inertia_table_t m = new rdtf.inertia_table_t(d);
@@ -157,6 +163,12 @@ std::optional<std::string> expected_line(const Message& m) {
     const auto d = m.as<rdtf::description_chunk_t>();
     return head(m, d.utime, d.model_id, d.revision, d.content_hash) + "\t" +
            join({std::to_string(d.index) + "/" + std::to_string(d.count), std::to_string(d.size)});
+  }
+  if (k == "MANIFEST") {
+    const auto d = m.as<rdtf::manifest_t>();
+    return head(m, d.utime, d.model_id, d.revision, d.content_hash) + "\t" +
+           join({std::to_string(d.part) + "/" + std::to_string(d.num_parts), std::to_string(d.num_files),
+                 d.files.at(0).path, d.files.at(0).sha256});
   }
   if (k == "INERTIA") {
     const auto d = m.as<rdtf::inertia_table_t>();
@@ -296,8 +308,8 @@ TEST(LcmSpyJar, DecodesEveryChannelOfARecordedSession) {
   for (const auto& m : all) {
     if (m.channel.rfind("RDTF/", 0) == 0 && m.kind() != "REQUEST") sent_kinds.insert(m.kind());
   }
-  const std::set<std::string> expected_kinds = {"DESCRIPTION", "DESCRIPTION_CHUNK", "INERTIA",   "VALIDATION",
-                                                "DELTA",       "STATUS",            "JOINT_STATE", "LINK_STATE"};
+  const std::set<std::string> expected_kinds = {"DESCRIPTION", "DESCRIPTION_CHUNK", "INERTIA",    "VALIDATION", "DELTA",
+                                                "STATUS",      "JOINT_STATE",       "LINK_STATE", "MANIFEST"};
   EXPECT_EQ(sent_kinds, expected_kinds);
   for (const auto& kind : expected_kinds) EXPECT_GT(decoded_kinds[kind], 0) << kind << " not in the log";
   EXPECT_EQ(decoded_models, (std::set<std::string>{"arm3.gltf r1", "parts.gltf r1"}));

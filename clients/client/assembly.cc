@@ -97,8 +97,6 @@ std::string RevisionParts::add_description(const rdtf::description_t& descriptio
     return "differs from the description already held for the same revision and content hash";
   }
   description_ = description;
-  // The INERTIA parts follow each DESCRIPTION: a new publication starts the table again.
-  inertia_.reset();
   return "";
 }
 
@@ -119,7 +117,10 @@ std::string RevisionParts::add_urdf_chunk(const rdtf::description_chunk_t& chunk
 
 std::string RevisionParts::add_inertia(const rdtf::inertia_table_t& table, const Limits& limits) {
   const std::int32_t expected = description_ ? description_->num_links : limits.max_links;
-  if (!inertia_) {
+  // The parts of one publication share its utime and come in order (one sender, one socket);
+  // a part of another publication starts the table again, so that parts lost from one
+  // publication are never filled in by another's in the wrong order.
+  if (!inertia_ || inertia_->utime != table.utime) {
     inertia_ = table;
     inertia_->links.clear();
     inertia_->num_links = 0;

@@ -155,6 +155,7 @@ struct Client::State {
   }
 
   void request(const std::string& model_id) {
+    if (!options.send_requests) return;
     rdtf::request_t r;
     r.utime = now_utime();
     r.model_id = model_id;

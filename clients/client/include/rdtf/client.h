@@ -81,6 +81,7 @@ struct Options {
   std::string pattern;          // ... an LCM regular expression of model ids; both empty: all models
   Blobs blobs = Blobs::kNone;
   bool states = true;           // deliver JOINT_STATE and LINK_STATE
+  bool send_requests = true;    // false: never send request_t (wait for rdtfd's republications)
   std::string requester;        // names this client in requests; default "rdtf_client <host> <pid>"
   Limits limits;
   // Re-requests: the first after `retry_initial` without progress, doubled up to `retry_max`.

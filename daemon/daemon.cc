@@ -804,6 +804,11 @@ void Daemon::publish_status() {
   status.live_real_time_factor = 0;  // lcm-gen leaves fields uninitialised.
   status.simulations_behind = 0;
   status.simulations_failed = 0;
+  status.blob_requests = 0;
+  status.blob_chunks_sent = 0;
+  status.blob_bytes_sent = 0;
+  status.blob_unavailable = 0;
+  status.blob_requests_dropped = 0;
   if (simulation_) {
     const LiveTiming timing = simulation_->timing();
     status.live_real_time_factor = timing.real_time_factor;

@@ -141,7 +141,9 @@ Json to_json(const rdtf::status_t& m) {
           {"coalesced_requests", m.coalesced_requests}, {"send_queue_bytes", m.send_queue_bytes},
           {"send_dropped", m.send_dropped}, {"live_real_time_factor", m.live_real_time_factor},
           {"simulations_behind", m.simulations_behind}, {"simulations_failed", m.simulations_failed},
-          {"model_ids", m.model_ids}};
+          {"blob_requests", m.blob_requests}, {"blob_chunks_sent", m.blob_chunks_sent},
+          {"blob_bytes_sent", m.blob_bytes_sent}, {"blob_unavailable", m.blob_unavailable},
+          {"blob_requests_dropped", m.blob_requests_dropped}, {"model_ids", m.model_ids}};
 }
 
 Json to_json(const rdtf::joint_state_t& m) {

@@ -39,6 +39,20 @@ void BusInput::command_datagram(const std::string& channel, const void* data, st
       });
 }
 
+void BusInput::blob_request_datagram(const std::string& channel, const void* data, std::size_t size) {
+  lcm_safe::guarded(
+      drops_, channel,
+      [&] {
+        auto request = decode<rdtf::blob_request_t>(channel, data, size);
+        if (!request) ++blob_requests_undecodable_;
+        if (!request || !handlers_.blob_request) return;
+        if (const std::string why = handlers_.blob_request(*request); !why.empty()) drop(channel, why);
+      },
+      [&](const std::string& line) {
+        if (handlers_.log) handlers_.log(line);
+      });
+}
+
 void BusInput::take_command(const std::string& channel, const void* data, std::size_t size) {
   auto command = decode<rdtf::joint_command_t>(channel, data, size);
   if (!command) return;

@@ -1,5 +1,5 @@
 // What rdtfd takes from the bus (LCM has no authentication: anyone on the network may send it):
-// requests and joint commands. Each datagram is checked against its type's schema before it is
+// requests, blob requests and joint commands. Each datagram is checked against its type's schema before it is
 // decoded (lcmtypes/safe_decode.h); one that does not fit is dropped, counted and logged at most
 // once a second. Requests for the same model are answered at most once per period.
 #pragma once
@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include <rdtf/blob_request_t.hpp>
 #include <rdtf/joint_command_t.hpp>
 #include <rdtf/request_t.hpp>
 
@@ -26,6 +27,8 @@ class BusInput {
     std::function<void(const rdtf::request_t&)> request;
     // Returns "" when the command was taken, else why it was dropped (counted and logged).
     std::function<std::string(const rdtf::joint_command_t&)> command;
+    // As `command`: "" when the blob request was taken, else why it was dropped.
+    std::function<std::string(const rdtf::blob_request_t&)> blob_request;
     std::function<void(const std::string&)> log;
   };
   explicit BusInput(Handlers handlers) : handlers_(std::move(handlers)) {}
@@ -34,8 +37,11 @@ class BusInput {
   // throws: an exception from a handler is counted and logged as a drop (lcm_safe::guarded).
   void request_datagram(const std::string& channel, const void* data, std::size_t size);
   void command_datagram(const std::string& channel, const void* data, std::size_t size);
+  void blob_request_datagram(const std::string& channel, const void* data, std::size_t size);
 
   std::uint64_t dropped() const { return drops_.total(); }
+  // Blob requests that did not decode (in dropped() too).
+  std::uint64_t blob_requests_undecodable() const { return blob_requests_undecodable_; }
 
   // Every datagram rdtfd subscribes to fits one UDP datagram: a larger message (LCM reassembles
   // up to 256 MiB from fragments) is dropped before it is decoded.
@@ -49,6 +55,7 @@ class BusInput {
 
   Handlers handlers_;
   lcm_safe::DropCounter drops_;
+  std::uint64_t blob_requests_undecodable_ = 0;
 };
 
 // Answers repeated requests at most once per period and model ("" for all): the first request of

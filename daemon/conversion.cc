@@ -153,8 +153,10 @@ bool write_outputs(const ConversionJob& job, const Conversion& conversion, Conve
   const std::filesystem::path name = job.source.stem().string() + ".rdtf.gltf";
   converted.output_path = job.output_dir / name;
   Diagnostics write_diag(converted.output_path.string());
+  // Every content-addressed file's hash, taken from the bytes as they are written (the manifest).
+  DigestLog written;
   WriteOptions write_options;
-  write_options.content_digest = output_digest;
+  write_options.content_digest = written.digest();
   if (!write_rdtf(conversion.asset, stage->folder() / name, write_options, write_diag, &converted.rdtf_json)) {
     diagnostics.append(write_diag);
     if (has_code(write_diag, "WRITE_FAILED")) write_failed(job.output_dir, diagnostics, retry);
@@ -166,7 +168,7 @@ bool write_outputs(const ConversionJob& job, const Conversion& conversion, Conve
     // URDF is a second output: a model URDF cannot express (a ball joint) still converts.
     Diagnostics urdf_diag(converted.output_path.string());
     UrdfOptions urdf_options = *job.urdf;
-    urdf_options.mesh_digest = output_digest;
+    urdf_options.mesh_digest = written.digest();
     if (write_urdf(conversion, stage->folder() / "urdf", urdf_options, urdf_diag, &converted.urdf)) {
       converted.urdf_path = job.output_dir / "urdf" / "robot.urdf";
       primaries.emplace_back("urdf/robot.urdf");
@@ -195,6 +197,12 @@ bool write_outputs(const ConversionJob& job, const Conversion& conversion, Conve
   }
   remove_unreferenced(job.output_dir, keep_gltf);
   if (job.urdf) remove_unreferenced(job.output_dir / "urdf" / "meshes", keep_meshes);
+  std::string manifest_why;
+  converted.files = output_files(name.string(), converted.rdtf_json, converted.urdf, written, manifest_why);
+  if (!manifest_why.empty()) {
+    diagnostics.warning("MANIFEST_INCOMPLETE", "", "no manifest for this revision, so its files are not served "
+                        "as blobs: " + manifest_why);
+  }
   return true;
 }
 

@@ -20,6 +20,8 @@
 #include "rdtf/robot.h"
 #include "rdtf/summary.h"
 
+#include "blob_manifest.h"
+
 namespace rdtf::daemon {
 
 // The bytes conversions may read at once, across every worker: a conversion holds what it will
@@ -86,6 +88,8 @@ struct ConvertedModel {
   bool written = false;
   std::filesystem::path urdf_path;  // Empty when no URDF was written.
   std::string urdf;
+  // Every file the revision's output folder holds (the manifest); empty when not written.
+  std::vector<OutputFile> files;
 };
 
 struct ConversionOutcome {

@@ -49,6 +49,8 @@ constexpr std::chrono::milliseconds kRequestAnswerPeriod{1000};
 // holds back requests, commands and heartbeats: this many file events are handled and finished
 // conversions applied per turn (reading the events is cheap; handling them is not).
 constexpr std::size_t kOutcomesPerTurn = 64;
+// LCM datagrams handled per turn (each is cheap: a request is answered by queueing messages).
+constexpr std::size_t kDatagramsPerTurn = 256;
 // File events handled per turn (a new folder of 20,000 files is listed at once: 20,000 events).
 constexpr std::size_t kFileEventsPerTurn = 2048;
 
@@ -122,7 +124,7 @@ auto simulation_settings(const DaemonConfig& c) {
 bool same_result(const ConvertedModel& live, const ConvertedModel& candidate) {
   return live.content_hash == candidate.content_hash && live.written == candidate.written &&
          live.output_path == candidate.output_path && live.rdtf_json == candidate.rdtf_json &&
-         live.urdf_path == candidate.urdf_path && live.urdf == candidate.urdf &&
+         live.urdf_path == candidate.urdf_path && live.urdf == candidate.urdf && live.files == candidate.files &&
          live.validation.has_value() == candidate.validation.has_value() &&
          (!live.validation || live.validation->passed == candidate.validation->passed);
 }
@@ -197,7 +199,11 @@ Daemon::Daemon(DaemonConfig config, ConfigLoader reload)
                                 // Without live simulations (--no-simulate) commands go unheard.
                                 return simulation_ ? simulation_->command(command) : std::string();
                               },
+                              [this](const rdtf::blob_request_t& request) {
+                                return blobs_.request(request, Clock::now(), *publisher_, config_.channel_prefix);
+                              },
                               [](const std::string& line) { log_line(line); }}),
+      blobs_([](const std::string& line) { log_line(line); }),
       request_throttle_(kRequestAnswerPeriod),
       read_budget_(std::make_shared<ReadBudget>(config_.max_read_bytes_in_flight)) {}
 
@@ -221,8 +227,10 @@ bool Daemon::connect_lcm(std::string& error) {
   }
   lcm->subscribe(config_.channel_prefix + "/REQUEST", &Daemon::on_request_datagram, this);
   lcm->subscribe(config_.channel_prefix + "/.*/JOINT_COMMAND", &Daemon::on_command_datagram, this);
+  lcm->subscribe(config_.channel_prefix + "/BLOB_REQUEST", &Daemon::on_blob_request_datagram, this);
   publisher_ = std::make_unique<Publisher>(*lcm, config_.chunk_rate_bytes_per_s, kBurstReceiveBufferBytes);
   publisher_->on_event([this](const PublisherEvent& event) { on_publisher_event(event); });
+  blobs_.publisher_replaced();
   lcm_ = std::move(lcm);
   return true;
 }
@@ -233,6 +241,7 @@ bool Daemon::start(std::string& error) {
     return false;
   }
   if (!connect_lcm(error)) return false;
+  blobs_.set_max_message_bytes(config_.max_chunk_bytes);
   sigset_t signals;
   sigemptyset(&signals);
   for (int s : {SIGTERM, SIGINT, SIGHUP}) sigaddset(&signals, s);
@@ -477,6 +486,7 @@ void Daemon::drop_model(const std::filesystem::path& source, std::chrono::micros
   if (record == nullptr) return;
   if (record->live) publisher_->publish(channel(record->id, "REMOVED"), make_model_removed(*record));
   if (simulation_) simulation_->remove(record->id);
+  blobs_.remove_model(record->id);
   log_line("removed " + record->id + " in " +
            milliseconds(checked + std::chrono::duration_cast<std::chrono::microseconds>(Clock::now() - start)) +
            (record->live ? " (revision " + std::to_string(record->revisions) + " was live)" : ""));
@@ -694,6 +704,8 @@ void Daemon::apply(ConversionOutcome outcome) {
       record->revisions = number;
       record->live = std::move(outcome.converted);
       record->live->validation = std::move(report);
+      // From now on the previous revision's files are no longer served (docs/lcm.md, "Files and blobs").
+      blobs_.set_model(id, config_.output / id, record->live->files);
       log_line("converted " + id + " revision " + std::to_string(record->revisions) + " (" +
                std::to_string(record->live->robot.links.size()) + " links, " +
                std::to_string(record->live->robot.joints.size()) + " joints" +
@@ -761,6 +773,13 @@ std::size_t Daemon::publish_model(const ModelRecord& record) {
                         make_validation_report(record.id, record.revisions, record.live->content_hash,
                                                *record.live->validation, config_.max_chunk_bytes));
   }
+  // The manifest before the description: a subscriber that has the description knows what to fetch.
+  if (!record.live->files.empty()) {
+    for (const auto& part : make_manifests(record.id, record.revisions, record.live->content_hash, record.live->files,
+                                           config_.max_chunk_bytes)) {
+      publisher_->publish(channel(record.id, "MANIFEST"), part);
+    }
+  }
   const auto messages = make_description(record, config_.max_chunk_bytes);
   for (const auto& chunk : messages.json_chunks) publisher_->publish(channel(record.id, "DESCRIPTION_CHUNK"), chunk);
   for (const auto& chunk : messages.urdf_chunks) publisher_->publish(channel(record.id, "URDF_CHUNK"), chunk);
@@ -804,11 +823,12 @@ void Daemon::publish_status() {
   status.live_real_time_factor = 0;  // lcm-gen leaves fields uninitialised.
   status.simulations_behind = 0;
   status.simulations_failed = 0;
-  status.blob_requests = 0;
-  status.blob_chunks_sent = 0;
-  status.blob_bytes_sent = 0;
-  status.blob_unavailable = 0;
-  status.blob_requests_dropped = 0;
+  const BlobCounters& blobs = blobs_.counters();
+  status.blob_requests = blobs.requests;
+  status.blob_chunks_sent = blobs.chunks_sent;
+  status.blob_bytes_sent = blobs.bytes_sent;
+  status.blob_unavailable = blobs.unavailable;
+  status.blob_requests_dropped = blobs.dropped + static_cast<std::int64_t>(bus_.blob_requests_undecodable());
   if (simulation_) {
     const LiveTiming timing = simulation_->timing();
     status.live_real_time_factor = timing.real_time_factor;
@@ -832,6 +852,14 @@ void Daemon::on_request_datagram(const lcm::ReceiveBuffer* buffer, const std::st
 void Daemon::on_command_datagram(const lcm::ReceiveBuffer* buffer, const std::string& channel) noexcept {
   try {
     bus_.command_datagram(channel, buffer->data, buffer->data_size);
+  } catch (...) {
+    handler_failed();
+  }
+}
+
+void Daemon::on_blob_request_datagram(const lcm::ReceiveBuffer* buffer, const std::string& channel) noexcept {
+  try {
+    bus_.blob_request_datagram(channel, buffer->data, buffer->data_size);
   } catch (...) {
     handler_failed();
   }
@@ -919,6 +947,7 @@ void Daemon::reload_config() {
   settle_.set_max_open_wait(config_.max_open_wait);
   if (lcm_changed && !connect_lcm(error)) log_line("SIGHUP: " + error);
   publisher_->set_rate(config_.chunk_rate_bytes_per_s);
+  blobs_.set_max_message_bytes(config_.max_chunk_bytes);
   read_budget_->set_capacity(config_.max_read_bytes_in_flight);
   if (simulation_changed) start_simulation_host();
   // New conversion settings (density, limits) may change any model: convert them all again. A
@@ -946,6 +975,8 @@ void Daemon::step(std::chrono::milliseconds max_wait) {
   auto now = Clock::now();
   // Sleep until the earliest of: a model settles, the publisher may send, a periodic message.
   Clock::time_point wake = now + max_wait;
+  blobs_.pump(*publisher_, config_.channel_prefix);
+  if (blobs_.ready(*publisher_)) wake = now;  // Files to check, or room in the send queue for chunks.
   if (auto deadline = settle_.next_deadline()) wake = std::min(wake, *deadline);
   if (auto send = publisher_->drain(now)) wake = std::min(wake, *send);
   if (config_.republish_period.count() > 0) wake = std::min(wake, next_republish_);
@@ -963,7 +994,12 @@ void Daemon::step(std::chrono::milliseconds max_wait) {
     if (fds[3].revents & POLLIN) handle_signals();
     if (fds[0].revents & POLLIN) handle_file_events();
     if (fds[2].revents & POLLIN) handle_outcomes(kOutcomesPerTurn);
-    if (fds[1].revents & POLLIN) lcm_->handleTimeout(0);
+    // Every datagram waiting (up to a bound), so that requests that came together are answered
+    // together: identical blob requests then share one pass.
+    if (fds[1].revents & POLLIN) {
+      for (std::size_t handled = 0; handled < kDatagramsPerTurn && lcm_->handleTimeout(0) > 0; ++handled) {
+      }
+    }
   }
   process_file_events(kFileEventsPerTurn);
   now = Clock::now();
@@ -983,6 +1019,7 @@ void Daemon::step(std::chrono::milliseconds max_wait) {
     publish_status();
     next_status_ = now + config_.status_period;
   }
+  blobs_.pump(*publisher_, config_.channel_prefix);
   publisher_->drain(Clock::now());
 }
 

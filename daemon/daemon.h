@@ -16,6 +16,7 @@
 #include <rdtf/joint_command_t.hpp>
 #include <rdtf/request_t.hpp>
 
+#include "blob_server.h"
 #include "bus_input.h"
 #include "config.h"
 #include "publisher.h"
@@ -82,6 +83,7 @@ class Daemon {
   // Raw datagrams: decoded by bus_ only after the schema check (never lcm-gen's decoder alone).
   void on_request_datagram(const lcm::ReceiveBuffer* buffer, const std::string& channel) noexcept;
   void on_command_datagram(const lcm::ReceiveBuffer* buffer, const std::string& channel) noexcept;
+  void on_blob_request_datagram(const lcm::ReceiveBuffer* buffer, const std::string& channel) noexcept;
   void handler_failed() noexcept;
   void on_request(const rdtf::request_t& request);
   void answer_request(const std::string& model_id, const std::string& requester);
@@ -106,6 +108,7 @@ class Daemon {
   std::unique_ptr<Publisher> publisher_;
   std::unique_ptr<SimulationHost> simulation_;  // Null when `simulate` is off.
   BusInput bus_;
+  BlobServer blobs_;  // The files of every live revision, by SHA-256 (blob_server.h).
   RequestThrottle request_throttle_;
   std::uint64_t handler_failures_ = 0;  // LCM thread: exceptions caught outside BusInput.
   Counters counters_;

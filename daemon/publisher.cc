@@ -40,6 +40,7 @@ void Publisher::drop_oldest(const char* why) {
     dropped_unreported_ = 0;
   }
   queued_bytes_ -= from.front().bytes.size();
+  if (&from == &queue_) ++departed_;
   from.pop_front();
 }
 
@@ -48,6 +49,7 @@ void Publisher::enqueue(std::string channel, std::vector<std::uint8_t> bytes, Pr
   while (queued() >= kMaxQueued) drop_oldest("100,000 messages");
   while (queued() > 0 && queued_bytes_ + bytes.size() > kMaxQueuedBytes) drop_oldest("64 MiB");
   queued_bytes_ += bytes.size();
+  if (priority != Priority::kUrgent) ++enqueued_;
   (priority == Priority::kUrgent ? urgent_ : queue_).push_back({std::move(channel), std::move(bytes)});
 }
 
@@ -98,6 +100,7 @@ std::optional<Publisher::Clock::time_point> Publisher::drain(Clock::time_point n
     if (!send_front(now)) return retry_at_;
     allowance_ -= cost;
     queued_bytes_ -= head.front().bytes.size();
+    if (&head == &queue_) ++departed_;
     head.pop_front();
   }
   if (queued() == 0) return std::nullopt;

@@ -66,6 +66,11 @@ class Publisher {
   std::optional<Clock::time_point> drain(Clock::time_point now);
 
   std::size_t queued() const { return queue_.size() + urgent_.size(); }
+  // Messages of normal priority queued since start, and those that left the queue (sent or
+  // dropped) since start: they leave in order, so the n-th is still waiting while departed() < n
+  // (the blob server skips chunks a request asks for that are still waiting to go).
+  std::uint64_t enqueued() const { return enqueued_; }
+  std::uint64_t departed() const { return departed_; }
   std::size_t queued_bytes() const { return queued_bytes_; }
   std::uint64_t send_failures() const { return send_failures_; }
   std::uint64_t dropped() const { return dropped_; }
@@ -94,6 +99,8 @@ class Publisher {
   std::deque<Pending> queue_;
   std::deque<Pending> urgent_;
   std::size_t queued_bytes_ = 0;
+  std::uint64_t enqueued_ = 0;
+  std::uint64_t departed_ = 0;
   std::uint64_t send_failures_ = 0;
   std::uint64_t dropped_ = 0;
   std::uint64_t dropped_unreported_ = 0;

@@ -186,7 +186,8 @@ void BlobFetcher::tick(Clock::time_point now) {
     request.num_chunks.clear();
     request.num_ranges = 0;
   };
-  auto add = [&](const std::string& sha, std::int32_t first, std::int32_t count) {
+  auto add = [&](const std::string& sha, std::int32_t first, std::int32_t count, bool again) {
+    if (again) stats_.blob_chunks_reasked += static_cast<std::uint64_t>(count);
     request.sha256.push_back(sha);
     request.first_chunk.push_back(first);
     request.num_chunks.push_back(count);
@@ -198,7 +199,7 @@ void BlobFetcher::tick(Clock::time_point now) {
     if (!f.active || now < f.due || ranges >= kRangesPerTick) continue;
     if (streaming && f.requested_once) continue;
     if (f.chunk_size < 0) {
-      add(sha, 0, -1);
+      add(sha, 0, -1, false);
     } else {
       for (std::int32_t i = 0; i < f.count && ranges < kRangesPerTick;) {
         if (f.have[static_cast<std::size_t>(i)]) {
@@ -207,7 +208,7 @@ void BlobFetcher::tick(Clock::time_point now) {
         }
         std::int32_t j = i;
         while (j < f.count && !f.have[static_cast<std::size_t>(j)]) ++j;
-        add(sha, i, j - i);
+        add(sha, i, j - i, f.requested_once);
         i = j;
       }
     }

@@ -129,8 +129,9 @@ int run_pull(const PullArguments& args) {
     std::cerr << "rdtf pull: " << args.model_id << ": rdtfd reports an error (the live revision "
               << e.live_revision << " stays)\n";
   };
+  const auto start = std::chrono::steady_clock::now();
   rdtf::client::Client client(lcm, options, callbacks);
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(args.timeout);
+  const auto deadline = start + std::chrono::duration<double>(args.timeout);
   while (!snapshot && std::chrono::steady_clock::now() < deadline) {
     if (lcm.handleTimeout(20) < 0) {
       std::cerr << "rdtf pull: LCM failed\n";
@@ -151,6 +152,7 @@ int run_pull(const PullArguments& args) {
               << stats.dropped << " datagrams dropped)\n";
     return kExitInternalError;
   }
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (const std::string why = write_snapshot(*snapshot, args.dir); !why.empty()) {
     std::cerr << "rdtf pull: " << why << "\n";
     return kExitInternalError;
@@ -159,8 +161,11 @@ int run_pull(const PullArguments& args) {
   for (const auto& file : snapshot->manifest) bytes += file.size;
   std::cout << "rdtf pull: " << args.model_id << " revision " << snapshot->revision() << " ("
             << snapshot->content_hash().substr(0, 12) << "): " << snapshot->manifest.size() << " files, " << bytes
-            << " bytes into " << args.dir << "; " << stats.blob_bytes << " blob bytes in " << stats.blob_chunks
-            << " chunks from the bus, " << stats.blob_retries << " re-requests\n";
+            << " bytes into " << args.dir << "; from the bus in " << seconds << " s: " << stats.bytes
+            << " bytes in " << stats.datagrams << " datagrams, of which " << stats.blob_bytes << " blob bytes in "
+            << stats.blob_chunks << " chunks; " << stats.blob_retries << " blob re-requests (" << stats.blob_chunks_reasked
+            << " chunks asked for again), " << stats.requests_sent
+            << " description requests\n";
   return kExitOk;
 }
 

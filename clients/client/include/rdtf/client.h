@@ -140,7 +140,8 @@ struct Stats {
   std::uint64_t blobs_fetched = 0;      // blobs received whole and checked
   std::uint64_t requests_sent = 0;      // request_t
   std::uint64_t blob_requests_sent = 0; // blob_request_t
-  std::uint64_t blob_retries = 0;       // blob_request_t for chunks already asked for once
+  std::uint64_t blob_retries = 0;       // blob_request_t ranges for chunks already asked for once
+  std::uint64_t blob_chunks_reasked = 0;  // chunks in those ranges (lost ones, or not yet sent)
   std::uint64_t revisions = 0;          // snapshots handed over
 };
 

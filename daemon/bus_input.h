@@ -27,9 +27,10 @@ class BusInput {
     std::function<void(const rdtf::request_t&)> request;
     // Returns "" when the command was taken, else why it was dropped (counted and logged).
     std::function<std::string(const rdtf::joint_command_t&)> command;
-    // As `command`: "" when the blob request was taken, else why it was dropped.
-    std::function<std::string(const rdtf::blob_request_t&)> blob_request;
     std::function<void(const std::string&)> log;
+    // As `command`: "" when the blob request was taken, else why it was dropped. Last, so that
+    // handler sets written before it existed keep their meaning.
+    std::function<std::string(const rdtf::blob_request_t&)> blob_request;
   };
   explicit BusInput(Handlers handlers) : handlers_(std::move(handlers)) {}
 

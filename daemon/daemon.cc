@@ -199,10 +199,10 @@ Daemon::Daemon(DaemonConfig config, ConfigLoader reload)
                                 // Without live simulations (--no-simulate) commands go unheard.
                                 return simulation_ ? simulation_->command(command) : std::string();
                               },
+                              [](const std::string& line) { log_line(line); },
                               [this](const rdtf::blob_request_t& request) {
                                 return blobs_.request(request, Clock::now(), *publisher_, config_.channel_prefix);
-                              },
-                              [](const std::string& line) { log_line(line); }}),
+                              }}),
       blobs_([](const std::string& line) { log_line(line); }),
       request_throttle_(kRequestAnswerPeriod),
       read_budget_(std::make_shared<ReadBudget>(config_.max_read_bytes_in_flight)) {}

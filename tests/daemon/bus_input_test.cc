@@ -159,7 +159,7 @@ TEST(BusInput, MalformedDatagramsNeverReachTheHandlers) {
                     ++commands;
                     return std::string();
                   },
-                  [&](const std::string& line) { lines.push_back(line); }});
+                  [&](const std::string& line) { lines.push_back(line); }, nullptr});
   const auto good = encode(two_joint_command());
   input.command_datagram("RDTF/arm3.gltf/JOINT_COMMAND", good.data(), good.size());
   EXPECT_EQ(commands, 1);
@@ -183,7 +183,7 @@ TEST(BusInput, DatagramsAboveOneUdpDatagramAndCommandsTheHostRefusesAreDroppedAn
                     ++commands;
                     return refusal;
                   },
-                  [&](const std::string& line) { lines.push_back(line); }});
+                  [&](const std::string& line) { lines.push_back(line); }, nullptr});
   auto big = two_joint_command();
   big.content_hash = std::string(BusInput::kMaxInputBytes, 'h');
   const auto bytes = encode(big);
@@ -208,7 +208,7 @@ TEST(BusInput, AHandlerThatThrowsIsACountedDropNeverAnExceptionIntoLiblcm) {
   std::vector<std::string> lines;
   BusInput input({[](const rdtf::request_t&) { throw std::runtime_error("request handler broke"); },
                   [](const rdtf::joint_command_t&) -> std::string { throw 42; },
-                  [&](const std::string& line) { lines.push_back(line); }});
+                  [&](const std::string& line) { lines.push_back(line); }, nullptr});
   const auto request = encode(rdtf::request_t{});
   const auto command = encode(two_joint_command());
   EXPECT_NO_THROW(input.request_datagram("RDTF/REQUEST", request.data(), request.size()));

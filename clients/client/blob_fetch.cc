@@ -82,6 +82,10 @@ std::string BlobFetcher::on_chunk(const rdtf::blob_chunk_t& c, Clock::time_point
     return "";
   }
   Fetch& f = it->second;
+  if (!f.active) {
+    ++stats_.blob_chunks_ignored;  // Not asked for yet (another client's request): no memory for it.
+    return "";
+  }
   if (c.blob_size != f.size) {
     return "blob " + c.sha256.substr(0, 12) + ": blob_size " + str(c.blob_size) + " but the manifest says " + str(f.size);
   }

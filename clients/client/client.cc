@@ -274,7 +274,14 @@ struct Client::State {
     auto with_parts = [&](std::int64_t revision, const std::string& hash, auto&& add) {
       key = Key{revision, hash};
       Pending* pending = pending_of(channel, model_id, *key, now);
-      if (pending != nullptr && !pending->assembled) why = add(pending->parts);
+      if (pending == nullptr || pending->assembled) return;
+      if (pending_bytes + static_cast<std::int64_t>(size) > options.limits.max_pending_bytes) {
+        why = "incomplete revisions hold max_pending_bytes (" + std::to_string(options.limits.max_pending_bytes) + ")";
+        return;
+      }
+      const std::int64_t before = pending->parts.bytes();
+      why = add(pending->parts);
+      pending_bytes += pending->parts.bytes() - before;
     };
     const Limits& limits = options.limits;
     if (kind == "DESCRIPTION") {
@@ -335,6 +342,7 @@ struct Client::State {
         if (p->second.first_seen < oldest->second.first_seen) oldest = p;
       }
       fetcher.release(waiter_of(model_id, oldest->first));
+      pending_bytes -= oldest->second.parts.bytes();
       m.pending.erase(oldest);
     }
     return &m.pending.emplace(key, Pending(model_id, key, now)).first->second;
@@ -346,6 +354,7 @@ struct Client::State {
     for (auto it = m.pending.begin(); it != m.pending.end();) {
       if (it->first.first < revision) {
         fetcher.release(waiter_of(model_id, it->first));
+        pending_bytes -= it->second.parts.bytes();
         it = m.pending.erase(it);
       } else {
         ++it;
@@ -356,7 +365,10 @@ struct Client::State {
   void forget(const std::string& model_id) {
     const auto model = models.find(model_id);
     if (model == models.end()) return;
-    for (const auto& [key, pending] : model->second.pending) fetcher.release(waiter_of(model_id, key));
+    for (const auto& [key, pending] : model->second.pending) {
+      fetcher.release(waiter_of(model_id, key));
+      pending_bytes -= pending.parts.bytes();
+    }
     models.erase(model);
   }
 
@@ -367,7 +379,9 @@ struct Client::State {
     if (it == model->second.pending.end() || it->second.assembled) return;
     Pending& p = it->second;
     std::string why;
+    const std::int64_t before = p.parts.bytes();
     auto snapshot = p.parts.assemble(options.blobs != Blobs::kNone, why);
+    pending_bytes += p.parts.bytes() - before;  // A part that failed its check was cleared.
     if (!why.empty()) drop(channel, why);
     if (!snapshot) return;
     if (options.blobs == Blobs::kAll) {
@@ -389,6 +403,7 @@ struct Client::State {
     ModelState& m = models[model_id];
     auto it = m.pending.find(key);
     auto snapshot = std::make_shared<const Snapshot>(std::move(*it->second.assembled));
+    pending_bytes -= it->second.parts.bytes();
     m.pending.erase(it);
     drop_older(model_id, key.first);
     m.current = snapshot;
@@ -415,7 +430,11 @@ struct Client::State {
     for (const auto& [model_id, key] : failed) {
       problem(model_id, failure);
       fetcher.release(waiter_of(model_id, key));
-      models[model_id].pending.erase(key);
+      auto& pending = models[model_id].pending;
+      if (const auto it = pending.find(key); it != pending.end()) {
+        pending_bytes -= it->second.parts.bytes();
+        pending.erase(it);
+      }
     }
     for (const auto& [model_id, key] : ready) {
       if (models[model_id].pending.count(key)) deliver(model_id, key);
@@ -465,6 +484,7 @@ struct Client::State {
   BlobFetcher fetcher;
   Clock::time_point next_start_request{};
   Clock::duration start_backoff{};
+  std::int64_t pending_bytes = 0;  // chunk bytes held by incomplete revisions of every model
 };
 
 namespace {

@@ -452,6 +452,31 @@ TEST(Client, DropsHostileDatagramsWithAReasonAndGoesOn) {
   expect_snapshot(*b.revisions[0], r);
 }
 
+// Chunks of incomplete revisions, of every model together, stay within max_pending_bytes.
+TEST(Client, HoldsNoMoreThanMaxPendingBytesOfIncompleteRevisions) {
+  rdtf::client::Options options;
+  options.limits.max_pending_bytes = 1000;
+  std::vector<std::string> drops;
+  rdtf::client::Callbacks callbacks;
+  callbacks.on_drop = [&](const std::string&, const std::string& why) { drops.push_back(why); };
+  Client client([](const std::string&, const std::vector<std::uint8_t>&) {}, options, callbacks);
+  const auto now = Clock::time_point{} + 1h;
+  int fed = 0;
+  for (int model = 0; model < 20; ++model) {
+    FakeRevision r = arm();
+    r.model_id = "m" + std::to_string(model) + ".gltf";
+    for (const auto& c : chunks_of(r, r.rdtf_json, r.json_chunk)) {
+      const auto d = datagram(prefixed(r, "DESCRIPTION_CHUNK"), c);
+      client.on_datagram(d.first, d.second.data(), d.second.size(), now);
+      ++fed;
+    }
+  }
+  // Each chunk holds 100 bytes (its datagram more): the first few fit, every later one is dropped.
+  ASSERT_FALSE(drops.empty());
+  EXPECT_LT(fed - static_cast<int>(drops.size()), 10);
+  EXPECT_NE(drops.back().find("max_pending_bytes (1000)"), std::string::npos) << drops.back();
+}
+
 // The same exchange through liblcm (memq://: in-process): subscriptions, handlers, publishing.
 TEST(ClientOverLcm, PullsARevisionThroughLiblcm) {
   lcm::LCM lcm("memq://");

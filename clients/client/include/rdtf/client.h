@@ -66,6 +66,7 @@ struct Limits {
   std::int64_t max_fetch_bytes = std::int64_t{1} << 30;        // blobs being received at once
   std::int64_t max_store_bytes = std::int64_t{4} << 30;        // blobs held (unused ones evicted first)
   std::size_t max_pending_revisions = 4;      // incomplete revisions held per model (oldest dropped)
+  std::int64_t max_pending_bytes = std::int64_t{256} << 20;  // chunks held by every incomplete revision
   std::size_t max_models = 4096;              // models followed at once
 };
 

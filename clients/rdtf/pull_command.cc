@@ -148,8 +148,9 @@ int run_pull(const PullArguments& args) {
       return kExitInvalidInput;
     }
     std::cerr << "rdtf pull: " << args.model_id << ": no complete revision within " << args.timeout << " s ("
-              << stats.blobs_fetched << " blobs received, " << stats.blob_retries << " re-requests, "
-              << stats.dropped << " datagrams dropped)\n";
+              << stats.blobs_fetched << " blobs received; " << stats.blob_chunks << " chunks used, "
+              << stats.blob_chunks_ignored << " ignored, " << stats.blob_chunks_reasked << " asked for again in "
+              << stats.blob_retries << " re-requests; " << stats.dropped << " datagrams dropped)\n";
     return kExitInternalError;
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -59,8 +59,11 @@ class TwoHosts {
     return testing::run_command(command);
   }
 
-  // Host B's address as the daemon's side sees it (for a failure message).
-  static std::string address_b() { return "10.213.0.2"; }
+  // Limits what A sends to B to `rate` (tc's token bucket filter on A's end of the link: a bucket
+  // of `burst`, a queue of `latency`): packets sent faster are dropped before they reach B.
+  static void shape_a_to_b(const std::string& rate, const std::string& burst, const std::string& latency) {
+    run("tc qdisc add dev mhA root tbf rate " + rate + " burst " + burst + " latency " + latency);
+  }
 
  private:
   static void run(const std::string& command) {

@@ -1,11 +1,13 @@
 // rdtf-pd-controller: holds one model of rdtfd's live simulation at a target pose.
 //
-// The loop: every JOINT_STATE of the model (rdtfd publishes them at state_rate_hz) is answered at
-// once by one JOINT_COMMAND for all its joints, stamped with that state's revision and content
-// hash (PdController in pd_controller.h). DESCRIPTIONs tell which revision is newest, so states
-// still in flight from a replaced revision are not answered; after a hot reload the first state
-// of the new revision re-stamps the commands. Commands rejected by rdtfd (ERROR, code
-// COMMAND_REJECTED) are printed. Runs until SIGINT/SIGTERM or --duration.
+// The model comes from the bus (rdtf_client: a request at start, the revision reassembled and
+// checked); without it after --wait seconds the controller exits 2 naming the models it saw.
+// The loop: every JOINT_STATE of the model's current revision (rdtfd publishes them at
+// state_rate_hz) is answered at once by one JOINT_COMMAND for all its joints, stamped with that
+// state's revision and content hash (PdController in pd_controller.h). States of any other
+// revision are never handed over by the client; after a hot reload the first state of the new
+// revision re-stamps the commands. Commands rejected by rdtfd (ERROR, code COMMAND_REJECTED) are
+// printed. Runs until SIGINT/SIGTERM or --duration.
 //
 //   rdtf-pd-controller --model arm3.gltf --target shoulder=0.3 --target elbow=-0.5 --kp 400 --kd 20
 //
@@ -17,16 +19,18 @@
 #include <csignal>
 #include <iostream>
 #include <map>
+#include <memory>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
 #include <lcm/lcm-cpp.hpp>
 
-#include <rdtf/description_t.hpp>
 #include <rdtf/model_error_t.hpp>
 
 #include "pd_controller.h"
+#include "rdtf/client.h"
 #include "safe_decode.h"
 
 namespace {
@@ -57,51 +61,33 @@ std::string parse_target(const std::string& text, std::map<std::string, double>&
 class ControllerNode {
  public:
   ControllerNode(lcm::LCM& lcm, std::string prefix, rdtf::controller::PdOptions options)
-      : lcm_(lcm), prefix_(std::move(prefix)), model_id_(options.model_id), controller_(std::move(options)) {
-    const std::string model_channel = prefix_ + "/" + model_id_ + "/";
-    // Raw datagrams, decoded only after the schema check (lcmtypes/safe_decode.h).
-    lcm_.subscribe(model_channel + "JOINT_STATE", &ControllerNode::on_state_datagram, this);
-    lcm_.subscribe(model_channel + "DESCRIPTION", &ControllerNode::on_description_datagram, this);
-    lcm_.subscribe(model_channel + "ERROR", &ControllerNode::on_error_datagram, this);
-    command_channel_ = model_channel + "JOINT_COMMAND";
+      : lcm_(lcm), model_id_(options.model_id), controller_(std::move(options)) {
+    command_channel_ = prefix + "/" + model_id_ + "/JOINT_COMMAND";
+    // rdtf_client: the model's revisions from the bus (a request at start, every part checked)
+    // and only the states of the revision it holds; no blobs.
+    rdtf::client::Options client_options;
+    client_options.prefix = std::move(prefix);
+    client_options.model = model_id_;
+    client_options.blobs = rdtf::client::Blobs::kNone;
+    rdtf::client::Callbacks callbacks;
+    callbacks.on_revision = [this](std::shared_ptr<const rdtf::client::Snapshot> s) {
+      controller_.on_description(s->revision());
+    };
+    callbacks.on_joint_state = [this](const rdtf::client::Snapshot&, const rdtf::joint_state_t& state) {
+      on_state(state);
+    };
+    callbacks.on_error = [this](const rdtf::model_error_t& error) { on_error(error); };
+    callbacks.on_removed = [this](const rdtf::model_removed_t&) {
+      std::cerr << "rdtf-pd-controller: " << model_id_ << " was removed\n";
+    };
+    client_ = std::make_unique<rdtf::client::Client>(lcm, client_options, callbacks);
   }
 
-  std::uint64_t dropped() const { return drops_.total(); }
+  void tick() { client_->tick(); }
+  bool has_model() const { return client_->snapshot(model_id_) != nullptr; }
+  std::set<std::string> models_seen() const { return client_->models_seen(); }
 
  private:
-  template <typename Message>
-  std::optional<Message> decode(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
-    std::string why;
-    auto message = rdtf::lcm_safe::decode<Message>(buffer->data, buffer->data_size, why);
-    if (!message) {
-      if (auto line = drops_.drop(channel, why, std::chrono::steady_clock::now())) {
-        std::cerr << "rdtf-pd-controller: " << *line << "\n";
-      }
-    }
-    return message;
-  }
-  // No exception unwinds through liblcm's C frames: one from a handler is a counted drop.
-  template <typename Handler>
-  void guarded(const std::string& channel, Handler&& handler) {
-    rdtf::lcm_safe::guarded(drops_, channel, std::forward<Handler>(handler),
-                            [](const std::string& line) { std::cerr << "rdtf-pd-controller: " << line << "\n"; });
-  }
-  void on_description_datagram(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
-    guarded(channel, [&] {
-      if (auto d = decode<rdtf::description_t>(buffer, channel)) controller_.on_description(d->revision);
-    });
-  }
-  void on_state_datagram(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
-    guarded(channel, [&] {
-      if (auto state = decode<rdtf::joint_state_t>(buffer, channel)) on_state(*state);
-    });
-  }
-  void on_error_datagram(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
-    guarded(channel, [&] {
-      if (auto error = decode<rdtf::model_error_t>(buffer, channel)) on_error(*error);
-    });
-  }
-
   void on_state(const rdtf::joint_state_t& state) {
     const std::int64_t followed = controller_.revision();
     auto command = controller_.on_state(state);
@@ -131,11 +117,10 @@ class ControllerNode {
   }
 
   lcm::LCM& lcm_;
-  rdtf::lcm_safe::DropCounter drops_;
-  std::string prefix_;
   std::string model_id_;
   std::string command_channel_;
   rdtf::controller::PdController controller_;
+  std::unique_ptr<rdtf::client::Client> client_;
 };
 
 }  // namespace
@@ -148,6 +133,7 @@ int main(int argc, char** argv) {
   std::string mode = "position";
   std::vector<std::string> targets;
   double duration = 0;
+  double wait = 10;
   app.add_option("--model", options.model_id, "Model id (its channel name, e.g. arm3.gltf)")->required();
   app.add_option("--target", targets,
                  "joint=value in rad or m (repeatable); joints without one hold their first state");
@@ -161,6 +147,8 @@ int main(int argc, char** argv) {
   app.add_option("--channel-prefix", prefix, "rdtfd's channel prefix")->capture_default_str();
   app.add_option("--duration", duration, "Stop after this many seconds (0: run until SIGINT/SIGTERM)")
       ->check(CLI::NonNegativeNumber);
+  app.add_option("--wait", wait, "Seconds to wait for the model on the bus before giving up (exit 2)")
+      ->capture_default_str()->check(CLI::Range(0.0, 86400.0));
   CLI11_PARSE(app, argc, argv);
   for (const auto& target : targets) {
     if (const std::string error = parse_target(target, options.targets); !error.empty()) {
@@ -182,10 +170,19 @@ int main(int argc, char** argv) {
   const auto out_of_time = [&] {
     return duration > 0 && std::chrono::steady_clock::now() - start >= std::chrono::duration<double>(duration);
   };
+  const auto wait_until = start + std::chrono::duration<double>(wait);
   while (!g_stop && !out_of_time()) {
     if (lcm.handleTimeout(50) < 0) {
       std::cerr << "rdtf-pd-controller: LCM failed\n";
       return 1;
+    }
+    node.tick();
+    if (!node.has_model() && std::chrono::steady_clock::now() >= wait_until) {
+      std::string seen;
+      for (const auto& id : node.models_seen()) seen += (seen.empty() ? "" : ", ") + id;
+      std::cerr << "rdtf-pd-controller: no model '" << options.model_id << "' on the bus within " << wait
+                << " s; models seen: " << (seen.empty() ? "none (no rdtfd heard)" : seen) << "\n";
+      return 2;
     }
   }
   return 0;

@@ -22,6 +22,7 @@ void add_inspect_command(CLI::App& app, int& exit_code);
 void add_urdf_command(CLI::App& app, int& exit_code);
 void add_import_command(CLI::App& app, int& exit_code);
 void add_validate_command(CLI::App& app, int& exit_code);
+void add_pull_command(CLI::App& app, int& exit_code);
 
 // Options shared by every command that converts: density and the input limits.
 void add_conversion_options(CLI::App& command, ConvertOptions& options);

@@ -15,6 +15,7 @@ int main(int argc, char** argv) {
   rdtf::cli::add_urdf_command(app, exit_code);
   rdtf::cli::add_import_command(app, exit_code);
   rdtf::cli::add_validate_command(app, exit_code);
+  rdtf::cli::add_pull_command(app, exit_code);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {

@@ -128,5 +128,19 @@ TEST(Controller, HoldsTheArmAgainstGravityWhereThePdLawPredicts) {
   (void)daemon;
 }
 
+// The controller takes its model from the bus: one nobody serves is an error naming the models it saw.
+TEST(Controller, ExitsWithAnErrorNamingTheModelsItSawWhenItsModelDoesNotExist) {
+  Session s;
+  write_arm3_across_gravity(s.watch);
+  s.start(live_arm_daemon());
+  ASSERT_TRUE(s.wait_for([&](const auto& all) { return last_description(all, kArm).has_value(); }));
+  ChildProcess controller({controller_path(), "--model", "arm9.gltf", "--wait", "1"}, s.root / "controller.out");
+  ASSERT_EQ(controller.wait_exit(20s), std::optional<int>(2)) << controller.output();
+  EXPECT_NE(controller.output().find("rdtf-pd-controller: no model 'arm9.gltf' on the bus within 1 s; models seen: "
+                                     "arm3.gltf"),
+            std::string::npos)
+      << controller.output();
+}
+
 }  // namespace
 }  // namespace rdtf::itest

@@ -98,26 +98,6 @@ std::string first_error(const Diagnostics& diag) {
   return "unknown error";
 }
 
-// What a conversion's result depends on besides the files: a reload that changes none of these
-// gives no model a new revision.
-auto conversion_settings(const DaemonConfig& c) {
-  const auto& l = c.convert.limits;
-  return std::make_tuple(c.output, c.convert.default_density, l.max_file_bytes, l.max_buffer_bytes, c.max_read_bytes,
-                         l.max_accessor_count, l.max_triangles, c.validate, c.validation_seconds,
-                         c.publish_failed, c.floating_root, c.gravity.x(), c.gravity.y(), c.gravity.z(),
-                         c.time_step, static_cast<int>(c.stepper), c.max_mass_ratio,
-                         c.validation_start_offset_rad, c.energy_tolerance, c.joint_separation_tolerance_m,
-                         c.limit_tolerance_rad, c.limit_tolerance_m, c.bound_mass_kg, c.bound_inertia_kgm2,
-                         c.massless_link_error, c.validation_cpu_budget_s, c.urdf, c.urdf_y_up);
-}
-
-// What the live simulations depend on: a reload that changes none of these keeps them running.
-auto simulation_settings(const DaemonConfig& c) {
-  return std::make_tuple(c.simulate, c.state_rate_hz, c.real_time_factor, c.floating_root, c.gravity.x(),
-                         c.gravity.y(), c.gravity.z(), c.time_step, static_cast<int>(c.stepper), c.lcm_url,
-                         c.channel_prefix, c.bound_mass_kg, c.bound_inertia_kgm2);
-}
-
 // A conversion again of the content served (after a reload) whose result is the served one.
 bool same_result(const ConvertedModel& live, const ConvertedModel& candidate) {
   return live.content_hash == candidate.content_hash && live.written == candidate.written &&
@@ -903,13 +883,14 @@ void Daemon::reload_config() {
     log_line("SIGHUP: config not reloaded, the running config stays: " + error);
     return;
   }
-  const bool lcm_changed = fresh->lcm_url != config_.lcm_url || fresh->channel_prefix != config_.channel_prefix;
-  const bool folders_changed = fresh->watch != config_.watch || fresh->output != config_.output;
-  const bool conversion_changed = conversion_settings(*fresh) != conversion_settings(config_);
-  const bool simulation_changed = simulation_settings(*fresh) != simulation_settings(config_);
-  const int workers = config_.workers;  // The pool keeps its size until a restart.
+  // What the changed keys need (their reload effects, daemon/config_keys.cc).
+  const ConfigChange change = compare_configs(config_, *fresh);
+  const bool lcm_changed = change.has(kReconnect);
+  const bool folders_changed = change.has(kFoldersChanged);
+  const bool conversion_changed = change.has(kReconvert);
+  const bool simulation_changed = change.has(kRestartSimulation);
+  keep_restart_settings(config_, *fresh);  // E.g. the worker pool keeps its size until a restart.
   config_ = std::move(*fresh);
-  config_.workers = workers;
   settle_.set_settle(config_.settle);
   settle_.set_max_open_wait(config_.max_open_wait);
   if (lcm_changed && !connect_lcm(error)) log_line("SIGHUP: " + error);

@@ -23,6 +23,7 @@
 #include "rdtf/atomic_file.h"
 #include "rdtf/gltf.h"
 #include "rdtf/urdf.h"
+#include "rdtf/diagnostic_codes.h"
 
 namespace rdtf::daemon {
 namespace {
@@ -308,14 +309,13 @@ void Daemon::publish_daemon_error(const std::string& code, const std::string& fi
   error.source_path = file;
   error.live_revision = 0;
   error.diagnostics = to_messages(diag);
-  error.num_diagnostics = static_cast<std::int32_t>(error.diagnostics.size());
   publisher_->publish(config_.channel_prefix + "/ERROR", error);
 }
 
 void Daemon::on_publisher_event(const PublisherEvent& event) {
   log_line(event.text);
   // While sends fail nothing can be told over LCM; once they work, the outage is reported.
-  if (event.kind == PublisherEvent::Kind::kSendRecovered) publish_daemon_error("LCM_SEND_FAILED", "", event.text);
+  if (event.kind == PublisherEvent::Kind::kSendRecovered) publish_daemon_error(codes::LCM_SEND_FAILED, "", event.text);
 }
 
 void Daemon::schedule_retry(const ConversionOutcome& outcome, ModelRecord& record) {
@@ -358,12 +358,12 @@ void Daemon::check_watches(Clock::time_point now) {
     for (const auto& [folder, missing] : unwatched) {
       if (missing) {
         log_line("watched folder " + folder.string() + " is missing; looking for it every second");
-        publish_daemon_error("WATCH_FAILED", folder.string(),
+        publish_daemon_error(codes::WATCH_FAILED, folder.string(),
                              "cannot watch " + folder.string() +
                                  ": it is missing (deleted or moved away); its models were removed, and "
                                  "it is looked for every second and watched again when it is back");
       } else {
-        publish_daemon_error("WATCH_FAILED", folder.string(),
+        publish_daemon_error(codes::WATCH_FAILED, folder.string(),
                              "cannot watch " + folder.string() +
                                  ": inotify watches exhausted (raise /proc/sys/fs/inotify/max_user_watches); "
                                  "its models were converted once, and the folder is tried again every second");
@@ -597,7 +597,7 @@ void Daemon::worker_loop() {
       outcome.source = job.source;
       outcome.kind = ConversionOutcome::Kind::kRejected;
       outcome.diagnostics.set_file(job.source.string());
-      outcome.diagnostics.error("INTERNAL_ERROR", "", error.what());
+      outcome.diagnostics.error(codes::INTERNAL_ERROR, "", error.what());
     }
     {
       std::lock_guard lock(mutex_);
@@ -776,7 +776,6 @@ void Daemon::publish_status() {
   pending += static_cast<std::int32_t>(retries_.size());
   status.pending = pending;
   status.num_models = static_cast<std::int32_t>(status.model_ids.size());
-  status.num_model_ids = status.num_models;
   status.dropped_messages = static_cast<std::int64_t>(bus_.dropped());
   status.coalesced_requests = static_cast<std::int64_t>(request_throttle_.coalesced());
   status.send_queue_bytes = static_cast<std::int64_t>(publisher_->queued_bytes());

@@ -1,6 +1,7 @@
 #include "config.h"
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <cstdlib>
 #include <fcntl.h>
@@ -10,7 +11,6 @@
 #include <cerrno>
 #include <cstring>
 #include <sstream>
-#include <type_traits>
 
 #include <nlohmann/json.hpp>
 
@@ -23,143 +23,36 @@ std::filesystem::path xdg_folder(const char* variable, const char* fallback) {
   return std::filesystem::path(home != nullptr ? home : "/tmp") / fallback;
 }
 
-// JSON's own type must match the setting's: a boolean is no number, -1 is no count.
-template <typename T>
-bool json_type_matches(const nlohmann::json& value) {
-  if constexpr (std::is_same_v<T, bool>) {
-    return value.is_boolean();
-  } else if constexpr (std::is_integral_v<T> && std::is_unsigned_v<T>) {
-    return value.is_number_unsigned();
-  } else if constexpr (std::is_integral_v<T>) {
-    return value.is_number_integer();
-  } else if constexpr (std::is_floating_point_v<T>) {
-    return value.is_number();
-  } else if constexpr (std::is_same_v<T, std::string>) {
-    return value.is_string();
-  } else {
-    return true;  // Containers: checked element by element by get<T>() below.
-  }
-}
-
-template <typename T>
-bool read_key(const nlohmann::json& json, const char* key, T& out, std::string& error) {
-  if (!json.contains(key)) return true;
-  const nlohmann::json& value = json[key];
-  bool ok = json_type_matches<T>(value);
-  if constexpr (std::is_same_v<T, std::vector<std::string>>) {
-    ok = value.is_array() && std::all_of(value.begin(), value.end(), [](const auto& v) { return v.is_string(); });
-  } else if constexpr (std::is_same_v<T, std::vector<double>>) {
-    ok = value.is_array() && std::all_of(value.begin(), value.end(), [](const auto& v) { return v.is_number(); });
-  }
-  if (!ok) {
-    error = std::string("\"") + key + "\" has the wrong type (" + value.type_name() + ")";
-    return false;
-  }
-  out = value.get<T>();
-  return true;
-}
-
-bool read_ms(const nlohmann::json& json, const char* key, std::chrono::milliseconds& out,
-             std::string& error) {
-  double value = static_cast<double>(out.count());
-  if (!read_key(json, key, value, error)) return false;
-  if (!(value >= 0)) {
-    error = std::string("\"") + key + "\" must be a number of milliseconds >= 0";
-    return false;
-  }
-  out = std::chrono::milliseconds(static_cast<long long>(value));
-  return true;
-}
-
 }  // namespace
 
+const ConfigKey* find_config_key(std::string_view name) {
+  for (const ConfigKey& key : config_registry()) {
+    if (key.name == name) return &key;
+  }
+  return nullptr;
+}
+
 const std::vector<std::string>& config_keys() {
-  static const std::vector<std::string> keys{
-      "watch", "output", "lcm_url", "channel_prefix", "settle_ms", "max_open_wait_ms",
-      "republish_period_ms", "status_period_ms", "workers", "max_chunk_bytes",
-      "chunk_rate_bytes_per_s", "default_density", "max_file_bytes", "max_buffer_bytes",
-      "max_accessor_count", "max_triangles", "validate", "validation_seconds", "publish_failed",
-      "simulate", "state_rate_hz", "real_time_factor", "floating_root", "gravity", "time_step",
-      "stepper", "max_mass_ratio", "validation_start_offset_rad", "energy_tolerance",
-      "joint_separation_tolerance_m", "limit_tolerance_rad", "limit_tolerance_m", "bound_mass_kg",
-      "bound_inertia_kgm2", "massless_link_severity", "validation_cpu_budget_s", "urdf", "urdf_y_up",
-      "max_read_bytes", "max_read_bytes_in_flight", "joint_command_timeout_s"};
+  static const std::vector<std::string> keys = [] {
+    std::vector<std::string> names;
+    for (const ConfigKey& key : config_registry()) names.push_back(key.name);
+    return names;
+  }();
   return keys;
 }
 
 const std::vector<KeyRange>& config_ranges() {
-  constexpr double kTiB = 1099511627776.0;
-  static const std::vector<KeyRange> ranges{
-      {"settle_ms", 1, 60000},
-      {"max_open_wait_ms", 0, 600000},
-      {"republish_period_ms", 0, 86400000},  // And 0 or at least 10.
-      {"status_period_ms", 10, 60000},
-      {"workers", 1, 64},
-      {"max_chunk_bytes", 1024, 65000},
-      {"chunk_rate_bytes_per_s", 1e4, 1e10},
-      {"default_density", 1e-3, 1e6},
-      {"max_file_bytes", 1, kTiB},
-      {"max_buffer_bytes", 1, kTiB},
-      {"max_accessor_count", 1, 4294967296.0},
-      {"max_triangles", 1, 4294967296.0},
-      {"max_read_bytes", 1, kTiB},
-      {"max_read_bytes_in_flight", 1, 4 * kTiB},  // And at least max_read_bytes.
-      {"validation_seconds", 1e-3, 60},
-      {"state_rate_hz", 0.1, 10000},
-      {"real_time_factor", 0.01, 100},
-      {"joint_command_timeout_s", 0.01, 60},
-      {"time_step", 1e-4, 0.1},
-      {"max_mass_ratio", 1, 1e12},
-      {"validation_start_offset_rad", -6.2832, 6.2832},
-      {"energy_tolerance", 1e-12, 1e6},
-      {"joint_separation_tolerance_m", 1e-12, 1e3},
-      {"limit_tolerance_rad", 1e-12, 6.2832},
-      {"limit_tolerance_m", 1e-12, 1e3},
-      {"bound_mass_kg", 0, 1e6},              // 0: off.
-      {"bound_inertia_kgm2", 0, 1e6},         // 0: off.
-      {"validation_cpu_budget_s", 0, 86400},  // 0: no limit.
-      {"gravity", -1e3, 1e3},  // Each component, m/s^2.
-  };
+  static const std::vector<KeyRange> ranges = [] {
+    std::vector<KeyRange> out;
+    for (const ConfigKey& key : config_registry()) {
+      if (key.min && key.max) out.push_back({key.name.c_str(), *key.min, *key.max});
+    }
+    return out;
+  }();
   return ranges;
 }
 
 namespace {
-
-// The value of each ranged key in `config`, as checked.
-std::vector<double> ranged_values(const DaemonConfig& c, const char* key) {
-  const std::string k = key;
-  const auto& l = c.convert.limits;
-  if (k == "settle_ms") return {static_cast<double>(c.settle.count())};
-  if (k == "max_open_wait_ms") return {static_cast<double>(c.max_open_wait.count())};
-  if (k == "republish_period_ms") return {static_cast<double>(c.republish_period.count())};
-  if (k == "status_period_ms") return {static_cast<double>(c.status_period.count())};
-  if (k == "workers") return {static_cast<double>(c.workers)};
-  if (k == "max_chunk_bytes") return {static_cast<double>(c.max_chunk_bytes)};
-  if (k == "chunk_rate_bytes_per_s") return {c.chunk_rate_bytes_per_s};
-  if (k == "default_density") return {c.convert.default_density};
-  if (k == "max_file_bytes") return {static_cast<double>(l.max_file_bytes)};
-  if (k == "max_buffer_bytes") return {static_cast<double>(l.max_buffer_bytes)};
-  if (k == "max_accessor_count") return {static_cast<double>(l.max_accessor_count)};
-  if (k == "max_triangles") return {static_cast<double>(l.max_triangles)};
-  if (k == "max_read_bytes") return {static_cast<double>(c.max_read_bytes)};
-  if (k == "max_read_bytes_in_flight") return {static_cast<double>(c.max_read_bytes_in_flight)};
-  if (k == "validation_seconds") return {c.validation_seconds};
-  if (k == "state_rate_hz") return {c.state_rate_hz};
-  if (k == "real_time_factor") return {c.real_time_factor};
-  if (k == "joint_command_timeout_s") return {c.joint_command_timeout_s};
-  if (k == "time_step") return {c.time_step};
-  if (k == "max_mass_ratio") return {c.max_mass_ratio};
-  if (k == "validation_start_offset_rad") return {c.validation_start_offset_rad};
-  if (k == "energy_tolerance") return {c.energy_tolerance};
-  if (k == "joint_separation_tolerance_m") return {c.joint_separation_tolerance_m};
-  if (k == "limit_tolerance_rad") return {c.limit_tolerance_rad};
-  if (k == "limit_tolerance_m") return {c.limit_tolerance_m};
-  if (k == "bound_mass_kg") return {c.bound_mass_kg};
-  if (k == "bound_inertia_kgm2") return {c.bound_inertia_kgm2};
-  if (k == "validation_cpu_budget_s") return {c.validation_cpu_budget_s};
-  if (k == "gravity") return {c.gravity.x(), c.gravity.y(), c.gravity.z()};
-  return {};
-}
 
 std::string number_text(double value) {
   std::ostringstream out;
@@ -167,13 +60,15 @@ std::string number_text(double value) {
   return out.str();
 }
 
-// Every ranged key within its range (NaN is in none).
+// Every ranged key within its range (NaN and the infinities are in none), then what a range alone
+// cannot say.
 bool check_ranges(const DaemonConfig& config, std::string& error) {
-  for (const KeyRange& range : config_ranges()) {
-    for (const double value : ranged_values(config, range.key)) {
-      if (!(value >= range.min && value <= range.max)) {
-        error = std::string("\"") + range.key + "\" is " + number_text(value) + ", outside its valid range [" +
-                number_text(range.min) + ", " + number_text(range.max) + "] (docs/daemon.md)";
+  for (const ConfigKey& key : config_registry()) {
+    if (!key.min || !key.max) continue;
+    for (const double value : key.numbers(config)) {
+      if (!(value >= *key.min && value <= *key.max)) {
+        error = "\"" + key.name + "\" is " + number_text(value) + ", outside its valid range [" +
+                number_text(*key.min) + ", " + number_text(*key.max) + "] (docs/daemon.md)";
         return false;
       }
     }
@@ -267,90 +162,46 @@ std::optional<DaemonConfig> load_config(const std::filesystem::path& path, Daemo
 std::optional<DaemonConfig> apply_config_json(const nlohmann::json& json, const std::filesystem::path& base,
                                               DaemonConfig config, std::string& error) {
 
-  const auto& keys = config_keys();
-  for (const auto& [key, value] : json.items()) {
-    if (key != "_comment" && std::find(keys.begin(), keys.end(), key) == keys.end()) {
-      error = "unknown key \"" + key + "\"";
+  for (const auto& [name, value] : json.items()) {
+    if (name != "_comment" && find_config_key(name) == nullptr) {
+      error = "unknown key \"" + name + "\"";
       return std::nullopt;
     }
   }
-  std::vector<std::string> watch;
-  std::string output;
-  bool ok = read_key(json, "watch", watch, error) && read_key(json, "output", output, error) &&
-            read_key(json, "lcm_url", config.lcm_url, error) &&
-            read_key(json, "channel_prefix", config.channel_prefix, error) &&
-            read_ms(json, "settle_ms", config.settle, error) &&
-            read_ms(json, "max_open_wait_ms", config.max_open_wait, error) &&
-            read_ms(json, "republish_period_ms", config.republish_period, error) &&
-            read_ms(json, "status_period_ms", config.status_period, error) &&
-            read_key(json, "workers", config.workers, error) &&
-            read_key(json, "max_chunk_bytes", config.max_chunk_bytes, error) &&
-            read_key(json, "chunk_rate_bytes_per_s", config.chunk_rate_bytes_per_s, error) &&
-            read_key(json, "default_density", config.convert.default_density, error) &&
-            read_key(json, "max_file_bytes", config.convert.limits.max_file_bytes, error) &&
-            read_key(json, "max_buffer_bytes", config.convert.limits.max_buffer_bytes, error) &&
-            read_key(json, "max_accessor_count", config.convert.limits.max_accessor_count, error) &&
-            read_key(json, "max_triangles", config.convert.limits.max_triangles, error) &&
-            read_key(json, "validate", config.validate, error) &&
-            read_key(json, "validation_seconds", config.validation_seconds, error) &&
-            read_key(json, "publish_failed", config.publish_failed, error) &&
-            read_key(json, "simulate", config.simulate, error) &&
-            read_key(json, "state_rate_hz", config.state_rate_hz, error) &&
-            read_key(json, "real_time_factor", config.real_time_factor, error) &&
-            read_key(json, "joint_command_timeout_s", config.joint_command_timeout_s, error) &&
-            read_key(json, "floating_root", config.floating_root, error) &&
-            read_key(json, "time_step", config.time_step, error) &&
-            read_key(json, "max_mass_ratio", config.max_mass_ratio, error) &&
-            read_key(json, "validation_start_offset_rad", config.validation_start_offset_rad, error) &&
-            read_key(json, "energy_tolerance", config.energy_tolerance, error) &&
-            read_key(json, "joint_separation_tolerance_m", config.joint_separation_tolerance_m, error) &&
-            read_key(json, "limit_tolerance_rad", config.limit_tolerance_rad, error) &&
-            read_key(json, "limit_tolerance_m", config.limit_tolerance_m, error) &&
-            read_key(json, "bound_mass_kg", config.bound_mass_kg, error) &&
-            read_key(json, "bound_inertia_kgm2", config.bound_inertia_kgm2, error) &&
-            read_key(json, "validation_cpu_budget_s", config.validation_cpu_budget_s, error) &&
-            read_key(json, "urdf", config.urdf, error) &&
-            read_key(json, "urdf_y_up", config.urdf_y_up, error) &&
-            read_key(json, "max_read_bytes", config.max_read_bytes, error) &&
-            read_key(json, "max_read_bytes_in_flight", config.max_read_bytes_in_flight, error);
-  if (ok && json.contains("massless_link_severity")) {
-    std::string severity;
-    ok = read_key(json, "massless_link_severity", severity, error);
-    if (ok && severity != "warning" && severity != "error") {
-      error = "\"massless_link_severity\" must be \"warning\" or \"error\"";
-      ok = false;
-    }
-    if (ok) config.massless_link_error = severity == "error";
+  for (const ConfigKey& key : config_registry()) {
+    if (json.contains(key.name) && !key.set(json[key.name], base, config, error)) return std::nullopt;
   }
-  if (ok && json.contains("gravity")) {
-    std::vector<double> gravity;
-    ok = read_key(json, "gravity", gravity, error);
-    if (ok && gravity.size() != 3) {
-      error = "\"gravity\" must be three numbers (m/s^2, scene frame)";
-      ok = false;
-    }
-    if (ok) config.gravity = Eigen::Vector3d(gravity[0], gravity[1], gravity[2]);
-  }
-  if (ok && json.contains("stepper")) {
-    std::string stepper;
-    ok = read_key(json, "stepper", stepper, error);
-    if (ok) {
-      const auto parsed = parse_stepper(stepper);
-      if (parsed) {
-        config.stepper = *parsed;
-      } else {
-        error = "\"stepper\" must be \"auto\", \"world_step\" or \"quick_step\", not \"" + stepper + "\"";
-        ok = false;
-      }
-    }
-  }
-  if (!ok) return std::nullopt;
-  if (json.contains("watch")) {
-    config.watch.clear();
-    for (const auto& folder : watch) config.watch.push_back(base / folder);
-  }
-  if (json.contains("output")) config.output = base / output;
   return config;
+}
+
+nlohmann::json value_from_text(const ConfigKey& key, const std::vector<std::string>& texts) {
+  const auto parsed = [](const std::string& text) {
+    return nlohmann::json::accept(text) ? nlohmann::json::parse(text) : nlohmann::json(text);
+  };
+  switch (key.kind) {
+    case ValueKind::kString:
+    case ValueKind::kName:
+    case ValueKind::kFolder:
+      return texts.size() == 1 ? nlohmann::json(texts[0]) : nlohmann::json(texts);
+    case ValueKind::kFolders:
+      // Several texts (--watch A --watch B) are folders; one is a JSON list or a single folder.
+      if (texts.size() == 1 && nlohmann::json::accept(texts[0]) && nlohmann::json::parse(texts[0]).is_array()) {
+        return nlohmann::json::parse(texts[0]);
+      }
+      return nlohmann::json(texts);
+    case ValueKind::kVector3:
+      if (texts.size() == 1) return parsed(texts[0]);
+      {
+        nlohmann::json out = nlohmann::json::array();
+        for (const auto& text : texts) out.push_back(parsed(text));
+        return out;
+      }
+    case ValueKind::kBoolean:
+    case ValueKind::kInteger:
+    case ValueKind::kNumber:
+      break;
+  }
+  return texts.size() == 1 ? parsed(texts[0]) : nlohmann::json(texts);
 }
 
 bool check_config(DaemonConfig& config, std::string& error) {
@@ -374,24 +225,6 @@ bool check_config(DaemonConfig& config, std::string& error) {
   }
   config.output = std::filesystem::canonical(config.output);
   if (!check_ranges(config, error)) return false;
-  if (!(config.validation_seconds > 0) || !(config.state_rate_hz > 0) || !(config.real_time_factor > 0)) {
-    error = "validation_seconds, state_rate_hz and real_time_factor must be > 0";
-    return false;
-  }
-  // Written so that NaN fails too; infinities are out (JSON has none, the command line does).
-  const auto positive = [](double v) { return v > 0 && std::isfinite(v); };
-  if (!positive(config.time_step) || config.time_step > 0.1 || !(config.max_mass_ratio >= 1) ||
-      !positive(config.energy_tolerance) || !positive(config.joint_separation_tolerance_m) ||
-      !positive(config.limit_tolerance_rad) || !positive(config.limit_tolerance_m) ||
-      !std::isfinite(config.validation_start_offset_rad) || !config.gravity.allFinite() ||
-      !(config.bound_mass_kg >= 0) || !std::isfinite(config.bound_mass_kg) || !(config.bound_inertia_kgm2 >= 0) ||
-      !std::isfinite(config.bound_inertia_kgm2) || !(config.validation_cpu_budget_s >= 0) ||
-      !std::isfinite(config.validation_cpu_budget_s)) {
-    error = "time_step must be in (0, 0.1] s, max_mass_ratio >= 1, the tolerances finite and > 0, "
-            "validation_start_offset_rad and gravity finite, bound_mass_kg, bound_inertia_kgm2 and "
-            "validation_cpu_budget_s finite and >= 0";
-    return false;
-  }
   for (const auto& folder : config.watch) {
     // An output folder that contains a watched folder would hide every save in it.
     const auto relative = folder.lexically_relative(config.output);
@@ -401,13 +234,6 @@ bool check_config(DaemonConfig& config, std::string& error) {
       return false;
     }
   }
-  if (config.settle.count() <= 0 || config.workers < 1 || config.max_chunk_bytes < 1024 ||
-      config.max_chunk_bytes > 65000 || config.chunk_rate_bytes_per_s <= 0 ||
-      config.status_period.count() <= 0) {
-    error = "settle_ms and status_period_ms must be > 0, workers >= 1, max_chunk_bytes in "
-            "1024..65000, chunk_rate_bytes_per_s > 0";
-    return false;
-  }
   if (config.channel_prefix.empty() || config.channel_prefix.size() > 16) {
     error = "channel_prefix must have 1 to 16 characters";
     return false;
@@ -415,6 +241,68 @@ bool check_config(DaemonConfig& config, std::string& error) {
   return true;
 }
 
+ConfigChange compare_configs(const DaemonConfig& running, const DaemonConfig& fresh) {
+  ConfigChange change;
+  for (const ConfigKey& key : config_registry()) {
+    if (key.get(running) != key.get(fresh)) {
+      change.keys.push_back(key.name);
+      change.effects |= key.reload;
+    }
+  }
+  return change;
+}
+
+void keep_restart_settings(const DaemonConfig& running, DaemonConfig& fresh) {
+  std::string error;
+  for (const ConfigKey& key : config_registry()) {
+    if ((key.reload & kNeedsRestart) != 0) key.set(key.get(running), "", fresh, error);
+  }
+}
+
+namespace {
+
+// The shortest text that reads back as `value`, but whole numbers below 1e9 and fractions down to
+// 1e-4 written out (600000, 0.0001, 4294967296, 1e+10, 1e-12).
+std::string shortest_text(double value) {
+  char buffer[64];
+  const double size = std::abs(value);
+  const bool written_out = (value == std::floor(value) && size < 1e9) || (size >= 1e-4 && size < 1);
+  const auto result = written_out ? std::to_chars(buffer, buffer + sizeof(buffer), value, std::chars_format::fixed)
+                                  : std::to_chars(buffer, buffer + sizeof(buffer), value);
+  return std::string(buffer, result.ptr);
+}
+
+std::string reload_text(unsigned effects) {
+  if ((effects & kNeedsRestart) != 0) return "needs a restart";
+  std::vector<std::string> parts;
+  if ((effects & kFoldersChanged) != 0) parts.push_back("rescans the new folders");
+  if ((effects & kReconnect) != 0) parts.push_back("reopens LCM");
+  if ((effects & kReconvert) != 0) parts.push_back("converts every model again");
+  if ((effects & kRestartSimulation) != 0) parts.push_back("restarts the simulations");
+  if (parts.empty()) return "live";
+  std::string text = parts[0];
+  for (std::size_t i = 1; i < parts.size(); ++i) text += ", " + parts[i];
+  return text;
+}
+
+}  // namespace
+
+std::string settings_table_markdown() {
+  const DaemonConfig defaults = default_config();
+  std::string table =
+      "| key | default | unit | range | on reload | meaning |\n"
+      "| --- | --- | --- | --- | --- | --- |\n";
+  for (const ConfigKey& key : config_registry()) {
+    std::string range = key.range_text;
+    if (range.empty() && key.min && key.max) range = shortest_text(*key.min) + " .. " + shortest_text(*key.max);
+    std::string meaning = key.doc;
+    if (!key.flag.empty()) meaning += " (`" + key.flag.substr(key.flag.find("--")) + "`)";
+    table += "| `" + key.name + "` | " +
+             (key.default_text.empty() ? "`" + key.get(defaults).dump() + "`" : key.default_text) + " | " +
+             key.unit + " | " + range + " | " + reload_text(key.reload) + " | " + meaning + " |\n";
+  }
+  return table;
+}
 
 std::optional<Stepper> parse_stepper(std::string_view name) {
   if (name == "auto") return Stepper::kAuto;

@@ -4,6 +4,7 @@
 
 #include <chrono>
 #include <filesystem>
+#include <functional>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -75,6 +76,48 @@ std::optional<Stepper> parse_stepper(std::string_view name);
 ValidationOptions validation_options(const DaemonConfig& config);
 SimulationOptions simulation_options(const DaemonConfig& config);
 
+// What a reload that changes a key does (bits; 0 = applied live, nothing else happens).
+enum ReloadEffect : unsigned {
+  kApplyLive = 0,
+  kReconvert = 1u << 0,          // Every model is converted again (a same result keeps its revision).
+  kRestartSimulation = 1u << 1,  // The live simulations are started again.
+  kReconnect = 1u << 2,          // LCM is opened again.
+  kFoldersChanged = 1u << 3,     // The rescan after the reload says the folders changed.
+  kNeedsRestart = 1u << 4,       // Not applied by a reload: the running value stays until a restart.
+};
+
+// How a key's value is written: picks the JSON type checked and how command-line text is read.
+enum class ValueKind { kBoolean, kInteger, kNumber, kString, kName, kFolder, kFolders, kVector3 };
+
+// One setting: everything about it that is not the DaemonConfig field itself. The registry of these
+// (daemon/config_keys.cc) is the one place a setting is described: parsing of the file and of
+// --set, the command-line options, the range check, the reload comparison, the defaults test of
+// config/rdtfd.json and the settings table of docs/daemon.md all come from it.
+struct ConfigKey {
+  std::string name;                // As in the file, e.g. "settle_ms".
+  ValueKind kind = ValueKind::kNumber;
+  std::string unit;                // "ms", "kg/m^3", ... ("" for none).
+  std::optional<double> min;       // The valid range, both ends included (each component of a vector).
+  std::optional<double> max;
+  std::string range_text;          // For the docs when the range is more than [min, max] ("0 (off) or ...").
+  unsigned reload = kApplyLive;    // ReloadEffect bits.
+  std::string flag;                // Command-line option ("-w,--watch"), "" for --set only.
+  std::string flag_help;
+  std::optional<nlohmann::json> flag_sets;  // For a switch (--no-urdf): the value it sets.
+  std::string default_text;        // For the docs when the default depends on the environment.
+  std::string doc;                 // The docs' meaning column.
+  // Filled in by the registry from the field's codec:
+  std::function<nlohmann::json(const DaemonConfig&)> get;
+  std::function<bool(const nlohmann::json& value, const std::filesystem::path& base, DaemonConfig& config,
+                     std::string& error)>
+      set;  // Checks the JSON type (error names the key); relative folders relative to `base`.
+  std::function<std::vector<double>(const DaemonConfig&)> numbers;  // What the range check checks.
+};
+
+// Every key, in the order of config/rdtfd.json and docs/daemon.md.
+const std::vector<ConfigKey>& config_registry();
+const ConfigKey* find_config_key(std::string_view name);
+
 // Every key a config object may have ("_comment" is allowed too, and ignored).
 const std::vector<std::string>& config_keys();
 
@@ -104,8 +147,28 @@ std::optional<DaemonConfig> load_config(const std::filesystem::path& path, Daemo
 std::optional<DaemonConfig> apply_config_json(const nlohmann::json& json, const std::filesystem::path& base,
                                               DaemonConfig config, std::string& error);
 
+// A key's value from command-line text (--set KEY=TEXT, or the key's option): JSON where the key
+// takes a number, a boolean or a list (else the text as a string, which the type check refuses);
+// the text itself for a string, a name or a folder, so paths and prefixes need no quotes.
+nlohmann::json value_from_text(const ConfigKey& key, const std::vector<std::string>& texts);
+
 // Checks the settings make sense (folders exist or can be made, every number within its range). Creates
 // missing watch and output folders and makes every folder absolute and canonical.
 bool check_config(DaemonConfig& config, std::string& error);
+
+// What a reload from `running` to `fresh` changes: the keys whose value differs and the union of
+// their ReloadEffect bits.
+struct ConfigChange {
+  std::vector<std::string> keys;
+  unsigned effects = 0;
+  bool has(ReloadEffect effect) const { return (effects & effect) != 0; }
+};
+ConfigChange compare_configs(const DaemonConfig& running, const DaemonConfig& fresh);
+
+// Puts the running value of every kNeedsRestart key into `fresh` (a reload does not apply them).
+void keep_restart_settings(const DaemonConfig& running, DaemonConfig& fresh);
+
+// docs/daemon.md's settings table, generated from the registry (a test keeps the docs equal to it).
+std::string settings_table_markdown();
 
 }  // namespace rdtf::daemon

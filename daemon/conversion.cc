@@ -15,6 +15,7 @@
 #include "rdtf/atomic_file.h"
 #include "rdtf/urdf_names.h"
 #include "rdtf/write.h"
+#include "rdtf/diagnostic_codes.h"
 
 namespace rdtf::daemon {
 namespace {
@@ -110,7 +111,7 @@ namespace {
 bool name_too_long(const Diagnostics& diag) {
   const std::string text = std::strerror(ENAMETOOLONG);
   for (const Diagnostic& d : diag.all()) {
-    if (d.severity == Severity::kError && d.code == "WRITE_FAILED" && d.message.find(text) != std::string::npos) {
+    if (d.severity == Severity::kError && d.code == codes::WRITE_FAILED && d.message.find(text) != std::string::npos) {
       return true;
     }
   }
@@ -122,7 +123,7 @@ bool name_too_long(const Diagnostics& diag) {
 void write_failed(const std::filesystem::path& output_dir, Diagnostics& diagnostics, bool& retry) {
   if (name_too_long(diagnostics)) {
     const long name_max = ::pathconf(output_dir.c_str(), _PC_NAME_MAX);
-    diagnostics.error("NAME_TOO_LONG", "",
+    diagnostics.error(codes::NAME_TOO_LONG, "",
                       "an output name made from this model (its file name, or a node's name in the "
                       "URDF's meshes) is longer than " + (name_max > 0 ? std::to_string(name_max) : std::string("allowed")) +
                       " bytes, the longest name the output file system takes; not retried: rename it");
@@ -140,14 +141,14 @@ bool write_outputs(const ConversionJob& job, const Conversion& conversion, Conve
   std::error_code ec;
   std::filesystem::create_directories(job.output_dir, ec);
   if (ec) {
-    diagnostics.error("WRITE_FAILED", "", "cannot create " + job.output_dir.string() + ": " + ec.message());
+    diagnostics.error(codes::WRITE_FAILED, "", "cannot create " + job.output_dir.string() + ": " + ec.message());
     write_failed(job.output_dir, diagnostics, retry);
     return false;
   }
   std::string why;
   auto stage = StagedOutput::create(job.output_dir, "stage", why);
   if (!stage) {
-    diagnostics.error("WRITE_FAILED", "", "cannot write: " + why);
+    diagnostics.error(codes::WRITE_FAILED, "", "cannot write: " + why);
     write_failed(job.output_dir, diagnostics, retry);
     return false;
   }
@@ -160,7 +161,7 @@ bool write_outputs(const ConversionJob& job, const Conversion& conversion, Conve
   write_options.content_digest = written.digest();
   if (!write_rdtf(conversion.asset, stage->folder() / name, write_options, write_diag, &converted.rdtf_json)) {
     diagnostics.append(write_diag);
-    if (has_code(write_diag, "WRITE_FAILED")) write_failed(job.output_dir, diagnostics, retry);
+    if (has_code(write_diag, codes::WRITE_FAILED)) write_failed(job.output_dir, diagnostics, retry);
     return false;
   }
   diagnostics.append(write_diag);
@@ -174,13 +175,13 @@ bool write_outputs(const ConversionJob& job, const Conversion& conversion, Conve
       converted.urdf_path = job.output_dir / "urdf" / "robot.urdf";
       primaries.emplace_back("urdf/robot.urdf");
       diagnostics.append(urdf_diag);  // Its warnings (URDF_NAME_CHANGED, ...).
-    } else if (has_code(urdf_diag, "WRITE_FAILED")) {
+    } else if (has_code(urdf_diag, codes::WRITE_FAILED)) {
       // The disk, not the model: fail the revision and try again; nothing was moved into place.
       diagnostics.append(urdf_diag);
       write_failed(job.output_dir, diagnostics, retry);
       return false;
     } else {
-      for (const Diagnostic& d : urdf_diag.all()) diagnostics.warning("URDF_NOT_WRITTEN", d.pointer, d.message);
+      for (const Diagnostic& d : urdf_diag.all()) diagnostics.warning(codes::URDF_NOT_WRITTEN, d.pointer, d.message);
     }
   }
   // Kept: the files of the new revision, of the outputs it replaces on disk, and of the live
@@ -192,7 +193,7 @@ bool write_outputs(const ConversionJob& job, const Conversion& conversion, Conve
   keep_meshes.merge(names_in_urdf(file_text(job.output_dir / "urdf" / "robot.urdf")));
   keep_meshes.merge(names_in_urdf(job.live_urdf));
   if (!stage->commit(job.output_dir, primaries, why)) {
-    diagnostics.error("WRITE_FAILED", "", "cannot move the outputs into place: " + why);
+    diagnostics.error(codes::WRITE_FAILED, "", "cannot move the outputs into place: " + why);
     write_failed(job.output_dir, diagnostics, retry);
     return false;
   }
@@ -201,7 +202,7 @@ bool write_outputs(const ConversionJob& job, const Conversion& conversion, Conve
   std::string manifest_why;
   converted.files = output_files(name.string(), converted.rdtf_json, converted.urdf, written, manifest_why);
   if (!manifest_why.empty()) {
-    diagnostics.warning("MANIFEST_INCOMPLETE", "", "no manifest for this revision, so its files are not served "
+    diagnostics.warning(codes::MANIFEST_INCOMPLETE, "", "no manifest for this revision, so its files are not served "
                         "as blobs: " + manifest_why);
   }
   return true;
@@ -260,7 +261,7 @@ ConversionOutcome run_conversion(const ConversionJob& job) {
       outcome.kind = ConversionOutcome::Kind::kVanished;
       return finish();
     case internal::ReadBeneath::kRefused:
-      outcome.diagnostics.error("IO_ERROR", "", "cannot read the model: it " + why);
+      outcome.diagnostics.error(codes::IO_ERROR, "", "cannot read the model: it " + why);
       return finish();
   }
   // Lexically, not canonically: no folder on the way is a symlink (read_beneath checked), and a
@@ -276,7 +277,7 @@ ConversionOutcome run_conversion(const ConversionJob& job) {
     to_read += internal::confined_file_size(folder, file, size_why).value_or(0);
   }
   if (to_read > job.max_read_bytes) {
-    outcome.diagnostics.error("LIMIT_EXCEEDED", "",
+    outcome.diagnostics.error(codes::LIMIT_EXCEEDED, "",
                               "the model and the " + std::to_string(outcome.dependencies.size()) +
                                   " files it names (each counted as often as it is named) add up to " +
                                   std::to_string(to_read) + " bytes to read, over the limit of " +

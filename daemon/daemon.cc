@@ -24,6 +24,7 @@
 #include "rdtf/atomic_file.h"
 #include "rdtf/gltf.h"
 #include "rdtf/urdf.h"
+#include "rdtf/diagnostic_codes.h"
 
 namespace rdtf::daemon {
 namespace {
@@ -99,26 +100,6 @@ std::string first_error(const Diagnostics& diag) {
     if (d.severity == Severity::kError) return format(d);
   }
   return "unknown error";
-}
-
-// What a conversion's result depends on besides the files: a reload that changes none of these
-// gives no model a new revision.
-auto conversion_settings(const DaemonConfig& c) {
-  const auto& l = c.convert.limits;
-  return std::make_tuple(c.output, c.convert.default_density, l.max_file_bytes, l.max_buffer_bytes, c.max_read_bytes,
-                         l.max_accessor_count, l.max_triangles, c.validate, c.validation_seconds,
-                         c.publish_failed, c.floating_root, c.gravity.x(), c.gravity.y(), c.gravity.z(),
-                         c.time_step, static_cast<int>(c.stepper), c.max_mass_ratio,
-                         c.validation_start_offset_rad, c.energy_tolerance, c.joint_separation_tolerance_m,
-                         c.limit_tolerance_rad, c.limit_tolerance_m, c.bound_mass_kg, c.bound_inertia_kgm2,
-                         c.massless_link_error, c.validation_cpu_budget_s, c.urdf, c.urdf_y_up);
-}
-
-// What the live simulations depend on: a reload that changes none of these keeps them running.
-auto simulation_settings(const DaemonConfig& c) {
-  return std::make_tuple(c.simulate, c.state_rate_hz, c.real_time_factor, c.joint_command_timeout_s, c.floating_root, c.gravity.x(),
-                         c.gravity.y(), c.gravity.z(), c.time_step, static_cast<int>(c.stepper), c.lcm_url,
-                         c.channel_prefix, c.bound_mass_kg, c.bound_inertia_kgm2);
 }
 
 // A conversion again of the content served (after a reload) whose result is the served one.
@@ -338,14 +319,13 @@ void Daemon::publish_daemon_error(const std::string& code, const std::string& fi
   error.source_path = file;
   error.live_revision = 0;
   error.diagnostics = to_messages(diag);
-  error.num_diagnostics = static_cast<std::int32_t>(error.diagnostics.size());
   publisher_->publish(config_.channel_prefix + "/ERROR", error);
 }
 
 void Daemon::on_publisher_event(const PublisherEvent& event) {
   log_line(event.text);
   // While sends fail nothing can be told over LCM; once they work, the outage is reported.
-  if (event.kind == PublisherEvent::Kind::kSendRecovered) publish_daemon_error("LCM_SEND_FAILED", "", event.text);
+  if (event.kind == PublisherEvent::Kind::kSendRecovered) publish_daemon_error(codes::LCM_SEND_FAILED, "", event.text);
 }
 
 void Daemon::schedule_retry(const ConversionOutcome& outcome, ModelRecord& record) {
@@ -388,12 +368,12 @@ void Daemon::check_watches(Clock::time_point now) {
     for (const auto& [folder, missing] : unwatched) {
       if (missing) {
         log_line("watched folder " + folder.string() + " is missing; looking for it every second");
-        publish_daemon_error("WATCH_FAILED", folder.string(),
+        publish_daemon_error(codes::WATCH_FAILED, folder.string(),
                              "cannot watch " + folder.string() +
                                  ": it is missing (deleted or moved away); its models were removed, and "
                                  "it is looked for every second and watched again when it is back");
       } else {
-        publish_daemon_error("WATCH_FAILED", folder.string(),
+        publish_daemon_error(codes::WATCH_FAILED, folder.string(),
                              "cannot watch " + folder.string() +
                                  ": inotify watches exhausted (raise /proc/sys/fs/inotify/max_user_watches); "
                                  "its models were converted once, and the folder is tried again every second");
@@ -632,7 +612,7 @@ void Daemon::worker_loop() {
       outcome.source = job.source;
       outcome.kind = ConversionOutcome::Kind::kRejected;
       outcome.diagnostics.set_file(job.source.string());
-      outcome.diagnostics.error("INTERNAL_ERROR", "", error.what());
+      outcome.diagnostics.error(codes::INTERNAL_ERROR, "", error.what());
     }
     {
       std::lock_guard lock(mutex_);
@@ -851,7 +831,6 @@ void Daemon::publish_status() {
   pending += static_cast<std::int32_t>(retries_.size());
   status.pending = pending;
   status.num_models = static_cast<std::int32_t>(status.model_ids.size());
-  status.num_model_ids = status.num_models;
   status.dropped_messages = static_cast<std::int64_t>(bus_.dropped());
   status.coalesced_requests = static_cast<std::int64_t>(request_throttle_.coalesced());
   status.send_queue_bytes = static_cast<std::int64_t>(publisher_->queued_bytes());
@@ -974,13 +953,14 @@ void Daemon::reload_config() {
     log_line("SIGHUP: config not reloaded, the running config stays: " + error);
     return;
   }
-  const bool lcm_changed = fresh->lcm_url != config_.lcm_url || fresh->channel_prefix != config_.channel_prefix;
-  const bool folders_changed = fresh->watch != config_.watch || fresh->output != config_.output;
-  const bool conversion_changed = conversion_settings(*fresh) != conversion_settings(config_);
-  const bool simulation_changed = simulation_settings(*fresh) != simulation_settings(config_);
-  const int workers = config_.workers;  // The pool keeps its size until a restart.
+  // What the changed keys need (their reload effects, daemon/config_keys.cc).
+  const ConfigChange change = compare_configs(config_, *fresh);
+  const bool lcm_changed = change.has(kReconnect);
+  const bool folders_changed = change.has(kFoldersChanged);
+  const bool conversion_changed = change.has(kReconvert);
+  const bool simulation_changed = change.has(kRestartSimulation);
+  keep_restart_settings(config_, *fresh);  // E.g. the worker pool keeps its size until a restart.
   config_ = std::move(*fresh);
-  config_.workers = workers;
   settle_.set_settle(config_.settle);
   settle_.set_max_open_wait(config_.max_open_wait);
   if (lcm_changed && !connect_lcm(error)) log_line("SIGHUP: " + error);

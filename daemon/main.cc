@@ -6,32 +6,20 @@
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
+#include <map>
 
 #include "daemon.h"
 
 namespace {
 
+// The command line: the named options of the registry's keys (config.cc) and --set KEY=VALUE.
 struct Overrides {
-  std::vector<std::string> watch;
-  std::string output;
-  std::string lcm_url;
-  std::string channel_prefix;
-  std::optional<double> settle_ms;
-  std::optional<double> republish_ms;
-  std::optional<int> workers;
-  std::optional<double> density;
-  std::optional<double> state_rate_hz;
-  std::vector<double> gravity;
-  bool no_validate = false;
-  bool no_simulate = false;
-  bool no_urdf = false;
-  bool publish_failed = false;
-  bool floating_root = false;
+  std::map<std::string, std::vector<std::string>> options;  // Key -> the texts its option was given.
+  std::map<std::string, bool> switches;                      // Key -> whether its switch was given.
   std::vector<std::string> settings;  // --set KEY=VALUE: any key of the config file.
 };
 
-// "--set KEY=VALUE" as the config file's {"KEY": VALUE}: VALUE is read as JSON (a number, true,
-// [0, 0, -9.8]) and otherwise taken as a string, so that paths and URLs need no quotes.
+// "--set KEY=VALUE" as the config file's {"KEY": VALUE} (value_from_text reads VALUE by the key's kind).
 std::optional<nlohmann::json> settings_json(const std::vector<std::string>& settings, std::string& error) {
   nlohmann::json json = nlohmann::json::object();
   for (const std::string& setting : settings) {
@@ -40,11 +28,25 @@ std::optional<nlohmann::json> settings_json(const std::vector<std::string>& sett
       error = "--set " + setting + ": expected KEY=VALUE";
       return std::nullopt;
     }
-    const std::string key = setting.substr(0, equals);
+    const std::string name = setting.substr(0, equals);
     const std::string value = setting.substr(equals + 1);
-    json[key] = nlohmann::json::accept(value) ? nlohmann::json::parse(value) : nlohmann::json(value);
+    const auto* key = rdtf::daemon::find_config_key(name);
+    json[name] = key != nullptr ? rdtf::daemon::value_from_text(*key, {value})
+                                : (nlohmann::json::accept(value) ? nlohmann::json::parse(value) : nlohmann::json(value));
   }
   return json;
+}
+
+// Applies `json` over `config`; an error is prefixed with `what` (the option).
+bool apply(const nlohmann::json& json, const std::string& what, rdtf::daemon::DaemonConfig& config,
+           std::string& error) {
+  auto applied = rdtf::daemon::apply_config_json(json, std::filesystem::current_path(), std::move(config), error);
+  if (!applied) {
+    error = what + ": " + error;
+    return false;
+  }
+  config = std::move(*applied);
+  return true;
 }
 
 std::optional<rdtf::daemon::DaemonConfig> load(const std::string& config_file,
@@ -60,35 +62,21 @@ std::optional<rdtf::daemon::DaemonConfig> load(const std::string& config_file,
   }
   if (!overrides.settings.empty()) {
     const auto settings = settings_json(overrides.settings, error);
-    if (!settings) return std::nullopt;
-    auto applied = rdtf::daemon::apply_config_json(*settings, std::filesystem::current_path(), std::move(config), error);
-    if (!applied) {
-      error = "--set: " + error;
-      return std::nullopt;
+    if (!settings || !apply(*settings, "--set", config, error)) return std::nullopt;
+  }
+  // The named options win over --set; each is applied alone so that an error names its option.
+  for (const auto& key : rdtf::daemon::config_registry()) {
+    const std::string option = key.flag.empty() ? "" : key.flag.substr(key.flag.find("--"));
+    nlohmann::json json;
+    if (const auto it = overrides.options.find(key.name); it != overrides.options.end() && !it->second.empty()) {
+      json[key.name] = rdtf::daemon::value_from_text(key, it->second);
+    } else if (const auto on = overrides.switches.find(key.name); on != overrides.switches.end() && on->second) {
+      json[key.name] = *key.flag_sets;
+    } else {
+      continue;
     }
-    config = std::move(*applied);
+    if (!apply(json, option, config, error)) return std::nullopt;
   }
-  if (!overrides.watch.empty()) {
-    config.watch.assign(overrides.watch.begin(), overrides.watch.end());
-  }
-  if (!overrides.output.empty()) config.output = overrides.output;
-  if (!overrides.lcm_url.empty()) config.lcm_url = overrides.lcm_url;
-  if (!overrides.channel_prefix.empty()) config.channel_prefix = overrides.channel_prefix;
-  if (overrides.settle_ms) config.settle = std::chrono::milliseconds(static_cast<long long>(*overrides.settle_ms));
-  if (overrides.republish_ms) {
-    config.republish_period = std::chrono::milliseconds(static_cast<long long>(*overrides.republish_ms));
-  }
-  if (overrides.workers) config.workers = *overrides.workers;
-  if (overrides.density) config.convert.default_density = *overrides.density;
-  if (overrides.state_rate_hz) config.state_rate_hz = *overrides.state_rate_hz;
-  if (overrides.gravity.size() == 3) {
-    config.gravity = Eigen::Vector3d(overrides.gravity[0], overrides.gravity[1], overrides.gravity[2]);
-  }
-  if (overrides.no_validate) config.validate = false;
-  if (overrides.no_simulate) config.simulate = false;
-  if (overrides.no_urdf) config.urdf = false;
-  if (overrides.publish_failed) config.publish_failed = true;
-  if (overrides.floating_root) config.floating_root = true;
   if (!rdtf::daemon::check_config(config, error)) return std::nullopt;
   return config;
 }
@@ -103,28 +91,24 @@ int main(int argc, char** argv) {
   Overrides overrides;
   app.add_option("-c,--config", config_file, "JSON config file (see config/rdtfd.json)")
       ->check(CLI::ExistingFile);
-  app.add_option("-w,--watch", overrides.watch,
-                 "Folder to watch, recursively (repeatable; default ~/.local/share/rdtf/models)");
-  app.add_option("-o,--output", overrides.output,
-                 "Folder for RDTF outputs (default ~/.local/state/rdtf/output)");
-  app.add_option("--lcm-url", overrides.lcm_url, "LCM URL (default: LCM_DEFAULT_URL, else LCM's default)");
-  app.add_option("--channel-prefix", overrides.channel_prefix, "First part of every channel (default RDTF)");
-  app.add_option("--settle-ms", overrides.settle_ms, "Quiet time after a save before converting (default 50)");
-  app.add_option("--republish-ms", overrides.republish_ms,
-                 "Period of republishing every description; 0 disables (default 5000)");
-  app.add_option("--workers", overrides.workers, "Conversion threads (default 2)")->check(CLI::PositiveNumber);
-  app.add_option("--density", overrides.density, "Default density, kg/m^3 (default 1000)")
-      ->check(CLI::PositiveNumber);
-  app.add_option("--state-rate-hz", overrides.state_rate_hz, "Joint-state messages per second and model (default 100)")
-      ->check(CLI::PositiveNumber);
-  app.add_option("--gravity", overrides.gravity, "Gravity in the scene frame, m/s^2 (default 0 -9.80665 0: glTF is Y up)")
-      ->expected(3);
-  app.add_flag("--no-validate", overrides.no_validate, "Publish without the ODE dynamics check");
-  app.add_flag("--no-simulate", overrides.no_simulate, "Run no live simulation (no joint states)");
-  app.add_flag("--no-urdf", overrides.no_urdf, "Write no URDF beside the RDTF outputs");
-  app.add_flag("--publish-failed", overrides.publish_failed,
-               "Publish revisions that fail the dynamics check (marked failed) instead of keeping the last good one");
-  app.add_flag("--floating-root", overrides.floating_root, "Root links float instead of being fixed to the world");
+  for (const auto& key : rdtf::daemon::config_registry()) {
+    if (key.flag.empty()) continue;
+    if (key.flag_sets) {
+      app.add_flag(key.flag, overrides.switches[key.name], key.flag_help);
+    } else {
+      auto* option = app.add_option(key.flag, overrides.options[key.name], key.flag_help);
+      using rdtf::daemon::ValueKind;
+      option->type_name(key.kind == ValueKind::kFolders || key.kind == ValueKind::kFolder ? "DIR"
+                        : key.kind == ValueKind::kString || key.kind == ValueKind::kName ? "TEXT"
+                        : key.kind == ValueKind::kInteger                                ? "INT"
+                                                                                         : "NUMBER");
+      if (key.kind == rdtf::daemon::ValueKind::kVector3) {
+        option->expected(3);
+      } else if (key.kind != rdtf::daemon::ValueKind::kFolders) {
+        option->expected(1)->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
+      }
+    }
+  }
   app.add_option("--set", overrides.settings,
                  "KEY=VALUE: any key of the config file (config/rdtfd.json), VALUE as JSON or a plain string; "
                  "repeatable; applied over the file, under the options above")

@@ -2,6 +2,9 @@
 
 #include <chrono>
 
+#include "counts.h"
+#include "diagnostic_message.h"
+#include "rdtf/diagnostic_codes.h"
 #include "rdtf/urdf_names.h"
 
 namespace rdtf::daemon {
@@ -14,18 +17,7 @@ std::int64_t now_utime() {
 
 std::vector<rdtf::diagnostic_t> to_messages(const Diagnostics& diagnostics) {
   std::vector<rdtf::diagnostic_t> out;
-  for (const Diagnostic& d : diagnostics.all()) {
-    rdtf::diagnostic_t m;
-    m.severity = d.severity == Severity::kError     ? rdtf::diagnostic_t::ERROR
-                 : d.severity == Severity::kWarning ? rdtf::diagnostic_t::WARNING
-                                                    : rdtf::diagnostic_t::INFO;
-    m.code = d.code;
-    m.file = d.file;
-    m.pointer = d.pointer;
-    m.byte_offset = d.byte_offset ? static_cast<std::int64_t>(*d.byte_offset) : -1;
-    m.message = d.message;
-    out.push_back(std::move(m));
-  }
+  for (const Diagnostic& d : diagnostics.all()) out.push_back(to_message(d));
   return out;
 }
 
@@ -39,7 +31,7 @@ std::vector<rdtf::description_chunk_t> chunks_of(const ModelRecord& record, cons
   empty.model_id = record.id;
   empty.revision = record.revisions;
   empty.content_hash = record.live->content_hash;
-  empty.size = 0;
+  set_counts(empty);
   const std::size_t overhead = static_cast<std::size_t>(empty.getEncodedSize());
   // A limit below the chunk's own fields still has to make progress.
   const std::size_t piece = max_message_bytes > overhead + 1024 ? max_message_bytes - overhead : 1024;
@@ -52,7 +44,7 @@ std::vector<rdtf::description_chunk_t> chunks_of(const ModelRecord& record, cons
     const std::size_t begin = i * piece;
     const std::size_t end = std::min(text.size(), begin + piece);
     chunk.data.assign(text.begin() + static_cast<std::ptrdiff_t>(begin), text.begin() + static_cast<std::ptrdiff_t>(end));
-    chunk.size = static_cast<std::int32_t>(chunk.data.size());
+    set_counts(chunk);
     chunks.push_back(std::move(chunk));
   }
   return chunks;
@@ -120,7 +112,7 @@ std::vector<rdtf::inertia_table_t> make_inertia_tables(const ModelRecord& record
   table.content_hash = model.content_hash;
   table.total_mass = model.totals.mass;
   for (int i = 0; i < 3; ++i) table.center_of_mass_scene[i] = model.totals.center_of_mass_scene[i];
-  table.num_links = 0;
+  set_counts(table);
   const std::size_t fields = static_cast<std::size_t>(table.getEncodedSize());
   std::vector<rdtf::inertia_table_t> tables;
   std::size_t size = fields;
@@ -145,7 +137,7 @@ std::vector<rdtf::inertia_table_t> make_inertia_tables(const ModelRecord& record
     row.authored = link.inertial_source == InertialSource::kAuthored;
     const std::size_t row_size = static_cast<std::size_t>(row._getEncodedSizeNoHash());
     if (!table.links.empty() && size + row_size > max_message_bytes) {
-      table.num_links = static_cast<std::int32_t>(table.links.size());
+      set_counts(table);
       tables.push_back(table);
       table.links.clear();
       size = fields;
@@ -153,7 +145,7 @@ std::vector<rdtf::inertia_table_t> make_inertia_tables(const ModelRecord& record
     table.links.push_back(std::move(row));
     size += row_size;
   }
-  table.num_links = static_cast<std::int32_t>(table.links.size());
+  set_counts(table);
   tables.push_back(std::move(table));
   return tables;
 }
@@ -165,15 +157,13 @@ namespace {
 template <typename Message>
 void fit_diagnostics(Message& message, std::size_t max_bytes) {
   if (static_cast<std::size_t>(message.getEncodedSize()) <= max_bytes) return;
-  rdtf::diagnostic_t note;
-  note.severity = rdtf::diagnostic_t::INFO;
-  note.code = "DIAGNOSTICS_TRUNCATED";
-  note.byte_offset = -1;
   // Sized with the longest count it can hold; the real count is put in below.
-  note.message = "999999 more diagnostics not sent: they did not fit in one datagram (rdtfd's log has every one)";
+  rdtf::diagnostic_t note = to_message(
+      Severity::kInfo, codes::DIAGNOSTICS_TRUNCATED,
+      "999999 more diagnostics not sent: they did not fit in one datagram (rdtfd's log has every one)");
   std::vector<rdtf::diagnostic_t> all = std::move(message.diagnostics);
   message.diagnostics.clear();
-  message.num_diagnostics = 0;
+  set_counts(message);
   std::size_t size = static_cast<std::size_t>(message.getEncodedSize()) + static_cast<std::size_t>(note._getEncodedSizeNoHash());
   std::size_t kept = 0;
   for (; kept < all.size(); ++kept) {
@@ -185,7 +175,7 @@ void fit_diagnostics(Message& message, std::size_t max_bytes) {
   note.message = std::to_string(all.size() - kept) +
                  " more diagnostics not sent: they did not fit in one datagram (rdtfd's log has every one)";
   message.diagnostics.push_back(std::move(note));
-  message.num_diagnostics = static_cast<std::int32_t>(message.diagnostics.size());
+  set_counts(message);
 }
 
 }  // namespace
@@ -199,7 +189,7 @@ rdtf::model_error_t make_model_error(const ModelRecord& record, const std::strin
   message.live_revision = record.live ? record.revisions : 0;
   message.content_hash = content_hash;
   message.diagnostics = to_messages(diagnostics);
-  message.num_diagnostics = static_cast<std::int32_t>(message.diagnostics.size());
+  set_counts(message);
   fit_diagnostics(message, max_message_bytes);
   return message;
 }
@@ -232,7 +222,7 @@ rdtf::validation_report_t make_validation_report(const std::string& model_id, st
   message.worst_joint_error = summary.worst_joint_error;
   message.wall_time = summary.wall_time;
   message.diagnostics = to_messages(summary.diagnostics);
-  message.num_diagnostics = static_cast<std::int32_t>(message.diagnostics.size());
+  set_counts(message);
   fit_diagnostics(message, max_message_bytes);
   return message;
 }

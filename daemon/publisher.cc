@@ -106,8 +106,10 @@ std::optional<Publisher::Clock::time_point> Publisher::drain(Clock::time_point n
   if (queued() == 0) return std::nullopt;
   const double missing =
       std::min(receive_buffer_cost(head_queue().front().bytes.size()), static_cast<double>(burst_)) - allowance_;
-  return now + std::chrono::duration_cast<Clock::duration>(
-                   std::chrono::duration<double>(std::max(missing, 0.0) / rate_));
+  // Capped at an hour: a rate near zero would otherwise overflow the clock's
+  // integer nanoseconds; the caller drains again by then anyway.
+  const double wait_s = std::min(std::max(missing, 0.0) / rate_, 3600.0);
+  return now + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(wait_s));
 }
 
 }  // namespace rdtf::daemon

@@ -27,6 +27,8 @@
 
 #include <lcm/lcm-cpp.hpp>
 
+#include "counts.h"
+
 namespace rdtf::daemon {
 
 // One LCM send: 0 on success, as lcm::LCM::publish. A seam for tests of the publisher itself.
@@ -55,8 +57,10 @@ class Publisher {
   Publisher(lcm::LCM& lcm, double bytes_per_second, std::size_t burst_bytes);
   Publisher(SendFunction send, double bytes_per_second, std::size_t burst_bytes);
 
+  // The message's length fields are set here from its arrays (lcmtypes/counts.h), never by callers.
   template <typename Message>
-  void publish(const std::string& channel, const Message& message, Priority priority = Priority::kNormal) {
+  void publish(const std::string& channel, Message message, Priority priority = Priority::kNormal) {
+    set_counts(message);
     std::vector<std::uint8_t> bytes(static_cast<std::size_t>(message.getEncodedSize()));
     message.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
     enqueue(channel, std::move(bytes), priority);

@@ -8,9 +8,12 @@
 #include <rdtf/link_state_t.hpp>
 #include <rdtf/model_error_t.hpp>
 
+#include "counts.h"
+#include "diagnostic_message.h"
 #include "daemon.h"
 #include "messages.h"
 #include "safe_decode.h"
+#include "rdtf/diagnostic_codes.h"
 
 namespace rdtf::daemon {
 
@@ -198,14 +201,9 @@ void SimulationHost::reject(const rdtf::joint_command_t& command, const std::str
   message.live_revision = live == models_.end() ? 0 : live->second->revision;
   // The live model's hash, never the bus's (which may be megabytes of anything).
   message.content_hash = live == models_.end() ? std::string() : live->second->content_hash;
-  rdtf::diagnostic_t d;
-  d.severity = rdtf::diagnostic_t::ERROR;
-  d.code = "COMMAND_REJECTED";
-  d.byte_offset = -1;
-  d.message = text;
+  const rdtf::diagnostic_t d = to_message(Severity::kError, codes::COMMAND_REJECTED, text);
   message.diagnostics.push_back(d);
-  message.num_diagnostics = 1;
-  lcm_.publish(options_.channel_prefix + "/" + command.model_id + "/ERROR", &message);
+  rdtf::publish(lcm_, options_.channel_prefix + "/" + command.model_id + "/ERROR", message);
 }
 
 void SimulationHost::apply_command(const rdtf::joint_command_t& command, Clock::time_point now) {
@@ -301,8 +299,7 @@ void SimulationHost::publish_state(const std::string& model_id, LiveModel& model
     message.velocity.push_back(state.velocity);
     message.effort.push_back(state.effort);
   }
-  message.num_joints = static_cast<std::int32_t>(message.name.size());
-  lcm_.publish(options_.channel_prefix + "/" + model_id + "/JOINT_STATE", &message);
+  rdtf::publish(lcm_, options_.channel_prefix + "/" + model_id + "/JOINT_STATE", message);
   publish_links(model_id, model, poses, message.utime, message.sim_time);
 }
 
@@ -328,8 +325,7 @@ void SimulationHost::publish_links(const std::string& model_id, const LiveModel&
     message.linear_velocity.push_back({pose.v_SLo_S.x(), pose.v_SLo_S.y(), pose.v_SLo_S.z()});
     message.angular_velocity.push_back({pose.w_SL_S.x(), pose.w_SL_S.y(), pose.w_SL_S.z()});
   }
-  message.num_links = static_cast<std::int32_t>(message.name.size());
-  lcm_.publish(options_.channel_prefix + "/" + model_id + "/LINK_STATE", &message);
+  rdtf::publish(lcm_, options_.channel_prefix + "/" + model_id + "/LINK_STATE", message);
 }
 
 void SimulationHost::publish_problem(const std::string& model_id, const LiveModel& model, const char* code,
@@ -339,14 +335,10 @@ void SimulationHost::publish_problem(const std::string& model_id, const LiveMode
   message.model_id = model_id;
   message.live_revision = model.revision;
   message.content_hash = model.content_hash;
-  rdtf::diagnostic_t d;
+  rdtf::diagnostic_t d = to_message(Severity::kError, code, text);
   d.severity = severity;
-  d.code = code;
-  d.byte_offset = -1;
-  d.message = text;
   message.diagnostics.push_back(d);
-  message.num_diagnostics = 1;
-  lcm_.publish(options_.channel_prefix + "/" + model_id + "/ERROR", &message);
+  rdtf::publish(lcm_, options_.channel_prefix + "/" + model_id + "/ERROR", message);
 }
 
 void SimulationHost::report_failure(const std::string& model_id, LiveModel& model, Clock::time_point now) {
@@ -369,7 +361,7 @@ void SimulationHost::report_failure(const std::string& model_id, LiveModel& mode
     log_line(text + " (" + std::to_string(failures_) + " failures since start)");
   }
   if (const auto admitted = failure_reports_.admit(text, now)) {
-    publish_problem(model_id, model, "SIMULATION_FAILED", rdtf::diagnostic_t::ERROR, *admitted);
+    publish_problem(model_id, model, codes::SIMULATION_FAILED, rdtf::diagnostic_t::ERROR, *admitted);
   }
 }
 

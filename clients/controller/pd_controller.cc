@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "counts.h"
+
 namespace rdtf::controller {
 
 void PdController::on_description(std::int64_t revision) {
@@ -58,7 +60,7 @@ std::optional<rdtf::joint_command_t> PdController::on_state(const rdtf::joint_st
       command.kd.push_back(0);
     }
   }
-  command.num_joints = static_cast<std::int32_t>(command.name.size());
+  set_counts(command);  // lcmtypes/counts.h
   return command;
 }
 

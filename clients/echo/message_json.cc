@@ -20,6 +20,8 @@
 #include <rdtf/status_t.hpp>
 #include <rdtf/validation_report_t.hpp>
 
+#include "diagnostic_message.h"
+#include "rdtf/diagnostics_json.h"
 #include "safe_decode.h"
 
 namespace rdtf::clients {
@@ -27,12 +29,8 @@ namespace {
 
 using Json = nlohmann::ordered_json;
 
-Json to_json(const rdtf::diagnostic_t& m) {
-  static const char* const kSeverity[] = {"info", "warning", "error"};
-  return {{"severity", m.severity >= 0 && m.severity <= 2 ? kSeverity[m.severity] : "?"},
-          {"code", m.code}, {"file", m.file}, {"pointer", m.pointer},
-          {"byte_offset", m.byte_offset}, {"message", m.message}};
-}
+// The core library's JSON of a diagnostic, the same as `rdtf inspect --json` prints.
+Json to_json(const rdtf::diagnostic_t& m) { return rdtf::diagnostic_json(rdtf::from_message(m)); }
 
 Json header(const char* type, std::int64_t utime, const std::string& model_id) {
   return {{"type", type}, {"utime", utime}, {"model_id", model_id}};

@@ -5,13 +5,14 @@
 
 #include "commands.h"
 #include "rdtf/write.h"
+#include "rdtf/diagnostic_codes.h"
 
 namespace rdtf::cli {
 namespace fs = std::filesystem;
 
 namespace {
 
-constexpr const char* kOutputInvalid = "OUTPUT_PATH_INVALID";
+constexpr const char* kOutputInvalid = codes::OUTPUT_PATH_INVALID;
 
 std::string file_type_name(fs::file_type type) {
   switch (type) {
@@ -210,7 +211,7 @@ bool OutputFiles::make_folder(const fs::path& folder, Diagnostics& diag) {
   fs::create_directories(normal, error);
   new_folders_.insert(new_folders_.end(), missing.begin(), missing.end());
   if (error) {
-    diag.error("WRITE_FAILED", "", "cannot create the folder " + normal.string() + ": " + error.message());
+    diag.error(codes::WRITE_FAILED, "", "cannot create the folder " + normal.string() + ": " + error.message());
     return false;
   }
   return true;
@@ -241,7 +242,7 @@ bool write_staged(const Conversion& conversion, const fs::path& target, bool glb
   std::string why;
   auto stage = StagedOutput::create(folder, "rdtf-stage", why);
   if (!stage) {
-    diag.error("WRITE_FAILED", "", "cannot write " + target.string() + ": " + why);
+    diag.error(codes::WRITE_FAILED, "", "cannot write " + target.string() + ": " + why);
     return false;
   }
   Diagnostics staged(target.string());
@@ -252,7 +253,7 @@ bool write_staged(const Conversion& conversion, const fs::path& target, bool glb
   }
   if (!written) return false;
   if (!stage->commit(folder, {target.filename()}, why, /*keep_identical=*/true)) {
-    diag.error("WRITE_FAILED", "", "cannot move the output into place: " + why);
+    diag.error(codes::WRITE_FAILED, "", "cannot move the output into place: " + why);
     return false;
   }
   return true;

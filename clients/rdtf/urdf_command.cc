@@ -3,6 +3,7 @@
 #include "commands.h"
 #include "rdtf/atomic_file.h"
 #include "rdtf/urdf.h"
+#include "rdtf/diagnostic_codes.h"
 
 namespace rdtf::cli {
 namespace {
@@ -51,7 +52,7 @@ int run_urdf(UrdfArguments& args) {
       std::string why;
       written = urdf ? write_file_atomically(path, exported->text, why)
                      : write_file_atomically(path, exported->meshes[i].bytes, why);
-      if (!written) write_diag.error("WRITE_FAILED", "", "cannot write " + path.string() + ": " + why);
+      if (!written) write_diag.error(codes::WRITE_FAILED, "", "cannot write " + path.string() + ": " + why);
     }
     if (!written) output.roll_back();
     urdf_diag.append(write_diag);
@@ -62,7 +63,7 @@ int run_urdf(UrdfArguments& args) {
   if (!written) {
     const std::size_t errors = urdf_diag.error_count() + output_diag.error_count();
     std::cerr << args.input << ": no URDF written (" << errors << " error" << (errors == 1 ? "" : "s") << ")\n";
-    return urdf_diag.contains("WRITE_FAILED") ? kExitInternalError : kExitInvalidInput;
+    return urdf_diag.contains(codes::WRITE_FAILED) ? kExitInternalError : kExitInvalidInput;
   }
   std::cerr << "wrote " << (dir / "robot.urdf").string() << " and " << (dir / "meshes").string()
             << "/: " << conversion->robot.links.size() << " links, "

@@ -3,6 +3,7 @@
 #include <iostream>
 
 #include "commands.h"
+#include "rdtf/diagnostics_json.h"
 #include "rdtf/dynamics.h"
 
 namespace rdtf::cli {
@@ -32,8 +33,7 @@ int run_validate(ValidateArguments& args) {
     out["conversionDiagnostics"] = Json::array();
     for (const Diagnostic& d : diag.all()) {
       if (d.severity != Severity::kInfo || args.verbose) {
-        out["conversionDiagnostics"].push_back(
-            {{"severity", to_string(d.severity)}, {"code", d.code}, {"pointer", d.pointer}, {"message", d.message}});
+        out["conversionDiagnostics"].push_back(diagnostic_json(d));
       }
     }
     std::cout << out.dump(2) << "\n";

@@ -1,4 +1,5 @@
 #include "rdtf/completion.h"
+#include "rdtf/diagnostic_codes.h"
 
 namespace rdtf {
 namespace {
@@ -75,7 +76,7 @@ void complete_nodes(Json& document, std::vector<NodeType>& types, Diagnostics& d
     std::vector<std::size_t> other_children;
     if (document["nodes"][link].contains("mesh")) {
       mesh_children.push_back(split_off_mesh(document, types, link));
-      diag.info("LINK_MESH_SPLIT", json_pointer("/nodes", link),
+      diag.info(codes::LINK_MESH_SPLIT, json_pointer("/nodes", link),
                 "link '" + name + "' carries a mesh and children (Blender's layout): its mesh " +
                     "moved to the new node '" + name + "_mesh'");
     }

@@ -38,6 +38,12 @@ void Diagnostics::add(Severity severity, std::string code, std::string pointer,
   items_.push_back(std::move(d));
 }
 
+void Diagnostics::add_at_line(Severity severity, std::string code, std::string pointer, int line,
+                              const std::string& message) {
+  add(severity, std::move(code), std::move(pointer), "line " + std::to_string(line) + ": " + message);
+  items_.back().line = line;
+}
+
 void Diagnostics::error_at_offset(std::string code, std::uint64_t offset, std::string message) {
   Diagnostic d;
   d.severity = Severity::kError;

@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "ode_model.h"
+#include "rdtf/diagnostic_codes.h"
 
 namespace rdtf {
 namespace dynamics_internal {
@@ -66,7 +67,7 @@ void check_mappable(const Robot& robot, const WeldGroups& welds, Diagnostics& di
     const Link& link = robot.links[l];
     const std::string where = node_pointer(link.node);
     const std::string name = "link '" + link.name + "': ";
-    if (!link.X_SL.matrix().allFinite()) diag.error("ODE_INVALID_LINK", where, name + "pose is not finite");
+    if (!link.X_SL.matrix().allFinite()) diag.error(codes::ODE_INVALID_LINK, where, name + "pose is not finite");
     const WeldGroup& group = welds.groups[welds.group_of[l]];
     if (group.welded_to_world || is_massless(link)) continue;
     // Mass 0 with an inertia, in a body with mass: its inertia only adds to the body's.
@@ -74,12 +75,12 @@ void check_mappable(const Robot& robot, const WeldGroups& welds, Diagnostics& di
     const MassProperties& inertial = link.inertial;
     if (!std::isfinite(inertial.mass) || !inertial.inertia.allFinite() ||
         !inertial.center_of_mass.allFinite()) {
-      diag.error("ODE_MASS_CHECK_FAILED", where, name + "mass, inertia or centre of mass is not finite");
+      diag.error(codes::ODE_MASS_CHECK_FAILED, where, name + "mass, inertia or centre of mass is not finite");
       continue;
     }
     const bool point_mass = inertial.mass > 0 && inertial.inertia.isZero(0) && group.links.size() > 1;
     if (!point_mass && !mass_checks(inertial)) {
-      diag.error("ODE_MASS_CHECK_FAILED", where,
+      diag.error(codes::ODE_MASS_CHECK_FAILED, where,
                  name + "dMassCheck refuses " + mass_text(inertial) +
                      " (mass must be positive, inertia positive definite)");
     }
@@ -89,7 +90,7 @@ void check_mappable(const Robot& robot, const WeldGroups& welds, Diagnostics& di
     const Link& top = robot.links[group.top];
     if (group.merged.mass == 0) {
       for (int l : group.links) {
-        diag.error("ODE_MASSLESS_LINK", node_pointer(robot.links[l].node),
+        diag.error(codes::ODE_MASSLESS_LINK, node_pointer(robot.links[l].node),
                    "link '" + robot.links[l].name +
                        "': has no mass and is not fixed to a link with mass or to the world: ODE "
                        "cannot move a body without mass (a bound mass and inertia simulate it: "
@@ -97,7 +98,7 @@ void check_mappable(const Robot& robot, const WeldGroups& welds, Diagnostics& di
                        "bound_inertia_kgm2)");
       }
     } else if (group.links.size() > 1 && !mass_checks(group.merged)) {
-      diag.error("ODE_MASS_CHECK_FAILED", node_pointer(top.node),
+      diag.error(codes::ODE_MASS_CHECK_FAILED, node_pointer(top.node),
                  "link '" + top.name + "' and the " + std::to_string(group.links.size() - 1) +
                      " links fixed to it: dMassCheck refuses their combined " + mass_text(group.merged));
     }
@@ -106,23 +107,23 @@ void check_mappable(const Robot& robot, const WeldGroups& welds, Diagnostics& di
     const std::string where = node_pointer(joint.node);
     const std::string name = "joint '" + joint.name + "' (" + to_string(joint.kind) + "): ";
     if (joint.kind == JointKind::kPlanar) {
-      diag.error("ODE_UNSUPPORTED_JOINT", where,
+      diag.error(codes::ODE_UNSUPPORTED_JOINT, where,
                  name + "ODE has no planar joint between two bodies; not simulated");
     }
-    if (!joint.X_PJ.matrix().allFinite()) diag.error("ODE_INVALID_JOINT", where, name + "origin is not finite");
+    if (!joint.X_PJ.matrix().allFinite()) diag.error(codes::ODE_INVALID_JOINT, where, name + "origin is not finite");
     if (one_dof(joint.kind) && (!joint.axis.allFinite() || joint.axis.norm() < 1e-12)) {
-      diag.error("ODE_INVALID_JOINT", where, name + "axis " + vector_text(joint.axis) + " has no direction");
+      diag.error(codes::ODE_INVALID_JOINT, where, name + "axis " + vector_text(joint.axis) + " has no direction");
     }
     if (joint.limits && (joint.kind == JointKind::kRevolute || joint.kind == JointKind::kPrismatic) &&
         !(joint.limits->lower <= joint.limits->upper && std::isfinite(joint.limits->lower) &&
           std::isfinite(joint.limits->upper))) {
-      diag.error("ODE_INVALID_JOINT", where,
+      diag.error(codes::ODE_INVALID_JOINT, where,
                  name + "limits [" + number(joint.limits->lower) + ", " + number(joint.limits->upper) +
                      "] are not a finite interval");
     }
     for (double value : {joint.damping, joint.friction, joint.spring_stiffness}) {
       if (!(value >= 0) || !std::isfinite(value)) {
-        diag.error("ODE_INVALID_JOINT", where,
+        diag.error(codes::ODE_INVALID_JOINT, where,
                    name + "damping, friction and stiffness must be finite and not negative");
         break;
       }
@@ -139,12 +140,12 @@ std::vector<double> start_positions(const Robot& robot, const std::map<std::stri
   for (const auto& [name, value] : initial) {
     const auto found = index.find(name);
     if (found == index.end()) {
-      diag.info("SIM_UNKNOWN_JOINT", "", "initial position for '" + name + "': no such joint; ignored");
+      diag.info(codes::SIM_UNKNOWN_JOINT, "", "initial position for '" + name + "': no such joint; ignored");
       continue;
     }
     const Joint& joint = robot.joints[found->second];
     if (!one_dof(joint.kind) || !std::isfinite(value)) {
-      diag.warning("SIM_INITIAL_POSITION_IGNORED", node_pointer(joint.node),
+      diag.warning(codes::SIM_INITIAL_POSITION_IGNORED, node_pointer(joint.node),
                    "initial position " + number(value) + " of joint '" + name + "' (" +
                        to_string(joint.kind) + ") ignored: not one finite degree of freedom");
       continue;
@@ -156,7 +157,7 @@ std::vector<double> start_positions(const Robot& robot, const std::map<std::stri
     if (!joint.limits || (joint.kind != JointKind::kRevolute && joint.kind != JointKind::kPrismatic)) continue;
     const double clamped = std::clamp(q[j], joint.limits->lower, joint.limits->upper);
     if (clamped != q[j]) {
-      diag.info("SIM_INITIAL_POSITION_CLAMPED", node_pointer(joint.node),
+      diag.info(codes::SIM_INITIAL_POSITION_CLAMPED, node_pointer(joint.node),
                 "joint '" + joint.name + "' starts at " + number(clamped) + " (its limit), not " + number(q[j]));
       q[j] = clamped;
     }
@@ -248,7 +249,7 @@ void add_joint(Simulation::Model& model, int j, const Eigen::Isometry3d& X_SJ, D
   const std::string where = node_pointer(joint.node);
   const std::string name = "joint '" + joint.name + "' (" + to_string(joint.kind) + "): ";
   const auto ignored = [&](const char* what) {
-    diag.warning("ODE_PROPERTY_IGNORED", where, name + what + " is not modelled for this kind; ignored");
+    diag.warning(codes::ODE_PROPERTY_IGNORED, where, name + what + " is not modelled for this kind; ignored");
   };
   if (joint.kind == JointKind::kFloating) {
     if (joint.damping > 0) ignored("damping");
@@ -372,9 +373,9 @@ std::unique_ptr<Simulation::Model> build_model(const Robot& robot, const Simulat
                                                const std::map<std::string, double>& initial,
                                                Diagnostics& diag) {
   init_ode();
-  if (!check_structure(robot, "ODE_INVALID_ROBOT", diag)) return nullptr;
+  if (!check_structure(robot, codes::ODE_INVALID_ROBOT, diag)) return nullptr;
   if (!options.gravity.allFinite() || !(options.time_step > 0) || !std::isfinite(options.time_step)) {
-    diag.error("SIM_INVALID_OPTIONS", "", "gravity must be finite and the time step positive");
+    diag.error(codes::SIM_INVALID_OPTIONS, "", "gravity must be finite and the time step positive");
     return nullptr;
   }
   const std::vector<int> order = tree_order(robot);

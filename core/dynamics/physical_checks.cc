@@ -5,6 +5,7 @@
 #include <numbers>
 
 #include "ode_model.h"
+#include "rdtf/diagnostic_codes.h"
 
 namespace rdtf {
 namespace {
@@ -21,20 +22,20 @@ void check_roots(const Robot& robot, Diagnostics& diag) {
     if (robot.links[l].parent_joint < 0) roots.push_back(static_cast<int>(l));
   }
   if (robot.links.empty()) {
-    diag.error("ROBOT_NO_LINKS", "", "the robot has no links: nothing to simulate");
+    diag.error(codes::ROBOT_NO_LINKS, "", "the robot has no links: nothing to simulate");
     return;
   }
   if (roots.size() < 2) return;
   std::string names;
   for (int r : roots) names += (names.empty() ? "'" : ", '") + robot.links[r].name + "'";
-  diag.error("ROBOT_MULTIPLE_ROOTS", where(robot.links[roots[1]]),
+  diag.error(codes::ROBOT_MULTIPLE_ROOTS, where(robot.links[roots[1]]),
              std::to_string(roots.size()) + " root links (" + names +
                  "): one robot has one root; join the others to it with joints");
   const std::vector<int> order = dynamics_internal::tree_order(robot);
   const std::vector<int> root = dynamics_internal::root_of(robot, order);
   for (std::size_t l = 0; l < robot.links.size(); ++l) {
     if (root[l] == roots[0]) continue;
-    diag.error("LINK_NOT_CONNECTED", where(robot.links[l]),
+    diag.error(codes::LINK_NOT_CONNECTED, where(robot.links[l]),
                "link '" + robot.links[l].name + "' is not connected to the root link '" +
                    robot.links[roots[0]].name + "' (its tree's root is '" +
                    robot.links[root[l]].name + "')");
@@ -58,38 +59,38 @@ void check_mass(const Robot& robot, std::size_t l, const WeldGroups& welds, cons
   const double mass = link.inertial.mass;
   const std::string name = "link '" + link.name + "': ";
   if (!std::isfinite(mass)) {
-    diag.error("LINK_MASS_NOT_FINITE", where(link), name + "mass " + number(mass) + " is not finite");
+    diag.error(codes::LINK_MASS_NOT_FINITE, where(link), name + "mass " + number(mass) + " is not finite");
   } else if (mass < 0) {
-    diag.error("LINK_MASS_NEGATIVE", where(link), name + "mass " + number(mass) + " kg is negative");
+    diag.error(codes::LINK_MASS_NEGATIVE, where(link), name + "mass " + number(mass) + " kg is negative");
   } else if (mass == 0 && !link.inertial.inertia.isZero(0)) {
     const std::string message = name + "mass is 0 but its inertia is not zero (largest moment " +
                                 number(link.inertial.inertia.cwiseAbs().maxCoeff()) + " kg m^2)";
     if (group.welded_to_world) {
       // Welded to the world it never moves: neither its mass nor its inertia is used.
-      diag.warning("LINK_MASSLESS_WITH_INERTIA", where(link),
+      diag.warning(codes::LINK_MASSLESS_WITH_INERTIA, where(link),
                    message + "; it is welded to the world and never moves, so its inertia is not used");
     } else if (group.merged.mass > 0) {
-      diag.warning("LINK_MASSLESS_WITH_INERTIA", where(link),
+      diag.warning(codes::LINK_MASSLESS_WITH_INERTIA, where(link),
                    message + "; it is welded (fixed joints) into the body of " + body_text(robot, group) +
                        ", whose inertia it adds to (as MuJoCo's fusestatic does)");
     } else {
-      diag.error("LINK_MASSLESS_WITH_INERTIA", where(link), message);
+      diag.error(codes::LINK_MASSLESS_WITH_INERTIA, where(link), message);
     }
   } else if (mass == 0) {
     if (group.welded_to_world) {
-      diag.info("LINK_MASSLESS", where(link), name + "has no mass; the world holds it (fixed joints)");
+      diag.info(codes::LINK_MASSLESS, where(link), name + "has no mass; the world holds it (fixed joints)");
     } else if (group.bounded) {
       const std::string message = name + "has no mass and moves with " + body_text(robot, group) +
                                   ", which have none: simulated with the bound mass " +
                                   number(options.bound_mass) + " kg and inertia " +
                                   number(options.bound_inertia) + " kg m^2";
       if (options.massless_link_error) {
-        diag.error("LINK_MASS_ZERO", where(link), message + " (massless moving links are errors by option)");
+        diag.error(codes::LINK_MASS_ZERO, where(link), message + " (massless moving links are errors by option)");
       } else {
-        diag.warning("LINK_MASS_ZERO", where(link), message);
+        diag.warning(codes::LINK_MASS_ZERO, where(link), message);
       }
     } else if (group.merged.mass > 0) {
-      diag.info("LINK_MASSLESS", where(link),
+      diag.info(codes::LINK_MASSLESS, where(link),
                 name + "has no mass; it is welded (fixed joints) into the body of " + body_text(robot, group));
     } else {
       const std::string how = link.parent_joint < 0
@@ -101,7 +102,7 @@ void check_mass(const Robot& robot, std::size_t l, const WeldGroups& welds, cons
                                  ? std::string()
                                  : " with link '" + top.name + "' on joint '" +
                                        robot.joints[top.parent_joint].name + "'";
-      diag.error("LINK_MASS_ZERO", where(link),
+      diag.error(codes::LINK_MASS_ZERO, where(link),
                  name + "mass is 0 and the link " + (group.top == static_cast<int>(l) ? how : "moves" + on) +
                      " without being fixed to a link with mass: a body without mass cannot move "
                      "(give it mass, e.g. rdtf_mass, or make its joint fixed; or simulate it with a "
@@ -132,13 +133,13 @@ void check_inertia(const Robot& robot, const Link& link, const WeldGroup& group,
   const Eigen::Matrix3d& I = link.inertial.inertia;
   const std::string name = "link '" + link.name + "': ";
   if (!I.allFinite()) {
-    diag.error("LINK_INERTIA_NOT_FINITE", where(link), name + "inertia is not finite");
+    diag.error(codes::LINK_INERTIA_NOT_FINITE, where(link), name + "inertia is not finite");
     return;
   }
   // A point mass (a sensor frame of a gram) is a sound part of a rigid body: welded to other links
   // or to the world it only adds m d^2 to the body's inertia. Alone on a joint it cannot turn.
   if (I.isZero(0) && (group.links.size() > 1 || group.welded_to_world)) {
-    diag.info("LINK_POINT_MASS", where(link),
+    diag.info(codes::LINK_POINT_MASS, where(link),
               name + "a point mass (zero inertia), welded (fixed joints) into the body of " +
                   (group.welded_to_world ? std::string("the world") : body_text(robot, group)));
     return;
@@ -146,7 +147,7 @@ void check_inertia(const Robot& robot, const Link& link, const WeldGroup& group,
   const double largest = I.cwiseAbs().maxCoeff();
   const double asymmetry = (I - I.transpose()).cwiseAbs().maxCoeff();
   if (asymmetry > options.symmetry_tolerance * largest) {
-    diag.error("LINK_INERTIA_NOT_SYMMETRIC", where(link),
+    diag.error(codes::LINK_INERTIA_NOT_SYMMETRIC, where(link),
                name + "inertia is not symmetric: |I - I^T| reaches " + number(asymmetry) +
                    " kg m^2 (largest entry " + number(largest) + ")");
     return;
@@ -157,12 +158,12 @@ void check_inertia(const Robot& robot, const Link& link, const WeldGroup& group,
   const double a = moments[0], b = moments[1], c = moments[2];
   const std::string principal = "principal moments " + vector_text(moments) + " kg m^2";
   if (!(a > 0)) {
-    diag.error("LINK_INERTIA_NOT_POSITIVE_DEFINITE", where(link),
+    diag.error(codes::LINK_INERTIA_NOT_POSITIVE_DEFINITE, where(link),
                name + "inertia is not positive definite: " + principal);
     return;
   }
   if (a + b < c - options.triangle_tolerance * (a + b + c)) {
-    diag.error("LINK_INERTIA_TRIANGLE_INEQUALITY", where(link),
+    diag.error(codes::LINK_INERTIA_TRIANGLE_INEQUALITY, where(link),
                name + "inertia breaks the triangle inequality A + B >= C of a real body: " +
                    principal + ", A + B = " + number(a + b) + " < C = " + number(c));
   }
@@ -170,7 +171,7 @@ void check_inertia(const Robot& robot, const Link& link, const WeldGroup& group,
     const double polar = 0.5 * I.trace();
     const double bound = polar_lower_bound(link);
     if (polar < bound * (1 - options.solid_bound_tolerance)) {
-      diag.error("LINK_INERTIA_BELOW_SOLID_BOUND", where(link),
+      diag.error(codes::LINK_INERTIA_BELOW_SOLID_BOUND, where(link),
                  name + "polar moment tr(I)/2 = " + number(polar) +
                      " kg m^2 is below " + number(bound) +
                      ", the least any solid of its volume and mass can have (a ball's)");
@@ -183,7 +184,7 @@ void check_center_of_mass(const Link& link, const std::optional<Eigen::AlignedBo
   const Eigen::Vector3d& com = link.inertial.center_of_mass;
   const std::string name = "link '" + link.name + "': ";
   if (!com.allFinite()) {
-    diag.error("LINK_COM_NOT_FINITE", where(link), name + "centre of mass is not finite");
+    diag.error(codes::LINK_COM_NOT_FINITE, where(link), name + "centre of mass is not finite");
     return;
   }
   if (!box || box->isEmpty() || link.inertial.mass <= 0) return;
@@ -194,9 +195,9 @@ void check_center_of_mass(const Link& link, const std::optional<Eigen::AlignedBo
                               vector_text(box->min()) + " - " + vector_text(box->max()) +
                               " of its geometry";
   if (link.inertial_source == InertialSource::kComputed) {
-    diag.error("LINK_COM_OUTSIDE_GEOMETRY", where(link), message);
+    diag.error(codes::LINK_COM_OUTSIDE_GEOMETRY, where(link), message);
   } else {
-    diag.warning("LINK_COM_OUTSIDE_GEOMETRY", where(link), message + " (authored inertial)");
+    diag.warning(codes::LINK_COM_OUTSIDE_GEOMETRY, where(link), message + " (authored inertial)");
   }
 }
 
@@ -204,18 +205,18 @@ void check_joint(const Robot& robot, const Joint& joint, const WeldGroups& welds
                  Diagnostics& diag) {
   const std::string name = "joint '" + joint.name + "' (" + to_string(joint.kind) + "): ";
   if (!joint.X_PJ.matrix().allFinite()) {
-    diag.error("JOINT_POSE_NOT_FINITE", where(joint), name + "origin is not finite");
+    diag.error(codes::JOINT_POSE_NOT_FINITE, where(joint), name + "origin is not finite");
   }
   const bool has_axis = dynamics_internal::one_dof(joint.kind) || joint.kind == JointKind::kPlanar;
   if (has_axis) {
     const double norm = joint.axis.norm();
     if (!joint.axis.allFinite()) {
-      diag.error("JOINT_AXIS_NOT_FINITE", where(joint), name + "axis is not finite");
+      diag.error(codes::JOINT_AXIS_NOT_FINITE, where(joint), name + "axis is not finite");
     } else if (norm < 1e-12) {
-      diag.error("JOINT_AXIS_ZERO", where(joint),
+      diag.error(codes::JOINT_AXIS_ZERO, where(joint),
                  name + "axis " + vector_text(joint.axis) + " is zero: it has no direction");
     } else if (std::abs(norm - 1) > 1e-6) {
-      diag.warning("JOINT_AXIS_NOT_UNIT", where(joint),
+      diag.warning(codes::JOINT_AXIS_NOT_UNIT, where(joint),
                    name + "axis " + vector_text(joint.axis) + " has length " + number(norm) +
                        "; it is normalized");
     }
@@ -223,14 +224,14 @@ void check_joint(const Robot& robot, const Joint& joint, const WeldGroups& welds
   if (joint.limits && (joint.kind == JointKind::kRevolute || joint.kind == JointKind::kPrismatic)) {
     const JointLimits& limits = *joint.limits;
     if (!std::isfinite(limits.lower) || !std::isfinite(limits.upper)) {
-      diag.error("JOINT_LIMITS_NOT_FINITE", where(joint),
+      diag.error(codes::JOINT_LIMITS_NOT_FINITE, where(joint),
                  name + "limits [" + number(limits.lower) + ", " + number(limits.upper) + "] are not finite");
     } else if (limits.lower > limits.upper) {
-      diag.error("JOINT_LIMITS_INVERTED", where(joint),
+      diag.error(codes::JOINT_LIMITS_INVERTED, where(joint),
                  name + "lower limit " + number(limits.lower) + " is above the upper limit " +
                      number(limits.upper));
     } else if (limits.lower > 0 || limits.upper < 0) {
-      diag.warning("JOINT_REST_OUTSIDE_LIMITS", where(joint),
+      diag.warning(codes::JOINT_REST_OUTSIDE_LIMITS, where(joint),
                    name + "the rest pose (position 0) is outside the limits [" +
                        number(limits.lower) + ", " + number(limits.upper) +
                        "]; simulations start at the nearest limit");
@@ -238,7 +239,7 @@ void check_joint(const Robot& robot, const Joint& joint, const WeldGroups& welds
   }
   const auto check_value = [&](const char* what, double value) {
     if (!std::isfinite(value) || value < 0) {
-      diag.error("JOINT_DYNAMICS_INVALID", where(joint),
+      diag.error(codes::JOINT_DYNAMICS_INVALID, where(joint),
                  name + what + " " + number(value) + " must be finite and not negative");
     }
   };
@@ -259,7 +260,7 @@ void check_joint(const Robot& robot, const Joint& joint, const WeldGroups& welds
   if (std::isfinite(mp) && std::isfinite(mc) && mp > 0 && mc > 0) {
     const double ratio = std::max(mp, mc) / std::min(mp, mc);
     if (ratio > options.max_mass_ratio) {
-      diag.error("JOINT_MASS_RATIO", where(joint),
+      diag.error(codes::JOINT_MASS_RATIO, where(joint),
                  name + "joins " + body_text(robot, parent) + " (" + number(mp) + " kg) and " +
                      body_text(robot, child) + " (" + number(mc) + " kg): mass ratio " + number(ratio) +
                      " is above the bound " + number(options.max_mass_ratio) +
@@ -272,7 +273,7 @@ void check_joint(const Robot& robot, const Joint& joint, const WeldGroups& welds
 
 void check_physics(const Robot& robot, const PhysicalCheckOptions& options, const LinkBounds* bounds,
                    Diagnostics& diag) {
-  if (!dynamics_internal::check_structure(robot, "ROBOT_INVALID_REFERENCE", diag)) return;
+  if (!dynamics_internal::check_structure(robot, codes::ROBOT_INVALID_REFERENCE, diag)) return;
   check_roots(robot, diag);
   const std::vector<int> order = dynamics_internal::tree_order(robot);
   const WeldGroups welds = dynamics_internal::weld_groups(
@@ -281,7 +282,7 @@ void check_physics(const Robot& robot, const PhysicalCheckOptions& options, cons
   for (std::size_t l = 0; l < robot.links.size(); ++l) {
     const Link& link = robot.links[l];
     if (!link.X_SL.matrix().allFinite()) {
-      diag.error("LINK_POSE_NOT_FINITE", where(link), "link '" + link.name + "': pose is not finite");
+      diag.error(codes::LINK_POSE_NOT_FINITE, where(link), "link '" + link.name + "': pose is not finite");
     }
     check_mass(robot, l, welds, options, diag);
     if (std::isfinite(link.inertial.mass) && link.inertial.mass > 0) {

@@ -7,6 +7,7 @@
 
 #include "ode_model.h"
 #include "rdtf/summary.h"
+#include "rdtf/diagnostic_codes.h"
 
 namespace rdtf {
 namespace {
@@ -123,13 +124,13 @@ void run_scenario(Simulation& sim, const Simulation::Model& model, const Validat
   for (std::uint64_t n = 0; n < steps; ++n) {
     if (limits_of_run.cancelled()) {
       report.cancelled = true;
-      diag.error("SIM_CANCELLED", "",
+      diag.error(codes::SIM_CANCELLED, "",
                  "the validation was cancelled at t = " + number(sim.time()) + " s of " + number(options.duration) +
                      " s: the model is not judged");
       break;
     }
     if (limits_of_run.over_budget(n)) {
-      diag.error("SIM_BUDGET_EXCEEDED", "",
+      diag.error(codes::SIM_BUDGET_EXCEEDED, "",
                  "the validation used " + number(thread_cpu_seconds() - limits_of_run.cpu_start) +
                      " s of CPU, beyond its budget of " + number(options.cpu_budget) + " s (rdtf validate "
                      "--cpu-budget, rdtfd validation_cpu_budget_s): stopped at t = " + number(sim.time()) +
@@ -142,7 +143,7 @@ void run_scenario(Simulation& sim, const Simulation::Model& model, const Validat
     const double t = sim.time();
     const SimulationHealth h = sim.health(tolerances);
     if (!h.finite) {
-      diag.error("SIM_NOT_FINITE", "",
+      diag.error(codes::SIM_NOT_FINITE, "",
                  "the state became NaN, infinite or too large to step (beyond 1e100) at t = " +
                      number(t) + " s (step " + std::to_string(sim.steps()) +
                      "): the model is unstable in ODE");
@@ -175,7 +176,7 @@ void run_scenario(Simulation& sim, const Simulation::Model& model, const Validat
   report.simulated_time = sim.time();
   report.steps = sim.steps();
   if (energy.failed) {
-    diag.error("SIM_ENERGY_RISE", "",
+    diag.error(codes::SIM_ENERGY_RISE, "",
                "total energy (kinetic + potential + dissipated) rose by " + number(100 * energy.worst) +
                    "% of its scale " + energy.when() + "; the bound is " +
                    number(100 * options.energy_tolerance) +
@@ -184,7 +185,7 @@ void run_scenario(Simulation& sim, const Simulation::Model& model, const Validat
   }
   const auto joint_text = [&](int j) { return "joint '" + robot.joints[j].name + "'"; };
   if (separation.failed) {
-    diag.error("SIM_JOINT_SEPARATION", node_pointer(robot.joints[separation.where].node),
+    diag.error(codes::SIM_JOINT_SEPARATION, node_pointer(robot.joints[separation.where].node),
                joint_text(separation.where) + ": its anchor points came " + number(separation.worst) +
                    " m apart " + separation.when() + "; " +
                    bound_text(separation.bound, separation_tolerance, " m", dt));
@@ -199,21 +200,21 @@ void run_scenario(Simulation& sim, const Simulation::Model& model, const Validat
       // solver, not on the model: measured, the same fraction in a healthy chain and in one whose
       // link is 100 times lighter in rotation (which twisted 0.7 rad). Models that break it blow up,
       // which energy, separation, limits and region catch (docs/dynamics.md).
-      diag.warning("SIM_JOINT_MISALIGNMENT", where,
+      diag.warning(codes::SIM_JOINT_MISALIGNMENT, where,
                    message + ", under dWorldQuickStep (" +
                        std::to_string(options.simulation.quickstep_iterations) +
                        " iterations): the iterative solver does not hold joints exactly and this is "
                        "its error, larger for big models and links light in rotation; more "
                        "quickstep_iterations, or dWorldStep, reduce it");
     } else {
-      diag.error("SIM_JOINT_MISALIGNMENT", where, message);
+      diag.error(codes::SIM_JOINT_MISALIGNMENT, where, message);
     }
   }
   if (limits.failed) {
     const Joint& joint = robot.joints[limits.where];
     const bool linear = joint.kind == JointKind::kPrismatic;
     const double tolerance = linear ? options.limit_tolerance_linear : options.limit_tolerance_angular;
-    diag.error("SIM_LIMIT_VIOLATED", node_pointer(joint.node),
+    diag.error(codes::SIM_LIMIT_VIOLATED, node_pointer(joint.node),
                joint_text(limits.where) + ": went " + number(limits.worst) + (linear ? " m" : " rad") +
                    " beyond its limits [" + number(joint.limits->lower) + ", " +
                    number(joint.limits->upper) + "] " + limits.when() + "; the bound there was " +
@@ -225,12 +226,12 @@ void run_scenario(Simulation& sim, const Simulation::Model& model, const Validat
   }
   if (region.failed) {
     const Link& link = robot.links[region.where];
-    diag.error("SIM_BODY_LEFT_REGION", node_pointer(link.node),
+    diag.error(codes::SIM_BODY_LEFT_REGION, node_pointer(link.node),
                "link '" + link.name + "': its centre of mass got " + number(region.worst) +
                    " m from its root link's origin " + region.when() +
                    ", further than its joints and limits allow");
   }
-  for (const std::string& message : sim.ode_messages()) diag.warning("ODE_MESSAGE", "", message);
+  for (const std::string& message : sim.ode_messages()) diag.warning(codes::ODE_MESSAGE, "", message);
 }
 
 }  // namespace
@@ -273,13 +274,13 @@ ValidationReport validate_dynamics(const Robot& robot, const ValidationOptions& 
       !(options.cpu_budget >= 0) || !(options.simulation.bound_mass >= 0) ||
       !std::isfinite(options.simulation.bound_mass) || !(options.simulation.bound_inertia >= 0) ||
       !std::isfinite(options.simulation.bound_inertia)) {
-    report.diagnostics.error("SIM_INVALID_OPTIONS", "",
+    report.diagnostics.error(codes::SIM_INVALID_OPTIONS, "",
                              "the duration, CPU budget, bound mass and bound inertia must not be negative, "
                              "and all but the budget finite; the start offset finite");
   } else if (limits.cancelled()) {
     report.cancelled = true;
-    report.diagnostics.error("SIM_CANCELLED", "", "the validation was cancelled before the run: the model is not judged");
-  } else if (!report.diagnostics.contains("ROBOT_INVALID_REFERENCE")) {
+    report.diagnostics.error(codes::SIM_CANCELLED, "", "the validation was cancelled before the run: the model is not judged");
+  } else if (!report.diagnostics.contains(codes::ROBOT_INVALID_REFERENCE)) {
     report.start_pose = validation_start_pose(robot, options);
     auto sim = Simulation::create(robot, options.simulation, report.start_pose, report.diagnostics);
     if (sim) {

@@ -4,6 +4,7 @@
 
 #include "rdtf/geometry.h"
 #include "typed_view.h"
+#include "rdtf/diagnostic_codes.h"
 
 namespace rdtf {
 namespace {
@@ -199,7 +200,7 @@ std::vector<std::uint32_t> read_indices(const GltfAsset& asset, std::size_t inde
 
 void warn_incomplete_triangle(std::uint64_t n, const std::string& pointer, Diagnostics& diag) {
   if (n % 3 != 0) {
-    diag.warning("MESH_PRIMITIVE_INCOMPATIBLE_MODE", pointer,
+    diag.warning(codes::MESH_PRIMITIVE_INCOMPATIBLE_MODE, pointer,
                  std::to_string(n) + " vertices is not a multiple of 3; the last " +
                      std::to_string(n % 3) + " are ignored");
   }
@@ -335,12 +336,12 @@ std::optional<TriangleMesh> read_primitive_triangles(const GltfAsset& asset, std
   const int mode = prim.value("mode", 4);
   if (mode < 4) {
     static const char* const kNames[] = {"POINTS", "LINES", "LINE_LOOP", "LINE_STRIP"};
-    diag.info("PRIMITIVE_SKIPPED", pointer,
+    diag.info(codes::PRIMITIVE_SKIPPED, pointer,
               std::string("primitive of mode ") + kNames[mode] + " has no volume; skipped");
     return std::nullopt;
   }
   if (!prim["attributes"].contains("POSITION")) {
-    diag.info("PRIMITIVE_SKIPPED", pointer, "primitive has no POSITION attribute; skipped");
+    diag.info(codes::PRIMITIVE_SKIPPED, pointer, "primitive has no POSITION attribute; skipped");
     return std::nullopt;
   }
   TriangleMesh result;

@@ -1,4 +1,5 @@
 #include "rdtf/glb.h"
+#include "rdtf/diagnostic_codes.h"
 
 #include <cstring>
 #include <string>
@@ -27,24 +28,24 @@ void write_u32(std::vector<std::uint8_t>& out, std::uint32_t value) {
 
 std::optional<GlbChunks> parse_glb(std::span<const std::uint8_t> bytes, Diagnostics& diag) {
   if (bytes.size() < kHeaderBytes) {
-    diag.error_at_offset("GLB_UNEXPECTED_END_OF_HEADER", bytes.size(),
+    diag.error_at_offset(codes::GLB_UNEXPECTED_END_OF_HEADER, bytes.size(),
                          "file has " + std::to_string(bytes.size()) +
                              " bytes; a GLB header needs 12");
     return std::nullopt;
   }
   if (read_u32(bytes, 0) != kMagic) {
-    diag.error_at_offset("GLB_INVALID_MAGIC", 0, "not a GLB file: the first four bytes are not 'glTF'");
+    diag.error_at_offset(codes::GLB_INVALID_MAGIC, 0, "not a GLB file: the first four bytes are not 'glTF'");
     return std::nullopt;
   }
   const std::uint32_t version = read_u32(bytes, 4);
   if (version != 2) {
-    diag.error_at_offset("GLB_INVALID_VERSION", 4,
+    diag.error_at_offset(codes::GLB_INVALID_VERSION, 4,
                          "GLB version " + std::to_string(version) + " is not supported (need 2)");
     return std::nullopt;
   }
   const std::uint64_t declared = read_u32(bytes, 8);
   if (declared != bytes.size()) {
-    diag.error_at_offset("GLB_LENGTH_MISMATCH", 8,
+    diag.error_at_offset(codes::GLB_LENGTH_MISMATCH, 8,
                          "header says " + std::to_string(declared) + " bytes but the file has " +
                              std::to_string(bytes.size()));
     return std::nullopt;
@@ -56,7 +57,7 @@ std::optional<GlbChunks> parse_glb(std::span<const std::uint8_t> bytes, Diagnost
   int index = 0;
   while (offset < bytes.size()) {
     if (bytes.size() - offset < kChunkHeaderBytes) {
-      diag.error_at_offset("GLB_UNEXPECTED_END_OF_CHUNK_HEADER", offset,
+      diag.error_at_offset(codes::GLB_UNEXPECTED_END_OF_CHUNK_HEADER, offset,
                            "chunk " + std::to_string(index) + " header is truncated");
       return std::nullopt;
     }
@@ -64,13 +65,13 @@ std::optional<GlbChunks> parse_glb(std::span<const std::uint8_t> bytes, Diagnost
     const std::uint32_t type = read_u32(bytes, offset + 4);
     const std::size_t data = offset + kChunkHeaderBytes;
     if (length > bytes.size() - data) {
-      diag.error_at_offset("GLB_CHUNK_TOO_BIG", offset,
+      diag.error_at_offset(codes::GLB_CHUNK_TOO_BIG, offset,
                            "chunk " + std::to_string(index) + " length " + std::to_string(length) +
                                " runs past the end of the file");
       return std::nullopt;
     }
     if (length % 4 != 0) {
-      diag.error_at_offset("GLB_CHUNK_LENGTH_UNALIGNED", offset,
+      diag.error_at_offset(codes::GLB_CHUNK_LENGTH_UNALIGNED, offset,
                            "chunk " + std::to_string(index) + " length " + std::to_string(length) +
                                " is not a multiple of 4");
       return std::nullopt;
@@ -78,21 +79,21 @@ std::optional<GlbChunks> parse_glb(std::span<const std::uint8_t> bytes, Diagnost
     const auto payload = bytes.subspan(data, static_cast<std::size_t>(length));
     if (index == 0) {
       if (type != kChunkJson) {
-        diag.error_at_offset("GLB_UNEXPECTED_FIRST_CHUNK", offset, "the first chunk must be JSON");
+        diag.error_at_offset(codes::GLB_UNEXPECTED_FIRST_CHUNK, offset, "the first chunk must be JSON");
         return std::nullopt;
       }
       if (length == 0) {
-        diag.error_at_offset("GLB_EMPTY_CHUNK", offset, "the JSON chunk is empty");
+        diag.error_at_offset(codes::GLB_EMPTY_CHUNK, offset, "the JSON chunk is empty");
         return std::nullopt;
       }
       chunks.json = std::string_view(reinterpret_cast<const char*>(payload.data()), payload.size());
       have_json = true;
     } else if (type == kChunkJson) {
-      diag.error_at_offset("GLB_DUPLICATE_CHUNK", offset, "a second JSON chunk");
+      diag.error_at_offset(codes::GLB_DUPLICATE_CHUNK, offset, "a second JSON chunk");
       return std::nullopt;
     } else if (type == kChunkBin) {
       if (index != 1) {
-        diag.error_at_offset("GLB_UNEXPECTED_BIN_CHUNK", offset,
+        diag.error_at_offset(codes::GLB_UNEXPECTED_BIN_CHUNK, offset,
                              "the BIN chunk must come right after the JSON chunk");
         return std::nullopt;
       }
@@ -103,7 +104,7 @@ std::optional<GlbChunks> parse_glb(std::span<const std::uint8_t> bytes, Diagnost
     ++index;
   }
   if (!have_json) {
-    diag.error_at_offset("GLB_NO_JSON_CHUNK", kHeaderBytes, "the file has no JSON chunk");
+    diag.error_at_offset(codes::GLB_NO_JSON_CHUNK, kHeaderBytes, "the file has no JSON chunk");
     return std::nullopt;
   }
   return chunks;

@@ -10,6 +10,7 @@
 #include "rdtf/glb.h"
 #include "rdtf/gltf.h"
 #include "rdtf/validate.h"
+#include "rdtf/diagnostic_codes.h"
 
 namespace rdtf {
 namespace {
@@ -101,12 +102,12 @@ std::string without_bytes_read(std::string message) {
 
 std::optional<Json> parse_json(std::string_view text, Diagnostics& diag) {
   if (text.substr(0, 3) == "\xEF\xBB\xBF") {
-    diag.error("JSON_BOM", "", "the JSON starts with a UTF-8 byte order mark, which glTF forbids");
+    diag.error(codes::JSON_BOM, "", "the JSON starts with a UTF-8 byte order mark, which glTF forbids");
     return std::nullopt;
   }
   std::size_t offset = 0;
   if (!json_depth_within(text, kMaxJsonDepth, offset)) {
-    diag.error("JSON_TOO_DEEP", "",
+    diag.error(codes::JSON_TOO_DEEP, "",
                "JSON nesting deeper than " + std::to_string(kMaxJsonDepth) + " levels at byte " +
                    std::to_string(offset));
     return std::nullopt;
@@ -114,7 +115,7 @@ std::optional<Json> parse_json(std::string_view text, Diagnostics& diag) {
   try {
     Json document = Json::parse(text.begin(), text.end());
     if (!document.is_object()) {
-      diag.error("TYPE_MISMATCH", "", "the glTF JSON must be an object");
+      diag.error(codes::TYPE_MISMATCH, "", "the glTF JSON must be an object");
       return std::nullopt;
     }
     return document;
@@ -124,14 +125,14 @@ std::optional<Json> parse_json(std::string_view text, Diagnostics& diag) {
     ErrorPosition position;
     const bool parsed = Json::sax_parse(text.begin(), text.end(), &position);
     const std::string at = parsed ? "" : " at " + place_in(text, position.byte);
-    diag.error("INVALID_JSON", "", "unusable JSON value" + at + ": " + error.what());
+    diag.error(codes::INVALID_JSON, "", "unusable JSON value" + at + ": " + error.what());
     return std::nullopt;
   } catch (const Json::parse_error& error) {
-    diag.error("INVALID_JSON", "",
+    diag.error(codes::INVALID_JSON, "",
                "invalid JSON at " + place_in(text, error.byte) + ": " + without_bytes_read(error.what()));
     return std::nullopt;
   } catch (const Json::exception& error) {
-    diag.error("INVALID_JSON", "", "invalid JSON: " + without_bytes_read(error.what()));
+    diag.error(codes::INVALID_JSON, "", "invalid JSON: " + without_bytes_read(error.what()));
     return std::nullopt;
   }
 }
@@ -195,7 +196,7 @@ bool data_uris_within_cap(const Json& document, const LoadLimits& limits, Diagno
     const std::uint64_t payload = comma == std::string::npos ? 0 : uri.size() - comma - 1;
     const std::uint64_t decoded = payload / 4 * 3;
     if (decoded > limits.max_buffer_bytes) {
-      diag.error("LIMIT_EXCEEDED", json_pointer("/buffers", i) + "/uri",
+      diag.error(codes::LIMIT_EXCEEDED, json_pointer("/buffers", i) + "/uri",
                  "the data URI holds about " + std::to_string(decoded) + " bytes, over the limit of " +
                      std::to_string(limits.max_buffer_bytes) + " bytes (max_buffer_bytes)");
       ok = false;
@@ -218,7 +219,7 @@ std::optional<Json> prepare_buffers(const Json& document, bool binary, const Loa
     Json entry = {{"byteLength", buffer["byteLength"]}};
     if (!buffer.contains("uri")) {
       if (!binary || i != 0) {
-        diag.error("BUFFER_MISSING_URI", pointer,
+        diag.error(codes::BUFFER_MISSING_URI, pointer,
                    "buffer has no uri; only the first buffer of a GLB may use the BIN chunk");
         continue;
       }
@@ -234,23 +235,23 @@ std::optional<Json> prepare_buffers(const Json& document, bool binary, const Loa
     std::string why;
     const auto path = internal::resolve_uri(folder, uri, why);
     if (!path) {
-      diag.error("URI_REFUSED", pointer + "/uri", "'" + uri + "': " + why);
+      diag.error(codes::URI_REFUSED, pointer + "/uri", "'" + uri + "': " + why);
       continue;
     }
     const auto size = internal::confined_file_size(folder, *path, why);
     if (!size) {
-      diag.error("IO_ERROR", pointer + "/uri", "'" + uri + "' (" + path->string() + ") " + why);
+      diag.error(codes::IO_ERROR, pointer + "/uri", "'" + uri + "' (" + path->string() + ") " + why);
       continue;
     }
     const std::uint64_t declared = buffer["byteLength"].get<std::uint64_t>();
     if (*size > limits.max_file_bytes) {
-      diag.error("LIMIT_EXCEEDED", pointer + "/uri",
+      diag.error(codes::LIMIT_EXCEEDED, pointer + "/uri",
                  "'" + uri + "' is " + std::to_string(*size) + " bytes, over the limit of " +
                      std::to_string(limits.max_file_bytes));
       continue;
     }
     if (*size != declared) {
-      diag.error("BUFFER_EXTERNAL_BYTELENGTH_MISMATCH", pointer + "/byteLength",
+      diag.error(codes::BUFFER_EXTERNAL_BYTELENGTH_MISMATCH, pointer + "/byteLength",
                  "'" + uri + "' has " + std::to_string(*size) + " bytes but byteLength is " +
                      std::to_string(declared));
       continue;
@@ -272,9 +273,9 @@ std::optional<Json> prepare_buffers(const Json& document, bool binary, const Loa
       const std::string pointer = json_pointer("/images", i) + "/uri";
       const auto path = internal::resolve_uri(folder, uri, why);
       if (!path) {
-        diag.error("URI_REFUSED", pointer, "'" + uri + "': " + why);
+        diag.error(codes::URI_REFUSED, pointer, "'" + uri + "': " + why);
       } else if (!internal::confined_file_size(folder, *path, why)) {
-        diag.warning("IO_ERROR", pointer,
+        diag.warning(codes::IO_ERROR, pointer,
                      "image '" + uri + "' " + why + "; it will be missing from the output");
       }
     }
@@ -352,7 +353,7 @@ bool load_buffers(const Json& loader_document, bool binary, std::span<const std:
     // tinygltf names our tokens; map them back to the pointers the user knows.
     std::string message = error.empty() ? std::string("tinygltf could not load the buffers") : error;
     while (!message.empty() && message.back() == '\n') message.pop_back();
-    diag.error("BUFFER_LOAD_FAILED", "/buffers", message);
+    diag.error(codes::BUFFER_LOAD_FAILED, "/buffers", message);
     return false;
   }
   asset.buffers.reserve(model.buffers.size());
@@ -369,7 +370,7 @@ std::optional<GltfAsset> load_from_bytes(const std::vector<std::uint8_t>& bytes,
                                          const LoadLimits& limits, Diagnostics& diag) {
   diag.set_file(display_path.string());
   if (bytes.empty()) {
-    diag.error("EMPTY_FILE", "", "the file is empty");
+    diag.error(codes::EMPTY_FILE, "", "the file is empty");
     return std::nullopt;
   }
   GltfAsset asset;
@@ -458,13 +459,13 @@ std::optional<GltfAsset> load_gltf(const std::filesystem::path& path, const Load
     internal::reserve_huge(bytes, static_cast<std::size_t>(size));
   }
   if (!internal::read_regular_file(path, limits.max_file_bytes, bytes, why)) {
-    diag.error("IO_ERROR", "", "cannot read the model: " + why);
+    diag.error(codes::IO_ERROR, "", "cannot read the model: " + why);
     return std::nullopt;
   }
   std::error_code error;
   auto folder = std::filesystem::canonical(std::filesystem::absolute(path, error).parent_path(), error);
   if (error) {
-    diag.error("IO_ERROR", "", "cannot resolve the model's folder: " + error.message());
+    diag.error(codes::IO_ERROR, "", "cannot resolve the model's folder: " + error.message());
     return std::nullopt;
   }
   return load_from_bytes(bytes, &bytes, path, folder, limits, diag);

@@ -2,6 +2,7 @@
 // to lie within the one it refers to before anything is allocated. See document_check.h.
 #include "document_check.h"
 #include "validate_util.h"
+#include "rdtf/diagnostic_codes.h"
 
 namespace rdtf::internal {
 namespace {
@@ -51,7 +52,7 @@ void DocumentCheck::check_buffers() {
     total = saturating_add(total, length.value_or(0));
   }
   if (total > limits_.max_buffer_bytes) {
-    diag_.error("LIMIT_EXCEEDED", "/buffers",
+    diag_.error(codes::LIMIT_EXCEEDED, "/buffers",
                 "the buffers declare " + std::to_string(total) +
                     " bytes in all, over the limit of " + std::to_string(limits_.max_buffer_bytes) +
                     " bytes");
@@ -67,18 +68,18 @@ bool DocumentCheck::check_data_uri(const std::string& uri, std::optional<std::ui
   const std::string suffix = ";base64";
   if (comma == std::string::npos || header.size() < suffix.size() ||
       header.compare(header.size() - suffix.size(), suffix.size(), suffix) != 0) {
-    diag_.error("INVALID_URI", pointer + "/uri",
+    diag_.error(codes::INVALID_URI, pointer + "/uri",
                 "a buffer's data URI must be data:<media type>;base64,<data>");
     return false;
   }
   const std::string media_type = header.substr(0, header.size() - suffix.size());
   if (media_type.find(';') != std::string::npos) {
-    diag_.error("INVALID_URI", pointer + "/uri",
+    diag_.error(codes::INVALID_URI, pointer + "/uri",
                 "malformed data URI header 'data:" + quote(header) + "'");
     return false;
   }
   if (media_type != "application/octet-stream" && media_type != "application/gltf-buffer") {
-    diag_.error("BUFFER_DATA_URI_MIME_TYPE_INVALID", pointer + "/uri",
+    diag_.error(codes::BUFFER_DATA_URI_MIME_TYPE_INVALID, pointer + "/uri",
                 "data URI media type '" + quote(media_type) +
                     "' must be application/octet-stream or application/gltf-buffer");
     return false;
@@ -88,13 +89,13 @@ bool DocumentCheck::check_data_uri(const std::string& uri, std::optional<std::ui
       data.find_first_not_of("ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/");
   if (end != data.npos && data.substr(end).find_first_not_of('=') != data.npos) {
     diag_.error(
-        "INVALID_URI", pointer + "/uri",
+        codes::INVALID_URI, pointer + "/uri",
         "the data URI's payload has a character that is not base64 at " + std::to_string(end));
     return false;
   }
   const std::uint64_t decoded = (end == data.npos ? data.size() : end) * 3 / 4;
   if (length && decoded != *length) {
-    diag_.error("BUFFER_BYTE_LENGTH_MISMATCH", pointer + "/byteLength",
+    diag_.error(codes::BUFFER_BYTE_LENGTH_MISMATCH, pointer + "/byteLength",
                 "the data URI holds " + std::to_string(decoded) + " bytes but byteLength is " +
                     std::to_string(*length));
     return false;
@@ -116,7 +117,7 @@ void DocumentCheck::check_buffer_views() {
     const auto target = read_uint(view, "target", pointer);
     const bool known_target = target && (*target == kArrayBuffer || *target == kElementArrayBuffer);
     if (target && !known_target) {
-      diag_.warning("VALUE_NOT_IN_LIST", pointer + "/target",
+      diag_.warning(codes::VALUE_NOT_IN_LIST, pointer + "/target",
                     "target " + std::to_string(*target) +
                         " is neither 34962 (vertices) nor 34963 (indices); ignored");
     }
@@ -130,7 +131,7 @@ void DocumentCheck::check_buffer_views() {
     const std::uint64_t capacity = buffers_[buffer].byte_length;
     const auto end = checked_add(facts.byte_offset, facts.byte_length);
     if (facts.byte_offset >= capacity || !end || *end > capacity) {
-      diag_.error("BUFFER_VIEW_TOO_LONG",
+      diag_.error(codes::BUFFER_VIEW_TOO_LONG,
                   pointer + (facts.byte_offset >= capacity ? "/byteOffset" : "/byteLength"),
                   "the view (offset " + std::to_string(facts.byte_offset) + ", " +
                       std::to_string(facts.byte_length) + " bytes) does not fit buffer " +
@@ -151,11 +152,11 @@ std::optional<std::uint64_t> DocumentCheck::read_stride(const Json& view,
   const std::string here = pointer + "/byteStride";
   const std::string text = "byteStride " + std::to_string(*stride);
   if (*stride < 4 || *stride > 252) {
-    diag_.error("VALUE_NOT_IN_RANGE", here, text + " must be between 4 and 252");
+    diag_.error(codes::VALUE_NOT_IN_RANGE, here, text + " must be between 4 and 252");
   } else if (*stride % 4 != 0) {
-    diag_.error("VALUE_MULTIPLE_OF", here, text + " must be a multiple of 4");
+    diag_.error(codes::VALUE_MULTIPLE_OF, here, text + " must be a multiple of 4");
   } else if (length != 0 && *stride > length) {
-    diag_.error("BUFFER_VIEW_TOO_BIG_BYTE_STRIDE", here,
+    diag_.error(codes::BUFFER_VIEW_TOO_BIG_BYTE_STRIDE, here,
                 text + " is greater than byteLength " + std::to_string(length));
   } else {
     return stride;
@@ -170,7 +171,7 @@ bool DocumentCheck::fits_view(std::size_t view, std::uint64_t offset, std::uint6
   const std::uint64_t length = views_[view].byte_length;
   const auto end = span_end(offset, count, stride, size);
   if (end && *end <= length) return true;
-  diag_.error("ACCESSOR_TOO_LONG", offset >= length ? pointer + "/byteOffset" : pointer,
+  diag_.error(codes::ACCESSOR_TOO_LONG, offset >= length ? pointer + "/byteOffset" : pointer,
               std::to_string(count) + " elements of " + std::to_string(size) + " bytes, " +
                   std::to_string(stride) + " bytes apart from offset " + std::to_string(offset) +
                   ", need " + (end ? std::to_string(*end) : std::string("more than 2^64")) +
@@ -194,7 +195,7 @@ bool DocumentCheck::check_accessor(const Json& accessor, const std::string& poin
   const auto component_type = read_uint(accessor, "componentType", pointer, true);
   const bool known_component = component_type && component_size(*component_type) != 0;
   if (component_type && !known_component) {
-    diag_.error("VALUE_NOT_IN_LIST", pointer + "/componentType",
+    diag_.error(codes::VALUE_NOT_IN_LIST, pointer + "/componentType",
                 "componentType " + std::to_string(*component_type) +
                     " is not one of 5120 (BYTE), 5121 (UNSIGNED_BYTE), 5122 (SHORT), "
                     "5123 (UNSIGNED_SHORT), 5125 (UNSIGNED_INT), 5126 (FLOAT)");
@@ -203,20 +204,20 @@ bool DocumentCheck::check_accessor(const Json& accessor, const std::string& poin
   const bool known_type = type && type_shape(*type).first != 0;
   if (type && !known_type) {
     diag_.error(
-        "VALUE_NOT_IN_LIST", pointer + "/type",
+        codes::VALUE_NOT_IN_LIST, pointer + "/type",
         "type '" + quote(*type) + "' is not one of SCALAR, VEC2, VEC3, VEC4, MAT2, MAT3, MAT4");
   }
   const auto count = read_uint(accessor, "count", pointer, true, 1);
   const bool within_limit = count && *count <= limits_.max_accessor_count;
   if (count && !within_limit) {
-    diag_.error("LIMIT_EXCEEDED", pointer + "/count",
+    diag_.error(codes::LIMIT_EXCEEDED, pointer + "/count",
                 "count " + std::to_string(*count) + " is over the limit of " +
                     std::to_string(limits_.max_accessor_count) + " elements");
   }
   facts.normalized = read_bool(accessor, "normalized", pointer).value_or(false);
   if (facts.normalized && component_type &&
       (*component_type == kUnsignedInt || *component_type == kFloat)) {
-    diag_.error("ACCESSOR_NORMALIZED_INVALID", pointer + "/normalized",
+    diag_.error(codes::ACCESSOR_NORMALIZED_INVALID, pointer + "/normalized",
                 "only BYTE, UNSIGNED_BYTE, SHORT and UNSIGNED_SHORT accessors can be normalized");
   }
   facts.view = read_ref(accessor, "bufferView", pointer, "bufferViews");
@@ -248,20 +249,20 @@ bool DocumentCheck::check_accessor_layout(const AccessorFacts& facts, std::uint6
   const std::uint64_t element = element_size(facts.type, facts.component_type);
   bool ok = true;
   if (offset % size != 0) {
-    diag_.error("ACCESSOR_OFFSET_ALIGNMENT", pointer + "/byteOffset",
+    diag_.error(codes::ACCESSOR_OFFSET_ALIGNMENT, pointer + "/byteOffset",
                 "byteOffset " + std::to_string(offset) +
                     " is not a multiple of the component size " + std::to_string(size));
     ok = false;
   }
   const auto total = checked_add(view.byte_offset, offset);
   if (total && *total % size != 0) {
-    diag_.error("ACCESSOR_TOTAL_OFFSET_ALIGNMENT", pointer,
+    diag_.error(codes::ACCESSOR_TOTAL_OFFSET_ALIGNMENT, pointer,
                 "the accessor starts at byte " + std::to_string(*total) +
                     " of its buffer, not a multiple of the component size " + std::to_string(size));
     ok = false;
   }
   if (view.byte_stride != 0 && view.byte_stride < element) {
-    diag_.error("ACCESSOR_SMALL_BYTESTRIDE", pointer,
+    diag_.error(codes::ACCESSOR_SMALL_BYTESTRIDE, pointer,
                 "buffer view " + std::to_string(facts.view) + " has byteStride " +
                     std::to_string(view.byte_stride) + ", less than the " +
                     std::to_string(element) + " bytes of one element");
@@ -278,7 +279,7 @@ bool DocumentCheck::check_sparse(const Json& accessor, const AccessorFacts& fact
   const std::string here = pointer + "/sparse";
   const auto count = read_uint(*sparse, "count", here, true, 1);
   if (count && *count > facts.count) {
-    diag_.error("ACCESSOR_SPARSE_COUNT_OUT_OF_RANGE", here + "/count",
+    diag_.error(codes::ACCESSOR_SPARSE_COUNT_OUT_OF_RANGE, here + "/count",
                 "the sparse part replaces " + std::to_string(*count) +
                     " elements, more than the accessor's " + std::to_string(facts.count));
     return false;
@@ -289,7 +290,7 @@ bool DocumentCheck::check_sparse(const Json& accessor, const AccessorFacts& fact
   if (indices != nullptr) {
     const auto type = read_uint(*indices, "componentType", here + "/indices", true);
     if (type && *type != kUnsignedByte && *type != kUnsignedShort && *type != kUnsignedInt) {
-      diag_.error("VALUE_NOT_IN_LIST", here + "/indices/componentType",
+      diag_.error(codes::VALUE_NOT_IN_LIST, here + "/indices/componentType",
                   "sparse indices must be 5121 (UNSIGNED_BYTE), 5123 (UNSIGNED_SHORT) or 5125 "
                   "(UNSIGNED_INT), not " +
                       std::to_string(*type));
@@ -314,7 +315,7 @@ bool DocumentCheck::check_sparse_part(const Json& part, const std::string& point
     return false;
   }
   if (views_[view].byte_stride != 0) {
-    diag_.error("BUFFER_VIEW_INVALID_BYTE_STRIDE", pointer + "/bufferView",
+    diag_.error(codes::BUFFER_VIEW_INVALID_BYTE_STRIDE, pointer + "/bufferView",
                 "buffer view " + std::to_string(view) +
                     " holds sparse data, so it must not have a byteStride");
     return false;

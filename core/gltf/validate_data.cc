@@ -12,6 +12,7 @@
 
 #include "rdtf/validate.h"
 #include "validate_util.h"
+#include "rdtf/diagnostic_codes.h"
 
 namespace rdtf {
 namespace internal {
@@ -289,7 +290,7 @@ bool DataCheck::buffers_hold_their_bytes() {
     const auto declared = uint_at(doc_["buffers"][i], "byteLength");
     const std::uint64_t actual = i < asset_.buffers.size() ? asset_.buffers[i].size() : 0;
     if (declared && actual >= *declared) continue;
-    diag_.error("BUFFER_BYTE_LENGTH_MISMATCH", json_pointer("/buffers", i),
+    diag_.error(codes::BUFFER_BYTE_LENGTH_MISMATCH, json_pointer("/buffers", i),
                 "the buffer holds " + std::to_string(actual) + " bytes, less than its byteLength " +
                     (declared ? std::to_string(*declared) : std::string("(missing)")));
     ok = false;
@@ -329,7 +330,7 @@ std::optional<AccessorRuns> DataCheck::locate_accessor(std::size_t index) {
   const auto [columns, rows] = accessor.is_object() ? type_shape(accessor) : std::pair{0, 0};
   const std::uint64_t size = type ? component_size(*type) : 0;
   const auto unreadable = [&] {
-    diag_.error("ACCESSOR_DATA_UNREADABLE", json_pointer("/accessors", index),
+    diag_.error(codes::ACCESSOR_DATA_UNREADABLE, json_pointer("/accessors", index),
                 "the accessor's data cannot be located in its buffer; the document did not pass "
                 "validation");
     return std::nullopt;
@@ -389,14 +390,14 @@ bool DataCheck::sparse_indices_sound(std::size_t index, const AccessorRuns& runs
     const std::string at = "sparse index " + std::to_string(k) + " is " +
                            std::to_string(static_cast<std::uint64_t>(value));
     if (value <= previous) {
-      diag_.error("ACCESSOR_SPARSE_INDICES_NON_INCREASING", pointer,
+      diag_.error(codes::ACCESSOR_SPARSE_INDICES_NON_INCREASING, pointer,
                   at + ", not greater than the one before it, " +
                       std::to_string(static_cast<std::uint64_t>(previous)));
       return false;
     }
     if (value >= static_cast<double>(runs.base.count)) {
       diag_.error(
-          "ACCESSOR_SPARSE_INDEX_OOB", pointer,
+          codes::ACCESSOR_SPARSE_INDEX_OOB, pointer,
           at + ", but the accessor has only " + std::to_string(runs.base.count) + " elements");
       return false;
     }
@@ -494,7 +495,7 @@ bool DataCheck::check_values(std::size_t index, const AccessorRuns& runs) {
     for_each_element(runs, visit);
   }
   if (non_finite > 0) {
-    diag_.error("ACCESSOR_INVALID_FLOAT", json_pointer("/accessors", index),
+    diag_.error(codes::ACCESSOR_INVALID_FLOAT, json_pointer("/accessors", index),
                 counted(non_finite, "component is", "components are") +
                     " NaN or infinite, the first in element " + std::to_string(first_non_finite));
     return true;
@@ -514,14 +515,14 @@ void DataCheck::report_bounds(std::size_t index, const char* key, int components
     const std::string bound = describe(doc_["accessors"][index][key][c]);
     if (outside[c] > 0) {
       diag_.error(
-          is_min ? "ACCESSOR_ELEMENT_OUT_OF_MIN_BOUND" : "ACCESSOR_ELEMENT_OUT_OF_MAX_BOUND",
+          is_min ? codes::ACCESSOR_ELEMENT_OUT_OF_MIN_BOUND : codes::ACCESSOR_ELEMENT_OUT_OF_MAX_BOUND,
           pointer,
           counted(outside[c], "element has", "elements have") + " component " + std::to_string(c) +
               (is_min ? " below" : " above") + " the declared " + key + " " + bound +
               "; the actual " + key + " is " + number_text(actual[c]));
     } else if (actual[c] != declared[c]) {
       // A loose bound misleads nothing here: the validator calls it an error, rdtf only warns.
-      diag_.warning(is_min ? "ACCESSOR_MIN_MISMATCH" : "ACCESSOR_MAX_MISMATCH", pointer,
+      diag_.warning(is_min ? codes::ACCESSOR_MIN_MISMATCH : codes::ACCESSOR_MAX_MISMATCH, pointer,
                     std::string("the declared ") + key + " " + bound + " is not the actual " + key +
                         " " + number_text(actual[c]));
     }
@@ -616,13 +617,13 @@ void DataCheck::check_indices(std::uint64_t accessor, std::uint64_t vertices,
                             json_pointer("/accessors", accessor) + ")";
   if (summary.restarts > 0) {
     const auto restart = (std::uint64_t{1} << (8 * component_size(summary.component_type))) - 1;
-    diag_.error("ACCESSOR_INDEX_PRIMITIVE_RESTART", pointer,
+    diag_.error(codes::ACCESSOR_INDEX_PRIMITIVE_RESTART, pointer,
                 where + " holds the primitive restart value " + std::to_string(restart) + " " +
                     counted(summary.restarts, "time", "times") + ", first at element " +
                     std::to_string(summary.first_restart) + "; glTF forbids it");
   }
   if (summary.largest >= static_cast<double>(vertices)) {
-    diag_.error("ACCESSOR_INDEX_OOB", pointer,
+    diag_.error(codes::ACCESSOR_INDEX_OOB, pointer,
                 where + " refers to vertex " +
                     std::to_string(static_cast<std::uint64_t>(summary.largest)) + " (element " +
                     std::to_string(summary.largest_at) + "), but the primitive has only " +

@@ -6,6 +6,7 @@
 #include "document_check.h"
 #include "rdtf/validate.h"
 #include "validate_util.h"
+#include "rdtf/diagnostic_codes.h"
 
 namespace rdtf {
 namespace internal {
@@ -28,7 +29,7 @@ bool extension_is_harmless(const std::string& name) {
 
 void DocumentCheck::run() {
   if (!doc_.is_object()) {
-    diag_.error("TYPE_MISMATCH", "",
+    diag_.error(codes::TYPE_MISMATCH, "",
                 "the glTF JSON must be an object, found " + std::string(doc_.type_name()));
     return;
   }
@@ -67,7 +68,7 @@ std::vector<const Json*> DocumentCheck::top_level(const char* key) {
 const Json* DocumentCheck::object_at(const Json& array, std::size_t i, const std::string& pointer) {
   if (array[i].is_object()) return &array[i];
   diag_.error(
-      "TYPE_MISMATCH", json_pointer(pointer, i),
+      codes::TYPE_MISMATCH, json_pointer(pointer, i),
       "must be an object, found " + std::string(array[i].type_name()) + " " + describe(array[i]));
   return nullptr;
 }
@@ -77,7 +78,7 @@ const Json* DocumentCheck::find(const Json& object, const char* key, const std::
   const auto it = object.find(key);
   if (it != object.end()) return &*it;
   if (required) {
-    diag_.error("UNDEFINED_PROPERTY", pointer,
+    diag_.error(codes::UNDEFINED_PROPERTY, pointer,
                 std::string("property '") + key + "' must be defined");
   }
   return nullptr;
@@ -89,7 +90,7 @@ const Json* DocumentCheck::read_typed(const Json& object, const char* key,
   const Json* value = find(object, key, pointer, required);
   if (value == nullptr || ((*value).*is_type)()) return value;
   diag_.error(
-      "TYPE_MISMATCH", json_pointer(pointer, key),
+      codes::TYPE_MISMATCH, json_pointer(pointer, key),
       std::string("must be ") + type + ", found " + value->type_name() + " " + describe(*value));
   return nullptr;
 }
@@ -99,7 +100,7 @@ const Json* DocumentCheck::read_array(const Json& object, const char* key,
                                       const std::string& pointer, bool required) {
   const Json* array = read_typed(object, key, pointer, required, &Json::is_array, "an array");
   if (array == nullptr || !array->empty()) return array;
-  diag_.error("EMPTY_ENTITY", json_pointer(pointer, key), "the array is empty; leave it out");
+  diag_.error(codes::EMPTY_ENTITY, json_pointer(pointer, key), "the array is empty; leave it out");
   return nullptr;
 }
 
@@ -124,11 +125,11 @@ std::optional<std::uint64_t> DocumentCheck::uint_value(const Json& value,
                                                        const std::string& pointer) {
   if (auto number = as_uint(value)) return number;
   if (value.is_number_integer()) {  // Negative.
-    diag_.error("VALUE_NOT_IN_RANGE", pointer,
+    diag_.error(codes::VALUE_NOT_IN_RANGE, pointer,
                 "must be a non-negative integer, found " + describe(value));
   } else {
     diag_.error(
-        "TYPE_MISMATCH", pointer,
+        codes::TYPE_MISMATCH, pointer,
         "must be an integer, found " + std::string(value.type_name()) + " " + describe(value));
   }
   return std::nullopt;
@@ -141,7 +142,7 @@ std::optional<std::uint64_t> DocumentCheck::read_uint(const Json& object, const 
   if (value == nullptr) return std::nullopt;
   const auto number = uint_value(*value, json_pointer(pointer, key));
   if (!number || *number >= minimum) return number;
-  diag_.error("VALUE_NOT_IN_RANGE", json_pointer(pointer, key),
+  diag_.error(codes::VALUE_NOT_IN_RANGE, json_pointer(pointer, key),
               "is " + std::to_string(*number) + "; it must be at least " + std::to_string(minimum));
   return std::nullopt;
 }
@@ -153,7 +154,7 @@ std::size_t DocumentCheck::reference(const Json& value, const std::string& point
   if (!index) return kNone;
   const std::size_t count = entries_[array].size();
   if (*index < count) return static_cast<std::size_t>(*index);
-  diag_.error("UNRESOLVED_REFERENCE", pointer,
+  diag_.error(codes::UNRESOLVED_REFERENCE, pointer,
               "there is no " + std::string(array) + "[" + std::to_string(*index) +
                   "]: the file has " +
                   (count == 0 ? std::string("none")
@@ -180,7 +181,7 @@ std::vector<std::size_t> DocumentCheck::read_refs(const Json& object, const char
     const std::size_t index = reference((*values)[k], json_pointer(here, k), array);
     if (index == kNone) continue;
     if (!seen.insert(index).second) {
-      diag_.error("DUPLICATE_ELEMENTS", json_pointer(here, k),
+      diag_.error(codes::DUPLICATE_ELEMENTS, json_pointer(here, k),
                   std::to_string(index) + " is listed twice");
       continue;
     }
@@ -197,7 +198,7 @@ std::optional<std::vector<double>> DocumentCheck::read_numbers(const Json& objec
   if (array == nullptr) return std::nullopt;
   const std::string here = json_pointer(pointer, key);
   if (length != 0 && array->size() != length) {
-    diag_.error("ARRAY_LENGTH_NOT_IN_LIST", here,
+    diag_.error(codes::ARRAY_LENGTH_NOT_IN_LIST, here,
                 "has " + std::to_string(array->size()) + " elements; it must have " +
                     std::to_string(length));
     return std::nullopt;
@@ -206,13 +207,13 @@ std::optional<std::vector<double>> DocumentCheck::read_numbers(const Json& objec
   for (std::size_t k = 0; k < array->size(); ++k) {
     const Json& value = (*array)[k];
     if (!value.is_number()) {
-      diag_.error("ARRAY_TYPE_MISMATCH", here,
+      diag_.error(codes::ARRAY_TYPE_MISMATCH, here,
                   "element " + std::to_string(k) + " is " + describe(value) + ", not a number");
       return std::nullopt;
     }
     const double number = value.get<double>();
     if (!std::isfinite(number) || std::abs(number) > kFloatMax) {
-      diag_.error("VALUE_NOT_IN_RANGE", json_pointer(here, k),
+      diag_.error(codes::VALUE_NOT_IN_RANGE, json_pointer(here, k),
                   describe(value) + " is beyond the range of a single-precision float");
       return std::nullopt;
     }
@@ -233,7 +234,7 @@ std::optional<std::pair<int, int>> DocumentCheck::read_version(const Json& asset
     return !s.empty() && s.size() <= 6 && s.find_first_not_of("0123456789") == std::string::npos;
   };
   if (dot == std::string::npos || !digits(text->substr(0, dot)) || !digits(text->substr(dot + 1))) {
-    diag_.error("PATTERN_MISMATCH", std::string("/asset/") + key,
+    diag_.error(codes::PATTERN_MISMATCH, std::string("/asset/") + key,
                 "'" + quote(*text) + "' is not a version of the form MAJOR.MINOR, such as \"2.0\"");
     return std::nullopt;
   }
@@ -246,15 +247,15 @@ void DocumentCheck::check_asset() {
   const auto version = read_version(*asset, "version", true);
   if (version && version->first != 2) {
     diag_.error(
-        "UNKNOWN_ASSET_MAJOR_VERSION", "/asset/version",
+        codes::UNKNOWN_ASSET_MAJOR_VERSION, "/asset/version",
         "glTF " + std::to_string(version->first) + " is not supported; the model must be glTF 2.x");
   } else if (version && version->second != 0) {
-    diag_.warning("UNKNOWN_ASSET_MINOR_VERSION", "/asset/version",
+    diag_.warning(codes::UNKNOWN_ASSET_MINOR_VERSION, "/asset/version",
                   "glTF 2." + std::to_string(version->second) + " is newer than 2.0; read as 2.0");
   }
   const auto minimum = read_version(*asset, "minVersion", false);
   if (version && minimum && *minimum > *version) {
-    diag_.error("ASSET_MIN_VERSION_GREATER_THAN_VERSION", "/asset/minVersion",
+    diag_.error(codes::ASSET_MIN_VERSION_GREATER_THAN_VERSION, "/asset/minVersion",
                 "minVersion is greater than version " + std::to_string(version->first) + "." +
                     std::to_string(version->second));
   }
@@ -267,12 +268,12 @@ void DocumentCheck::check_extensions() {
       const std::string pointer = json_pointer(json_pointer("", key), k);
       const Json& name = (*names)[k];
       if (!name.is_string()) {
-        diag_.error("TYPE_MISMATCH", pointer,
+        diag_.error(codes::TYPE_MISMATCH, pointer,
                     "an extension name must be a string, found " + describe(name));
       } else if (key == "extensionsUsed" && name == "KHR_mesh_quantization") {
         quantization_ = true;
       } else if (key == "extensionsRequired" && !extension_is_harmless(name)) {
-        diag_.error("UNSUPPORTED_EXTENSION", pointer,
+        diag_.error(codes::UNSUPPORTED_EXTENSION, pointer,
                     "the model requires " + quote(name.get<std::string>()) +
                         ", which rdtf cannot read; export the model without it");
       }
@@ -313,7 +314,7 @@ void DocumentCheck::check_triangle_limit() {
     if (nodes_[i].mesh == kNone) continue;
     total = saturating_add(total, meshes_[nodes_[i].mesh].triangles);
     if (total <= limits_.max_triangles) continue;
-    diag_.error("LIMIT_EXCEEDED", json_pointer("/nodes", i) + "/mesh",
+    diag_.error(codes::LIMIT_EXCEEDED, json_pointer("/nodes", i) + "/mesh",
                 "with this node the model's meshes reach " + std::to_string(total) +
                     " triangles (a mesh counts once per node using it), over the limit of " +
                     std::to_string(limits_.max_triangles));

@@ -3,6 +3,7 @@
 
 #include "document_check.h"
 #include "validate_util.h"
+#include "rdtf/diagnostic_codes.h"
 
 namespace rdtf::internal {
 namespace {
@@ -55,14 +56,14 @@ void DocumentCheck::check_mesh(const Json& mesh, const std::string& pointer, Mes
     const std::size_t targets = primitive->contains("targets") ? (*primitive)["targets"].size() : 0;
     if (p == 0) facts.targets = targets;
     if (targets != facts.targets) {
-      diag_.error("MESH_PRIMITIVES_UNEQUAL_TARGETS_COUNT", here + (targets != 0 ? "/targets" : ""),
+      diag_.error(codes::MESH_PRIMITIVES_UNEQUAL_TARGETS_COUNT, here + (targets != 0 ? "/targets" : ""),
                   "the primitive has " + std::to_string(targets) +
                       " morph targets but the first has " + std::to_string(facts.targets) +
                       "; all primitives of a mesh must have as many");
     }
   }
   if (weights && facts.valid && weights->size() != facts.targets) {
-    diag_.error("MESH_INVALID_WEIGHTS_COUNT", pointer + "/weights",
+    diag_.error(codes::MESH_INVALID_WEIGHTS_COUNT, pointer + "/weights",
                 "the mesh has " + std::to_string(weights->size()) + " weights for " +
                     std::to_string(facts.targets) + " morph targets");
   }
@@ -80,7 +81,7 @@ bool DocumentCheck::check_primitive(const Json& primitive, const std::string& po
   if (indices != kNone && accessors_[indices].valid) check_indices(indices, pointer + "/indices");
   const auto mode = read_uint(primitive, "mode", pointer).value_or(4);
   if (mode > 6) {
-    diag_.error("VALUE_NOT_IN_RANGE", pointer + "/mode",
+    diag_.error(codes::VALUE_NOT_IN_RANGE, pointer + "/mode",
                 "mode " + std::to_string(mode) +
                     " is not a glTF primitive mode (0 POINTS .. 6 TRIANGLE_FAN)");
   }
@@ -116,7 +117,7 @@ std::map<std::string, std::size_t> DocumentCheck::check_attributes(const Json& a
     const std::string here = json_pointer(pointer, name);
     const auto semantic = parse_semantic(name, target);
     if (!semantic) {
-      diag_.error("MESH_PRIMITIVE_INVALID_ATTRIBUTE", here,
+      diag_.error(codes::MESH_PRIMITIVE_INVALID_ATTRIBUTE, here,
                   "'" + quote(name) + "' is not a glTF attribute name");
     }
     const std::size_t accessor = reference(value, here, "accessors");
@@ -127,7 +128,7 @@ std::map<std::string, std::size_t> DocumentCheck::check_attributes(const Json& a
     check_attribute_format(name, accessor, here);
     use_view(accessors_[accessor].view, kArrayBuffer, here);
     if (count != 0 && accessors_[accessor].count != count) {
-      diag_.error("MESH_PRIMITIVE_UNEQUAL_ACCESSOR_COUNT", here,
+      diag_.error(codes::MESH_PRIMITIVE_UNEQUAL_ACCESSOR_COUNT, here,
                   "has " + std::to_string(accessors_[accessor].count) +
                       " elements but another attribute has " + std::to_string(count) +
                       "; all attributes of a primitive must have the same count");
@@ -137,14 +138,14 @@ std::map<std::string, std::size_t> DocumentCheck::check_attributes(const Json& a
   for (auto& [base, numbers] : sets) {
     std::sort(numbers.begin(), numbers.end());
     if (numbers.back() + 1 != static_cast<long>(numbers.size())) {
-      diag_.error("MESH_PRIMITIVE_INDEXED_SEMANTIC_CONTINUITY", pointer,
+      diag_.error(codes::MESH_PRIMITIVE_INDEXED_SEMANTIC_CONTINUITY, pointer,
                   base + "_n attributes must be numbered 0, 1, 2... without gaps; found " +
                       std::to_string(numbers.size()) + " up to " + base + "_" +
                       std::to_string(numbers.back()));
     }
   }
   if (!target && sets["JOINTS"].size() != sets["WEIGHTS"].size()) {
-    diag_.error("MESH_PRIMITIVE_JOINTS_WEIGHTS_MISMATCH", pointer,
+    diag_.error(codes::MESH_PRIMITIVE_JOINTS_WEIGHTS_MISMATCH, pointer,
                 std::to_string(sets["JOINTS"].size()) + " JOINTS_n attributes but " +
                     std::to_string(sets["WEIGHTS"].size()) + " WEIGHTS_n; they come in pairs");
   }
@@ -173,12 +174,12 @@ void DocumentCheck::check_attribute_format(const std::string& name, std::size_t 
     expected = "VEC4 of FLOAT, or of normalized UNSIGNED_BYTE or UNSIGNED_SHORT";
   }
   if (!ok) {
-    diag_.error("MESH_PRIMITIVE_ATTRIBUTES_ACCESSOR_INVALID_FORMAT", pointer,
+    diag_.error(codes::MESH_PRIMITIVE_ATTRIBUTES_ACCESSOR_INVALID_FORMAT, pointer,
                 "the accessor is " + format_name(facts) + "; " + name + " must be " + expected);
   }
   const Json& json = *entries_["accessors"][accessor];
   if (name == "POSITION" && ok && (!json.contains("min") || !json.contains("max"))) {
-    diag_.error("MESH_PRIMITIVE_POSITION_ACCESSOR_WITHOUT_BOUNDS", pointer,
+    diag_.error(codes::MESH_PRIMITIVE_POSITION_ACCESSOR_WITHOUT_BOUNDS, pointer,
                 "a POSITION accessor must declare min and max (its bounding box)");
   }
 }
@@ -188,12 +189,12 @@ void DocumentCheck::check_indices(std::size_t accessor, const std::string& point
   const std::uint64_t type = facts.component_type;
   if (facts.type != "SCALAR" || facts.normalized ||
       (type != kUnsignedByte && type != kUnsignedShort && type != kUnsignedInt)) {
-    diag_.error("MESH_PRIMITIVE_INDICES_ACCESSOR_INVALID_FORMAT", pointer,
+    diag_.error(codes::MESH_PRIMITIVE_INDICES_ACCESSOR_INVALID_FORMAT, pointer,
                 "indices must be SCALAR of UNSIGNED_BYTE, UNSIGNED_SHORT or UNSIGNED_INT, not " +
                     format_name(facts));
   }
   if (facts.view != kNone && views_[facts.view].byte_stride != 0) {
-    diag_.error("MESH_PRIMITIVE_INDICES_ACCESSOR_WITH_BYTESTRIDE", pointer,
+    diag_.error(codes::MESH_PRIMITIVE_INDICES_ACCESSOR_WITH_BYTESTRIDE, pointer,
                 "buffer view " + std::to_string(facts.view) +
                     " holds indices, so it must not have a byteStride");
   }
@@ -206,7 +207,7 @@ void DocumentCheck::use_view(std::size_t view, std::uint64_t usage, const std::s
   if (views_[view].usage == 0) views_[view].usage = usage;
   if (views_[view].usage == usage) return;
   const auto kind = [](std::uint64_t u) { return u == kArrayBuffer ? "vertex" : "index"; };
-  diag_.error("BUFFER_VIEW_TARGET_OVERRIDE", pointer,
+  diag_.error(codes::BUFFER_VIEW_TARGET_OVERRIDE, pointer,
               "buffer view " + std::to_string(view) + " holds " + kind(views_[view].usage) +
                   " data, but is used here for " + kind(usage) + " data");
 }
@@ -216,7 +217,7 @@ void DocumentCheck::check_target(const Json& target, const std::string& pointer,
   const auto attributes = check_attributes(target, pointer, true);
   for (const auto& [name, value] : target.items()) {
     if (base.count(name) != 0) continue;
-    diag_.error("MESH_PRIMITIVE_MORPH_TARGET_NO_BASE_ACCESSOR", json_pointer(pointer, name),
+    diag_.error(codes::MESH_PRIMITIVE_MORPH_TARGET_NO_BASE_ACCESSOR, json_pointer(pointer, name),
                 "the morph target moves " + quote(name) + ", which the primitive does not have");
   }
   for (const auto& [name, accessor] : attributes) {
@@ -224,7 +225,7 @@ void DocumentCheck::check_target(const Json& target, const std::string& pointer,
     if (found == base.end() || accessors_[found->second].count == accessors_[accessor].count) {
       continue;
     }
-    diag_.error("MESH_PRIMITIVE_MORPH_TARGET_INVALID_ATTRIBUTE_COUNT", json_pointer(pointer, name),
+    diag_.error(codes::MESH_PRIMITIVE_MORPH_TARGET_INVALID_ATTRIBUTE_COUNT, json_pointer(pointer, name),
                 "has " + std::to_string(accessors_[accessor].count) +
                     " elements but the primitive's " + name + " has " +
                     std::to_string(accessors_[found->second].count));

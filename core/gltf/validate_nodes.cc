@@ -5,6 +5,7 @@
 
 #include "document_check.h"
 #include "validate_util.h"
+#include "rdtf/diagnostic_codes.h"
 
 namespace rdtf::internal {
 namespace {
@@ -41,19 +42,19 @@ void DocumentCheck::check_node(const Json& node, const std::string& pointer, Nod
   facts.skin = read_ref(node, "skin", pointer, "skins");
   read_ref(node, "camera", pointer, "cameras");
   if (node.contains("skin") && !node.contains("mesh")) {
-    diag_.error("UNSATISFIED_DEPENDENCY", pointer + "/skin", "a node with a skin must have a mesh");
+    diag_.error(codes::UNSATISFIED_DEPENDENCY, pointer + "/skin", "a node with a skin must have a mesh");
   }
   const MeshFacts* mesh =
       facts.mesh != kNone && meshes_[facts.mesh].valid ? &meshes_[facts.mesh] : nullptr;
   const auto weights = read_numbers(node, "weights", pointer, 0);
   if (weights && mesh != nullptr && weights->size() != mesh->targets) {
-    diag_.error("NODE_WEIGHTS_INVALID", pointer + "/weights",
+    diag_.error(codes::NODE_WEIGHTS_INVALID, pointer + "/weights",
                 "the node has " + std::to_string(weights->size()) + " weights for the " +
                     std::to_string(mesh->targets) + " morph targets of mesh " +
                     std::to_string(facts.mesh));
   }
   if (facts.skin != kNone && mesh != nullptr && !mesh->skinned) {
-    diag_.error("NODE_SKIN_WITH_NON_SKINNED_MESH", pointer,
+    diag_.error(codes::NODE_SKIN_WITH_NON_SKINNED_MESH, pointer,
                 "the node has a skin but mesh " + std::to_string(facts.mesh) +
                     " has no JOINTS_0 attribute");
   }
@@ -67,11 +68,11 @@ void DocumentCheck::check_transform(const Json& node, const std::string& pointer
   const auto rotation = read_numbers(node, "rotation", pointer, 4);
   if (node.contains("matrix") &&
       (node.contains("translation") || node.contains("rotation") || node.contains("scale"))) {
-    diag_.error("NODE_MATRIX_TRS", pointer + "/matrix",
+    diag_.error(codes::NODE_MATRIX_TRS, pointer + "/matrix",
                 "a node has either a matrix or translation/rotation/scale, not both");
   }
   if (matrix && !decomposable(*matrix)) {
-    diag_.error("NODE_MATRIX_NON_TRS", pointer + "/matrix",
+    diag_.error(codes::NODE_MATRIX_NON_TRS, pointer + "/matrix",
                 "the matrix is not a translation, rotation and scale (it shears, projects or "
                 "collapses space); apply the transform in the modeller before export");
   }
@@ -79,7 +80,7 @@ void DocumentCheck::check_transform(const Json& node, const std::string& pointer
   double norm2 = 0;
   for (std::size_t k = 0; k < 4; ++k) {
     if (std::abs((*rotation)[k]) > 1) {
-      diag_.error("VALUE_NOT_IN_RANGE", json_pointer(pointer + "/rotation", k),
+      diag_.error(codes::VALUE_NOT_IN_RANGE, json_pointer(pointer + "/rotation", k),
                   "a unit quaternion's components lie in [-1, 1]; this one is " +
                       number_text((*rotation)[k]));
     }
@@ -88,7 +89,7 @@ void DocumentCheck::check_transform(const Json& node, const std::string& pointer
   // The validator's tolerance for a unit quaternion stored as floats.
   if (std::abs(std::sqrt(norm2) - 1) > 0.00769) {
     diag_.error(
-        "ROTATION_NON_UNIT", pointer + "/rotation",
+        codes::ROTATION_NON_UNIT, pointer + "/rotation",
         "the rotation quaternion has length " + number_text(std::sqrt(norm2)) + "; it must be 1");
   }
 }
@@ -104,7 +105,7 @@ void DocumentCheck::check_node_graph() {
         parents_[child] = i;
         continue;
       }
-      diag_.error("NODE_PARENT_OVERRIDE", json_pointer(json_pointer("/nodes", i) + "/children", k),
+      diag_.error(codes::NODE_PARENT_OVERRIDE, json_pointer(json_pointer("/nodes", i) + "/children", k),
                   "node " + std::to_string(child) + " is already a child of node " +
                       std::to_string(parents_[child]) + "; a node can have only one parent");
     }
@@ -139,7 +140,7 @@ void DocumentCheck::report_loops() {
       for (auto it = path.rbegin(); state[child] == 1 && it != path.rend(); ++it) {
         if (!reported[it->first]) {
           reported[it->first] = 1;
-          diag_.error("NODE_LOOP", json_pointer("/nodes", it->first),
+          diag_.error(codes::NODE_LOOP, json_pointer("/nodes", it->first),
                       "node " + std::to_string(it->first) +
                           " is its own descendant: the children lists form a loop");
         }
@@ -197,7 +198,7 @@ void DocumentCheck::check_skins() {
     const std::size_t root = root_[joints.front()];
     if (std::any_of(joints.begin(), joints.end(),
                     [&](std::size_t j) { return root_[j] != root; })) {
-      diag_.error("SKIN_NO_COMMON_ROOT", pointer + "/joints",
+      diag_.error(codes::SKIN_NO_COMMON_ROOT, pointer + "/joints",
                   "the joints are not all in one node tree");
       continue;
     }
@@ -206,7 +207,7 @@ void DocumentCheck::check_skins() {
           return is_ancestor_or_self(skeleton, j);
         })) {
       diag_.error(
-          "SKIN_SKELETON_INVALID", pointer + "/skeleton",
+          codes::SKIN_SKELETON_INVALID, pointer + "/skeleton",
           "skeleton node " + std::to_string(skeleton) + " is not an ancestor of every joint");
     }
   }
@@ -217,16 +218,16 @@ void DocumentCheck::check_inverse_bind_matrices(std::size_t accessor, std::size_
   const AccessorFacts& facts = accessors_[accessor];
   if (!facts.valid) return;
   if (facts.type != "MAT4" || facts.component_type != kFloat || facts.normalized) {
-    diag_.error("SKIN_IBM_INVALID_FORMAT", pointer,
+    diag_.error(codes::SKIN_IBM_INVALID_FORMAT, pointer,
                 "inverse bind matrices must be MAT4 of FLOAT, not " + facts.type +
                     " of component type " + std::to_string(facts.component_type));
   } else if (facts.count < joints) {
-    diag_.error("INVALID_IBM_ACCESSOR_COUNT", pointer,
+    diag_.error(codes::INVALID_IBM_ACCESSOR_COUNT, pointer,
                 "the accessor has " + std::to_string(facts.count) + " matrices for " +
                     std::to_string(joints) + " joints");
   }
   if (facts.view != kNone && views_[facts.view].byte_stride != 0) {
-    diag_.error("SKIN_IBM_ACCESSOR_WITH_BYTESTRIDE", pointer,
+    diag_.error(codes::SKIN_IBM_ACCESSOR_WITH_BYTESTRIDE, pointer,
                 "buffer view " + std::to_string(facts.view) +
                     " holds inverse bind matrices, so it must not have a byteStride");
   }
@@ -245,7 +246,7 @@ void DocumentCheck::check_scenes() {
     for (std::size_t k = 0; listed != nullptr && listed->is_array() && k < listed->size(); ++k) {
       const auto node = as_uint((*listed)[k]);
       if (!node || *node >= parents_.size() || parents_[*node] == kNone) continue;
-      diag_.error("SCENE_NON_ROOT_NODE", json_pointer(pointer, k),
+      diag_.error(codes::SCENE_NON_ROOT_NODE, json_pointer(pointer, k),
                   "node " + std::to_string(*node) + " is a child of node " +
                       std::to_string(parents_[*node]) + ", so it cannot be a root of the scene");
     }
@@ -275,7 +276,7 @@ void DocumentCheck::check_skins_in_scenes(
     for (std::size_t s : scenes_of_root[mesh_root]) {
       if (std::binary_search(sorted_roots[s].begin(), sorted_roots[s].end(), joint_root)) continue;
       for (std::size_t node : skinned) {
-        diag_.error("NODE_SKIN_NO_SCENE", json_pointer("/nodes", node),
+        diag_.error(codes::NODE_SKIN_NO_SCENE, json_pointer("/nodes", node),
                     "scene " + std::to_string(s) +
                         " shows this skinned mesh but not the joints of skin " +
                         std::to_string(nodes_[node].skin) + " (the tree of node " +

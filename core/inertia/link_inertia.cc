@@ -8,6 +8,7 @@
 #include "rdtf/geometry.h"
 #include "rdtf/mesh_checks.h"
 #include "skinning.h"
+#include "rdtf/diagnostic_codes.h"
 
 namespace rdtf {
 namespace {
@@ -59,7 +60,7 @@ std::optional<double> positive_extra(const Json& document, std::size_t node, con
   }
   const Json& value = n["extras"][key];
   if (!value.is_number() || !std::isfinite(value.get<double>()) || value.get<double>() <= 0) {
-    diag.error("RDTF_INVALID_VALUE", json_pointer("/nodes", node) + "/extras/" + key,
+    diag.error(codes::RDTF_INVALID_VALUE, json_pointer("/nodes", node) + "/extras/" + key,
                node_label(document, node) + ": " + key + " is " + value_text(value) +
                    ", not a positive number");
     return std::nullopt;
@@ -82,13 +83,13 @@ void report_topology(const MeshGeometry& geometry, const std::string& pointer,
                      const std::string& name, Diagnostics& diag) {
   const SurfaceTopology& t = geometry.topology;
   if (!t.closed()) {
-    diag.warning("MESH_OPEN", pointer,
+    diag.warning(codes::MESH_OPEN, pointer,
                  "mesh of '" + name + "' is not closed (" + std::to_string(t.boundary_edges) +
                      " boundary edges, " + std::to_string(t.nonmanifold_edges) +
                      " non-manifold edges): its volume, and so its mass, is unreliable");
   }
   if (!t.consistently_oriented()) {
-    diag.warning("MESH_INCONSISTENT_WINDING", pointer,
+    diag.warning(codes::MESH_INCONSISTENT_WINDING, pointer,
                  "mesh of '" + name + "' has " + std::to_string(t.misoriented_edges) +
                      " edges whose triangles wind the same way: some faces are flipped, so its "
                      "mass is wrong; recalculate normals outside in the modeller");
@@ -99,7 +100,7 @@ void report_topology(const MeshGeometry& geometry, const std::string& pointer,
 VolumeIntegrals oriented(VolumeIntegrals integrals, const std::string& pointer,
                          const std::string& name, Diagnostics& diag) {
   if (integrals.volume < 0) {
-    diag.warning("MESH_INSIDE_OUT", pointer,
+    diag.warning(codes::MESH_INSIDE_OUT, pointer,
                  "mesh of '" + name + "' is inside out (signed volume " +
                      std::to_string(integrals.volume) +
                      " m^3): its faces wind clockwise; mass computed as if turned right");
@@ -118,7 +119,7 @@ std::optional<MassProperties> authored_inertial(const Json& inertial, const std:
   auto number = [&](const Json& value) { return value.is_number() && std::isfinite(value.get<double>()); };
   MassProperties result;
   if (!inertial.contains("mass") || !number(inertial["mass"])) {
-    diag.error("RDTF_INVALID_VALUE", where + "/mass",
+    diag.error(codes::RDTF_INVALID_VALUE, where + "/mass",
                label + ": an authored inertial needs a finite mass; it has " +
                    (inertial.contains("mass") ? value_text(inertial["mass"]) : std::string("none")));
     return std::nullopt;
@@ -127,7 +128,7 @@ std::optional<MassProperties> authored_inertial(const Json& inertial, const std:
   if (inertial.contains("gravityCenter")) {
     const Json& c = inertial["gravityCenter"];
     if (!c.is_array() || c.size() != 3 || !number(c[0]) || !number(c[1]) || !number(c[2])) {
-      diag.error("RDTF_INVALID_VALUE", where + "/gravityCenter",
+      diag.error(codes::RDTF_INVALID_VALUE, where + "/gravityCenter",
                  label + ": gravityCenter is " + value_text(c) + ", not 3 finite numbers");
       return std::nullopt;
     }
@@ -140,7 +141,7 @@ std::optional<MassProperties> authored_inertial(const Json& inertial, const std:
     bool valid = six || nine;
     for (std::size_t i = 0; valid && i < I.size(); ++i) valid = number(I[i]);
     if (!valid) {
-      diag.error("RDTF_INVALID_VALUE", where + "/inertia",
+      diag.error(codes::RDTF_INVALID_VALUE, where + "/inertia",
                  label + ": inertia is " + value_text(I) + "; it must be [ixx, ixy, ixz, iyy, iyz, izz] or a row-major 3x3 matrix");
       return std::nullopt;
     }
@@ -197,7 +198,7 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
     const std::string name = node_name(document, node);
     const bool skinned = document["nodes"][node].contains("skin");
     if (owner < 0 && !skinned) {
-      diag.warning("MESH_WITHOUT_LINK", pointer, "mesh node '" + name + "' belongs to no link; ignored");
+      diag.warning(codes::MESH_WITHOUT_LINK, pointer, "mesh node '" + name + "' belongs to no link; ignored");
       continue;
     }
     const auto mesh = document["nodes"][node]["mesh"].get<std::size_t>();
@@ -266,7 +267,7 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
       }
     }
     if (link.inertial.volume <= 0) {
-      diag.warning("LINK_NO_VOLUME", pointer,
+      diag.warning(codes::LINK_NO_VOLUME, pointer,
                    "link '" + link.name + "' has no volume (no closed mesh): its mass is zero");
     }
   }

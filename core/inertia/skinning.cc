@@ -4,6 +4,7 @@
 #include <unordered_map>
 
 #include "rdtf/geometry.h"
+#include "rdtf/diagnostic_codes.h"
 
 namespace rdtf {
 namespace {
@@ -83,7 +84,7 @@ std::vector<BoneGeometry> split_by_bone(const GltfAsset& asset, std::size_t mesh
       bound = true;
     }
     if (!bound) {
-      diag.warning("SKIN_NO_WEIGHTS", pointer,
+      diag.warning(codes::SKIN_NO_WEIGHTS, pointer,
                    "a primitive of the skinned mesh has no JOINTS_0/WEIGHTS_0; its triangles "
                    "are left out of the mass");
     }
@@ -126,7 +127,7 @@ std::vector<BoneGeometry> split_by_bone(const GltfAsset& asset, std::size_t mesh
     }
     bone_of_part[part] = static_cast<int>(best - sum.begin());
     if (*best < 0.999 * total) {
-      diag.info("SKIN_PART_SHARED", pointer,
+      diag.info(codes::SKIN_PART_SHARED, pointer,
                 "a connected part of the skinned mesh is weighted to several bones; all of it "
                 "counts for the bone with the most weight");
     }

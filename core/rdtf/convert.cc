@@ -8,6 +8,7 @@
 #include "rdtf/link_inertia.h"
 #include "rdtf/rdtf_extras.h"
 #include "rdtf/typing.h"
+#include "rdtf/diagnostic_codes.h"
 
 namespace rdtf {
 namespace {
@@ -59,7 +60,7 @@ void add_missing_strides(Json& document, Diagnostics& diag) {
     }
     if (sizes.size() != 1 || *sizes.begin() % 4 != 0) continue;
     buffer_view["byteStride"] = *sizes.begin();
-    diag.info("BUFFER_VIEW_STRIDE_ADDED", json_pointer("/bufferViews", view),
+    diag.info(codes::BUFFER_VIEW_STRIDE_ADDED, json_pointer("/bufferViews", view),
               "buffer view shared by " + std::to_string(accessors.size()) +
                   " vertex accessors had no byteStride (glTF 2.0 requires one); set to " +
                   std::to_string(*sizes.begin()));

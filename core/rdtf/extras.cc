@@ -4,6 +4,7 @@
 #include "rdtf/rdtf_extras.h"
 
 #include "rdtf/geometry.h"
+#include "rdtf/diagnostic_codes.h"
 
 namespace rdtf {
 namespace {
@@ -127,7 +128,7 @@ Json vector_to_json(const Eigen::Vector3d& v) { return Json::array({v.x(), v.y()
 bool write_rdtf_extras(Json& document, const std::vector<NodeType>& types, const Robot& robot,
                        Diagnostics& diag) {
   if (document.contains("extras") && !document["extras"].is_object()) {
-    diag.error("EXTRAS_NOT_OBJECT", "/extras",
+    diag.error(codes::EXTRAS_NOT_OBJECT, "/extras",
                "the document's extras is not an object, so extras.RDTF cannot be added to it");
     return false;
   }

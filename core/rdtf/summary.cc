@@ -5,7 +5,7 @@
 #include <string_view>
 
 #include "rdtf/rdtf_extras.h"
-#include "rdtf/utf8.h"
+#include "rdtf/diagnostics_json.h"
 
 namespace rdtf {
 namespace {
@@ -18,24 +18,6 @@ std::string fixed(double value, int precision = 6) {
 
 std::string vector_text(const Eigen::Vector3d& v) {
   return "(" + fixed(v.x()) + ", " + fixed(v.y()) + ", " + fixed(v.z()) + ")";
-}
-
-// Text that JSON can carry: file names are bytes on Linux and a parse error quotes the input as
-// it is, so a byte that is not UTF-8 becomes U+FFFD instead of making the JSON writer throw.
-std::string json_safe(std::string_view text) {
-  std::string out;
-  out.reserve(text.size());
-  for (std::size_t i = 0; i < text.size();) {
-    const std::size_t length = utf8_sequence_length(text, i);
-    if (length == 0) {
-      out += "\xEF\xBF\xBD";
-      ++i;
-    } else {
-      out.append(text, i, length);
-      i += length;
-    }
-  }
-  return out;
 }
 
 Json pose_json(const Eigen::Isometry3d& X) {
@@ -56,18 +38,6 @@ RobotTotals robot_totals(const Robot& robot) {
   }
   if (totals.mass > 0) totals.center_of_mass_scene = weighted / totals.mass;
   return totals;
-}
-
-Json diagnostics_json(const Diagnostics& diag) {
-  Json out = Json::array();
-  for (const Diagnostic& d : diag.all()) {
-    Json item = {{"severity", to_string(d.severity)}, {"code", json_safe(d.code)},
-                 {"file", json_safe(d.file)}, {"pointer", json_safe(d.pointer)},
-                 {"message", json_safe(d.message)}};
-    if (d.byte_offset) item["byteOffset"] = *d.byte_offset;
-    out.push_back(std::move(item));
-  }
-  return out;
 }
 
 Json robot_summary(const Robot& robot, const Json& document, const Diagnostics& diag) {

@@ -8,6 +8,7 @@
 #include "../gltf/confined_files.h"
 #include "rdtf/atomic_file.h"
 #include "rdtf/glb.h"
+#include "rdtf/diagnostic_codes.h"
 
 namespace rdtf {
 namespace {
@@ -38,7 +39,7 @@ bool write_bytes(const std::filesystem::path& path, std::span<const std::uint8_t
   std::filesystem::create_directories(path.parent_path(), error);
   std::string why;
   if (!write_file_atomically(path, bytes, why)) {
-    diag.error("WRITE_FAILED", pointer, "cannot write " + path.string() + ": " + why);
+    diag.error(codes::WRITE_FAILED, pointer, "cannot write " + path.string() + ": " + why);
     return false;
   }
   return true;
@@ -129,7 +130,7 @@ void external_images(const GltfAsset& asset, Json& document, const WriteOptions&
     std::string why;
     const auto relative = internal::resolve_uri(std::filesystem::path("/"), uri, why);
     if (!bytes || !relative) {
-      diag.warning("IMAGE_NOT_COPIED", json_pointer("/images", i) + "/uri",
+      diag.warning(codes::IMAGE_NOT_COPIED, json_pointer("/images", i) + "/uri",
                    "image '" + uri + "' could not be read, so it is missing beside the output");
       continue;
     }
@@ -201,7 +202,7 @@ bool write_gltf(const GltfAsset& asset, const std::filesystem::path& output, con
   if (written_json != nullptr) *written_json = text;
   std::string why;
   if (ok && !write_file_atomically(output, text, why)) {
-    diag.error("WRITE_FAILED", "", "cannot write " + output.string() + ": " + why);
+    diag.error(codes::WRITE_FAILED, "", "cannot write " + output.string() + ": " + why);
     ok = false;
   }
   if (addressed) tidy_content_addressed(folder, ok, resources, previous, created);
@@ -239,7 +240,7 @@ bool write_glb(const GltfAsset& asset, const std::filesystem::path& output, Diag
       std::filesystem::path source;
       const auto bytes = read_image(asset, uri, source);
       if (!bytes) {
-        diag.warning("IMAGE_NOT_EMBEDDED", json_pointer("/images", i) + "/uri",
+        diag.warning(codes::IMAGE_NOT_EMBEDDED, json_pointer("/images", i) + "/uri",
                      "image '" + uri + "' could not be read; the output keeps its URI");
         continue;
       }
@@ -261,7 +262,7 @@ bool write_glb(const GltfAsset& asset, const std::filesystem::path& output, Diag
   const auto glb = make_glb(json, bin);
   std::string why;
   if (!write_file_atomically(output, glb, why)) {
-    diag.error("WRITE_FAILED", "", "cannot write " + output.string() + ": " + why);
+    diag.error(codes::WRITE_FAILED, "", "cannot write " + output.string() + ": " + why);
     return false;
   }
   return true;

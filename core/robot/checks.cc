@@ -6,6 +6,7 @@
 
 #include "rdtf/completion.h"
 #include "rdtf/robot.h"
+#include "rdtf/diagnostic_codes.h"
 
 namespace rdtf {
 namespace {
@@ -55,7 +56,7 @@ void check_units_of(const Json& document, const Robot& robot, Diagnostics& diag)
   const double extent = std::max(box.diagonal().norm(), largest_part);
   if (extent <= kMaxExtent && mass <= kMaxMass) return;
   const Link& link = robot.links[heaviest];
-  diag.warning("UNITS_IMPLAUSIBLE", json_pointer("/nodes", link.node),
+  diag.warning(codes::UNITS_IMPLAUSIBLE, json_pointer("/nodes", link.node),
                "the robot is " + short_number(extent) + " m across and weighs " +
                    short_number(mass) + " kg (" + node_label(document, link.node) + " alone " +
                    short_number(link.inertial.mass) +
@@ -104,7 +105,7 @@ void check_missing_properties(const Json& document, const std::vector<NodeType>&
     names += (k ? ", " : "") + node_label(document, empties[k]);
   }
   if (empties.size() > 4) names += ", ...";
-  diag.warning("NO_RDTF_PROPERTIES", "/nodes",
+  diag.warning(codes::NO_RDTF_PROPERTIES, "/nodes",
                std::string("no node has an rdtf_* property, so every joint is fixed and the robot is "
                            "one rigid body") +
                    (names.empty() ? std::string() : "; these empties look like joints: " + names) +

@@ -4,6 +4,7 @@
 
 #include "rdtf/completion.h"
 #include "rdtf/geometry.h"
+#include "rdtf/diagnostic_codes.h"
 
 namespace rdtf {
 namespace {
@@ -28,7 +29,7 @@ std::optional<double> read_number(const JointSource& source, const std::string& 
   if (!source.values->contains(key)) return std::nullopt;
   const Json& value = (*source.values)[key];
   if (!value.is_number() || !std::isfinite(value.get<double>())) {
-    diag.error("RDTF_INVALID_VALUE", json_pointer(source.pointer, key),
+    diag.error(codes::RDTF_INVALID_VALUE, json_pointer(source.pointer, key),
                source.label + ": " + key + " is " + value_text(value) + ", not a finite number");
     return std::nullopt;
   }
@@ -93,7 +94,7 @@ bool reads_blender_axes(const Json& document, std::size_t node, Diagnostics& dia
     const Json& value = (*extras)["rdtf_axes"];
     if (value == "blender") return true;
     if (value == "gltf") return false;
-    diag.error("RDTF_INVALID_VALUE", json_pointer("/nodes", node) + "/extras/rdtf_axes",
+    diag.error(codes::RDTF_INVALID_VALUE, json_pointer("/nodes", node) + "/extras/rdtf_axes",
                node_label(document, node) + ": rdtf_axes is " + value_text(value) +
                    ", not \"blender\" or \"gltf\"");
   }
@@ -126,13 +127,13 @@ void read_axis(const JointSource& source, const Eigen::Affine3d& X_SF, const Eig
     if (!axis->allFinite()) axis.reset();
   }
   if (!axis) {
-    diag.error("RDTF_INVALID_VALUE", pointer,
+    diag.error(codes::RDTF_INVALID_VALUE, pointer,
                source.label + ": " + axis_key + " is " + value_text(value) +
                    ", not three finite numbers or one of \"x\", \"y\", \"z\", \"-x\", \"-y\", \"-z\"");
     return;
   }
   if (axis->norm() == 0.0) {
-    diag.error("JOINT_AXIS_ZERO", pointer,
+    diag.error(codes::JOINT_AXIS_ZERO, pointer,
                source.label + ": the joint axis " + value_text(value) + " is the zero vector");
     return;
   }
@@ -142,7 +143,7 @@ void read_axis(const JointSource& source, const Eigen::Affine3d& X_SF, const Eig
     if (source.blender_axes) *axis = blender_to_gltf_axes() * *axis;
     *axis = X_SC.linear().transpose() * (X_SF.linear() * *axis);
     if (!(axis->norm() > 0.0)) {  // The node's scale flattens it (a scale of 0).
-      diag.error("JOINT_AXIS_ZERO", pointer,
+      diag.error(codes::JOINT_AXIS_ZERO, pointer,
                  source.label + ": the joint axis " + value_text(value) +
                      " has no length in the scene: the node's scale flattens it");
       return;
@@ -158,7 +159,7 @@ void read_joint_properties(const JointSource& source, const Eigen::Affine3d& X_S
     const Json& value = (*source.values)[kind_key];
     const auto kind = value.is_string() ? joint_kind_from_string(value.get<std::string>()) : std::nullopt;
     if (!kind) {
-      diag.error("RDTF_INVALID_JOINT_TYPE", json_pointer(source.pointer, kind_key),
+      diag.error(codes::RDTF_INVALID_JOINT_TYPE, json_pointer(source.pointer, kind_key),
                  source.label + ": joint type " + value_text(value) +
                      " is not one of fixed, revolute, continuous, prismatic, floating, planar, ball");
     } else {
@@ -177,7 +178,7 @@ void read_joint_properties(const JointSource& source, const Eigen::Affine3d& X_S
     limits.effort = effort.value_or(0.0);
     limits.velocity = velocity.value_or(0.0);
     if (limits.lower > limits.upper) {
-      diag.error("JOINT_LIMITS_INVERTED", source.pointer,
+      diag.error(codes::JOINT_LIMITS_INVERTED, source.pointer,
                  source.label + ": lower limit " + value_text(limits.lower) +
                      " is above upper limit " + value_text(limits.upper));
     }
@@ -288,7 +289,7 @@ Robot build_robot(const Json& document, const std::vector<NodeType>& types, std:
     joint.name = joint.node >= 0 ? node_name(document, joint.node)
                                  : parent.name + "_" + child.name + "_joint";
     if (joint_nodes.size() > 1) {
-      diag.info("JOINT_CHAIN", json_pointer("/nodes", joint_nodes.front()),
+      diag.info(codes::JOINT_CHAIN, json_pointer("/nodes", joint_nodes.front()),
                 std::to_string(joint_nodes.size()) + " joint nodes between links '" + parent.name +
                     "' and '" + child.name + "': they make one joint");
     }
@@ -335,7 +336,7 @@ Robot build_robot(const Json& document, const std::vector<NodeType>& types, std:
     robot.joints.push_back(std::move(joint));
   }
   if (robot.links.empty()) {
-    diag.warning("NO_LINKS", json_pointer("/scenes", scene),
+    diag.warning(codes::NO_LINKS, json_pointer("/scenes", scene),
                  "the scene has no link: nothing in it carries a mesh or children");
   }
   return robot;

@@ -2,6 +2,7 @@
 
 #include "rdtf/completion.h"
 #include "rdtf/geometry.h"
+#include "rdtf/diagnostic_codes.h"
 
 namespace rdtf {
 namespace {
@@ -40,7 +41,7 @@ void read_authored_types(const Json& document, std::vector<NodeType>& types,
         const Json& entry = entries[i];
         if (!entry.is_object() || !entry.contains("node") || !entry["node"].is_number_unsigned() ||
             entry["node"].get<std::size_t>() >= nodes.size()) {
-          diag.error("RDTF_INVALID_NODE_ENTRY", pointer,
+          diag.error(codes::RDTF_INVALID_NODE_ENTRY, pointer,
                      std::string("an RDTF node entry needs \"node\": the index of an existing node "
                                  "(0 to ") + std::to_string(nodes.size() - 1) + "); it has " +
                          (entry.is_object() && entry.contains("node") ? value_text(entry["node"])
@@ -52,7 +53,7 @@ void read_authored_types(const Json& document, std::vector<NodeType>& types,
             entry["type"].is_string() ? node_type_from_string(entry["type"].get<std::string>())
                                       : std::nullopt;
         if (!type) {
-          diag.error("RDTF_INVALID_TYPE", pointer + "/type",
+          diag.error(codes::RDTF_INVALID_TYPE, pointer + "/type",
                      "entry for " + node_label(document, entry["node"].get<std::size_t>()) +
                          ": type " + value_text(entry["type"]) +
                          " is not one of link, joint, mesh, visual, inertial");
@@ -70,7 +71,7 @@ void read_authored_types(const Json& document, std::vector<NodeType>& types,
     const Json& value = (*extras)["rdtf_type"];
     const auto type = value.is_string() ? node_type_from_string(value.get<std::string>()) : std::nullopt;
     if (!type) {
-      diag.error("RDTF_INVALID_TYPE", json_pointer("/nodes", i) + "/extras/rdtf_type",
+      diag.error(codes::RDTF_INVALID_TYPE, json_pointer("/nodes", i) + "/extras/rdtf_type",
                  node_label(document, i) + ": rdtf_type " + value_text(value) +
                      " is not one of link, joint, mesh, visual, inertial");
       continue;
@@ -162,7 +163,7 @@ std::optional<std::size_t> default_scene(const Json& document, Diagnostics& diag
   const std::size_t scenes = document.contains("scenes") ? document["scenes"].size() : 0;
   if (document.contains("scene")) return document["scene"].get<std::size_t>();
   if (scenes > 0) return 0;
-  diag.error("NO_SCENE", "/scenes", "the model has no scene, so no node tree to convert");
+  diag.error(codes::NO_SCENE, "/scenes", "the model has no scene, so no node tree to convert");
   return std::nullopt;
 }
 

@@ -11,6 +11,7 @@
 #include "rdtf/urdf_names.h"
 #include "urdf_check.h"
 #include "urdf_internal.h"
+#include "rdtf/diagnostic_codes.h"
 
 namespace rdtf {
 namespace {
@@ -39,7 +40,7 @@ std::optional<int> urdf_joint_type(const Joint& joint, const std::string& name, 
       // Valid URDF, which check_urdf and urdfdom accept, but every URDF joint hangs below a link:
       // MuJoCo makes it a free joint of a nested body and refuses the file, and ROS's
       // robot_state_publisher publishes no transform for it.
-      diag.warning("URDF_FLOATING_JOINT", pointer,
+      diag.warning(codes::URDF_FLOATING_JOINT, pointer,
                    "floating joint '" + name + "' is written as URDF says it, but MuJoCo refuses the file "
                    "(a free joint must belong to a top-level body) and robot_state_publisher ignores it; "
                    "for those tools make the child a separate model or use a fixed joint");
@@ -48,18 +49,18 @@ std::optional<int> urdf_joint_type(const Joint& joint, const std::string& name, 
       return urdf::Joint::PLANAR;
     case JointKind::kRevolute:
       if (joint.limits) return urdf::Joint::REVOLUTE;
-      diag.warning("URDF_REVOLUTE_WITHOUT_LIMITS", pointer,
+      diag.warning(codes::URDF_REVOLUTE_WITHOUT_LIMITS, pointer,
                    "revolute joint '" + name + "' has no limits, which URDF requires: it turns "
                    "without end, so it is written as a continuous joint");
       return urdf::Joint::CONTINUOUS;
     case JointKind::kPrismatic:
       if (joint.limits) return urdf::Joint::PRISMATIC;
-      diag.error("URDF_PRISMATIC_WITHOUT_LIMITS", pointer,
+      diag.error(codes::URDF_PRISMATIC_WITHOUT_LIMITS, pointer,
                  "prismatic joint '" + name + "' has no limits, which URDF requires and which "
                  "have no neutral value: set rdtf_lower and rdtf_upper (m) on it");
       return std::nullopt;
     case JointKind::kBall:
-      diag.error("URDF_BALL_JOINT", pointer,
+      diag.error(codes::URDF_BALL_JOINT, pointer,
                  "ball joint '" + name + "' has no URDF equivalent (URDF joints are fixed, "
                  "revolute, continuous, prismatic, floating or planar)");
       return std::nullopt;
@@ -144,7 +145,7 @@ bool write_meshes(const UrdfExport& exported, const std::filesystem::path& dir, 
     std::error_code error;
     const bool existed = std::filesystem::exists(target, error);
     if (!write_file_atomically(target, mesh.bytes, why)) {
-      diag.error("WRITE_FAILED", "", "cannot write " + target.string() + ": " + why);
+      diag.error(codes::WRITE_FAILED, "", "cannot write " + target.string() + ": " + why);
       return false;
     }
     if (!existed) created.push_back(target);
@@ -231,7 +232,7 @@ std::optional<UrdfExport> export_urdf(const Conversion& conversion, const UrdfOp
                                       Diagnostics& diag) {
   const Robot& robot = conversion.robot;
   if (robot.links.empty()) {
-    diag.error("URDF_NO_LINKS", "", "the model has no link, and a URDF needs at least one");
+    diag.error(codes::URDF_NO_LINKS, "", "the model has no link, and a URDF needs at least one");
     return std::nullopt;
   }
   const Eigen::Matrix3d C = options.y_up ? Eigen::Matrix3d::Identity() : y_up_to_z_up();
@@ -256,7 +257,7 @@ std::optional<UrdfExport> export_urdf(const Conversion& conversion, const UrdfOp
     if (!surfaces[l].mesh.triangles.empty()) {
       result.meshes.push_back({file, std::move(bytes)});
       if (!surfaces[l].closed) {
-        diag.info("URDF_VISUAL_ONLY", node_pointer(link.node),
+        diag.info(codes::URDF_VISUAL_ONLY, node_pointer(link.node),
                   "link '" + name + "': a mesh of it is open or has no volume, so it is visual "
                   "geometry only (no <collision>; MuJoCo refuses collision meshes without volume)");
       }
@@ -293,7 +294,7 @@ std::optional<UrdfExport> export_urdf(const Conversion& conversion, const UrdfOp
       out->limits->effort = joint.limits->effort > 0 ? joint.limits->effort : kUnsetEffort;
       out->limits->velocity = joint.limits->velocity > 0 ? joint.limits->velocity : kUnsetVelocity;
       if (joint.limits->effort <= 0 || joint.limits->velocity <= 0) {
-        diag.info("URDF_LIMIT_DEFAULTED", node_pointer(joint.node),
+        diag.info(codes::URDF_LIMIT_DEFAULTED, node_pointer(joint.node),
                   "joint '" + name + "' has no " +
                       (joint.limits->effort <= 0 && joint.limits->velocity <= 0
                            ? std::string("rdtf_effort or rdtf_velocity")
@@ -304,12 +305,12 @@ std::optional<UrdfExport> export_urdf(const Conversion& conversion, const UrdfOp
       }
     }
     if (joint.spring_stiffness != 0) {
-      diag.warning("URDF_SPRING_DROPPED", node_pointer(joint.node),
+      diag.warning(codes::URDF_SPRING_DROPPED, node_pointer(joint.node),
                    "joint '" + name + "': URDF has no spring, its stiffness is not exported");
     }
     const Link& child = robot.links[joint.child_link];
     if (*type != urdf::Joint::FIXED && child.inertial.mass <= 0) {
-      diag.warning("URDF_MASSLESS_MOVING_LINK", node_pointer(child.node),
+      diag.warning(codes::URDF_MASSLESS_MOVING_LINK, node_pointer(child.node),
                    "link '" + result.link_names[joint.child_link] + "' moves on joint '" + name +
                        "' but has no mass: simulators (MuJoCo among them) refuse it");
     }
@@ -331,7 +332,7 @@ std::optional<UrdfExport> export_urdf(const Conversion& conversion, const UrdfOp
       set_origin(joint->parent_to_joint_origin_transform, conjugate(C, robot.links[l].X_SL), joint_rpy[name]);
       model->joints_[name] = joint;
     }
-    diag.info("URDF_ROOT_ADDED", "",
+    diag.info(codes::URDF_ROOT_ADDED, "",
               std::to_string(robot.root_links.size()) + " root links: the URDF's root is a new "
               "empty link '" + root + "' (the scene frame) holding each of them by a fixed joint");
   }
@@ -374,13 +375,13 @@ std::optional<UrdfExport> export_urdf(const Conversion& conversion, const UrdfOp
     text = printer.Str();
   });
   if (!failure.empty()) {
-    diag.error("URDF_EXPORT_FAILED", "", "urdfdom refused the model: " + failure + (messages.empty() ? "" : " (" + messages + ")"));
+    diag.error(codes::URDF_EXPORT_FAILED, "", "urdfdom refused the model: " + failure + (messages.empty() ? "" : " (" + messages + ")"));
     return std::nullopt;
   }
   // The check: urdfdom reads it back, with every number exactly as we meant it.
   std::string mismatch;
   if (!urdf_internal::reads_back_exactly(text, *model, mismatch)) {
-    diag.error("URDF_SELF_CHECK_FAILED", "", "the URDF written does not read back: " + mismatch);
+    diag.error(codes::URDF_SELF_CHECK_FAILED, "", "the URDF written does not read back: " + mismatch);
     return std::nullopt;
   }
   result.text = std::move(text);
@@ -402,7 +403,7 @@ bool write_urdf(const Conversion& conversion, const std::filesystem::path& dir,
   std::error_code error;
   std::filesystem::create_directories(dir / "meshes", error);
   if (error) {
-    diag.error("WRITE_FAILED", "", "cannot create " + (dir / "meshes").string() + ": " + error.message());
+    diag.error(codes::WRITE_FAILED, "", "cannot create " + (dir / "meshes").string() + ": " + error.message());
     return false;
   }
   const bool addressed = static_cast<bool>(options.mesh_digest);
@@ -414,7 +415,7 @@ bool write_urdf(const Conversion& conversion, const std::filesystem::path& dir,
   const auto previous = addressed ? mesh_names_referenced_by(urdf) : std::set<std::string>{};
   std::string why;
   if (ok && !write_file_atomically(urdf, exported->text, why)) {
-    diag.error("WRITE_FAILED", "", "cannot write " + urdf.string() + ": " + why);
+    diag.error(codes::WRITE_FAILED, "", "cannot write " + urdf.string() + ": " + why);
     ok = false;
   }
   if (addressed) tidy_meshes(dir / "meshes", ok, *exported, previous, created);

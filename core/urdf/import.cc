@@ -12,6 +12,7 @@
 #include "rdtf/rdtf_extras.h"
 #include "rdtf/urdf.h"
 #include "urdf_internal.h"
+#include "rdtf/diagnostic_codes.h"
 
 namespace rdtf {
 namespace {
@@ -24,7 +25,7 @@ namespace fs = std::filesystem;
 // without blocking on a FIFO put in its place meanwhile.
 std::optional<std::string> read_text(const fs::path& path, std::uint64_t max_bytes, Diagnostics& diag) {
   auto refuse = [&](const std::string& why) {
-    diag.error("URDF_READ_FAILED", "", "cannot read " + path.string() + ": " + why);
+    diag.error(codes::URDF_READ_FAILED, "", "cannot read " + path.string() + ": " + why);
     return std::nullopt;
   };
   std::error_code error;
@@ -51,7 +52,7 @@ std::optional<std::string> read_text(const fs::path& path, std::uint64_t max_byt
       return refuse("not a regular file");
   }
   if (const auto size = fs::file_size(path, error); !error && size > max_bytes) {
-    diag.error("FILE_TOO_LARGE", "", path.string() + " is larger than " + std::to_string(max_bytes) + " bytes");
+    diag.error(codes::FILE_TOO_LARGE, "", path.string() + " is larger than " + std::to_string(max_bytes) + " bytes");
     return std::nullopt;
   }
   std::vector<std::uint8_t> bytes;
@@ -128,14 +129,13 @@ class Builder {
   // The triangles of one <visual> (or <collision>) geometry in its own frame, or nothing.
   std::optional<TriangleMesh> geometry(const urdf::Geometry& g, const std::string& pointer, int row,
                                        Eigen::Vector3d& scale) {
-    const std::string at = "line " + std::to_string(row) + ": ";
     auto skip = [&](const std::string& why) {
-      diag.warning("URDF_GEOMETRY_SKIPPED", pointer, at + why + "; this geometry is skipped");
+      diag.warning_at_line(codes::URDF_GEOMETRY_SKIPPED, pointer, row, why + "; this geometry is skipped");
       return std::nullopt;
     };
     scale = Eigen::Vector3d::Ones();
     if (const auto why = degenerate_shape(g)) {
-      diag.warning("URDF_SHAPE_DEGENERATE", pointer, at + *why + "; this geometry is skipped, the link is kept");
+      diag.warning_at_line(codes::URDF_SHAPE_DEGENERATE, pointer, row, *why + "; this geometry is skipped, the link is kept");
       return std::nullopt;
     }
     switch (g.type) {
@@ -155,27 +155,27 @@ class Builder {
     std::string extension = fs::path(mesh.filename).extension().string();
     for (char& ch : extension) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
     if (extension != ".stl") {
-      diag.warning("URDF_MESH_FORMAT_UNSUPPORTED", pointer,
-                   at + "mesh '" + mesh.filename + "' is not STL (the one mesh format import reads); skipped");
+      diag.warning_at_line(codes::URDF_MESH_FORMAT_UNSUPPORTED, pointer, row,
+                   "mesh '" + mesh.filename + "' is not STL (the one mesh format import reads); skipped");
       return std::nullopt;
     }
     std::string why;
     const auto path = resolve_mesh_path(mesh.filename, urdf.parent_path().empty() ? fs::path(".") : urdf.parent_path(), why);
     if (!path) {
-      diag.error("URDF_MESH_NOT_FOUND", pointer, at + why);
+      diag.error_at_line(codes::URDF_MESH_NOT_FOUND, pointer, row, why);
       ok = false;
       return std::nullopt;
     }
     Diagnostics read_diag(path->string());
     const auto bytes = read_text(*path, options.convert.limits.max_file_bytes, read_diag);
     if (!bytes) {
-      diag.error("URDF_MESH_NOT_FOUND", pointer, at + "mesh '" + mesh.filename + "': " + read_diag.all().front().message);
+      diag.error_at_line(codes::URDF_MESH_NOT_FOUND, pointer, row, "mesh '" + mesh.filename + "': " + read_diag.all().front().message);
       ok = false;
       return std::nullopt;
     }
     auto triangles_read = parse_stl(std::vector<std::uint8_t>(bytes->begin(), bytes->end()), why);
     if (!triangles_read) {
-      diag.error("URDF_MESH_INVALID", pointer, at + "mesh '" + path->string() + "': " + why);
+      diag.error_at_line(codes::URDF_MESH_INVALID, pointer, row, "mesh '" + path->string() + "': " + why);
       ok = false;
       return std::nullopt;
     }
@@ -188,7 +188,7 @@ class Builder {
   std::optional<std::size_t> visuals(const urdf::Link& link, const XmlLink& xml) {
     bool use_collision = link.visual_array.empty() && !link.collision_array.empty();
     if (use_collision) {
-      diag.info("URDF_COLLISION_AS_VISUAL", link_pointer(link.name),
+      diag.info(codes::URDF_COLLISION_AS_VISUAL, link_pointer(link.name),
                 "link '" + link.name + "' has no <visual>: its <collision> geometry is its mesh");
     }
     std::vector<std::size_t> mesh_nodes;
@@ -206,7 +206,7 @@ class Builder {
       if (!mesh) continue;
       triangles += mesh->triangles.size();
       if (triangles > options.convert.limits.max_triangles) {
-        diag.error("TOO_MANY_TRIANGLES", pointer, "more than " + std::to_string(options.convert.limits.max_triangles) + " triangles");
+        diag.error(codes::TOO_MANY_TRIANGLES, pointer, "more than " + std::to_string(options.convert.limits.max_triangles) + " triangles");
         ok = false;
         return std::nullopt;
       }
@@ -245,7 +245,7 @@ class Builder {
     out["damping"] = joint.dynamics ? joint.dynamics->damping : 0.0;
     out["springStiffness"] = 0.0;
     if (joint.mimic || joint.safety || joint.calibration) {
-      diag.info("URDF_IGNORED", joint_pointer(joint.name),
+      diag.info(codes::URDF_IGNORED, joint_pointer(joint.name),
                 "joint '" + joint.name + "': <mimic>, <safety_controller> and <calibration> have no "
                 "RDTF equivalent and are not imported");
     }
@@ -308,7 +308,7 @@ void report_urdfdom_failure(const XmlRobot& xml, const ConsoleMessages& messages
   std::string said;
   for (const std::string& message : messages.errors) said += (said.empty() ? "" : "; ") + message;
   if (said.empty()) said = "it gives no reason";
-  diag.error("URDF_PARSE_FAILED", pointer, "line " + std::to_string(row) + ": urdfdom cannot read it: " + said);
+  diag.error_at_line(codes::URDF_PARSE_FAILED, pointer, row, "urdfdom cannot read it: " + said);
 }
 
 }  // namespace
@@ -342,14 +342,14 @@ std::optional<Conversion> import_urdf(const fs::path& urdf, const UrdfImportOpti
   bool agreed = true;
   for (const XmlLink& link : xml->links) {
     if (model->getLink(link.name)) continue;
-    diag.error("URDF_PARSE_FAILED", link_pointer(link.name),
-               "line " + std::to_string(link.row) + ": urdfdom reads no link named '" + link.name + "'");
+    diag.error_at_line(codes::URDF_PARSE_FAILED, link_pointer(link.name), link.row,
+                       "urdfdom reads no link named '" + link.name + "'");
     agreed = false;
   }
   for (const XmlJoint& joint : xml->joints) {
     if (model->getJoint(joint.name)) continue;
-    diag.error("URDF_PARSE_FAILED", joint_pointer(joint.name),
-               "line " + std::to_string(joint.row) + ": urdfdom reads no joint named '" + joint.name + "'");
+    diag.error_at_line(codes::URDF_PARSE_FAILED, joint_pointer(joint.name), joint.row,
+                       "urdfdom reads no joint named '" + joint.name + "'");
     agreed = false;
   }
   if (!agreed) return std::nullopt;
@@ -384,7 +384,7 @@ std::optional<Conversion> import_urdf(const fs::path& urdf, const UrdfImportOpti
     if (link->inertial) {  // Checked in the XML: a finite mass of 0 or more, a finite tensor.
       children.push_back(b.add_node(Json{{"name", name + "_inertial"}}, "inertial", b.inertial_json(*link->inertial)));
     } else {
-      diag.info("URDF_NO_INERTIAL", link_pointer(name),
+      diag.info(codes::URDF_NO_INERTIAL, link_pointer(name),
                 "link '" + name + "' has no <inertial>: rdtf computes it from the link's geometry");
     }
     if (!children.empty()) b.document["nodes"][index]["children"] = std::move(children);

@@ -9,6 +9,7 @@
 
 #include "import_internal.h"
 #include "rdtf/utf8.h"
+#include "rdtf/diagnostic_codes.h"
 
 namespace rdtf::urdf_internal {
 namespace {
@@ -75,7 +76,7 @@ std::optional<std::string> urdf_text_as_utf8(std::string_view text, Diagnostics&
   for (std::size_t at = 0; at < text.size();) {
     const std::size_t n = utf8_sequence_length(text, at);
     if (n == 0) {
-      diag.error("URDF_NOT_UTF8", "",
+      diag.error(codes::URDF_NOT_UTF8, "",
                  place_of(text, at) + ": byte 0x" + "0123456789ABCDEF"[static_cast<unsigned char>(text[at]) >> 4] +
                      "0123456789ABCDEF"[static_cast<unsigned char>(text[at]) & 0xF] +
                      " is not UTF-8 (URDF names become glTF names, which must be UTF-8)");
@@ -85,7 +86,7 @@ std::optional<std::string> urdf_text_as_utf8(std::string_view text, Diagnostics&
       if (const auto ref = reference_at(text, at); ref && ref->code >= 0x80) {
         const bool surrogate = ref->code >= 0xD800 && ref->code <= 0xDFFF;
         if (surrogate || ref->code > 0x10FFFF) {
-          diag.error("URDF_NOT_UTF8", "",
+          diag.error(codes::URDF_NOT_UTF8, "",
                      place_of(text, at) + ": the character reference '" + std::string(text.substr(at, ref->length)) +
                          "' is not a Unicode character (a surrogate or beyond U+10FFFF)");
           return std::nullopt;

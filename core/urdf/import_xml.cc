@@ -15,6 +15,7 @@
 
 #include "import_internal.h"
 #include "urdf_internal.h"
+#include "rdtf/diagnostic_codes.h"
 
 namespace rdtf::urdf_internal {
 namespace {
@@ -25,7 +26,6 @@ const std::set<std::string>& known_joint_types() {
   return types;
 }
 
-std::string line(int row) { return "line " + std::to_string(row) + ": "; }
 
 std::string attribute(const TiXmlElement* e, const char* name) {
   const char* value = e->Attribute(name);
@@ -114,8 +114,8 @@ struct Rule {
   const char* what;
 };
 
-constexpr const char* kInvalidNumber = "URDF_INVALID_NUMBER";
-constexpr const char* kInvalidInertial = "URDF_INVALID_INERTIAL";
+constexpr const char* kInvalidNumber = codes::URDF_INVALID_NUMBER;
+constexpr const char* kInvalidInertial = codes::URDF_INVALID_INERTIAL;
 
 // Reads and checks attributes, reporting each problem (every one, not only the first) with the
 // attribute's pointer ("/robot/joint[@name='elbow']/limit/@effort") and the element's line.
@@ -125,7 +125,7 @@ class Checker {
   bool ok() const { return ok_; }
 
   void error(const char* code, const std::string& pointer, int row, const std::string& message) {
-    diag_.error(code, pointer, line(row) + message);
+    diag_.error_at_line(code, pointer, row, message);
     ok_ = false;
   }
 
@@ -139,7 +139,7 @@ class Checker {
     const std::string element = "<" + std::string(e->Value());
     if (value == nullptr) {
       if (required) {
-        error(code == kInvalidInertial ? kInvalidInertial : "URDF_INVALID", pointer, e->Row(),
+        error(code == kInvalidInertial ? kInvalidInertial : codes::URDF_INVALID, pointer, e->Row(),
               element + "> has no " + name + " attribute, which URDF requires");
       }
       return std::nullopt;
@@ -251,12 +251,12 @@ void check_geometry(Checker& c, const TiXmlElement* holder, const std::string& p
   const std::string holder_name = holder->Value();
   const TiXmlElement* geometry = holder->FirstChildElement("geometry");
   if (geometry == nullptr) {
-    c.error("URDF_INVALID", pointer, holder->Row(), "<" + holder_name + "> has no <geometry>");
+    c.error(codes::URDF_INVALID, pointer, holder->Row(), "<" + holder_name + "> has no <geometry>");
     return;
   }
   const TiXmlElement* shape = geometry->FirstChildElement();
   if (shape == nullptr) {
-    c.error("URDF_INVALID", pointer + "/geometry", geometry->Row(),
+    c.error(codes::URDF_INVALID, pointer + "/geometry", geometry->Row(),
             "<geometry> holds no shape: give it a <box>, <cylinder>, <sphere> or <mesh>");
     return;
   }
@@ -271,17 +271,17 @@ void check_geometry(Checker& c, const TiXmlElement* holder, const std::string& p
     c.numbers(shape, at, "radius", {1, Range::kNonNegative, "a sphere radius"}, true);
   } else if (kind == "mesh") {
     if (shape->Attribute("filename") == nullptr) {
-      c.error("URDF_INVALID", at, shape->Row(), "<mesh> has no filename attribute");
+      c.error(codes::URDF_INVALID, at, shape->Row(), "<mesh> has no filename attribute");
     }
     c.numbers(shape, at, "scale", {3, Range::kNonZero, "a mesh scale"}, false);
   } else {
-    c.error("URDF_INVALID", at, shape->Row(),
+    c.error(codes::URDF_INVALID, at, shape->Row(),
             "<" + shown(kind) + "> is no URDF shape: the shapes are <box>, <cylinder>, <sphere> and <mesh>");
   }
   if (holder_name != "visual") return;
   if (const TiXmlElement* material = holder->FirstChildElement("material")) {
     if (material->Attribute("name") == nullptr) {
-      c.error("URDF_INVALID", pointer + "/material", material->Row(), "<material> in a <visual> has no name attribute");
+      c.error(codes::URDF_INVALID, pointer + "/material", material->Row(), "<material> in a <visual> has no name attribute");
     }
     if (const TiXmlElement* color = material->FirstChildElement("color")) {
       c.numbers(color, pointer + "/material/color", "rgba", {4, Range::kUnit, "a colour component"}, false);
@@ -298,7 +298,7 @@ void check_joint(Checker& c, const TiXmlElement* e, const XmlJoint& joint, const
                         joint.type == "planar";
   if (const TiXmlElement* axis = e->FirstChildElement("axis"); axis != nullptr && has_axis) {
     if (axis->Attribute("xyz") == nullptr) {
-      c.error("URDF_INVALID", pointer + "/axis", axis->Row(),
+      c.error(codes::URDF_INVALID, pointer + "/axis", axis->Row(),
               "<axis> has no xyz attribute (urdfdom then takes the zero vector, which is no direction)");
     } else if (const auto xyz = c.numbers(axis, pointer + "/axis", "xyz", {3, Range::kAny, "an axis"}, true)) {
       if ((*xyz)[0] == 0 && (*xyz)[1] == 0 && (*xyz)[2] == 0) {
@@ -323,14 +323,14 @@ void check_joint(Checker& c, const TiXmlElement* e, const XmlJoint& joint, const
               "<limit>: lower " + exact_number(low) + " is above upper " + exact_number(high));
     }
   } else if (joint.type == "revolute" || joint.type == "prismatic") {
-    c.error("URDF_INVALID", pointer, e->Row(),
+    c.error(codes::URDF_INVALID, pointer, e->Row(),
             "joint '" + joint.name + "' is " + joint.type +
                 " and has no <limit lower upper effort velocity/>, which URDF requires for that kind");
   }
   if (const TiXmlElement* dynamics = e->FirstChildElement("dynamics")) {
     const std::string at = pointer + "/dynamics";
     if (dynamics->Attribute("damping") == nullptr && dynamics->Attribute("friction") == nullptr) {
-      c.error("URDF_INVALID", at, dynamics->Row(), "<dynamics> has neither damping nor friction");
+      c.error(codes::URDF_INVALID, at, dynamics->Row(), "<dynamics> has neither damping nor friction");
     }
     c.numbers(dynamics, at, "damping", {1, Range::kNonNegative, "damping"}, false);
     c.numbers(dynamics, at, "friction", {1, Range::kNonNegative, "friction"}, false);
@@ -350,7 +350,7 @@ void check_joint(Checker& c, const TiXmlElement* e, const XmlJoint& joint, const
   }
   if (const TiXmlElement* mimic = e->FirstChildElement("mimic")) {
     if (mimic->Attribute("joint") == nullptr) {
-      c.error("URDF_INVALID", pointer + "/mimic", mimic->Row(), "<mimic> has no joint attribute");
+      c.error(codes::URDF_INVALID, pointer + "/mimic", mimic->Row(), "<mimic> has no joint attribute");
     }
     for (const char* name : {"multiplier", "offset"}) c.numbers(mimic, pointer + "/mimic", name, kAnyNumber, false);
   }
@@ -366,8 +366,8 @@ bool check_tree(XmlRobot& robot, Diagnostics& diag) {
     const std::size_t child = link_index.at(joint.child);
     if (parent_joint[child] >= 0) {
       const XmlJoint& first = robot.joints[parent_joint[child]];
-      diag.error("URDF_LINK_TWO_PARENTS", joint_pointer(joint.name),
-                 line(joint.row) + "link '" + joint.child + "' is the child of joint '" + joint.name +
+      diag.error_at_line(codes::URDF_LINK_TWO_PARENTS, joint_pointer(joint.name), joint.row,
+                 "link '" + joint.child + "' is the child of joint '" + joint.name +
                      "' and of joint '" + first.name + "' (line " + std::to_string(first.row) +
                      "): a URDF is a tree, each link has one parent");
       ok = false;
@@ -403,8 +403,8 @@ bool check_tree(XmlRobot& robot, Diagnostics& diag) {
       joints += (joints.empty() ? "" : ", ") + ("'" + joint.name + "'");
       l = link_index.at(joint.parent);
     } while (l != at);
-    diag.error("URDF_JOINT_LOOP", joint_pointer(robot.joints[parent_joint[at]].name),
-               line(first_row) + "joints " + joints + " form a loop (link '" + robot.links[at].name +
+    diag.error_at_line(codes::URDF_JOINT_LOOP, joint_pointer(robot.joints[parent_joint[at]].name), first_row,
+               "joints " + joints + " form a loop (link '" + robot.links[at].name +
                    "' is its own ancestor): a URDF is a tree");
     ok = false;
   }
@@ -419,7 +419,7 @@ bool check_tree(XmlRobot& robot, Diagnostics& diag) {
   if (roots.size() > 1) {
     std::string names;
     for (const std::string& r : roots) names += (names.empty() ? "" : ", ") + r;
-    diag.error("URDF_MULTIPLE_ROOTS", "/robot",
+    diag.error(codes::URDF_MULTIPLE_ROOTS, "/robot",
                std::to_string(roots.size()) + " links have no parent joint: " + names +
                    "; a URDF has exactly one root link");
     return false;
@@ -436,14 +436,14 @@ std::optional<XmlRobot> scan_urdf_xml(const std::string& text, Diagnostics& diag
   TiXmlDocument document;
   document.Parse(text.c_str(), nullptr, TIXML_ENCODING_UTF8);
   if (document.Error()) {
-    diag.error("URDF_MALFORMED_XML", "",
-               line(document.ErrorRow()) + "column " + std::to_string(document.ErrorCol()) +
+    diag.error_at_line(codes::URDF_MALFORMED_XML, "", document.ErrorRow(),
+               "column " + std::to_string(document.ErrorCol()) +
                    ": malformed XML: " + document.ErrorDesc());
     return std::nullopt;
   }
   const TiXmlElement* robot_element = document.RootElement();
   if (robot_element == nullptr || std::string(robot_element->Value()) != "robot") {
-    diag.error("URDF_NOT_A_ROBOT", "",
+    diag.error(codes::URDF_NOT_A_ROBOT, "",
                "the root element is <" + std::string(robot_element ? robot_element->Value() : "") +
                    ">, not <robot>: this is not a URDF");
     return std::nullopt;
@@ -464,13 +464,13 @@ std::optional<XmlRobot> scan_urdf_xml(const std::string& text, Diagnostics& diag
   for (const TiXmlElement* e = robot_element->FirstChildElement("link"); e; e = e->NextSiblingElement("link")) {
     XmlLink link{attribute(e, "name"), e->Row(), {}, {}};
     if (link.name.empty()) {
-      diag.error("URDF_INVALID", "/robot/link", line(e->Row()) + "a <link> has no name");
+      diag.error_at_line(codes::URDF_INVALID, "/robot/link", e->Row(), "a <link> has no name");
       ok = false;
       continue;
     }
     if (!link_names.insert(link.name).second) {
-      diag.error("URDF_DUPLICATE_NAME", link_pointer(link.name),
-                 line(e->Row()) + "a second link is named '" + link.name + "'");
+      diag.error_at_line(codes::URDF_DUPLICATE_NAME, link_pointer(link.name), e->Row(),
+                 "a second link is named '" + link.name + "'");
       ok = false;
       continue;
     }
@@ -494,18 +494,18 @@ std::optional<XmlRobot> scan_urdf_xml(const std::string& text, Diagnostics& diag
                    link_reference(e, "child"), e->Row()};
     const std::string pointer = joint.name.empty() ? "/robot/joint" : joint_pointer(joint.name);
     if (joint.name.empty()) {
-      diag.error("URDF_INVALID", pointer, line(e->Row()) + "a <joint> has no name");
+      diag.error_at_line(codes::URDF_INVALID, pointer, e->Row(), "a <joint> has no name");
       ok = false;
       continue;
     }
     if (!joint_names.insert(joint.name).second) {
-      diag.error("URDF_DUPLICATE_NAME", pointer, line(e->Row()) + "a second joint is named '" + joint.name + "'");
+      diag.error_at_line(codes::URDF_DUPLICATE_NAME, pointer, e->Row(), "a second joint is named '" + joint.name + "'");
       ok = false;
       continue;
     }
     if (!known_joint_types().count(joint.type)) {
-      diag.error("URDF_UNKNOWN_JOINT_TYPE", pointer,
-                 line(e->Row()) + "joint '" + joint.name + "' has type '" + joint.type +
+      diag.error_at_line(codes::URDF_UNKNOWN_JOINT_TYPE, pointer, e->Row(),
+                 "joint '" + joint.name + "' has type '" + joint.type +
                      "'; URDF's types are fixed, revolute, continuous, prismatic, floating and planar");
       ok = false;
     } else {
@@ -514,25 +514,25 @@ std::optional<XmlRobot> scan_urdf_xml(const std::string& text, Diagnostics& diag
     for (const auto& [which, link] : {std::pair<const char*, const std::string&>{"parent", joint.parent},
                                       std::pair<const char*, const std::string&>{"child", joint.child}}) {
       if (link.empty()) {
-        diag.error("URDF_INVALID", pointer,
-                   line(e->Row()) + "joint '" + joint.name + "' has no <" + which + " link=\"...\"/>");
+        diag.error_at_line(codes::URDF_INVALID, pointer, e->Row(),
+                   "joint '" + joint.name + "' has no <" + which + " link=\"...\"/>");
         ok = false;
       } else if (!link_names.count(link)) {
-        diag.error("URDF_UNKNOWN_LINK", pointer,
-                   line(e->Row()) + "joint '" + joint.name + "' names " + which + " link '" + link +
+        diag.error_at_line(codes::URDF_UNKNOWN_LINK, pointer, e->Row(),
+                   "joint '" + joint.name + "' names " + which + " link '" + link +
                        "', which no <link> defines");
         ok = false;
       }
     }
     if (!joint.parent.empty() && joint.parent == joint.child) {
-      diag.error("URDF_JOINT_LOOP", pointer,
-                 line(e->Row()) + "joint '" + joint.name + "' joins link '" + joint.parent + "' to itself");
+      diag.error_at_line(codes::URDF_JOINT_LOOP, pointer, e->Row(),
+                 "joint '" + joint.name + "' joins link '" + joint.parent + "' to itself");
       ok = false;
     }
     robot.joints.push_back(std::move(joint));
   }
   if (robot.links.empty() && ok) {
-    diag.error("URDF_INVALID", "/robot", "the robot has no <link>");
+    diag.error(codes::URDF_INVALID, "/robot", "the robot has no <link>");
     return std::nullopt;
   }
   if (!ok || !check_tree(robot, diag) || !checker.ok()) return std::nullopt;

@@ -1,5 +1,7 @@
 #include "rdtf/urdf_names.h"
 
+#include "rdtf/diagnostic_codes.h"
+
 #include "urdf_internal.h"
 
 namespace rdtf {
@@ -12,7 +14,7 @@ UrdfNames urdf_names(const Robot& robot, Diagnostics* diag) {
   auto choose = [&](const std::string& name, int node, const char* what, std::vector<std::string>& taken) {
     const std::string chosen = unique_name(valid_urdf_name(name, what), taken);
     if (diag != nullptr && chosen != name) {
-      diag->warning("URDF_NAME_CHANGED", node >= 0 ? json_pointer("/nodes", static_cast<std::size_t>(node)) : "",
+      diag->warning(codes::URDF_NAME_CHANGED, node >= 0 ? json_pointer("/nodes", static_cast<std::size_t>(node)) : "",
                     std::string(what) + " '" + name + "' is named '" + chosen +
                         "' in the URDF (URDF names here are unique and use letters, digits, '_', "
                         "'-' and '.')");

@@ -60,6 +60,7 @@ TEST(SafeDecode, EveryRdtfTypeRoundTripsThroughTheSchemaCheck) {
   rdtf::link_state_t links;
   links.num_links = 2;
   links.name = {"a", "b"};
+  links.gltf_name = {"a", "b"};
   links.position = {{1, 2, 3}, {4, 5, 6}};
   links.orientation = {{1, 0, 0, 0}, {1, 0, 0, 0}};
   links.linear_velocity = links.position;

@@ -8,6 +8,7 @@
 #include <cstdio>
 
 #include <cctype>
+#include <regex>
 
 #include "urdf/urdf_test_support.h"
 
@@ -205,6 +206,14 @@ TEST_P(UrdfImportErrors, ClearErrorAndNoOutput) {
     EXPECT_EQ(found->pointer, bad.pointer);
   }
   EXPECT_NE(found->message.find(bad.says), std::string::npos) << found->message;
+  // The element's line is a field of its own (JSON "line", LCM diagnostic_t.line) whenever the
+  // message names it as "line N: ".
+  std::smatch line;
+  if (std::regex_search(found->message, line, std::regex("^line ([0-9]+): "))) {
+    EXPECT_EQ(found->line, std::stoi(line[1].str())) << found->message;
+  } else {
+    EXPECT_EQ(found->line, 0) << found->message;
+  }
 
   // The CLI: exit code 2, the error on stderr with the file and element, no output file.
   const fs::path out = dir / "out.gltf";

@@ -2,7 +2,8 @@
 //
 // Every stage of the pipeline appends to a Diagnostics list instead of throwing; the caller decides
 // what to do with them (print, publish on LCM, fail). Each diagnostic names the file and a place in
-// it: a JSON pointer (RFC 6901) as the Khronos validator reports it, or a byte offset in a GLB.
+// it: a JSON pointer (RFC 6901) as the Khronos validator reports it, a byte offset in a GLB, or for
+// URDF an XPath-like path and the line. docs/diagnostics.md lists every code.
 #pragma once
 
 #include <cstdint>
@@ -19,9 +20,12 @@ std::string_view to_string(Severity severity);
 
 struct Diagnostic {
   Severity severity = Severity::kError;
-  std::string code;     // Stable, machine-readable, e.g. "ACCESSOR_OUT_OF_BOUNDS".
+  std::string code;     // Stable, machine-readable, e.g. "ACCESSOR_TOO_LONG" (docs/diagnostics.md).
   std::string file;     // The file the problem is in (may be empty for in-memory input).
-  std::string pointer;  // JSON pointer into the glTF document, e.g. "/accessors/3/count".
+  // The place in the file: for glTF a JSON pointer into the document ("/accessors/3/count"), for
+  // URDF a path of elements and attributes ("/robot/joint[@name='elbow']/limit/@effort").
+  std::string pointer;
+  int line = 0;  // For text formats read by line (URDF): the line, from 1; 0 when none.
   std::optional<std::uint64_t> byte_offset;  // For GLB container problems.
   std::string message;  // Human-readable; says what is wrong and, where useful, what to do.
 };
@@ -48,6 +52,15 @@ class Diagnostics {
     add(Severity::kInfo, std::move(code), std::move(pointer), std::move(message));
   }
   void error_at_offset(std::string code, std::uint64_t offset, std::string message);
+  // A problem on a line of a text file (URDF). The message starts with "line N: " too, so that it
+  // reads whole where only the message is shown.
+  void add_at_line(Severity severity, std::string code, std::string pointer, int line, const std::string& message);
+  void error_at_line(std::string code, std::string pointer, int line, const std::string& message) {
+    add_at_line(Severity::kError, std::move(code), std::move(pointer), line, message);
+  }
+  void warning_at_line(std::string code, std::string pointer, int line, const std::string& message) {
+    add_at_line(Severity::kWarning, std::move(code), std::move(pointer), line, message);
+  }
   void append(const Diagnostics& other);
 
   bool has_errors() const { return error_count_ > 0; }

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "rdtf/diagnostics.h"
+#include "rdtf/diagnostics_json.h"  // diagnostics_json, which robot_summary uses
 #include "rdtf/gltf.h"
 #include "rdtf/robot.h"
 
@@ -22,7 +23,5 @@ RobotTotals robot_totals(const Robot& robot);
 Json robot_summary(const Robot& robot, const Json& document, const Diagnostics& diag);
 
 std::string robot_table(const Robot& robot, const Diagnostics& diag);
-
-Json diagnostics_json(const Diagnostics& diag);
 
 }  // namespace rdtf

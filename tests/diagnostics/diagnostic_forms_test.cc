@@ -1,0 +1,150 @@
+// One diagnostic in each of its forms: the core value, its JSON (CLI and rdtf-echo alike), its LCM
+// diagnostic_t and back; a URDF diagnostic's line in a field of its own; and the length fields of
+// LCM messages set by lcmtypes/counts.h.
+#include <gtest/gtest.h>
+
+#include <rdtf/model_error_t.hpp>
+
+#include "counts.h"
+#include "diagnostic_message.h"
+#include "message_json.h"
+#include "publisher.h"
+#include "rdtf/diagnostic_codes.h"
+#include "rdtf/diagnostics_json.h"
+#include "support/test_support.h"
+
+namespace rdtf {
+namespace {
+
+Diagnostic urdf_finding() {
+  Diagnostics diag("arm.urdf");
+  diag.error_at_line(codes::URDF_INVALID_NUMBER, "/robot/joint[@name='j']/limit/@lower", 5,
+                     "<limit lower=\"abc\">: 'abc' is not a number");
+  return diag.all().front();
+}
+
+TEST(DiagnosticForms, AUrdfFindingHasItsLineInAFieldAndInItsMessage) {
+  const Diagnostic d = urdf_finding();
+  EXPECT_EQ(d.line, 5);
+  EXPECT_EQ(d.pointer, "/robot/joint[@name='j']/limit/@lower");
+  EXPECT_EQ(d.message, "line 5: <limit lower=\"abc\">: 'abc' is not a number");
+  EXPECT_FALSE(d.byte_offset);
+}
+
+TEST(DiagnosticForms, JsonHasLineAndByteOffsetOnlyWhenGiven) {
+  const Json urdf = diagnostic_json(urdf_finding());
+  EXPECT_EQ(urdf.dump(), R"({"severity":"error","code":"URDF_INVALID_NUMBER","file":"arm.urdf",)"
+                         R"("pointer":"/robot/joint[@name='j']/limit/@lower","line":5,)"
+                         R"("message":"line 5: <limit lower=\"abc\">: 'abc' is not a number"})");
+  Diagnostics glb("a.glb");
+  glb.error_at_offset(codes::GLB_LENGTH_MISMATCH, 8, "header says 100 bytes but the file has 90");
+  glb.warning(codes::MESH_OPEN, "/nodes/2", "open");
+  const Json list = diagnostics_json(glb);
+  ASSERT_EQ(list.size(), 2u);
+  EXPECT_EQ(list[0]["byteOffset"], 8);
+  EXPECT_FALSE(list[0].contains("line"));
+  EXPECT_FALSE(list[1].contains("byteOffset"));
+  EXPECT_FALSE(list[1].contains("line"));
+  EXPECT_EQ(list[1]["severity"], "warning");
+}
+
+TEST(DiagnosticForms, LcmMessageCarriesEveryFieldBothWays) {
+  const Diagnostic d = urdf_finding();
+  const diagnostic_t m = to_message(d);
+  EXPECT_EQ(m.severity, diagnostic_t::ERROR);
+  EXPECT_EQ(m.code, "URDF_INVALID_NUMBER");
+  EXPECT_EQ(m.file, "arm.urdf");
+  EXPECT_EQ(m.pointer, d.pointer);
+  EXPECT_EQ(m.line, 5);
+  EXPECT_EQ(m.byte_offset, -1);
+  EXPECT_EQ(m.message, d.message);
+  const Diagnostic back = from_message(m);
+  EXPECT_EQ(diagnostic_json(back), diagnostic_json(d));
+  Diagnostics glb("a.glb");
+  glb.error_at_offset(codes::GLB_CHUNK_TOO_BIG, 20, "chunk 1 length 4000 runs past the end of the file");
+  const diagnostic_t at_offset = to_message(glb.all().front());
+  EXPECT_EQ(at_offset.byte_offset, 20);
+  EXPECT_EQ(at_offset.line, 0);
+  EXPECT_EQ(diagnostic_json(from_message(at_offset)), diagnostic_json(glb.all().front()));
+  const diagnostic_t own = to_message(Severity::kInfo, codes::DIAGNOSTICS_TRUNCATED, "3 more");
+  EXPECT_EQ(own.severity, diagnostic_t::INFO);
+  EXPECT_EQ(own.line, 0);
+  EXPECT_EQ(own.byte_offset, -1);
+  EXPECT_EQ(own.file, "");
+}
+
+// rdtf-echo prints a received diagnostic as the CLI prints it.
+TEST(DiagnosticForms, EchoPrintsTheCliJson) {
+  model_error_t error{};
+  error.model_id = "arm";
+  error.diagnostics = {to_message(urdf_finding())};
+  set_counts(error);
+  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(error.getEncodedSize()));
+  error.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  const auto json = clients::message_to_json(bytes.data(), static_cast<std::uint32_t>(bytes.size()));
+  ASSERT_TRUE(json);
+  ASSERT_EQ((*json)["diagnostics"].size(), 1u);
+  EXPECT_EQ((*json)["diagnostics"][0].dump(), diagnostic_json(urdf_finding()).dump());
+}
+
+TEST(DiagnosticForms, CountsFollowTheArrays) {
+  model_error_t error{};
+  error.num_diagnostics = 7;  // Stale: set_counts makes it the vector's length.
+  error.diagnostics = {to_message(Severity::kError, codes::INTERNAL_ERROR, "a"),
+                       to_message(Severity::kError, codes::INTERNAL_ERROR, "b")};
+  set_counts(error);
+  EXPECT_EQ(error.num_diagnostics, 2);
+  link_state_t links{};
+  links.name = {"a", "b", "c"};
+  links.position.assign(3, {});
+  links.orientation.assign(3, {});
+  links.linear_velocity.assign(3, {});
+  links.angular_velocity.assign(3, {});
+  set_counts(links);
+  EXPECT_EQ(links.num_links, 3);
+  status_t status{};
+  status.model_ids = {"a"};
+  set_counts(status);
+  EXPECT_EQ(status.num_model_ids, 1);
+  description_chunk_t chunk{};
+  chunk.data = {1, 2, 3, 4};
+  set_counts(chunk);
+  EXPECT_EQ(chunk.size, 4);
+  joint_command_t command{};
+  command.name = {"j"};
+  set_counts(command);
+  EXPECT_EQ(command.num_joints, 1);
+}
+
+}  // namespace
+}  // namespace rdtf
+
+namespace rdtf::daemon {
+namespace {
+
+// The daemon's publisher sets the counts of whatever it sends: a caller never does.
+TEST(DiagnosticForms, ThePublisherSendsCountsThatFollowTheArrays) {
+  std::vector<std::uint8_t> sent;
+  Publisher publisher(
+      [&](const std::string&, const std::uint8_t* data, unsigned int size) {
+        sent.assign(data, data + size);
+        return 0;
+      },
+      1e9, 1 << 20);
+  model_error_t error{};
+  error.model_id = "arm";
+  error.diagnostics = {to_message(Severity::kError, codes::INTERNAL_ERROR, "a"),
+                       to_message(Severity::kWarning, codes::MESH_OPEN, "b")};
+  error.num_diagnostics = 0;  // As a caller that forgot it would leave it.
+  publisher.publish("RDTF/ERROR", error);
+  publisher.drain(Publisher::Clock::now());
+  ASSERT_FALSE(sent.empty());
+  model_error_t decoded;
+  ASSERT_GT(decoded.decode(sent.data(), 0, static_cast<int>(sent.size())), 0);
+  EXPECT_EQ(decoded.num_diagnostics, 2);
+  ASSERT_EQ(decoded.diagnostics.size(), 2u);
+  EXPECT_EQ(decoded.diagnostics[1].code, "MESH_OPEN");
+}
+
+}  // namespace
+}  // namespace rdtf::daemon

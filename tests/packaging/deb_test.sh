@@ -3,7 +3,8 @@
 # dpkg-deb -x (nothing is installed on this system): the package must hold rdtfd, the clients,
 # rdtf-spy and the LCM types jar, the systemd unit (naming /usr/bin/rdtfd and /etc/rdtf/rdtfd.json),
 # the config (a conffile) and librdtf with its headers and CMake package; and `rdtf --version`
-# and `rdtfd --version` run from the scratch root print what the build's own binaries print.
+# and `rdtfd --version` run from the scratch root print what the build's own binaries print; the
+# packaged rdtf-spy finds the packaged jar.
 # Usage: deb_test.sh BUILD_DIR
 set -euo pipefail
 
@@ -48,4 +49,8 @@ for program in rdtf rdtfd; do
     fail "$program --version printed '$packaged'"
   [[ $packaged == "$built" ]] || fail "$program --version: package '$packaged', build '$built'"
 done
+# The packaged rdtf-spy finds the packaged jar by itself (without it, it stops before lcm-spy
+# starts); lcm-spy --help prints its usage and exits without opening a window.
+spy_help=$(env -u RDTF_LCM_JAR "$work/root/usr/bin/rdtf-spy" --help 2>&1 || true)
+[[ $spy_help == *"usage: lcm-spy"* ]] || fail "the packaged rdtf-spy did not start lcm-spy: $spy_help"
 echo "PASS: $(basename "$deb") holds the daemon, clients, unit, config and library; rdtf --version runs from it"

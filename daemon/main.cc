@@ -9,6 +9,7 @@
 #include <map>
 
 #include "daemon.h"
+#include "rdtf/version.h"
 
 namespace {
 
@@ -86,7 +87,7 @@ std::optional<rdtf::daemon::DaemonConfig> load(const std::string& config_file,
 int main(int argc, char** argv) {
   CLI::App app{"rdtfd: watches folders of glTF models, converts each save to RDTF and publishes "
                "it over LCM"};
-  app.set_version_flag("--version", "rdtfd 0.1.0");
+  app.set_version_flag("--version", rdtf::version_line("rdtfd"));
   std::string config_file;
   Overrides overrides;
   app.add_option("-c,--config", config_file, "JSON config file (see config/rdtfd.json)")

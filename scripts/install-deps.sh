@@ -20,6 +20,7 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev libglib2.0-dev libssl-dev
   clang libclang-rt-14-dev
   iproute2 util-linux
+  default-jre libjchart2d-java xvfb xauth x11-apps dpkg-dev
   blender python3-numpy
 )
 

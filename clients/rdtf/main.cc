@@ -4,11 +4,12 @@
 #include <iostream>
 
 #include "commands.h"
+#include "rdtf/version.h"
 
 int main(int argc, char** argv) {
   CLI::App app{"rdtf: turns glTF 2.0 models into RDTF robot descriptions (glTF + extras.RDTF)"};
   app.require_subcommand(1);
-  app.set_version_flag("--version", "rdtf 0.1.0");
+  app.set_version_flag("--version", rdtf::version_line("rdtf"));
   int exit_code = rdtf::cli::kExitOk;
   rdtf::cli::add_convert_command(app, exit_code);
   rdtf::cli::add_inspect_command(app, exit_code);

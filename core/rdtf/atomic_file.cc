@@ -50,6 +50,11 @@ bool ends_with_name_digits(std::string_view text) {
 
 bool write_file_atomically(const std::filesystem::path& path, std::span<const std::uint8_t> bytes,
                            std::string& why) {
+  return write_file_atomically(path, std::span<const std::span<const std::uint8_t>>(&bytes, 1), why);
+}
+
+bool write_file_atomically(const std::filesystem::path& path,
+                           std::span<const std::span<const std::uint8_t>> pieces, std::string& why) {
   const std::filesystem::path folder = path.has_parent_path() ? path.parent_path() : ".";
   std::random_device random;
   // A leading dot and a .tmp suffix: watchers (ours included) ignore such names.
@@ -61,7 +66,11 @@ bool write_file_atomically(const std::filesystem::path& path, std::span<const st
     why = errno_text(("create " + temporary.string()).c_str());
     return false;
   }
-  bool ok = write_all(fd, bytes.data(), bytes.size(), why);
+  bool ok = true;
+  for (const auto& piece : pieces) {
+    ok = write_all(fd, piece.data(), piece.size(), why);
+    if (!ok) break;
+  }
   if (ok && ::fsync(fd) != 0) {
     why = errno_text("fsync");
     ok = false;

@@ -209,21 +209,71 @@ bool write_gltf(const GltfAsset& asset, const std::filesystem::path& output, con
   return ok;
 }
 
-void append_aligned(std::vector<std::uint8_t>& bin, std::span<const std::uint8_t> bytes) {
-  bin.resize((bin.size() + 3) & ~std::size_t{3}, 0);
-  bin.insert(bin.end(), bytes.begin(), bytes.end());
+// The BIN chunk of a GLB as pieces in file order: the asset's buffers and embedded images where
+// they already lie, each started on a 4-byte boundary (zero bytes between), as glTF requires of
+// accessor data. Nothing is copied: a 24 MB model is written without two fresh 24 MB copies
+// (the concatenated chunk, then the whole container), whose page faults and copying were a third
+// of a whole `rdtf convert --glb` process.
+class BinChunk {
+ public:
+  // Appends bytes (which must outlive this object) and returns their offset in the chunk.
+  std::size_t append(std::span<const std::uint8_t> bytes) {
+    pad_to(4);
+    const std::size_t offset = size_;
+    pieces_.push_back(bytes);
+    size_ += bytes.size();
+    return offset;
+  }
+  // The chunk's padding to its 4-byte end (GLB section 4.4.3).
+  void pad_to(std::size_t alignment) {
+    const std::size_t padding = (alignment - size_ % alignment) % alignment;
+    if (padding == 0) return;
+    pieces_.emplace_back(kZeros, padding);
+    size_ += padding;
+  }
+  std::size_t size() const { return size_; }
+  const std::vector<std::span<const std::uint8_t>>& pieces() const { return pieces_; }
+
+ private:
+  static constexpr std::uint8_t kZeros[4] = {};
+  std::vector<std::span<const std::uint8_t>> pieces_;
+  std::size_t size_ = 0;
+};
+
+void append_u32(std::vector<std::uint8_t>& out, std::uint32_t value) {
+  for (int shift = 0; shift < 32; shift += 8) out.push_back(static_cast<std::uint8_t>(value >> shift));
+}
+
+// The GLB header and JSON chunk, and the BIN chunk's header when there is one: what make_glb(json,
+// bin) writes before the bin bytes, for a bin of bin_size bytes (a multiple of 4).
+std::vector<std::uint8_t> glb_head(std::string_view json, std::size_t bin_size) {
+  constexpr std::uint32_t kMagic = 0x46546C67;      // "glTF"
+  constexpr std::uint32_t kChunkJson = 0x4E4F534A;  // "JSON"
+  constexpr std::uint32_t kChunkBin = 0x004E4942;   // "BIN\0"
+  const std::size_t json_padded = (json.size() + 3) & ~std::size_t{3};
+  const std::size_t total = 12 + 8 + json_padded + (bin_size == 0 ? 0 : 8 + bin_size);
+  std::vector<std::uint8_t> head;
+  head.reserve(12 + 8 + json_padded + 8);
+  append_u32(head, kMagic);
+  append_u32(head, 2);
+  append_u32(head, static_cast<std::uint32_t>(total));
+  append_u32(head, static_cast<std::uint32_t>(json_padded));
+  append_u32(head, kChunkJson);
+  head.insert(head.end(), json.begin(), json.end());
+  head.resize(head.size() + (json_padded - json.size()), ' ');
+  if (bin_size != 0) {
+    append_u32(head, static_cast<std::uint32_t>(bin_size));
+    append_u32(head, kChunkBin);
+  }
+  return head;
 }
 
 bool write_glb(const GltfAsset& asset, const std::filesystem::path& output, Diagnostics& diag,
                std::string* written_json) {
   Json document = asset.document;
-  std::vector<std::uint8_t> bin;
+  BinChunk bin;
   std::vector<std::size_t> offsets;
-  for (const auto& buffer : asset.buffers) {
-    bin.resize((bin.size() + 3) & ~std::size_t{3}, 0);
-    offsets.push_back(bin.size());
-    bin.insert(bin.end(), buffer.begin(), buffer.end());
-  }
+  for (const auto& buffer : asset.buffers) offsets.push_back(bin.append(buffer));
   if (document.contains("bufferViews")) {
     for (Json& view : document["bufferViews"]) {
       const auto buffer = view["buffer"].get<std::size_t>();
@@ -231,6 +281,7 @@ bool write_glb(const GltfAsset& asset, const std::filesystem::path& output, Diag
       view["buffer"] = 0;
     }
   }
+  std::deque<std::vector<std::uint8_t>> image_bytes;  // A deque: appending never moves the others.
   if (document.contains("images")) {
     Json& images = document["images"];
     for (std::size_t i = 0; i < images.size(); ++i) {
@@ -238,30 +289,34 @@ bool write_glb(const GltfAsset& asset, const std::filesystem::path& output, Diag
       const std::string uri = images[i]["uri"].get<std::string>();
       if (internal::is_data_uri(uri)) continue;
       std::filesystem::path source;
-      const auto bytes = read_image(asset, uri, source);
+      auto bytes = read_image(asset, uri, source);
       if (!bytes) {
         diag.warning(codes::IMAGE_NOT_EMBEDDED, json_pointer("/images", i) + "/uri",
                      "image '" + uri + "' could not be read; the output keeps its URI");
         continue;
       }
-      append_aligned(bin, *bytes);
-      document["bufferViews"].push_back(
-          Json{{"buffer", 0}, {"byteOffset", bin.size() - bytes->size()}, {"byteLength", bytes->size()}});
+      const std::vector<std::uint8_t>& kept = image_bytes.emplace_back(std::move(*bytes));
+      const std::size_t offset = bin.append(kept);
+      document["bufferViews"].push_back(Json{{"buffer", 0}, {"byteOffset", offset}, {"byteLength", kept.size()}});
       images[i].erase("uri");
       images[i]["bufferView"] = document["bufferViews"].size() - 1;
       if (!images[i].contains("mimeType")) images[i]["mimeType"] = mime_type_for(uri);
     }
   }
-  if (bin.empty()) {
+  const std::size_t bin_bytes = bin.size();  // The buffer's byteLength: before the chunk's padding.
+  if (bin_bytes == 0) {
     document.erase("buffers");
   } else {
-    document["buffers"] = Json::array({Json{{"byteLength", bin.size()}}});
+    document["buffers"] = Json::array({Json{{"byteLength", bin_bytes}}});
   }
+  bin.pad_to(4);
   const std::string json = document.dump();
   if (written_json != nullptr) *written_json = json;
-  const auto glb = make_glb(json, bin);
+  const auto head = glb_head(json, bin.size());
+  std::vector<std::span<const std::uint8_t>> pieces{head};
+  pieces.insert(pieces.end(), bin.pieces().begin(), bin.pieces().end());
   std::string why;
-  if (!write_file_atomically(output, glb, why)) {
+  if (!write_file_atomically(output, pieces, why)) {
     diag.error(codes::WRITE_FAILED, "", "cannot write " + output.string() + ": " + why);
     return false;
   }

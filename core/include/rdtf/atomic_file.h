@@ -25,6 +25,10 @@ bool write_file_atomically(const std::filesystem::path& path, std::span<const st
                            std::string& why);
 bool write_file_atomically(const std::filesystem::path& path, std::string_view text,
                            std::string& why);
+// The file's bytes are the pieces one after another: a large output is written from where its
+// parts already lie, without assembling a copy of it first.
+bool write_file_atomically(const std::filesystem::path& path,
+                           std::span<const std::span<const std::uint8_t>> pieces, std::string& why);
 
 // A digest of bytes in lowercase hex, at least 16 digits (the daemon passes SHA-256). librdtf
 // links no cryptography library, so whoever wants content-addressed names brings the digest.

@@ -1,0 +1,56 @@
+#!/usr/bin/env bash
+# cpack -G DEB builds rdtf's .deb from the build, which is unpacked into a scratch root with
+# dpkg-deb -x (nothing is installed on this system): the package must hold rdtfd, the clients,
+# rdtf-spy and the LCM types jar, the systemd unit (naming /usr/bin/rdtfd and /etc/rdtf/rdtfd.json),
+# the config (a conffile) and librdtf with its headers and CMake package; and `rdtf --version`
+# and `rdtfd --version` run from the scratch root print what the build's own binaries print; the
+# packaged rdtf-spy finds the packaged jar.
+# Usage: deb_test.sh BUILD_DIR
+set -euo pipefail
+
+build=$(cd "$1" && pwd)
+fail() { echo "FAIL: $*" >&2; exit 1; }
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+
+(cd "$work" && cpack --config "$build/CPackConfig.cmake" -G DEB -B "$work/out" >"$work/cpack.log" 2>&1) ||
+  { cat "$work/cpack.log"; fail "cpack -G DEB failed"; }
+debs=("$work"/out/*.deb)
+[[ ${#debs[@]} -eq 1 && -f ${debs[0]} ]] || fail "expected one .deb in $work/out, found: ${debs[*]}"
+deb=${debs[0]}
+echo "--- $(basename "$deb")"
+dpkg-deb -f "$deb" Package Version Architecture Depends Recommends
+dpkg-deb -x "$deb" "$work/root"
+
+for file in usr/bin/rdtf usr/bin/rdtfd usr/bin/rdtf-echo usr/bin/rdtf-pd-controller usr/bin/rdtf-spy \
+            usr/share/rdtf/java/rdtf_lcmtypes.jar usr/lib/systemd/system/rdtfd.service etc/rdtf/rdtfd.json \
+            usr/lib/librdtf.a usr/include/rdtf/convert.h usr/include/rdtf/version.h \
+            usr/lib/cmake/rdtf/rdtfConfig.cmake usr/lib/cmake/rdtf/rdtfTargets.cmake; do
+  [[ -f $work/root/$file ]] || fail "the package has no /$file"
+done
+for program in rdtf rdtfd rdtf-echo rdtf-pd-controller rdtf-spy; do
+  [[ -x $work/root/usr/bin/$program ]] || fail "/usr/bin/$program is not executable"
+done
+grep -qx 'ExecStart=/usr/bin/rdtfd --config /etc/rdtf/rdtfd.json' "$work/root/usr/lib/systemd/system/rdtfd.service" ||
+  fail "the unit's ExecStart: $(grep ExecStart "$work/root/usr/lib/systemd/system/rdtfd.service")"
+grep -q '"/var/lib/rdtf/models"' "$work/root/etc/rdtf/rdtfd.json" || fail "the config does not watch /var/lib/rdtf/models"
+grep -q '"output": "/var/lib/rdtf/output"' "$work/root/etc/rdtf/rdtfd.json" || fail "the config's output is not /var/lib/rdtf/output"
+dpkg-deb --ctrl-tarfile "$deb" | tar -xO ./conffiles | grep -qx /etc/rdtf/rdtfd.json || fail "rdtfd.json is not a conffile"
+depends=$(dpkg-deb -f "$deb" Depends)
+for lib in libode libssl libglib; do
+  [[ $depends == *"$lib"* ]] || fail "Depends lacks $lib (dpkg-shlibdeps): $depends"
+done
+
+for program in rdtf rdtfd; do
+  packaged=$("$work/root/usr/bin/$program" --version)
+  built=$("$build/$([[ $program == rdtf ]] && echo clients/rdtf || echo daemon)/$program" --version)
+  echo "$program from the package: $packaged"
+  [[ $packaged =~ ^$program\ [0-9]+\.[0-9]+\.[0-9]+\ \(commit\ ([0-9a-f]{7,40}(-dirty)?|unknown)\)$ ]] ||
+    fail "$program --version printed '$packaged'"
+  [[ $packaged == "$built" ]] || fail "$program --version: package '$packaged', build '$built'"
+done
+# The packaged rdtf-spy finds the packaged jar by itself (without it, it stops before lcm-spy
+# starts); lcm-spy --help prints its usage and exits without opening a window.
+spy_help=$(env -u RDTF_LCM_JAR "$work/root/usr/bin/rdtf-spy" --help 2>&1 || true)
+[[ $spy_help == *"usage: lcm-spy"* ]] || fail "the packaged rdtf-spy did not start lcm-spy: $spy_help"
+echo "PASS: $(basename "$deb") holds the daemon, clients, unit, config and library; rdtf --version runs from it"

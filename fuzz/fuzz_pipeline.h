@@ -25,6 +25,8 @@
 #include "rdtf/urdf.h"
 #include "rdtf/write.h"
 
+#include "decoder_models.h"
+
 namespace rdtf::fuzz {
 
 struct RunResult {
@@ -220,7 +222,7 @@ inline Workspace make_workspace(const std::filesystem::path& folder,
 
 // The targets, as fuzz/<name>_fuzzer.cc and the folders of tests/data/fuzz-regressions name them.
 inline constexpr std::string_view kTargets[] = {"convert_gltf", "convert_glb", "glb", "extras",
-                                                "urdf_import"};
+                                                "urdf_import", "draco", "meshopt"};
 
 struct TargetRun {
   bool not_for_target = false;  // An input this target leaves alone (libFuzzer: return -1).
@@ -234,6 +236,8 @@ struct TargetRun {
 //   glb           the GLB container parser, with make_glb as its inverse
 //   extras        the input (JSON) as extras.RDTF / node extras of blender/arm3, then converted
 //   urdf_import   the input as a URDF file, imported and converted; the output converted again
+//   draco         a Draco bitstream as the one mesh of a GLB (decoder_models.h), converted
+//   meshopt       meshopt vertex and index streams as the one mesh of a GLB, converted
 inline TargetRun run_target(std::string_view target, const std::vector<std::uint8_t>& bytes,
                             const Workspace& workspace) {
   TargetRun result;
@@ -258,6 +262,21 @@ inline TargetRun run_target(std::string_view target, const std::vector<std::uint
     Conversion conversion;
     result.run = import_urdf_bytes(bytes, workspace.folder, &conversion);
     if (result.run.succeeded) failure = reconvert(result.run, conversion, workspace.folder);
+  } else if (target == "draco" || target == "meshopt") {
+    const auto model = target == "draco" ? draco_model(bytes) : meshopt_model(bytes);
+    if (!model) {
+      result.not_for_target = true;
+      return result;
+    }
+    Conversion conversion;
+    result.run = convert_bytes(*model, workspace.folder, &conversion);
+    if (result.run.succeeded) {
+      RunResult again = convert_bytes(merged_glb(result.run.output, conversion.asset), workspace.folder);
+      if (!again.succeeded) {
+        failure = "the converted model does not convert again:";
+        for (const Diagnostic& d : again.diag.all()) failure += "\n  " + format(d);
+      }
+    }
   } else {
     result.violation = "no fuzz target named '" + std::string(target) + "'";
     return result;

@@ -10,9 +10,10 @@
 # Budgets: glb (the GLB container parser, ~30,000 executions per CPU-second) runs a fixed number
 # of executions, FUZZ_GLB_RUNS, which alone reaches the floor of 1,000,000 executions per run; the
 # pipeline targets (convert_gltf, convert_glb, extras, urdf_import: ~300-7,000 per CPU-second) run
-# FUZZ_SECONDS each, `bus` (LCM datagrams to rdtfd's and the clients' handlers) FUZZ_BUS_SECONDS
-# and `client` (datagram sequences to rdtf_client) FUZZ_CLIENT_SECONDS: 4 x 158 + 60 + 30 s, about
-# the 4 x 180 s the pipeline targets had before `bus` came. FUZZ_JOBS targets
+# FUZZ_SECONDS each, `bus` (LCM datagrams to rdtfd's and the clients' handlers) FUZZ_BUS_SECONDS,
+# `client` (datagram sequences to rdtf_client) FUZZ_CLIENT_SECONDS and the decoders (`draco`,
+# `meshopt`: compressed meshes) FUZZ_DECODER_SECONDS each: 4 x 143 + 60 + 30 + 2 x 30 s, the
+# 4 x 180 s the pipeline targets had before `bus` came. FUZZ_JOBS targets
 # run at once (default: one per CPU, so two on CI's 2 cores).
 # Every libFuzzer run starts afresh from the seeds; what it finds goes to $BUILD_DIR/fuzz-run/.
 #
@@ -24,8 +25,8 @@
 # all (FUZZ_MIN_EXECUTIONS) is one more test: fewer executions (a machine too slow for the
 # budgets) fail the run.
 #
-# Environment: BUILD_DIR (default build-fuzz), FUZZ_SECONDS (default 158), FUZZ_BUS_SECONDS (default
-# 60), FUZZ_CLIENT_SECONDS (default 30), FUZZ_GLB_RUNS (default
+# Environment: BUILD_DIR (default build-fuzz), FUZZ_SECONDS (default 143), FUZZ_BUS_SECONDS (default
+# 60), FUZZ_CLIENT_SECONDS (default 30), FUZZ_DECODER_SECONDS (default 30), FUZZ_GLB_RUNS (default
 # 1000000), FUZZ_MIN_EXECUTIONS (default 1000000 when every target runs, else 0 = no floor),
 # FUZZ_JOBS (default nproc), FUZZ_RUNS_MAX_SECONDS (cap on the glb target's time, default 600).
 set -uo pipefail
@@ -33,13 +34,14 @@ set -uo pipefail
 cd "$(dirname "$0")/.."
 root=$(pwd)
 build=${BUILD_DIR:-build-fuzz}
-seconds=${FUZZ_SECONDS:-158}
+seconds=${FUZZ_SECONDS:-143}
 bus_seconds=${FUZZ_BUS_SECONDS:-60}
 client_seconds=${FUZZ_CLIENT_SECONDS:-30}
+decoder_seconds=${FUZZ_DECODER_SECONDS:-30}
 glb_runs=${FUZZ_GLB_RUNS:-1000000}
 runs_cap=${FUZZ_RUNS_MAX_SECONDS:-600}
 jobs=${FUZZ_JOBS:-$(nproc)}
-all_targets=(convert_gltf convert_glb extras urdf_import bus client glb)  # Longest first.
+all_targets=(convert_gltf convert_glb extras urdf_import bus client draco meshopt glb)  # Longest first.
 if (($# > 0)); then
   targets=("$@")
   min_executions=${FUZZ_MIN_EXECUTIONS:-0}
@@ -96,7 +98,7 @@ dict_of() {
     glb) echo fuzz/glb.dict ;;
     convert_glb) echo "$out/convert_glb.dict" ;;
     urdf_import) echo fuzz/urdf.dict ;;
-    bus | client) echo "" ;;
+    bus | client | draco | meshopt) echo "" ;;
     *) echo fuzz/gltf.dict ;;
   esac
 }
@@ -112,6 +114,8 @@ run_target() {
     limit=(-max_total_time="$bus_seconds")
   elif [[ $name == client ]]; then
     limit=(-max_total_time="$client_seconds")
+  elif [[ $name == draco || $name == meshopt ]]; then
+    limit=(-max_total_time="$decoder_seconds")
   else
     limit=(-max_total_time="$seconds")
   fi

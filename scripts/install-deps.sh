@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs everything rdtf needs to build and test on Debian 12 (bookworm): Debian packages
 # (installs only the missing ones; runs `apt-get update` only when something is missing) and the
-# npm packages of tools/gltf-validator (skipped when node_modules already matches the lock file).
+# npm packages of tools/gltf-validator and tools/encoders (each skipped when its node_modules
+# already matches its lock file).
 # Idempotent: a second run installs nothing and takes well under a second.
 # Run as root, or as a user who may use sudo.
 set -euo pipefail
@@ -16,6 +17,7 @@ PACKAGES=(
   nodejs npm
   liblcm-dev liblcm-bin liblcm-java default-jdk-headless
   libeigen3-dev nlohmann-json3-dev libtinygltf-dev libstb-dev
+  libdraco-dev libmeshoptimizer-dev draco
   liburdfdom-dev liburdfdom-tools libode-dev libmujoco-dev
   libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev libglib2.0-dev libssl-dev
   clang libclang-rt-14-dev
@@ -127,23 +129,25 @@ else
   say "lcm: patched source of lcm $lcm_version in $lcm_root"
 fi
 
-# --- npm packages of tools/gltf-validator ------------------------------------------------------
-validator=tools/gltf-validator
-if [[ -f $validator/package.json ]]; then
-  stamp=$validator/node_modules/.rdtf-installed
-  want=$(cat "$validator/package.json" "$validator/package-lock.json" 2>/dev/null | sha256sum | cut -d' ' -f1)
+# --- npm packages of tools/gltf-validator and tools/encoders -----------------------------------
+# tools/encoders pins the encoders whose outputs tests/data/encoded/ holds (gltfpack,
+# gltf-pipeline): tests/data/encoded/make.sh rebuilds those files with them.
+for tool in tools/gltf-validator tools/encoders; do
+  [[ -f $tool/package.json ]] || continue
+  stamp=$tool/node_modules/.rdtf-installed
+  want=$(cat "$tool/package.json" "$tool/package-lock.json" 2>/dev/null | sha256sum | cut -d' ' -f1)
   if [[ -f $stamp && $(cat "$stamp") == "$want" ]]; then
-    say "npm: $validator/node_modules matches the lock file, nothing to do"
+    say "npm: $tool/node_modules matches the lock file, nothing to do"
   else
-    if [[ -f $validator/package-lock.json ]]; then
-      say "npm: npm ci in $validator"
-      (cd "$validator" && npm ci --no-audit --no-fund --loglevel=error)
+    if [[ -f $tool/package-lock.json ]]; then
+      say "npm: npm ci in $tool"
+      (cd "$tool" && npm ci --no-audit --no-fund --loglevel=error)
     else
-      say "npm: npm install in $validator (no lock file)"
-      (cd "$validator" && npm install --no-audit --no-fund --loglevel=error)
-      want=$(cat "$validator/package.json" "$validator/package-lock.json" | sha256sum | cut -d' ' -f1)
+      say "npm: npm install in $tool (no lock file)"
+      (cd "$tool" && npm install --no-audit --no-fund --loglevel=error)
+      want=$(cat "$tool/package.json" "$tool/package-lock.json" | sha256sum | cut -d' ' -f1)
     fi
     echo "$want" >"$stamp"
     say "npm: done"
   fi
-fi
+done

@@ -21,6 +21,14 @@ std::size_t split_off_mesh(Json& document, std::vector<NodeType>& types, std::si
       link_node.erase(key);
     }
   }
+  // GPU instances are copies of the mesh: they go with it.
+  constexpr const char* kInstancing = "EXT_mesh_gpu_instancing";
+  if (link_node.contains("extensions") && link_node["extensions"].is_object() &&
+      link_node["extensions"].contains(kInstancing)) {
+    mesh_node["extensions"] = {{kInstancing, link_node["extensions"][kInstancing]}};
+    link_node["extensions"].erase(kInstancing);
+    if (link_node["extensions"].empty()) link_node.erase("extensions");
+  }
   const std::size_t index = append_node(document, types, std::move(mesh_node), NodeType::kMesh);
   // Morph-weight animations follow the mesh to its new node.
   if (document.contains("animations")) {

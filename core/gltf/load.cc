@@ -7,6 +7,7 @@
 
 #include "../geometry/big_arrays.h"
 #include "confined_files.h"
+#include "decode.h"
 #include "rdtf/glb.h"
 #include "rdtf/gltf.h"
 #include "rdtf/validate.h"
@@ -143,6 +144,7 @@ struct ConfinedReads {
   std::uint64_t max_bytes = 0;
   std::map<std::string, std::filesystem::path> files;
   std::map<std::string, std::uint64_t> sizes;  // byteLength of each, checked against the file.
+  std::vector<std::size_t> fallbacks;  // Buffers that EXT_meshopt_compression decodes into.
 };
 
 bool fs_file_exists(const std::string& name, void* user) {
@@ -218,6 +220,10 @@ std::optional<Json> prepare_buffers(const Json& document, bool binary, const Loa
     const std::string pointer = json_pointer("/buffers", i);
     Json entry = {{"byteLength", buffer["byteLength"]}};
     if (!buffer.contains("uri")) {
+      if (internal::is_meshopt_fallback(buffer)) {
+        reads.fallbacks.push_back(i);  // No bytes to load: decoding fills it.
+        continue;
+      }
       if (!binary || i != 0) {
         diag.error(codes::BUFFER_MISSING_URI, pointer,
                    "buffer has no uri; only the first buffer of a GLB may use the BIN chunk");
@@ -405,7 +411,16 @@ std::optional<GltfAsset> load_from_bytes(const std::vector<std::uint8_t>& bytes,
   } else if (!load_buffers(*loader_document, asset.binary, bin, reads, asset, diag)) {
     return std::nullopt;
   }
+  for (const std::size_t i : reads.fallbacks) {
+    asset.buffers.insert(asset.buffers.begin() + static_cast<std::ptrdiff_t>(i), std::vector<std::uint8_t>());
+  }
   asset.document = std::move(*document);
+
+  // Compressed geometry becomes plain accessors, checked again as plain glTF.
+  bool decoded = false;
+  if (!internal::decode_compressed(asset, decoded, diag)) return std::nullopt;
+  if (decoded) validate_document(asset.document, limits, diag);
+  if (diag.has_errors()) return std::nullopt;
 
   validate_data(asset, diag);
   if (diag.has_errors()) return std::nullopt;

@@ -14,14 +14,17 @@ namespace {
 
 constexpr double kFloatMax = 3.4028234663852886e38;  // glTF numbers are single precision.
 
-// Extensions that change nothing the converter reads (geometry, node tree): a model may require
-// them. Any other required extension may store geometry where plain accessors do not (Draco,
-// meshopt) or multiply it (instancing): such a model is refused rather than misread.
+// Extensions a model may require: those that change nothing the converter reads (geometry, node
+// tree), and those it decodes (Draco, meshopt: decode.h) or reads (instancing). Any other required
+// extension may store geometry where plain accessors do not: such a model is refused rather than
+// misread.
 bool extension_is_harmless(const std::string& name) {
   for (const char* prefix : {"KHR_materials_", "KHR_texture_", "EXT_texture_", "KHR_lights_"}) {
     if (name.rfind(prefix, 0) == 0) return true;
   }
-  return name == "KHR_mesh_quantization" || name == "KHR_animation_pointer" ||
+  return name == "KHR_mesh_quantization" || name == "KHR_draco_mesh_compression" ||
+         name == "EXT_meshopt_compression" || name == "EXT_mesh_gpu_instancing" ||
+         name == "KHR_animation_pointer" ||
          name == "KHR_node_visibility" || name == "KHR_xmp_json_ld";
 }
 

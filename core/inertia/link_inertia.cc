@@ -6,6 +6,7 @@
 
 #include "rdtf/completion.h"
 #include "rdtf/geometry.h"
+#include "rdtf/instancing.h"
 #include "rdtf/mesh_checks.h"
 #include "skinning.h"
 #include "rdtf/diagnostic_codes.h"
@@ -222,12 +223,25 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
     }
     const int link = link_of_node[owner];
     const Eigen::Affine3d X_LN = robot.links[link].X_SL.inverse() * world[node];
-    auto integrals = oriented(integrate_solid(std::span<const TriangleMeshView>(geometry.pieces), X_LN),
-                              pointer, name, diag);
+    // Every instance (EXT_mesh_gpu_instancing) is a solid of the link; a node's rdtf_mass is
+    // the mass of them all.
+    std::uint64_t triangles = 0;
+    for (const TriangleMeshView& piece : geometry.pieces) triangles += piece.triangle_count;
+    const auto instances = instance_transforms(asset, node, asset.limits.max_triangles / std::max<std::uint64_t>(triangles, 1), diag);
+    if (!instances) continue;
+    std::vector<VolumeIntegrals> solids;
+    double volume = 0;
+    for (const Eigen::Affine3d& X_NI : *instances) {
+      solids.push_back(oriented(integrate_solid(std::span<const TriangleMeshView>(geometry.pieces), X_LN * X_NI),
+                                pointer, name, diag));
+      volume += solids.back().volume;
+    }
     double mesh_density = density;
-    if (mass_override && integrals.volume > 0) mesh_density = *mass_override / integrals.volume;
-    pieces[link].push_back({integrals, mesh_density});
-    robot.links[link].meshes.push_back({static_cast<int>(node), integrals.volume, mesh_density});
+    if (mass_override && volume > 0) mesh_density = *mass_override / volume;
+    for (const VolumeIntegrals& integrals : solids) {
+      pieces[link].push_back({integrals, mesh_density});
+      robot.links[link].meshes.push_back({static_cast<int>(node), integrals.volume, mesh_density});
+    }
   }
 
   for (std::size_t l = 0; l < robot.links.size(); ++l) {

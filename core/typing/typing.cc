@@ -2,12 +2,35 @@
 
 #include "rdtf/completion.h"
 #include "rdtf/geometry.h"
+#include "rdtf/mesh_carriers.h"
 #include "rdtf/diagnostic_codes.h"
 
 namespace rdtf {
 namespace {
 
-bool has_mesh(const Json& node) { return node.contains("mesh"); }
+// Whether each node has a mesh for typing: its own, unless it is a mesh carrier, or its carrier
+// child's (rdtf/mesh_carriers.h): a node and the carrier an encoder gave its mesh type as the node
+// with the mesh did.
+class MeshOwnership {
+ public:
+  explicit MeshOwnership(const Json& document) : carrier_(mesh_carrier_nodes(document)), has_(carrier_.size(), 0) {
+    const Json& nodes = document["nodes"];
+    for (std::size_t i = 0; i < carrier_.size(); ++i) {
+      if (nodes[i].contains("mesh") && !carrier_[i]) has_[i] = 1;
+    }
+    for (std::size_t i = 0; i < carrier_.size(); ++i) {
+      if (!nodes[i].contains("children")) continue;
+      for (const Json& child : nodes[i]["children"]) {
+        if (carrier_[child.get<std::size_t>()]) has_[i] = 1;
+      }
+    }
+  }
+  bool has_mesh(std::size_t node) const { return has_[node] != 0; }
+  bool carrier(std::size_t node) const { return carrier_[node] != 0; }
+
+ private:
+  std::vector<char> carrier_, has_;
+};
 
 const Json* node_extras(const Json& node) {
   if (!node.contains("extras") || !node["extras"].is_object()) return nullptr;
@@ -86,7 +109,7 @@ void type_skin_joints(const Json& document, const std::vector<char>& in_scene,
                       std::vector<NodeType>& types, std::vector<char>& fixed) {
   const Json& nodes = document["nodes"];
   for (std::size_t i = 0; i < nodes.size(); ++i) {
-    if (!in_scene[i] || !nodes[i].contains("skin") || !has_mesh(nodes[i])) continue;
+    if (!in_scene[i] || !nodes[i].contains("skin") || !nodes[i].contains("mesh")) continue;
     const Json& skin = document["skins"][nodes[i]["skin"].get<std::size_t>()];
     for (const Json& joint : skin["joints"]) {
       const auto j = joint.get<std::size_t>();
@@ -98,16 +121,20 @@ void type_skin_joints(const Json& document, const std::vector<char>& in_scene,
 }
 
 // Algorithm 2, amended: see docs/format.md, "Typing".
-NodeType mesh_or_visual(const Json& nodes, const Json* parent, NodeType parent_type,
-                        const Json& node) {
+NodeType mesh_or_visual(const Json& nodes, const MeshOwnership& meshes, int parent_index,
+                        NodeType parent_type, std::size_t index) {
+  const Json& node = nodes[index];
+  const Json* parent = parent_index < 0 ? nullptr : &nodes[parent_index];
+  const auto has_mesh = [&](std::size_t i) { return meshes.has_mesh(i); };
+  if (meshes.carrier(index)) return NodeType::kMesh;
   const auto children = children_of(node);
-  if (has_mesh(node)) {
+  if (has_mesh(index)) {
     // A skinned mesh moves with its bones, whose links carry its mass: never a link itself.
     if (node.contains("skin") && children.empty()) return NodeType::kMesh;
     // Blender puts an object's mesh on the node that parents other objects; an object parented
     // to a mesh object moves on its own; and an object parented to a joint empty is what that
     // joint moves (an elbow empty under the upper-arm mesh, the forearm under the elbow): all links.
-    if (!children.empty() || parent == nullptr || has_mesh(*parent) ||
+    if (!children.empty() || parent == nullptr || has_mesh(static_cast<std::size_t>(parent_index)) ||
         parent_type == NodeType::kJoint || has_extra(node, "rdtf_joint")) {
       return NodeType::kLink;
     }
@@ -117,7 +144,7 @@ NodeType mesh_or_visual(const Json& nodes, const Json* parent, NodeType parent_t
   if (children.empty()) {
     bool sibling_has_mesh = false;
     if (parent != nullptr) {
-      for (std::size_t sibling : children_of(*parent)) sibling_has_mesh |= has_mesh(nodes[sibling]);
+      for (std::size_t sibling : children_of(*parent)) sibling_has_mesh |= has_mesh(sibling);
     }
     if (!sibling_has_mesh) return NodeType::kVisual;
   }
@@ -125,9 +152,11 @@ NodeType mesh_or_visual(const Json& nodes, const Json* parent, NodeType parent_t
 }
 
 // Algorithm 3.
-NodeType joint_or_link(const Json& nodes, const Json& node) {
-  const auto children = children_of(node);
-  if (children.size() == 1 && !has_mesh(nodes[children[0]])) return NodeType::kJoint;
+NodeType joint_or_link(const Json& nodes, const MeshOwnership& meshes, std::size_t index) {
+  const auto children = children_of(nodes[index]);
+  if (children.size() == 1 && !meshes.has_mesh(children[0]) && !meshes.carrier(children[0])) {
+    return NodeType::kJoint;
+  }
   return NodeType::kLink;
 }
 
@@ -197,14 +226,14 @@ std::vector<NodeType> type_nodes(const Json& document, std::size_t scene, Diagno
   for (std::size_t i = 0; i < count; ++i) {
     if (!in_scene[i] && !fixed[i]) types[i] = NodeType::kNone;
   }
+  const MeshOwnership meshes(document);
   for (const auto& [parent, node] : order) {
     if (fixed[node]) continue;
-    types[node] = mesh_or_visual(nodes, parent < 0 ? nullptr : &nodes[parent],
-                                 parent < 0 ? NodeType::kNone : types[parent], nodes[node]);
+    types[node] = mesh_or_visual(nodes, meshes, parent, parent < 0 ? NodeType::kNone : types[parent], node);
   }
   for (const auto& [parent, node] : order) {
     if (fixed[node] || types[node] != NodeType::kNone) continue;
-    types[node] = joint_or_link(nodes, nodes[node]);
+    types[node] = joint_or_link(nodes, meshes, node);
   }
   return types;
 }

@@ -39,7 +39,10 @@ const std::set<std::string>& not_codes() {
       "VALIDATION", "ERROR", "REMOVED", "STATUS", "REQUEST", "JOINT_STATE", "JOINT_COMMAND", "LINK_STATE",
       "MANIFEST", "DELTA", "URDF", "BLOB", "BLOB_REQUEST", "BLOB_CHUNK", "BLOB_UNAVAILABLE", "HOME", "XDG_DATA_HOME",
       "XDG_STATE_HOME", "LCM_DEFAULT_URL", "RDTFD_TEST_INOTIFY_LIMIT_FILE", "PASS", "FAIL", "FAILED", "TEXT",
-      "NUMBER"};
+      "NUMBER",
+      // EXT_meshopt_compression's modes and filters, EXT_mesh_gpu_instancing's attributes.
+      "ATTRIBUTES", "TRIANGLES", "INDICES", "NONE", "OCTAHEDRAL", "QUATERNION", "EXPONENTIAL",
+      "TRANSLATION", "ROTATION", "SCALE"};
   return names;
 }
 

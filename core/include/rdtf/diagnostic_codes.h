@@ -45,6 +45,8 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(BUFFER_VIEW_TARGET_OVERRIDE, kSeverityError, "glTF") \
   X(BUFFER_VIEW_TOO_BIG_BYTE_STRIDE, kSeverityError, "glTF") \
   X(BUFFER_VIEW_TOO_LONG, kSeverityError, "glTF") \
+  X(COMPRESSION_DECODED, kSeverityInfo, "glTF") \
+  X(DRACO_INVALID, kSeverityError, "glTF") \
   X(DUPLICATE_ELEMENTS, kSeverityError, "glTF") \
   X(EMPTY_ENTITY, kSeverityError, "glTF") \
   X(EMPTY_FILE, kSeverityError, "glTF") \
@@ -60,6 +62,7 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(GLB_UNEXPECTED_END_OF_CHUNK_HEADER, kSeverityError, "glTF") \
   X(GLB_UNEXPECTED_END_OF_HEADER, kSeverityError, "glTF") \
   X(GLB_UNEXPECTED_FIRST_CHUNK, kSeverityError, "glTF") \
+  X(INSTANCING_INVALID, kSeverityError, "glTF") \
   X(INVALID_IBM_ACCESSOR_COUNT, kSeverityError, "glTF") \
   X(INVALID_JSON, kSeverityError, "glTF") \
   X(INVALID_URI, kSeverityError, "glTF") \
@@ -67,6 +70,7 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(JSON_BOM, kSeverityError, "glTF") \
   X(JSON_TOO_DEEP, kSeverityError, "glTF") \
   X(LIMIT_EXCEEDED, kSeverityError, "glTF") \
+  X(MESHOPT_INVALID, kSeverityError, "glTF") \
   X(MESH_INVALID_WEIGHTS_COUNT, kSeverityError, "glTF") \
   X(MESH_PRIMITIVES_UNEQUAL_TARGETS_COUNT, kSeverityError, "glTF") \
   X(MESH_PRIMITIVE_ATTRIBUTES_ACCESSOR_INVALID_FORMAT, kSeverityError, "glTF") \

@@ -1,0 +1,37 @@
+#!/usr/bin/env bash
+# Rebuilds the encoded fixtures of this folder with the real encoders, pinned in
+# tools/encoders/package.json (npm gltfpack 1.3.0, gltf-pipeline 4.3.1; `bash
+# scripts/install-deps.sh` installs them) and Debian's `draco` 1.5.5 (draco_transcoder).
+# Run from anywhere; writes only into this folder. The outputs are committed: the tests read them
+# and never run the encoders.
+set -euo pipefail
+here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
+root=$(cd "$here/../../.." && pwd)
+bin=${RDTF_ENCODERS_BIN:-$root/tools/encoders/node_modules/.bin}
+cd "$here"
+
+# The source: Blender's modelled_arm (tests/data/blender) with "rdtf_axes": "blender" beside each
+# rdtf_axis. Encoders replace asset.generator, which is how rdtf tells Blender's axes otherwise
+# (docs/format.md, Node extras); the robot is the same as modelled_arm's.
+python3 - "$root/tests/data/blender/modelled_arm.gltf" <<'PY'
+import json, shutil, sys
+source = sys.argv[1]
+document = json.load(open(source))
+for node in document["nodes"]:
+    extras = node.get("extras", {})
+    if "rdtf_axis" in extras:
+        extras["rdtf_axes"] = "blender"
+document["buffers"][0]["uri"] = "arm_source.bin"
+json.dump(document, open("arm_source.gltf", "w"), indent=1)
+shutil.copy(source.replace(".gltf", ".bin"), "arm_source.bin")
+PY
+
+# gltfpack, keeping named nodes and extras: KHR_mesh_quantization, each mesh moved into a new
+# child node that carries the dequantization transform.
+"$bin/gltfpack" -i arm_source.gltf -o arm_gltfpack.gltf -kn -ke
+# The same with EXT_meshopt_compression (-cc), as a GLB.
+"$bin/gltfpack" -i arm_source.gltf -o arm_meshopt.glb -kn -ke -cc
+# gltf-pipeline's Draco (default quantization: 11 bits for positions), buffers embedded.
+"$bin/gltf-pipeline" -i arm_source.gltf -o arm_draco.gltf -d
+# draco_transcoder (Debian draco), default quantization (11 bits for positions); it drops extras.
+draco_transcoder -i arm_source.gltf -o arm_draco_transcoder.gltf

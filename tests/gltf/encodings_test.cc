@@ -1,0 +1,257 @@
+// Instanced meshes, encoders' mesh carrier nodes and unusable compressed data, on small models
+// made here. Closed forms: a 0.1 m cube of 1000 kg/m^3 weighs 1 kg; a scaled copy weighs the
+// product of its scales.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+
+#include "../../fuzz/fuzz_pipeline.h"
+#include "rdtf/convert.h"
+#include "support/test_support.h"
+
+namespace rdtf {
+namespace {
+
+constexpr double kExact = 1e-12;
+
+std::vector<std::uint8_t> floats_and_shorts(const std::vector<float>& floats, const std::vector<std::uint16_t>& shorts) {
+  std::vector<std::uint8_t> bin(floats.size() * 4 + shorts.size() * 2);
+  std::memcpy(bin.data(), floats.data(), floats.size() * 4);
+  std::memcpy(bin.data() + floats.size() * 4, shorts.data(), shorts.size() * 2);
+  while (bin.size() % 4 != 0) bin.push_back(0);
+  return bin;
+}
+
+// A 0.1 m cube (mesh 0: 8 vertices, 12 triangles wound outwards) and `extra` floats after it
+// (accessors from 2 on, each `extra_accessors` entry's offset counted in floats from there).
+struct Model {
+  Json document;
+  std::vector<std::uint8_t> bin;
+};
+
+Model cube_model(const std::vector<float>& extra, const Json& extra_accessors) {
+  std::vector<float> floats;
+  for (int c = 0; c < 8; ++c) {
+    floats.push_back(c & 1 ? 0.05f : -0.05f);
+    floats.push_back(c & 2 ? 0.05f : -0.05f);
+    floats.push_back(c & 4 ? 0.05f : -0.05f);
+  }
+  std::vector<std::uint16_t> shorts;
+  const int quads[6][4] = {{1, 3, 7, 5}, {0, 4, 6, 2}, {2, 6, 7, 3}, {0, 1, 5, 4}, {4, 5, 7, 6}, {0, 2, 3, 1}};
+  for (const auto& q : quads) {
+    for (int v : {q[0], q[1], q[2], q[0], q[2], q[3]}) shorts.push_back(static_cast<std::uint16_t>(v));
+  }
+  Model model;
+  model.bin = floats_and_shorts(floats, shorts);
+  const std::size_t extra_at = model.bin.size();
+  model.bin.resize(extra_at + extra.size() * 4);
+  if (!extra.empty()) std::memcpy(model.bin.data() + extra_at, extra.data(), extra.size() * 4);
+  Json& d = model.document;
+  d["asset"] = {{"version", "2.0"}};
+  d["scene"] = 0;
+  d["meshes"] = {{{"primitives", {{{"attributes", {{"POSITION", 0}}}, {"indices", 1}}}}}};
+  d["accessors"] = {{{"bufferView", 0}, {"componentType", 5126}, {"count", 8}, {"type", "VEC3"},
+                     {"min", {-0.05, -0.05, -0.05}}, {"max", {0.05, 0.05, 0.05}}},
+                    {{"bufferView", 1}, {"componentType", 5123}, {"count", 36}, {"type", "SCALAR"}}};
+  d["bufferViews"] = {{{"buffer", 0}, {"byteOffset", 0}, {"byteLength", 96}, {"target", 34962}},
+                      {{"buffer", 0}, {"byteOffset", 96}, {"byteLength", 72}, {"target", 34963}}};
+  if (!extra.empty()) {
+    d["bufferViews"].push_back({{"buffer", 0}, {"byteOffset", extra_at}, {"byteLength", extra.size() * 4}});
+    for (const Json& a : extra_accessors) {
+      d["accessors"].push_back({{"bufferView", 2}, {"byteOffset", a["offset"].get<int>() * 4}, {"componentType", 5126},
+                                {"count", a["count"]}, {"type", a["type"]}});
+    }
+  }
+  d["buffers"] = {{{"byteLength", model.bin.size()}}};
+  return model;
+}
+
+std::optional<Conversion> convert_model(const Model& model, Diagnostics& diag, LoadLimits limits = {}) {
+  const auto glb = make_glb(model.document.dump(), model.bin);
+  auto asset = load_gltf_from_memory(glb, "model.glb", "", limits, diag);
+  if (!asset) return std::nullopt;
+  return convert(std::move(*asset), ConvertOptions{}, diag);
+}
+
+Conversion convert_ok(const Model& model) {
+  Diagnostics diag;
+  auto conversion = convert_model(model, diag);
+  for (const Diagnostic& d : diag.all()) {
+    if (d.severity == Severity::kError) ADD_FAILURE() << format(d);
+  }
+  if (!conversion) throw std::runtime_error("did not convert");
+  return std::move(*conversion);
+}
+
+void expect_same_mass(const MassProperties& got, const MassProperties& want) {
+  EXPECT_NEAR(got.mass, want.mass, kExact * want.mass);
+  EXPECT_TRUE(got.center_of_mass.isApprox(want.center_of_mass, kExact)) << got.center_of_mass.transpose();
+  EXPECT_TRUE(got.inertia.isApprox(want.inertia, kExact)) << got.inertia;
+}
+
+// Three instances: at the origin; 0.3 m along x turned 90 degrees about z and stretched twice
+// along its x; 0.5 m up, half as tall. Not required (as Blender writes it), still counted.
+TEST(GpuInstancing, EveryInstanceIsASolidOfTheLink) {
+  const float s = std::sqrt(0.5f);
+  Model instanced = cube_model({0, 0, 0, 0.3f, 0, 0, 0, 0.5f, 0,          // TRANSLATION
+                                0, 0, 0, 1, 0, 0, s, s, 0, 0, 0, 1,       // ROTATION
+                                1, 1, 1, 2, 1, 1, 1, 1, 0.5f},            // SCALE
+                               Json::array({{{"offset", 0}, {"count", 3}, {"type", "VEC3"}},
+                                            {{"offset", 9}, {"count", 3}, {"type", "VEC4"}},
+                                            {{"offset", 21}, {"count", 3}, {"type", "VEC3"}}}));
+  instanced.document["extensionsUsed"] = {"EXT_mesh_gpu_instancing"};
+  instanced.document["scenes"] = {{{"nodes", {0}}}};
+  instanced.document["nodes"] = {
+      {{"name", "base"}, {"children", {1}}},
+      {{"name", "parts"}, {"mesh", 0},
+       {"extensions", {{"EXT_mesh_gpu_instancing", {{"attributes", {{"TRANSLATION", 2}, {"ROTATION", 3}, {"SCALE", 4}}}}}}}}};
+  // The twin: one node per instance, with the instance's transform.
+  Model nodes = cube_model({}, Json::array());
+  nodes.document["scenes"] = {{{"nodes", {0}}}};
+  nodes.document["nodes"] = {
+      {{"name", "base"}, {"children", {1, 2, 3}}},
+      {{"name", "part0"}, {"mesh", 0}},
+      {{"name", "part1"}, {"mesh", 0}, {"translation", {0.3f, 0, 0}}, {"rotation", {0, 0, s, s}}, {"scale", {2, 1, 1}}},
+      {{"name", "part2"}, {"mesh", 0}, {"translation", {0, 0.5f, 0}}, {"scale", {1, 1, 0.5f}}}};
+
+  const Conversion a = convert_ok(instanced);
+  const Conversion b = convert_ok(nodes);
+  ASSERT_EQ(a.robot.links.size(), 1u);
+  ASSERT_EQ(b.robot.links.size(), 1u);
+  const double cube = 1000.0 * std::pow(0.1f, 3.0);  // The float32 cube of 0.1 m, 1000 kg/m^3.
+  EXPECT_NEAR(a.robot.links[0].inertial.mass, 3.5 * cube, 1e-6 * cube);
+  EXPECT_EQ(a.robot.links[0].meshes.size(), 3u);
+  expect_same_mass(a.robot.links[0].inertial, b.robot.links[0].inertial);
+}
+
+// On a link node that also has children (Blender's layout), the instances move with the mesh to
+// the node completion splits off.
+TEST(GpuInstancing, InstancesFollowTheMeshOfALink) {
+  Model model = cube_model({0, 0, 0, 0, 0.3f, 0}, Json::array({{{"offset", 0}, {"count", 2}, {"type", "VEC3"}}}));
+  model.document["extensionsUsed"] = {"EXT_mesh_gpu_instancing"};
+  model.document["scenes"] = {{{"nodes", {0}}}};
+  model.document["nodes"] = {
+      {{"name", "base"}, {"mesh", 0}, {"children", {1}},
+       {"extensions", {{"EXT_mesh_gpu_instancing", {{"attributes", {{"TRANSLATION", 2}}}}}}}},
+      {{"name", "arm"}, {"mesh", 0}, {"translation", {0, 0, 1}}}};
+  const Conversion c = convert_ok(model);
+  ASSERT_EQ(c.robot.links.size(), 2u);
+  const double cube = 1000.0 * std::pow(0.1f, 3.0);
+  EXPECT_NEAR(c.robot.links[0].inertial.mass, 2 * cube, 1e-6 * cube);
+  EXPECT_NEAR(c.robot.links[0].inertial.center_of_mass.y(), 0.15f, 1e-7);
+  EXPECT_NEAR(c.robot.links[1].inertial.mass, cube, 1e-6 * cube);
+}
+
+TEST(GpuInstancing, UnusableAttributesAreErrors) {
+  Model model = cube_model({0, 0, 0, 1, 0, 0}, Json::array({{{"offset", 0}, {"count", 2}, {"type", "VEC2"}}}));
+  model.document["scenes"] = {{{"nodes", {0}}}};
+  model.document["nodes"] = {{{"name", "base"}, {"mesh", 0},
+                              {"extensions", {{"EXT_mesh_gpu_instancing", {{"attributes", {{"TRANSLATION", 2}}}}}}}}};
+  Diagnostics diag;
+  EXPECT_FALSE(convert_model(model, diag));
+  Diagnostic d;
+  for (const Diagnostic& each : diag.all()) {
+    if (each.severity == Severity::kError && d.code.empty()) d = each;
+  }
+  // The instances moved with the mesh to the node split off the link (node 1, 'base_mesh').
+  EXPECT_EQ(d.code, "INSTANCING_INVALID");
+  EXPECT_EQ(d.pointer, "/nodes/1/extensions/EXT_mesh_gpu_instancing/attributes/TRANSLATION");
+  EXPECT_NE(d.message.find("VEC3 of FLOAT"), std::string::npos) << d.message;
+}
+
+// gltfpack's layout: the mesh moved from "base" and "arm" into unnamed children that carry the
+// dequantization transform (here a scale of 1 and no offset, so the geometry is the same).
+TEST(MeshCarriers, EncoderInsertedMeshNodesLeaveTheRobotUnchanged) {
+  Model plain = cube_model({}, Json::array());
+  plain.document["scenes"] = {{{"nodes", {0}}}};
+  plain.document["nodes"] = {{{"name", "base"}, {"mesh", 0}, {"children", {1}}},
+                             {{"name", "arm"}, {"mesh", 0}, {"translation", {0.3, 0, 0}}}};
+  Model carried = cube_model({}, Json::array());
+  carried.document["scenes"] = {{{"nodes", {0}}}};
+  carried.document["nodes"] = {{{"name", "base"}, {"children", {1, 2}}},
+                               {{"name", "arm"}, {"translation", {0.3, 0, 0}}, {"children", {3}}},
+                               {{"mesh", 0}, {"scale", {1, 1, 1}}},
+                               {{"mesh", 0}, {"translation", {0, 0, 0}}}};
+  const Conversion a = convert_ok(plain);
+  const Conversion b = convert_ok(carried);
+  ASSERT_EQ(a.robot.links.size(), 2u);
+  ASSERT_EQ(b.robot.links.size(), 2u);
+  ASSERT_EQ(b.robot.joints.size(), 1u);
+  for (std::size_t l = 0; l < 2; ++l) {
+    EXPECT_EQ(b.robot.links[l].name, a.robot.links[l].name);
+    expect_same_mass(b.robot.links[l].inertial, a.robot.links[l].inertial);
+  }
+  EXPECT_EQ(b.robot.joints[0].name, a.robot.joints[0].name);
+  EXPECT_TRUE(b.robot.joints[0].X_PJ.isApprox(a.robot.joints[0].X_PJ, kExact));
+}
+
+// Two bare mesh children are no encoder's work: each is an ordinary mesh node of the link.
+TEST(MeshCarriers, TwoBareMeshChildrenAreOrdinaryMeshes) {
+  Model model = cube_model({}, Json::array());
+  model.document["scenes"] = {{{"nodes", {0}}}};
+  model.document["nodes"] = {{{"name", "base"}, {"children", {1, 2}}},
+                             {{"mesh", 0}},
+                             {{"mesh", 0}, {"translation", {0.3, 0, 0}}}};
+  const Conversion c = convert_ok(model);
+  ASSERT_EQ(c.robot.links.size(), 1u);
+  EXPECT_EQ(c.robot.links[0].meshes.size(), 2u);
+}
+
+Diagnostic refusal(const std::optional<std::vector<std::uint8_t>>& glb, LoadLimits limits = {}) {
+  Diagnostics diag;
+  EXPECT_TRUE(glb);
+  EXPECT_FALSE(load_gltf_from_memory(*glb, "model.glb", "", limits, diag));
+  for (const Diagnostic& d : diag.all()) {
+    if (d.severity == Severity::kError) return d;
+  }
+  ADD_FAILURE() << "no error";
+  return {};
+}
+
+std::vector<std::uint8_t> with_header(std::vector<std::uint8_t> header, const std::string& payload) {
+  header.insert(header.end(), payload.begin(), payload.end());
+  return header;
+}
+
+TEST(CompressedData, DracoBytesThatAreNoMeshAreRefused) {
+  const Diagnostic d = refusal(fuzz::draco_model(with_header({8, 0, 36, 0, 0, 0}, "DRACO but not really a mesh")));
+  EXPECT_EQ(d.code, "DRACO_INVALID");
+  EXPECT_EQ(d.pointer, "/meshes/0/primitives/0/extensions/KHR_draco_mesh_compression");
+}
+
+TEST(CompressedData, DracoDecodedSizeIsCheckedBeforeDecoding) {
+  // The first seed's mesh decodes to 192 vertices and 372 indices; the limit leaves room for the
+  // compressed bytes only.
+  const auto seed = fuzz::read_bytes(testing::data_dir() / "fuzz-regressions/draco/arm_draco_mesh1");
+  LoadLimits limits;
+  limits.max_buffer_bytes = seed.size() + 16;
+  const Diagnostic d = refusal(fuzz::draco_model(seed), limits);
+  EXPECT_EQ(d.code, "LIMIT_EXCEEDED");
+  EXPECT_NE(d.message.find("max_buffer_bytes"), std::string::npos) << d.message;
+}
+
+TEST(CompressedData, MeshoptBytesThatDoNotDecodeAreRefused) {
+  // 8 vertices of 12 bytes from a stream of 5 bytes that is no meshopt vertex stream.
+  const Diagnostic d = refusal(fuzz::meshopt_model({8, 0, 36, 0, 0, 5, 0, 1, 2, 3, 4, 5, 9, 9}));
+  EXPECT_EQ(d.code, "MESHOPT_INVALID");
+  EXPECT_EQ(d.pointer, "/bufferViews/0/extensions/EXT_meshopt_compression");
+}
+
+TEST(CompressedData, MeshoptLayoutRulesAreChecked) {
+  const auto glb = fuzz::meshopt_model({8, 0, 35, 0, 0, 5, 0, 1, 2, 3, 4, 5, 9, 9});  // 35 indices: not triangles
+  ASSERT_TRUE(glb);
+  Diagnostics diag;
+  EXPECT_FALSE(load_gltf_from_memory(*glb, "model.glb", "", LoadLimits{}, diag));
+  bool found = false;
+  for (const Diagnostic& d : diag.all()) {
+    if (d.pointer != "/bufferViews/1/extensions/EXT_meshopt_compression") continue;
+    found = true;
+    EXPECT_EQ(d.code, "MESHOPT_INVALID");
+    EXPECT_NE(d.message.find("multiple of 3"), std::string::npos) << d.message;
+  }
+  EXPECT_TRUE(found);
+}
+
+}  // namespace
+}  // namespace rdtf

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs everything rdtf needs to build and test on Debian 12 (bookworm): Debian packages
 # (installs only the missing ones; runs `apt-get update` only when something is missing) and the
-# npm packages of tools/gltf-validator (skipped when node_modules already matches the lock file).
+# npm packages of tools/gltf-validator, clients/view/web and tools/view-test (each skipped when its
+# node_modules already matches its lock file).
 # Idempotent: a second run installs nothing and takes well under a second.
 # Run as root, or as a user who may use sudo.
 set -euo pipefail
@@ -21,6 +22,7 @@ PACKAGES=(
   clang libclang-rt-14-dev
   iproute2 util-linux
   blender python3-numpy
+  libboost-dev chromium
 )
 
 if [[ $(id -u) -eq 0 ]]; then
@@ -126,23 +128,25 @@ else
   say "lcm: patched source of lcm $lcm_version in $lcm_root"
 fi
 
-# --- npm packages of tools/gltf-validator ------------------------------------------------------
-validator=tools/gltf-validator
-if [[ -f $validator/package.json ]]; then
-  stamp=$validator/node_modules/.rdtf-installed
-  want=$(cat "$validator/package.json" "$validator/package-lock.json" 2>/dev/null | sha256sum | cut -d' ' -f1)
+# --- npm packages: tools/gltf-validator, rdtf-view's three.js (clients/view/web) and its browser
+# tests' puppeteer-core (tools/view-test) ------------------------------------------------------
+# puppeteer-core downloads no browser: the tests drive Debian's chromium.
+for folder in tools/gltf-validator clients/view/web tools/view-test; do
+  [[ -f $folder/package.json ]] || continue
+  stamp=$folder/node_modules/.rdtf-installed
+  want=$(cat "$folder/package.json" "$folder/package-lock.json" 2>/dev/null | sha256sum | cut -d' ' -f1)
   if [[ -f $stamp && $(cat "$stamp") == "$want" ]]; then
-    say "npm: $validator/node_modules matches the lock file, nothing to do"
+    say "npm: $folder/node_modules matches the lock file, nothing to do"
   else
-    if [[ -f $validator/package-lock.json ]]; then
-      say "npm: npm ci in $validator"
-      (cd "$validator" && npm ci --no-audit --no-fund --loglevel=error)
+    if [[ -f $folder/package-lock.json ]]; then
+      say "npm: npm ci in $folder"
+      (cd "$folder" && npm ci --no-audit --no-fund --loglevel=error)
     else
-      say "npm: npm install in $validator (no lock file)"
-      (cd "$validator" && npm install --no-audit --no-fund --loglevel=error)
-      want=$(cat "$validator/package.json" "$validator/package-lock.json" | sha256sum | cut -d' ' -f1)
+      say "npm: npm install in $folder (no lock file)"
+      (cd "$folder" && npm install --no-audit --no-fund --loglevel=error)
+      want=$(cat "$folder/package.json" "$folder/package-lock.json" | sha256sum | cut -d' ' -f1)
     fi
     echo "$want" >"$stamp"
     say "npm: done"
   fi
-fi
+done

@@ -194,13 +194,13 @@ export class ModelView {
     this.totalCom.matrixAutoUpdate = false;
   }
 
-  // Diagnostics to red: each names a link or joint by the names quoted in its message, else by
+  // Diagnostics to red (errors and warnings; infos are no fault): each names a link or joint by the names quoted in its message, else by
   // the node of its JSON pointer (/nodes/N: a link node, or a joint node between two links).
   highlight(diagnostics) {
     for (const link of this.links) for (const m of link.meshes) m.material.color.copy(link.color);
     for (const j of this.joints) j.arrow.setColor(0x00e0ff);
     const links = new Set(), joints = new Set();
-    for (const d of diagnostics || []) {
+    for (const d of (diagnostics || []).filter((x) => x.severity !== 'info')) {
       const names = [...(d.message || '').matchAll(/'([^']+)'/g)].map((m) => m[1]);
       const node = /^\/nodes\/(\d+)/.exec(d.pointer || '');
       const nodeIndex = node ? Number(node[1]) : -1;

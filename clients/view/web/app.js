@@ -42,11 +42,16 @@ function resize() {
 window.addEventListener('resize', resize);
 resize();
 
+const justSwapped = [];  // models whose new revision this frame draws first
 function render() {
   requestAnimationFrame(render);
   controls.update();
   renderer.render(scene, camera);
   ++frame;
+  // When the frame that first drew a revision was rendered (ms since the epoch: the latency
+  // benchmark's save -> pixels end point).
+  const now = performance.timeOrigin + performance.now();
+  for (const m of justSwapped.splice(0)) m.drawnAt = now;
 }
 requestAnimationFrame(render);
 
@@ -129,6 +134,7 @@ async function onModel(info) {
     if (m.view) { world.remove(m.view.root); m.view.dispose(); }
     m.view = view;
     world.add(view.root);
+    justSwapped.push(m);
     view.setVisible(visibleParts());
     if (m.lastState) applyState(m, m.lastState);
     if (!cameraFitted && info.id === selected) fitCamera(view);
@@ -292,6 +298,7 @@ window.rdtfView = {
         diagnostics: diagnosticsOf(m.info),
         error: m.info.error ?? null,
         targets: m.targets,
+        drawn_at: m.drawnAt ?? null,
         links: [], joints: [],
         ...(m.view ? m.view.state() : {}),
       })),

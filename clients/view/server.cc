@@ -26,7 +26,9 @@ namespace websocket = beast::websocket;
 using tcp = asio::ip::tcp;
 using namespace std::chrono_literals;
 
-constexpr std::size_t kMaxSocketMessageBytes = 64 * 1024;
+// Above kMaxPageMessageBytes a message is refused with its reason; above this it closes the socket
+// (Beast sends close code 1009, though a peer still sending may see the reset first).
+constexpr std::size_t kMaxSocketMessageBytes = std::size_t{1} << 20;
 constexpr std::size_t kMaxQueuedBytes = std::size_t{32} << 20;
 constexpr int kRefusalAnswersPerSecond = 20;
 

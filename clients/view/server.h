@@ -9,8 +9,8 @@
 // WebSocket (/ws): the page protocol (docs/view.md). The upgrade must come from this viewer's
 // page (check_socket_origin). Each message a page sends is checked (page_protocol.h) and rate
 // limited; a refusal is answered with its reason ({"type":"refused"}), at most 20 answers a
-// second, the rest counted in the next one. A message over 64 KiB closes the connection ("message
-// too big"). Outgoing messages queue per connection; a page that falls 32 MiB behind is closed
+// second, the rest counted in the next one. A message over 1 MiB closes the connection ("message
+// too big", close code 1009). Outgoing messages queue per connection; a page that falls 32 MiB behind is closed
 // (a slow page must not make the viewer hold the bus's traffic for it).
 #pragma once
 

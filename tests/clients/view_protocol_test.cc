@@ -54,7 +54,8 @@ TEST(ViewPageProtocol, RefusesEveryHostileMessageWithItsReason) {
       {R"({"type":"set_joint","model":"arm3.gltf","joint":"shoulder","value":null})", "\"value\" must be a number, not null"},
       {R"({"type":"set_joint","model":"arm3.gltf","joint":"shoulder","value":"0.1"})", "\"value\" must be a number, not string"},
       {R"({"type":"set_joint","model":"arm3.gltf","joint":"shoulder","value":[1,2]})", "\"value\" must be a number, not array"},
-      {R"({"type":"set_joint","model":"arm3.gltf","joint":"shoulder","value":1e999})", "\"value\" is not finite"},
+      // nlohmann's parser refuses a number that overflows a double: no infinity gets through.
+      {R"({"type":"set_joint","model":"arm3.gltf","joint":"shoulder","value":1e999})", "not JSON"},
       {R"({"type":"set_joint","model":"arm3.gltf","joint":"shoulder","value":NaN})", "not JSON"},
       {R"({"type":"set_joint","model":"arm3.gltf","joint":"shoulder","value":1.5700000000000001e0,"kp":5})", "unknown key 'kp' in a set_joint message"},
       {R"({"type":"set_joint","model":"arm3.gltf","joint":"shoulder"})", "a set_joint message needs \"value\""},

@@ -112,6 +112,8 @@ export class ModelView {
     for (const link of this.links) {
       link.axes = new THREE.AxesHelper(0.08 * s);
       link.axes.matrixAutoUpdate = false;
+      link.axes.material.depthTest = false;  // frames inside a solid link still show
+      link.axes.renderOrder = 2;
       this.frames.add(link.axes);
       link.comMesh = new THREE.Mesh(comGeometry, new THREE.MeshBasicMaterial({ color: 0xffff00, depthTest: false }));
       link.comMesh.renderOrder = 2;
@@ -146,6 +148,10 @@ export class ModelView {
       const axis = entry ? entry.joint.axis : [j.axis[0], j.axis[2], -j.axis[1]];
       const arrow = new THREE.ArrowHelper(new THREE.Vector3(...axis).normalize(), new THREE.Vector3(),
         0.15 * this.size, 0x00e0ff, 0.04 * this.size, 0.02 * this.size);
+      for (const part of [arrow.line, arrow.cone]) part.material.depthTest = false;
+      arrow.renderOrder = 2;
+      arrow.line.renderOrder = 2;
+      arrow.cone.renderOrder = 2;
       const holder = new THREE.Group();
       holder.matrixAutoUpdate = false;
       holder.add(arrow);

@@ -80,13 +80,13 @@ TEST(ViewPageProtocol, RefusesHugeMessagesBeforeParsingAndModelsNotSimulated) {
 }
 
 TEST(ViewPageProtocol, RateLimiterAllowsTheBurstThenTheRate) {
-  RateLimiter limiter(10, 20);
+  RateLimiter limiter(8, 20);  // times below are exact in binary: 1/16 s is half a token
   int allowed = 0;
   for (int i = 0; i < 100; ++i) allowed += limiter.allow(5.0);
   EXPECT_EQ(allowed, 20);
-  EXPECT_FALSE(limiter.allow(5.05));  // half a token
-  EXPECT_TRUE(limiter.allow(5.1));    // one token since 5.0
-  EXPECT_FALSE(limiter.allow(5.1));
+  EXPECT_FALSE(limiter.allow(5.0625));  // half a token
+  EXPECT_TRUE(limiter.allow(5.125));    // one token since 5.0
+  EXPECT_FALSE(limiter.allow(5.125));
   allowed = 0;
   for (int i = 0; i < 100; ++i) allowed += limiter.allow(1000.0);  // refilled to the burst, not beyond
   EXPECT_EQ(allowed, 20);

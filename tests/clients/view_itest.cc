@@ -83,6 +83,12 @@ TEST(View, DrawsEveryLinkWhereLinkStatePutsItWithItsInertiaBox) {
   }
   page.eval("window.rdtfView.show({inertia: true})");
   page.screenshot("arm3_live_with_inertia_boxes.png");
+
+  // Z up turns the drawing, not the scene frame the hook reports in.
+  page.eval("window.rdtfView.setUp('z')");
+  const Json turned = wait_drawn(page, kArm, 1);
+  expect_links_where_link_state_puts_them(s, turned, kArm);
+  page.screenshot("arm3_z_up.png");
 }
 
 TEST(View, ShowsASavedRevisionInPlaceWithoutReloadingThePage) {

@@ -15,6 +15,7 @@ import { spawn } from 'node:child_process';
 import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
+import crypto from 'node:crypto';
 
 const [build, repo] = process.argv.slice(2, 4);
 const flag = (name, fallback) => {
@@ -60,11 +61,25 @@ const browser = await puppeteer.launch({
 const page = await browser.newPage();
 await page.goto('http://127.0.0.1:8765/', { waitUntil: 'load' });
 const model = (id) => page.evaluate((i) => window.rdtfView.state().models.find((m) => m.id === i) || null, id);
-async function waitRevision(id, above, timeoutMs = 60000) {
+// rdtfd's content_hash of a model file and the files it refers to (docs/lcm.md): SHA-256 over
+// each file's length (8 bytes, little endian) and bytes.
+const contentHash = (files) => {
+  const h = crypto.createHash('sha256');
+  for (const f of files) {
+    const bytes = fs.readFileSync(f);
+    const size = Buffer.alloc(8);
+    size.writeBigUInt64LE(BigInt(bytes.length));
+    h.update(size);
+    h.update(bytes);
+  }
+  return h.digest('hex');
+};
+// Waits until the page draws the revision of exactly this content (not one of an earlier save).
+async function waitRevision(id, above, hash, timeoutMs = 60000) {
   const end = Date.now() + timeoutMs;
   for (;;) {
     const m = await model(id);
-    if (m && m.revision > above && m.drawn_at) return m;
+    if (m && m.revision > above && m.drawn_at && (!hash || m.content_hash === hash)) return m;
     if (Date.now() > end) throw new Error(`${id}: no revision above ${above} drawn`);
     await sleep(2);
   }
@@ -72,20 +87,20 @@ async function waitRevision(id, above, timeoutMs = 60000) {
 const percentile = (xs, p) => { const s = [...xs].sort((a, b) => a - b); return s[Math.min(s.length - 1, Math.ceil((p / 100) * s.length) - 1)]; };
 const report = (o) => console.log(JSON.stringify(o));
 
-async function latency(id, write, count) {
+async function latency(id, write, count, files) {
   let m = await waitRevision(id, 0);
   const ms = [];
   for (let i = 0; i < count; ++i) {
     const t0 = now();
     write(i);
-    m = await waitRevision(id, m.revision);
+    m = await waitRevision(id, m.revision, contentHash(files));
     ms.push(m.drawn_at - t0);
     await sleep(100);  // let the simulation's states of the new revision flow, as between real saves
   }
   return { p50: percentile(ms, 50), p99: percentile(ms, 99), max: Math.max(...ms), n: ms.length };
 }
 
-report({ bench: 'save_to_pixels_ms', validate, model: 'arm3 (3 links)', ...(await latency('arm3.gltf', (i) => writeArm('arm3.gltf', 1.1 + 0.001 * i), saves)) });
+report({ bench: 'save_to_pixels_ms', validate, model: 'arm3 (3 links)', ...(await latency('arm3.gltf', (i) => writeArm('arm3.gltf', 1.1 + 0.001 * i), saves, [path.join(watch, 'arm3.gltf'), path.join(watch, 'arm3.bin')])) });
 
 if (big) {
   // One link, a 1M-triangle grid (500,000 vertices) closed into a slab by nothing: an open
@@ -116,7 +131,7 @@ if (big) {
       { bufferView: 1, componentType: 5125, count: indices.length, type: 'SCALAR' }],
   }));
   writeBig(0);
-  report({ bench: 'save_to_pixels_ms', validate, model: `big (1 link, ${indices.length / 3} triangles)`, ...(await latency('big.gltf', (i) => writeBig(i + 1), Math.max(5, Math.round(saves / 10)))) });
+  report({ bench: 'save_to_pixels_ms', validate, model: `big (1 link, ${indices.length / 3} triangles)`, ...(await latency('big.gltf', (i) => writeBig(i + 1), Math.max(5, Math.round(saves / 10)), [path.join(watch, 'big.gltf'), path.join(watch, 'big.bin')])) });
   await page.evaluate(() => window.rdtfView.select('big.gltf'));
   const f0 = (await page.evaluate(() => window.rdtfView.state().frame));
   const t0 = now();

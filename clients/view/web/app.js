@@ -134,6 +134,7 @@ async function onModel(info) {
     if (m.view) { world.remove(m.view.root); m.view.dispose(); }
     m.view = view;
     world.add(view.root);
+    m.drawnAt = null;  // until the frame that draws it is rendered
     justSwapped.push(m);
     view.setVisible(visibleParts());
     if (m.lastState) applyState(m, m.lastState);
@@ -294,6 +295,7 @@ window.rdtfView = {
         id: m.info.id,
         revision: m.view ? m.view.revision : null,
         latest_revision: m.info.revision ?? null,
+        content_hash: m.view ? m.view.info.content_hash : null,
         status: m.info.status,
         diagnostics: diagnosticsOf(m.info),
         error: m.info.error ?? null,

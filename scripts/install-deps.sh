@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Installs everything rdtf needs to build and test on Debian 12 (bookworm): Debian packages
 # (installs only the missing ones; runs `apt-get update` only when something is missing) and the
-# npm packages of tools/gltf-validator and tools/encoders (each skipped when its node_modules
-# already matches its lock file).
+# npm packages of tools/gltf-validator, tools/encoders, clients/view/web and tools/view-test (each
+# skipped when its node_modules already matches its lock file).
 # Idempotent: a second run installs nothing and takes well under a second.
 # Run as root, or as a user who may use sudo.
 set -euo pipefail
@@ -24,6 +24,7 @@ PACKAGES=(
   iproute2 util-linux
   default-jre libjchart2d-java xvfb xauth x11-apps dpkg-dev
   blender python3-numpy
+  libboost-dev chromium
 )
 
 if [[ $(id -u) -eq 0 ]]; then
@@ -129,23 +130,24 @@ else
   say "lcm: patched source of lcm $lcm_version in $lcm_root"
 fi
 
-# --- npm packages of tools/gltf-validator and tools/encoders -----------------------------------
-# tools/encoders pins the encoders whose outputs tests/data/encoded/ holds (gltfpack,
-# gltf-pipeline): tests/data/encoded/make.sh rebuilds those files with them.
-for tool in tools/gltf-validator tools/encoders; do
-  [[ -f $tool/package.json ]] || continue
-  stamp=$tool/node_modules/.rdtf-installed
-  want=$(cat "$tool/package.json" "$tool/package-lock.json" 2>/dev/null | sha256sum | cut -d' ' -f1)
+# --- npm packages: tools/gltf-validator, tools/encoders (the encoders whose outputs
+# tests/data/encoded/ holds: tests/data/encoded/make.sh rebuilds them), rdtf-view's three.js
+# (clients/view/web) and its browser tests' puppeteer-core (tools/view-test) ------------------
+# puppeteer-core downloads no browser: the tests drive Debian's chromium.
+for folder in tools/gltf-validator tools/encoders clients/view/web tools/view-test; do
+  [[ -f $folder/package.json ]] || continue
+  stamp=$folder/node_modules/.rdtf-installed
+  want=$(cat "$folder/package.json" "$folder/package-lock.json" 2>/dev/null | sha256sum | cut -d' ' -f1)
   if [[ -f $stamp && $(cat "$stamp") == "$want" ]]; then
-    say "npm: $tool/node_modules matches the lock file, nothing to do"
+    say "npm: $folder/node_modules matches the lock file, nothing to do"
   else
-    if [[ -f $tool/package-lock.json ]]; then
-      say "npm: npm ci in $tool"
-      (cd "$tool" && npm ci --no-audit --no-fund --loglevel=error)
+    if [[ -f $folder/package-lock.json ]]; then
+      say "npm: npm ci in $folder"
+      (cd "$folder" && npm ci --no-audit --no-fund --loglevel=error)
     else
-      say "npm: npm install in $tool (no lock file)"
-      (cd "$tool" && npm install --no-audit --no-fund --loglevel=error)
-      want=$(cat "$tool/package.json" "$tool/package-lock.json" | sha256sum | cut -d' ' -f1)
+      say "npm: npm install in $folder (no lock file)"
+      (cd "$folder" && npm install --no-audit --no-fund --loglevel=error)
+      want=$(cat "$folder/package.json" "$folder/package-lock.json" | sha256sum | cut -d' ' -f1)
     fi
     echo "$want" >"$stamp"
     say "npm: done"

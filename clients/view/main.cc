@@ -1,0 +1,173 @@
+// rdtf-view: every model on the bus in a browser, live (docs/view.md).
+//
+//   rdtf-view [--port 8765] [--bind 127.0.0.1] [--lcm-url URL]
+//
+// One thread: a Boost.Asio io_context runs the HTTP/WebSocket server (server.h), waits on LCM's
+// socket and ticks the client library every 20 ms (it asks for at least every 100 ms), which also
+// flushes the newest joint and link states to the pages (at most 50 messages a second per model
+// however fast rdtfd publishes).
+#include <CLI/CLI.hpp>
+
+#include <chrono>
+#include <iostream>
+#include <memory>
+#include <string>
+
+#include <boost/asio/io_context.hpp>
+#include <boost/asio/ip/address.hpp>
+#include <boost/asio/posix/stream_descriptor.hpp>
+#include <boost/asio/signal_set.hpp>
+#include <boost/asio/steady_timer.hpp>
+#include <lcm/lcm-cpp.hpp>
+
+#include "model_hub.h"
+#include "rdtf/client.h"
+#include "server.h"
+
+#ifndef RDTF_VIEW_WEB_DIR
+#define RDTF_VIEW_WEB_DIR ""
+#endif
+
+namespace {
+
+namespace asio = boost::asio;
+using namespace std::chrono_literals;
+
+// LCM's socket in the io_context: when it is readable, dispatch what is there.
+class LcmPump {
+ public:
+  LcmPump(asio::io_context& io, lcm::LCM& lcm) : lcm_(lcm), descriptor_(io, lcm.getFileno()) { wait(); }
+  ~LcmPump() {
+    descriptor_.cancel();
+    descriptor_.release();  // LCM owns the descriptor
+  }
+  bool failed() const { return failed_; }
+
+ private:
+  void wait() {
+    descriptor_.async_wait(asio::posix::stream_descriptor::wait_read, [this](boost::system::error_code ec) {
+      if (ec) return;
+      // Readable: handle what is queued without blocking (at most a bounded batch per turn, so
+      // HTTP and WebSocket traffic is served between batches).
+      for (int i = 0; i < 256; ++i) {
+        const int handled = lcm_.handleTimeout(0);
+        if (handled < 0) {
+          failed_ = true;
+          return;
+        }
+        if (handled == 0) break;
+      }
+      wait();
+    });
+  }
+  lcm::LCM& lcm_;
+  asio::posix::stream_descriptor descriptor_;
+  bool failed_ = false;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"rdtf-view: every rdtf model on the bus in a browser, live"};
+  std::string bind = "127.0.0.1";
+  int port = 8765;
+  std::string url;
+  std::string prefix = "RDTF";
+  std::string web_dir = RDTF_VIEW_WEB_DIR;
+  rdtf::view::Gains gains;
+  app.add_option("--port", port, "TCP port of the page (0: any free port)")->capture_default_str()->check(CLI::Range(0, 65535));
+  app.add_option("--bind", bind, "Address to listen on (loopback unless you mean others to command joints)")
+      ->capture_default_str();
+  app.add_option("--lcm-url", url, "LCM URL (default: LCM_DEFAULT_URL, else LCM's default)");
+  app.add_option("--channel-prefix", prefix, "rdtfd's channel prefix")->capture_default_str();
+  app.add_option("--web-dir", web_dir, "Folder of the page (index.html, *.js, node_modules/three)")->capture_default_str();
+  app.add_option("--kp", gains.kp, "Position gain of the sliders' commands, N m/rad (N/m)")->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--kd", gains.kd, "Velocity gain of the sliders' commands, N m s/rad (N s/m)")->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  CLI11_PARSE(app, argc, argv);
+
+  boost::system::error_code ec;
+  const auto address = asio::ip::make_address(bind, ec);
+  if (ec) {
+    std::cerr << "rdtf-view: --bind " << bind << ": not an IP address\n";
+    return 2;
+  }
+  if (!std::filesystem::is_regular_file(std::filesystem::path(web_dir) / "index.html") ||
+      !std::filesystem::is_regular_file(std::filesystem::path(web_dir) / "node_modules/three/build/three.module.js")) {
+    std::cerr << "rdtf-view: --web-dir '" << web_dir
+              << "' lacks index.html or node_modules/three (run scripts/install-deps.sh)\n";
+    return 2;
+  }
+  if (!address.is_loopback()) {
+    std::cerr << "rdtf-view: WARNING: listening on " << bind
+              << ", not loopback: anyone who reaches this address can see every model and command its joints "
+                 "in the live simulation\n";
+  }
+
+  lcm::LCM lcm(url);
+  if (!lcm.good()) {
+    std::cerr << "rdtf-view: cannot open LCM" << (url.empty() ? "" : " at " + url) << "\n";
+    return 1;
+  }
+
+  asio::io_context io;
+  std::unique_ptr<rdtf::view::Server> server;
+  rdtf::view::ModelHub hub(
+      gains, [&](std::shared_ptr<const std::string> json) { if (server) server->broadcast(json); },
+      [&](const std::string& model_id, rdtf::joint_command_t& command) {
+        lcm.publish(prefix + "/" + model_id + "/JOINT_COMMAND", &command);
+      });
+  try {
+    rdtf::view::ServerOptions options;
+    options.web_dir = web_dir;
+    options.loopback_only = address.is_loopback();
+    server = std::make_unique<rdtf::view::Server>(io, asio::ip::tcp::endpoint(address, static_cast<std::uint16_t>(port)),
+                                                  options, hub);
+  } catch (const std::exception& e) {
+    std::cerr << "rdtf-view: cannot listen on " << bind << ":" << port << ": " << e.what() << "\n";
+    return 1;
+  }
+
+  rdtf::client::Options client_options;
+  client_options.prefix = prefix;
+  client_options.blobs = rdtf::client::Blobs::kAll;
+  client_options.requester = "rdtf-view";
+  rdtf::client::Callbacks callbacks;
+  callbacks.on_revision = [&](std::shared_ptr<const rdtf::client::Snapshot> s) { hub.on_revision(std::move(s)); };
+  callbacks.on_error = [&](const rdtf::model_error_t& e) { hub.on_error(e); };
+  callbacks.on_removed = [&](const rdtf::model_removed_t& r) { hub.on_removed(r); };
+  callbacks.on_joint_state = [&](const rdtf::client::Snapshot& s, const rdtf::joint_state_t& q) { hub.on_joint_state(s, q); };
+  callbacks.on_link_state = [&](const rdtf::client::Snapshot& s, const rdtf::link_state_t& x) { hub.on_link_state(s, x); };
+  callbacks.on_problem = [](const std::string& model_id, const std::string& problem) {
+    std::cerr << "rdtf-view: " << model_id << ": " << problem << "\n";
+  };
+  rdtf::client::Client client(lcm, client_options, callbacks);
+
+  const std::string host = address.is_v6() ? "[" + bind + "]" : bind;
+  std::cout << "rdtf-view: http://" << host << ":" << server->port() << "/" << std::endl;
+
+  LcmPump pump(io, lcm);
+  asio::steady_timer timer(io);
+  std::function<void()> tick = [&] {
+    timer.expires_after(20ms);
+    timer.async_wait([&](boost::system::error_code e) {
+      if (e) return;
+      if (pump.failed()) {
+        std::cerr << "rdtf-view: LCM failed\n";
+        io.stop();
+        return;
+      }
+      client.tick();
+      hub.on_models_seen(client.models_seen());
+      hub.flush_states();
+      tick();
+    });
+  };
+  tick();
+  asio::signal_set signals(io, SIGINT, SIGTERM);
+  signals.async_wait([&](boost::system::error_code, int) { io.stop(); });
+  io.run();
+  server.reset();
+  return pump.failed() ? 1 : 0;
+}

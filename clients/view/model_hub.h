@@ -1,0 +1,104 @@
+// rdtf-view's picture of the bus: every model the client library reports, in the JSON the page
+// draws from, the files of its recent revisions, and the joint targets pages set.
+//
+// Fed by rdtf_client's callbacks (on the thread that dispatches LCM; the hub has no thread and is
+// not thread-safe). It turns what it hears into page messages (JSON text, docs/view.md "Page
+// protocol") handed to `broadcast`, and answers each JOINT_STATE of a model that has targets with
+// one JOINT_COMMAND (POSITION mode, the hub's gains) stamped with that state's revision and hash,
+// as rdtf-pd-controller does: a command lives joint_command_timeout_s in rdtfd, so it is renewed
+// with every state while a target is held.
+#pragma once
+
+#include <cstdint>
+#include <deque>
+#include <functional>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <rdtf/joint_command_t.hpp>
+#include <rdtf/joint_state_t.hpp>
+#include <rdtf/link_state_t.hpp>
+
+#include "page_protocol.h"
+#include "rdtf/client.h"
+
+namespace rdtf::view {
+
+// A joint as the page needs it: from the revision's URDF (names are URDF names).
+struct JointInfo {
+  std::string name, type, parent, child;
+  double axis[3] = {1, 0, 0};
+  std::optional<double> lower, upper;
+};
+
+// The joints of a URDF text; empty with `error` set when it does not parse.
+std::vector<JointInfo> joints_of_urdf(const std::string& urdf, std::string* error);
+
+struct Gains {
+  double kp = 200;  // N m/rad (N/m)
+  double kd = 10;   // N m s/rad (N s/m)
+};
+
+class ModelHub {
+ public:
+  using Broadcast = std::function<void(std::shared_ptr<const std::string> json)>;
+  using PublishCommand = std::function<void(const std::string& model_id, rdtf::joint_command_t& command)>;
+
+  ModelHub(Gains gains, Broadcast broadcast, PublishCommand publish);
+
+  // rdtf_client's callbacks.
+  void on_revision(std::shared_ptr<const rdtf::client::Snapshot> snapshot);
+  void on_error(const rdtf::model_error_t& error);
+  void on_removed(const rdtf::model_removed_t& removed);
+  void on_joint_state(const rdtf::client::Snapshot& snapshot, const rdtf::joint_state_t& state);
+  void on_link_state(const rdtf::client::Snapshot& snapshot, const rdtf::link_state_t& state);
+  // Model ids heard (rdtfd's STATUS) that have no entry yet are listed as pending.
+  void on_models_seen(const std::set<std::string>& ids);
+
+  // Everything a page that just connected needs, one message per model.
+  std::vector<std::shared_ptr<const std::string>> welcome() const;
+  // The state messages of models whose states changed since the last call (at most one per
+  // model: the newest), so a page gets at most one per model and flush, however fast rdtfd sends.
+  void flush_states();
+
+  // A page's request, already parsed. Returns the refusal reason, or "" when done.
+  std::string apply(const SetJoint& request);
+  std::string apply(const Release& request);
+  // What pages may command now.
+  const Catalog& catalog() const { return catalog_; }
+
+  // The bytes of a file of one of a model's recent revisions (the live one and the one before,
+  // so a page still loading the previous revision gets it), or nullptr.
+  std::shared_ptr<const std::string> file(const std::string& model_id, std::int64_t revision,
+                                          const std::string& path) const;
+
+  std::size_t model_count() const { return models_.size(); }
+
+ private:
+  struct Model {
+    std::string status = "pending";  // pending, live, error, removed
+    std::deque<std::shared_ptr<const rdtf::client::Snapshot>> recent;  // newest first, at most 2
+    std::vector<JointInfo> joints;
+    std::string urdf_error;
+    std::optional<rdtf::model_error_t> error;  // the last rejected save since the live revision
+    std::map<std::string, double> targets;
+    std::optional<rdtf::joint_state_t> joint_state;
+    std::optional<rdtf::link_state_t> link_state;
+    bool states_changed = false;
+  };
+
+  std::shared_ptr<const std::string> model_message(const std::string& id, const Model& model) const;
+  std::shared_ptr<const std::string> targets_message(const std::string& id, const Model& model) const;
+  void update_catalog(const std::string& id);
+
+  Gains gains_;
+  Broadcast broadcast_;
+  PublishCommand publish_;
+  std::map<std::string, Model> models_;
+  Catalog catalog_;
+};
+
+}  // namespace rdtf::view

@@ -1,0 +1,322 @@
+// rdtf-view's page: the models rdtf-view hears on the bus (over its WebSocket, docs/view.md), the
+// selected one drawn by ModelView, sliders that command joints, and the test hook
+// window.rdtfView.
+import * as THREE from 'three';
+import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
+import { ModelView } from './model.js';
+
+const $ = (id) => document.getElementById(id);
+const models = new Map();  // id -> {info, view, loading, links, joints, targets}
+let selected = null;
+let socket = null;
+let frame = 0;
+const refusals = [];
+const notices = [];
+
+// --- three.js scene ---------------------------------------------------------------------------
+const renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+renderer.setPixelRatio(window.devicePixelRatio);
+$('view').appendChild(renderer.domElement);
+const scene = new THREE.Scene();
+scene.background = new THREE.Color(0x303238);
+const camera = new THREE.PerspectiveCamera(45, 1, 0.01, 1000);
+camera.position.set(1.2, 1.0, 1.6);
+const controls = new OrbitControls(camera, renderer.domElement);
+scene.add(new THREE.HemisphereLight(0xffffff, 0x444444, 2.0));
+const sun = new THREE.DirectionalLight(0xffffff, 1.5);
+sun.position.set(3, 5, 4);
+scene.add(sun);
+const grid = new THREE.GridHelper(4, 40, 0x777777, 0x4a4a4a);
+scene.add(grid);
+// `world` holds the models in their scene frame; the up switch turns it (Z up: +Z drawn up).
+const world = new THREE.Group();
+scene.add(world);
+let cameraFitted = false;
+
+function resize() {
+  const w = $('view').clientWidth, h = $('view').clientHeight;
+  renderer.setSize(w, h);
+  camera.aspect = w / Math.max(h, 1);
+  camera.updateProjectionMatrix();
+}
+window.addEventListener('resize', resize);
+resize();
+
+const justSwapped = [];  // models whose new revision this frame draws first
+function render() {
+  requestAnimationFrame(render);
+  controls.update();
+  renderer.render(scene, camera);
+  ++frame;
+  // When the frame that first drew a revision was rendered (ms since the epoch: the latency
+  // benchmark's save -> pixels end point).
+  const now = performance.timeOrigin + performance.now();
+  for (const m of justSwapped.splice(0)) m.drawnAt = now;
+}
+requestAnimationFrame(render);
+
+function fitCamera(view) {
+  const box = new THREE.Box3().setFromObject(view.root);
+  if (box.isEmpty()) return;
+  const centre = box.getCenter(new THREE.Vector3());
+  const size = box.getSize(new THREE.Vector3()).length();
+  controls.target.copy(centre);
+  camera.position.copy(centre).add(new THREE.Vector3(0.7, 0.5, 0.9).multiplyScalar(size * 1.1));
+  camera.near = size / 1000;
+  camera.far = size * 100;
+  camera.updateProjectionMatrix();
+  cameraFitted = true;
+}
+
+function visibleParts() {
+  return { frames: $('show-frames').checked, com: $('show-com').checked, inertia: $('show-inertia').checked };
+}
+for (const id of ['show-frames', 'show-com', 'show-inertia']) {
+  $(id).addEventListener('change', () => { for (const m of models.values()) if (m.view) m.view.setVisible(visibleParts()); });
+}
+function setUp(up) {
+  world.rotation.set(up === 'z' ? -Math.PI / 2 : 0, 0, 0);
+  $('up').value = up;
+}
+$('up').addEventListener('change', () => setUp($('up').value));
+
+// --- hover: link names ------------------------------------------------------------------------
+const raycaster = new THREE.Raycaster();
+renderer.domElement.addEventListener('pointermove', (event) => {
+  const rect = renderer.domElement.getBoundingClientRect();
+  const pointer = new THREE.Vector2(((event.clientX - rect.left) / rect.width) * 2 - 1,
+    -((event.clientY - rect.top) / rect.height) * 2 + 1);
+  raycaster.setFromCamera(pointer, camera);
+  const hit = raycaster.intersectObjects(world.children, true).find((h) => h.object.userData.rdtfLink);
+  const tip = $('tooltip');
+  if (!hit) { tip.style.display = 'none'; return; }
+  tip.textContent = hit.object.userData.rdtfLink;
+  tip.style.left = `${event.clientX + 12}px`;
+  tip.style.top = `${event.clientY + 12}px`;
+  tip.style.display = 'block';
+});
+
+// --- models -----------------------------------------------------------------------------------
+function entry(id) {
+  if (!models.has(id)) models.set(id, { info: { id, status: 'pending' }, view: null, loading: null, targets: {} });
+  return models.get(id);
+}
+
+function diagnosticsOf(info) {
+  return [...((info.error && info.error.diagnostics) || []), ...((info.validation && info.validation.diagnostics) || [])];
+}
+
+async function onModel(info) {
+  const m = entry(info.id);
+  m.info = info;
+  if (selected === null && info.status !== 'removed') selected = info.id;
+  if (info.status === 'removed' || !info.gltf) {
+    if (info.status === 'removed' && m.view) {
+      world.remove(m.view.root);
+      m.view.dispose();
+      m.view = null;
+    }
+  } else if ((!m.view || m.view.revision !== info.revision) && (!m.loading || m.loading.revision !== info.revision)) {
+    // A new revision: load it beside the drawn one, then swap in one step (the camera stays).
+    const view = new ModelView(info);
+    m.loading = view;
+    try {
+      await view.load();
+    } catch (e) {
+      console.error(`rdtf-view: ${info.id} revision ${info.revision}:`, e);
+      notices.push(`${info.id} revision ${info.revision} could not be drawn: ${e.message}`);
+      if (m.loading === view) m.loading = null;
+      refreshPanel();
+      return;
+    }
+    if (m.loading !== view || m.info.status === 'removed') { view.dispose(); return; }
+    m.loading = null;
+    if (m.view) { world.remove(m.view.root); m.view.dispose(); }
+    m.view = view;
+    world.add(view.root);
+    m.drawnAt = null;  // until the frame that draws it is rendered
+    justSwapped.push(m);
+    view.setVisible(visibleParts());
+    if (m.lastState) applyState(m, m.lastState);
+    if (!cameraFitted && info.id === selected) fitCamera(view);
+  }
+  if (m.view) m.view.highlight(diagnosticsOf(m.info));
+  refreshPanel();
+}
+
+function applyState(m, state) {
+  if (!m.view) return;
+  if (state.links && state.links.revision === m.view.revision) m.view.setLinkState(state.links);
+  if (state.joints && state.joints.revision === m.view.revision) m.view.setJointState(state.joints);
+}
+
+function onState(state) {
+  const m = entry(state.id);
+  m.lastState = state;
+  applyState(m, state);
+  if (state.id === selected) refreshSliderValues();
+}
+
+// --- panel ------------------------------------------------------------------------------------
+function refreshPanel() {
+  for (const [id, m] of models) if (m.view) m.view.root.visible = id === selected;
+  const list = $('models');
+  list.replaceChildren(...[...models.values()].map((m) => {
+    const li = document.createElement('li');
+    li.className = m.info.id === selected ? 'selected' : '';
+    li.innerHTML = `<span></span> <span class="status-${m.info.status}">${m.info.status}</span>`;
+    li.firstChild.textContent = `${m.info.id}${m.info.revision ? ` r${m.info.revision}` : ''}`;
+    li.addEventListener('click', () => { selected = m.info.id; refreshPanel(); });
+    return li;
+  }));
+  const m = models.get(selected);
+  const details = $('details');
+  const diagnostics = $('diagnostics');
+  diagnostics.replaceChildren();
+  $('sliders').replaceChildren();
+  if (!m) { details.textContent = ''; return; }
+  const info = m.info;
+  const verdict = info.validated ? (info.validation_passed ? 'passed' : 'FAILED') : 'not validated';
+  details.textContent = info.revision
+    ? `revision ${info.revision} (${(info.content_hash || '').slice(0, 12)}), validation ${verdict}; ` +
+      `total mass ${Number(info.total_mass).toPrecision(6)} kg, centre of mass ` +
+      `[${(info.com_scene || []).map((x) => Number(x).toFixed(4)).join(', ')}] m`
+    : `status ${info.status}`;
+  if (info.error) {
+    const head = document.createElement('div');
+    head.className = 'diagnostic error';
+    head.textContent = `save rejected: ${info.error.live_revision ? `revision ${info.error.live_revision} stays live` : 'nothing live yet'}`;
+    diagnostics.appendChild(head);
+  }
+  for (const d of diagnosticsOf(info)) {
+    const div = document.createElement('div');
+    div.className = `diagnostic ${d.severity}`;
+    const code = document.createElement('span');
+    code.className = 'code';
+    code.textContent = `${d.severity} ${d.code} `;
+    const place = document.createElement('span');
+    place.className = 'place';
+    place.textContent = `${d.file}${d.pointer ? `:${d.pointer}` : ''}${d.line ? `:${d.line}` : ''} `;
+    div.append(code, place, document.createTextNode(d.message));
+    diagnostics.appendChild(div);
+  }
+  if (m.view) {
+    const h = m.view.highlighted;
+    if (h.links.length || h.joints.length) {
+      const div = document.createElement('div');
+      div.textContent = `in red: ${[...h.joints.map((j) => `joint ${j}`), ...h.links.map((l) => `link ${l}`)].join(', ')}`;
+      diagnostics.appendChild(div);
+    }
+    buildSliders(m);
+  }
+  $('notices').textContent = [...notices.slice(-3), ...refusals.slice(-3).map((r) => `refused: ${r}`)].join('\n');
+}
+
+function buildSliders(m) {
+  for (const j of m.view.joints) {
+    if (!['revolute', 'continuous', 'prismatic'].includes(j.type)) continue;
+    const div = document.createElement('div');
+    div.className = 'slider';
+    const lower = j.lower ?? -Math.PI, upper = j.upper ?? Math.PI;
+    div.innerHTML = `<label></label><input type="range" step="any">`;
+    const input = div.querySelector('input');
+    input.min = lower; input.max = upper;
+    input.value = m.targets[j.name] ?? m.view.jointPositions.get(j.name) ?? 0;
+    input.dataset.joint = j.name;
+    input.addEventListener('input', () => setJoint(m.info.id, j.name, Number(input.value)));
+    $('sliders').appendChild(div);
+  }
+  refreshSliderValues();
+}
+
+function refreshSliderValues() {
+  const m = models.get(selected);
+  if (!m || !m.view) return;
+  for (const input of $('sliders').querySelectorAll('input')) {
+    const name = input.dataset.joint;
+    const q = m.view.jointPositions.get(name);
+    const target = m.targets[name];
+    input.previousSibling.textContent = `${name}: ${q === undefined ? '-' : q.toFixed(3)}` +
+      `${target === undefined ? '' : ` (target ${target.toFixed(3)})`}`;
+  }
+}
+
+// --- socket -----------------------------------------------------------------------------------
+const waiters = [];  // setJoint promises: resolved by the next answer about their model
+function connect() {
+  socket = new WebSocket(`ws://${location.host}/ws`);
+  socket.onopen = () => { $('connection').textContent = `connected to ${location.host}`; };
+  socket.onclose = () => {
+    $('connection').textContent = 'disconnected: retrying';
+    setTimeout(connect, 1000);
+  };
+  socket.onmessage = (event) => {
+    const message = JSON.parse(event.data);
+    switch (message.type) {
+      case 'model': onModel(message); break;
+      case 'state': onState(message); break;
+      case 'targets':
+        entry(message.id).targets = message.targets;
+        settle((w) => w.model === message.id, '');
+        if (message.id === selected) refreshSliderValues();
+        break;
+      case 'refused':
+        refusals.push(message.reason);
+        settle(() => true, message.reason);
+        refreshPanel();
+        break;
+      case 'notice':
+        notices.push(`${message.id}: ${message.diagnostics.map((d) => d.message).join('; ')}`);
+        refreshPanel();
+        break;
+    }
+  };
+}
+function settle(match, reason) {
+  const i = waiters.findIndex(match);
+  if (i >= 0) waiters.splice(i, 1)[0].resolve(reason);
+}
+function setJoint(modelId, jointName, value) {
+  return new Promise((resolve) => {
+    waiters.push({ model: modelId, resolve });
+    socket.send(JSON.stringify({ type: 'set_joint', model: modelId, joint: jointName, value }));
+  });
+}
+connect();
+
+// --- test hook (docs/view.md) -----------------------------------------------------------------
+window.rdtfView = {
+  // Every model: positions of the drawn revision in the scene frame, as drawn now.
+  state() {
+    return {
+      frame,
+      selected,
+      models: [...models.values()].map((m) => ({
+        id: m.info.id,
+        revision: m.view ? m.view.revision : null,
+        latest_revision: m.info.revision ?? null,
+        content_hash: m.view ? m.view.info.content_hash : null,
+        status: m.info.status,
+        diagnostics: diagnosticsOf(m.info),
+        error: m.info.error ?? null,
+        targets: m.targets,
+        drawn_at: m.drawnAt ?? null,
+        links: [], joints: [],
+        ...(m.view ? m.view.state() : {}),
+      })),
+      refusals: refusals.slice(),
+    };
+  },
+  // What the slider does; resolves to "" when rdtf-view took it, else the reason it refused.
+  setJoint,
+  select(id) { selected = id; refreshPanel(); if (models.get(id)?.view) fitCamera(models.get(id).view); },
+  setUp,
+  show(parts) {
+    for (const [k, id] of [['frames', 'show-frames'], ['com', 'show-com'], ['inertia', 'show-inertia']]) {
+      if (k in parts) $(id).checked = !!parts[k];
+    }
+    for (const m of models.values()) if (m.view) m.view.setVisible(visibleParts());
+  },
+  // Sends raw text on the page's socket (tests of hostile messages).
+  sendRaw(text) { socket.send(text); },
+};

@@ -1,0 +1,262 @@
+// One revision of one model drawn in three.js: its RDTF glTF (GLTFLoader, geometry from the blobs
+// rdtf-view serves), each link tinted apart and moved by LINK_STATE, joint frames and axes,
+// centres of mass, equivalent-inertia boxes, and the links and joints diagnostics name in red.
+//
+// Frames: `root` is the model in its scene frame S (glTF, Y up). A link's frame F (LINK_STATE's
+// pose, the joint frame of docs/format.md) is the frame of its frame node with scale removed: the
+// joint node nearest the link that has a transform of its own or joint keys in its extras, else
+// the link node. At load, X_FL = inv(X_SF0) X_SL0 ties the link node L to F; every link node is
+// then re-parented to `root` and drawn at X_SL = X_SF X_FL, with X_SF from LINK_STATE (or X_SF0).
+import * as THREE from 'three';
+import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
+import { equivalentBox } from './inertia.js';
+
+const JOINT_KEYS = ['rdtf_joint', 'rdtf_axis', 'rdtf_lower', 'rdtf_upper', 'rdtf_effort', 'rdtf_velocity',
+  'rdtf_damping', 'rdtf_friction', 'rdtf_spring_stiffness'];
+const RED = new THREE.Color(0xff2020);
+
+function hasOwnTransform(node) {
+  const t = node.translation, r = node.rotation, s = node.scale;
+  return (node.matrix && node.matrix.some((x, i) => x !== (i % 5 === 0 ? 1 : 0))) ||
+    (t && t.some((x) => x !== 0)) || (r && (r[0] !== 0 || r[1] !== 0 || r[2] !== 0 || r[3] !== 1)) ||
+    (s && s.some((x) => x !== 1));
+}
+function hasJointKeys(node) {
+  return !!node.extras && JOINT_KEYS.some((k) => k in node.extras);
+}
+// The rigid part of a matrix (scale removed).
+function rigid(matrix) {
+  const p = new THREE.Vector3(), q = new THREE.Quaternion(), s = new THREE.Vector3();
+  matrix.decompose(p, q, s);
+  return new THREE.Matrix4().compose(p, q, new THREE.Vector3(1, 1, 1));
+}
+
+export class ModelView {
+  constructor(info) {
+    this.info = info;
+    this.id = info.id;
+    this.revision = info.revision;
+    this.root = new THREE.Group();
+    this.root.name = `model ${info.id} r${info.revision}`;
+    this.links = [];  // {name, gltf_name, node, object, X_FL, X_SF, color, meshes, overlays}
+    this.joints = [];  // {name, type, lower, upper, axis, link, arrow}
+    this.jointPositions = new Map();
+    this.simTime = null;
+    this.highlighted = { links: [], joints: [] };
+  }
+
+  async load() {
+    const gltf = await new GLTFLoader().loadAsync(this.info.gltf);
+    const json = gltf.parser.json;
+    const nodeObjects = [];
+    for (const [object, where] of gltf.parser.associations) {
+      if (where && where.nodes !== undefined && object.isObject3D) nodeObjects[where.nodes] = object;
+    }
+    this.root.add(gltf.scene);
+    this.root.updateMatrixWorld(true);
+    const parent = [];
+    (json.nodes || []).forEach((n, i) => (n.children || []).forEach((c) => { parent[c] = i; }));
+    const linkNodes = new Set(this.info.links.map((l) => l.node));
+    this.nodeNames = (json.nodes || []).map((n) => n.name || '');
+    const rdtf = (json.extras && json.extras.RDTF && json.extras.RDTF.nodes) || [];
+    this.rdtfNodes = new Map(rdtf.map((e) => [e.node, e]));
+    this.size = 0;
+
+    this.info.links.forEach((l, index) => {
+      const object = nodeObjects[l.node];
+      if (!object) throw new Error(`link ${l.name}: no node ${l.node} in the glTF`);
+      const chain = [];
+      let p = parent[l.node];
+      while (p !== undefined && !linkNodes.has(p)) { chain.push(p); p = parent[p]; }
+      let frameNode = l.node;
+      if (p !== undefined) {
+        const placed = chain.find((n) => hasOwnTransform(json.nodes[n]) || hasJointKeys(json.nodes[n]));
+        if (placed !== undefined) frameNode = placed;
+      }
+      const X_SF0 = rigid(nodeObjects[frameNode].matrixWorld);
+      const X_FL = X_SF0.clone().invert().multiply(object.matrixWorld);
+      this.links.push({ ...l, index, object, chain, frameNode, X_FL, X_SF: X_SF0.clone(), meshes: [], comLocal: l.com });
+    });
+    // Every link node straight under root (attach keeps its world transform), drawn from X_SF.
+    for (const link of this.links) {
+      this.root.attach(link.object);
+      link.object.matrixAutoUpdate = false;
+    }
+    // Tint each link apart (golden-ratio hues) on its own copies of the materials.
+    const box = new THREE.Box3();
+    for (const link of this.links) {
+      link.color = new THREE.Color().setHSL((link.index * 0.618034) % 1, 0.55, 0.55);
+      link.object.traverse((o) => {
+        if (o !== link.object && this.links.some((other) => other.object === o)) return;
+        if (!o.isMesh) return;
+        o.material = (Array.isArray(o.material) ? o.material[0] : o.material).clone();
+        o.material.color = link.color.clone();
+        o.userData.rdtfLink = link.name;
+        link.meshes.push(o);
+        box.expandByObject(o);
+      });
+    }
+    this.size = box.isEmpty() ? 1 : box.getSize(new THREE.Vector3()).length();
+    this.buildOverlays();
+    this.buildJoints();
+    this.applyPose();
+  }
+
+  buildOverlays() {
+    const s = this.size;
+    this.frames = new THREE.Group();
+    this.coms = new THREE.Group();
+    this.boxes = new THREE.Group();
+    this.root.add(this.frames, this.coms, this.boxes);
+    const comGeometry = new THREE.SphereGeometry(0.012 * s, 12, 8);
+    for (const link of this.links) {
+      link.axes = new THREE.AxesHelper(0.08 * s);
+      link.axes.matrixAutoUpdate = false;
+      link.axes.material.depthTest = false;  // frames inside a solid link still show
+      link.axes.renderOrder = 2;
+      this.frames.add(link.axes);
+      link.comMesh = new THREE.Mesh(comGeometry, new THREE.MeshBasicMaterial({ color: 0xffff00, depthTest: false }));
+      link.comMesh.renderOrder = 2;
+      link.comMesh.matrixAutoUpdate = false;
+      this.coms.add(link.comMesh);
+      const eq = equivalentBox(link.mass, link.inertia);
+      link.box = eq;
+      if (eq) {
+        const geometry = new THREE.BoxGeometry(...eq.sides.map((x) => Math.max(x, 1e-6)));
+        link.boxMesh = new THREE.Mesh(geometry, new THREE.MeshBasicMaterial({
+          color: link.color, wireframe: true }));
+        link.boxMesh.matrixAutoUpdate = false;
+        const [u, v, w] = eq.axes.map((a) => new THREE.Vector3(...a));
+        link.X_FB = new THREE.Matrix4().makeBasis(u, v, w).setPosition(...link.comLocal);
+        this.boxes.add(link.boxMesh);
+      }
+    }
+    this.totalCom = new THREE.Mesh(new THREE.SphereGeometry(0.025 * s, 16, 12),
+      new THREE.MeshBasicMaterial({ color: 0xff00ff, depthTest: false }));
+    this.totalCom.renderOrder = 3;
+    this.coms.add(this.totalCom);
+  }
+
+  buildJoints() {
+    const byChild = new Map(this.links.map((l) => [l.name, l]));
+    for (const j of this.info.joints || []) {
+      const link = byChild.get(j.child);
+      if (!link) continue;
+      // The axis in the joint frame, glTF's axes: extras.RDTF's joint entry; else the URDF's axis
+      // turned back from ROS's Z up (docs/urdf.md, "Frames": glTF (x, y, z) is URDF (x, -z, y)).
+      const entry = [link.node, ...link.chain].map((n) => this.rdtfNodes.get(n)).find((e) => e && e.joint && e.joint.axis);
+      const axis = entry ? entry.joint.axis : [j.axis[0], j.axis[2], -j.axis[1]];
+      const arrow = new THREE.ArrowHelper(new THREE.Vector3(...axis).normalize(), new THREE.Vector3(),
+        0.15 * this.size, 0x00e0ff, 0.04 * this.size, 0.02 * this.size);
+      for (const part of [arrow.line, arrow.cone]) part.material.depthTest = false;
+      arrow.renderOrder = 2;
+      arrow.line.renderOrder = 2;
+      arrow.cone.renderOrder = 2;
+      const holder = new THREE.Group();
+      holder.matrixAutoUpdate = false;
+      holder.add(arrow);
+      if (j.type === 'fixed') holder.visible = false;
+      this.frames.add(holder);
+      this.joints.push({ ...j, link, arrow, holder, gltf_names: link.chain.map((n) => this.nodeNames[n]) });
+    }
+  }
+
+  // LINK_STATE of this revision (the hub's "links" part): every link's X_SF.
+  setLinkState(links) {
+    const byName = new Map(this.links.map((l) => [l.name, l]));
+    links.names.forEach((name, i) => {
+      const link = byName.get(name);
+      if (!link) return;
+      const [x, y, z] = links.position[i];
+      const [w, qx, qy, qz] = links.orientation[i];
+      link.X_SF.compose(new THREE.Vector3(x, y, z), new THREE.Quaternion(qx, qy, qz, w), new THREE.Vector3(1, 1, 1));
+    });
+    this.simTime = links.sim_time;
+    this.applyPose();
+  }
+
+  setJointState(joints) {
+    joints.names.forEach((name, i) => this.jointPositions.set(name, joints.position[i]));
+  }
+
+  applyPose() {
+    let mass = 0;
+    const com = new THREE.Vector3();
+    for (const link of this.links) {
+      link.object.matrix.multiplyMatrices(link.X_SF, link.X_FL);
+      link.object.matrixWorldNeedsUpdate = true;
+      link.axes.matrix.copy(link.X_SF);
+      const c = new THREE.Vector3(...link.comLocal).applyMatrix4(link.X_SF);
+      link.comMesh.matrix.makeTranslation(c.x, c.y, c.z);
+      if (link.boxMesh) link.boxMesh.matrix.multiplyMatrices(link.X_SF, link.X_FB);
+      mass += link.mass;
+      com.addScaledVector(c, link.mass);
+    }
+    for (const j of this.joints) j.holder.matrix.copy(j.link.X_SF);
+    if (mass > 0) com.divideScalar(mass);
+    this.totalMass = mass;
+    this.totalComPosition = com;
+    this.totalCom.matrix = new THREE.Matrix4().makeTranslation(com.x, com.y, com.z);
+    this.totalCom.matrixAutoUpdate = false;
+  }
+
+  // Diagnostics to red (errors and warnings; infos are no fault): each names a link or joint by the names quoted in its message, else by
+  // the node of its JSON pointer (/nodes/N: a link node, or a joint node between two links).
+  highlight(diagnostics) {
+    for (const link of this.links) for (const m of link.meshes) m.material.color.copy(link.color);
+    for (const j of this.joints) j.arrow.setColor(0x00e0ff);
+    const links = new Set(), joints = new Set();
+    for (const d of (diagnostics || []).filter((x) => x.severity !== 'info')) {
+      const names = [...(d.message || '').matchAll(/'([^']+)'/g)].map((m) => m[1]);
+      const node = /^\/nodes\/(\d+)/.exec(d.pointer || '');
+      const nodeIndex = node ? Number(node[1]) : -1;
+      let found = false;
+      for (const j of this.joints) {
+        if (names.includes(j.name) || names.some((n) => j.gltf_names.includes(n)) || j.link.chain.includes(nodeIndex)) {
+          joints.add(j);
+          found = true;
+        }
+      }
+      for (const link of this.links) {
+        if ((names.includes(link.name) || names.includes(link.gltf_name) || link.node === nodeIndex) && !found) {
+          links.add(link);
+        }
+      }
+    }
+    for (const j of joints) {
+      j.arrow.setColor(RED);
+      j.holder.visible = true;
+      links.add(j.link);  // the part the joint moves, so that it shows in red too
+    }
+    for (const link of links) for (const m of link.meshes) m.material.color.copy(RED);
+    this.highlighted = { links: [...links].map((l) => l.name), joints: [...joints].map((j) => j.name) };
+  }
+
+  setVisible(parts) {
+    this.frames.visible = parts.frames;
+    this.coms.visible = parts.com;
+    this.boxes.visible = parts.inertia;
+  }
+
+  state() {
+    return {
+      links: this.links.map((l) => {
+        const p = new THREE.Vector3().setFromMatrixPosition(l.X_SF);
+        return { name: l.name, position: [p.x, p.y, p.z], box: l.box ? l.box.sides : null };
+      }),
+      joints: this.joints.map((j) => ({ name: j.name, type: j.type, lower: j.lower, upper: j.upper,
+        position: this.jointPositions.has(j.name) ? this.jointPositions.get(j.name) : null })),
+      total_mass: this.totalMass,
+      com: this.totalComPosition.toArray(),
+      sim_time: this.simTime,
+      highlighted: this.highlighted,
+    };
+  }
+
+  dispose() {
+    this.root.traverse((o) => {
+      if (o.geometry) o.geometry.dispose();
+      if (o.material) (Array.isArray(o.material) ? o.material : [o.material]).forEach((m) => m.dispose());
+    });
+  }
+}

@@ -1,0 +1,348 @@
+// rdtf-view end to end: the real rdtfd, rdtf-view and Debian's headless chromium (puppeteer-core,
+// SwiftShader's WebGL) in the test case's network namespace (tests/clients/view_page.h). The page
+// is read through its test hook window.rdtfView (docs/view.md); the bus through the harness's
+// Subscriber. Screenshots go to build/test-artifacts/view/.
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+
+#include <Eigen/Eigenvalues>
+
+#include <rdtf/joint_command_t.hpp>
+#include <rdtf/link_state_t.hpp>
+
+#include "clients/live_arm.h"
+#include "clients/view_page.h"
+
+namespace rdtf::itest {
+namespace {
+
+DaemonOptions simulating() { return DaemonOptions().with("simulate", true).with("state_rate_hz", 50); }
+
+// The page's model once it draws `revision` with a state from the simulation.
+Json wait_drawn(Page& page, const std::string& id, std::int64_t revision, Clock::duration timeout = 20s) {
+  Json m;
+  page.wait_state([&](const Json& st) {
+    m = model_in(st, id);
+    return !m.is_null() && m["revision"] == revision && !m["sim_time"].is_null();
+  }, timeout);
+  return m;
+}
+
+std::optional<rdtf::link_state_t> link_state_at(const std::vector<Message>& all, const std::string& id,
+                                                std::int64_t revision, double sim_time) {
+  for (const auto& s : decoded<rdtf::link_state_t>(all, "LINK_STATE", id)) {
+    if (s.revision == revision && s.sim_time == sim_time) return s;
+  }
+  return std::nullopt;
+}
+
+// Every drawn link at the position LINK_STATE gave it for the step the page shows.
+void expect_links_where_link_state_puts_them(Session& s, const Json& m, const std::string& id) {
+  const auto state = link_state_at(s.messages(), id, m["revision"].get<std::int64_t>(), m["sim_time"].get<double>());
+  ASSERT_TRUE(state) << "no LINK_STATE of sim_time " << m["sim_time"];
+  ASSERT_EQ(m["links"].size(), state->name.size());
+  for (const auto& link : m["links"]) {
+    const auto at = std::find(state->name.begin(), state->name.end(), link["name"].get<std::string>());
+    ASSERT_NE(at, state->name.end()) << link["name"];
+    const auto i = static_cast<std::size_t>(at - state->name.begin());
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(link["position"][k].get<double>(), state->position[i][k], 1e-6) << link["name"];
+  }
+}
+
+TEST(View, DrawsEveryLinkWhereLinkStatePutsItWithItsInertiaBox) {
+  Session s;
+  copy_fixture(s.watch, "arm3");
+  s.start(simulating());
+  ViewProcess view(s.root.path());
+  Page page(view.url(), s.root / "page.log");
+  const Json m = wait_drawn(page, kArm, 1);
+  ASSERT_FALSE(m.is_null()) << page.state().dump() << "\n" << page.driver_log() << view.log();
+  EXPECT_EQ(m["status"], "live");
+  expect_links_where_link_state_puts_them(s, m, kArm);
+
+  // Mass and the equivalent-inertia boxes, against Eigen's eigenvalues of the INERTIA table's
+  // tensors: sides sqrt(6 (Ij + Ik - Ii) / m).
+  const auto table = last_inertia(s.messages(), kArm);
+  ASSERT_TRUE(table);
+  EXPECT_NEAR(m["total_mass"].get<double>(), table->total_mass, 1e-12 * table->total_mass);
+  for (const auto& l : table->links) {
+    Eigen::Matrix3d I;
+    I << l.ixx, l.ixy, l.ixz, l.ixy, l.iyy, l.iyz, l.ixz, l.iyz, l.izz;
+    const Eigen::Vector3d p = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(I).eigenvalues();
+    std::vector<double> expected = {std::sqrt(6 * (p[1] + p[2] - p[0]) / l.mass), std::sqrt(6 * (p[0] + p[2] - p[1]) / l.mass),
+                                    std::sqrt(6 * (p[0] + p[1] - p[2]) / l.mass)};
+    std::vector<double> drawn;
+    for (const auto& link : m["links"]) {
+      if (link["name"] == l.name) drawn = link["box"].get<std::vector<double>>();
+    }
+    ASSERT_EQ(drawn.size(), 3u) << l.name;
+    std::sort(expected.begin(), expected.end());
+    std::sort(drawn.begin(), drawn.end());
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(drawn[k], expected[k], 1e-9 * expected[2]) << l.name;
+  }
+  page.eval("window.rdtfView.show({inertia: true})");
+  page.screenshot("arm3_live_with_inertia_boxes.png");
+
+  // Z up turns the drawing, not the scene frame the hook reports in.
+  page.eval("window.rdtfView.setUp('z')");
+  const Json turned = wait_drawn(page, kArm, 1);
+  expect_links_where_link_state_puts_them(s, turned, kArm);
+  page.screenshot("arm3_z_up.png");
+}
+
+TEST(View, ShowsASavedRevisionInPlaceWithoutReloadingThePage) {
+  Session s;
+  copy_fixture(s.watch, "arm3");
+  s.start(simulating());
+  ViewProcess view(s.root.path());
+  Page page(view.url(), s.root / "page.log");
+  ASSERT_FALSE(wait_drawn(page, kArm, 1).is_null()) << page.driver_log();
+  page.eval("window.sameDocument = 'yes'");
+
+  // The base raised from y = 0.1 to 0.3: every link 0.2 m higher.
+  Json document = Json::parse(read(s.watch / kArm));
+  for (auto& node : document["nodes"]) {
+    if (node.value("name", "") == "base_link") node["translation"] = {0.0, 0.3, 0.0};
+  }
+  write_in_place(s.watch / kArm, document.dump(1));
+  const Json m = wait_drawn(page, kArm, 2);
+  ASSERT_FALSE(m.is_null()) << page.state().dump();
+  EXPECT_EQ(page.eval("window.sameDocument"), "yes") << "the page was reloaded";
+  expect_links_where_link_state_puts_them(s, m, kArm);
+  for (const auto& link : m["links"]) {
+    if (link["name"] == "base_link") {
+      EXPECT_NEAR(link["position"][1].get<double>(), 0.3, 1e-6);
+    }
+  }
+  page.screenshot("arm3_revision_2.png");
+}
+
+TEST(View, ARejectedSaveShowsTheErrorWithTheCulpritInRedAndKeepsTheLastGoodModel) {
+  Session s;
+  copy_fixture(s.watch, "arm3");
+  s.start(simulating());
+  ViewProcess view(s.root.path());
+  Page page(view.url(), s.root / "page.log");
+  ASSERT_FALSE(wait_drawn(page, kArm, 1).is_null()) << page.driver_log();
+
+  Json document = Json::parse(read(s.watch / kArm));
+  for (auto& node : document["nodes"]) {
+    if (node.value("name", "") == "elbow") node["extras"]["rdtf_axis"] = {0, 0, 0};
+  }
+  write_in_place(s.watch / kArm, document.dump(1));
+  Json m;
+  ASSERT_TRUE(page.wait_state([&](const Json& st) {
+    m = model_in(st, kArm);
+    return m["status"] == "error";
+  }, 10s)) << m.dump();
+  bool named = false;
+  for (const auto& d : m["diagnostics"]) named = named || d["code"] == "JOINT_AXIS_ZERO";
+  EXPECT_TRUE(named) << m["diagnostics"].dump();
+  EXPECT_EQ(m["highlighted"]["joints"], Json::array({"elbow"}));
+  EXPECT_EQ(m["highlighted"]["links"], Json::array({"forearm"}));  // the part the joint moves
+  // Revision 1 stays drawn, still moving with LINK_STATE.
+  EXPECT_EQ(m["revision"], 1);
+  EXPECT_EQ(m["links"].size(), 3u);
+  expect_links_where_link_state_puts_them(s, m, kArm);
+  page.screenshot("arm3_rejected_save.png");
+}
+
+TEST(View, SetJointMovesTheJointInTheLiveSimulation) {
+  Session s;
+  const std::string hash = write_arm3_across_gravity(s.watch);
+  // No gravity: nothing loads the joints, so the PD law rests exactly at its target (up to ODE's
+  // joint error, far below the tolerance).
+  s.start(simulating().with("gravity", Json::array({0.0, 0.0, 0.0})));
+  ViewProcess view(s.root.path());
+  Page page(view.url(), s.root / "page.log");
+  ASSERT_FALSE(wait_drawn(page, kArm, 1).is_null()) << page.driver_log();
+
+  EXPECT_EQ(page.eval("window.rdtfView.setJoint('arm3.gltf', 'shoulder', 0.5)"), "");
+  ASSERT_TRUE(s.wait_for([&](const auto& all) {
+    const auto last = last_state(all, 1);
+    return last && std::abs(*position_of(*last, "shoulder") - 0.5) < 1e-3;
+  }, 20s)) << "shoulder did not reach 0.5";
+  bool commanded = false;
+  for (const auto& c : decoded<rdtf::joint_command_t>(s.messages(), "JOINT_COMMAND", kArm)) {
+    commanded = commanded || (c.name == std::vector<std::string>{"shoulder"} && c.value[0] == 0.5 &&
+                              c.mode[0] == rdtf::joint_command_t::POSITION && c.revision == 1 && c.content_hash == hash);
+  }
+  EXPECT_TRUE(commanded);
+  EXPECT_TRUE(rejections(s.messages()).empty()) << rejections(s.messages()).front();
+  // The page shows it: the joint's position and the links where LINK_STATE puts them.
+  Json m;
+  ASSERT_TRUE(page.wait_state([&](const Json& st) {
+    m = model_in(st, kArm);
+    for (const auto& j : m["joints"]) {
+      if (j["name"] == "shoulder" && j["position"].is_number()) return std::abs(j["position"].get<double>() - 0.5) < 1e-3;
+    }
+    return false;
+  })) << m.dump();
+  expect_links_where_link_state_puts_them(s, m, kArm);
+  // Beyond the limit (1.57): refused with the reason, nothing sent.
+  const Json refused = page.eval("window.rdtfView.setJoint('arm3.gltf', 'shoulder', 2)");
+  EXPECT_NE(refused.get<std::string>().find("outside its limits"), std::string::npos) << refused;
+  page.screenshot("arm3_shoulder_set_to_0.5.png");
+}
+
+TEST(View, ShowsTwoModelsAndOneRemoved) {
+  Session s;
+  copy_fixture(s.watch, "arm3");
+  copy_fixture(s.watch, "two_cylinder");
+  s.start(simulating());
+  ViewProcess view(s.root.path());
+  Page page(view.url(), s.root / "page.log");
+  ASSERT_FALSE(wait_drawn(page, kArm, 1).is_null()) << page.driver_log();
+  const Json cylinder = wait_drawn(page, "two_cylinder.gltf", 1);
+  ASSERT_FALSE(cylinder.is_null()) << page.state().dump();
+  expect_links_where_link_state_puts_them(s, cylinder, "two_cylinder.gltf");
+  page.eval("window.rdtfView.select('two_cylinder.gltf')");
+  page.screenshot("two_models_cylinder_selected.png");
+
+  fs::remove(s.watch / "two_cylinder.gltf");
+  Json st;
+  ASSERT_TRUE(page.wait_state([&](const Json& state) {
+    return model_in(state, "two_cylinder.gltf")["status"] == "removed";
+  }, 10s, &st)) << st.dump();
+  const Json removed = model_in(st, "two_cylinder.gltf");
+  EXPECT_TRUE(removed["links"].empty());
+  EXPECT_TRUE(removed["revision"].is_null());
+  EXPECT_EQ(model_in(st, kArm)["status"], "live");
+  page.screenshot("two_models_cylinder_removed.png");
+}
+
+// Hostile pages: every message refused with a reason, none reaches the bus; a message over
+// 4 KiB is refused with its size and one over 1 MiB closes that socket; a flood is answered 20 times a second and counted; clients that
+// vanish mid-request or mid-frame, or come from another origin, leave the viewer serving.
+TEST(View, RefusesHostileMessagesAndSurvivesClientsThatVanish) {
+  Session s;
+  copy_fixture(s.watch, "arm3");
+  s.start(simulating());
+  ViewProcess view(s.root.path());
+  Page page(view.url(), s.root / "page.log");
+  ASSERT_FALSE(wait_drawn(page, kArm, 1).is_null()) << page.driver_log();
+
+  const Json reasons = page.eval(R"((async () => {
+    const ws = new WebSocket(`ws://${location.host}/ws`);
+    await new Promise((r) => { ws.onopen = r; });
+    const answers = [];
+    ws.onmessage = (e) => { const m = JSON.parse(e.data); if (m.type === 'refused') answers.push(m.reason); };
+    const sent = ['not json', '[1, 2]', '{"type": 7}',
+      '{"type":"set_joint","model":"nope.gltf","joint":"shoulder","value":0.1}',
+      JSON.stringify({type: 'set_joint', model: 'arm3.gltf', joint: 'shoulder', value: NaN}),
+      '{"type":"set_joint","model":"arm3.gltf","joint":"shoulder","value":1e999}',
+      '{"type":"set_joint","model":"arm3.gltf","joint":"wrist","value":0.1}',
+      '{"type":"set_joint","model":"arm3.gltf","joint":"shoulder","value":[0.1]}',
+      JSON.stringify({type: 'set_joint', model: 'arm3.gltf', joint: 'shoulder', value: 0.1, more: new Array(3000).fill(1)}),
+      '{"type":"set_joint","model":"arm3.gltf","joint":"shoulder","value":0.1,"kp":1e9}',
+      '{"type":"set_joint","model":"arm3.gltf","joint":"shoulder","value":9}',
+      '{"type":"launch"}'];
+    for (const t of sent) ws.send(t);
+    for (let i = 0; i < 500 && answers.length < sent.length; ++i) await new Promise((r) => setTimeout(r, 10));
+    ws.close();
+    return answers;
+  })())");
+  const std::vector<std::string> expected = {
+      "not JSON", "not a JSON object", "no \"type\" string", "unknown model 'nope.gltf'", "\"value\" must be a number, not null",
+      "not JSON", "has no movable joint 'wrist'", "\"value\" must be a number, not array",
+      "more than 4096", "unknown key 'kp'", "outside its limits", "unknown type 'launch'"};
+  ASSERT_EQ(reasons.size(), expected.size()) << reasons.dump();
+  for (std::size_t i = 0; i < expected.size(); ++i) {
+    EXPECT_NE(reasons[i].get<std::string>().find(expected[i]), std::string::npos) << reasons[i] << " vs " << expected[i];
+  }
+
+  // A huge array: 100 KB refused with its size; 2 MB (over 1 MiB) closes that socket: 1009, or
+  // 1006 when the reset of the unread rest reaches the browser before the close frame.
+  const Json huge = page.eval(R"((async () => {
+    const ws = new WebSocket(`ws://${location.host}/ws`);
+    await new Promise((r) => { ws.onopen = r; });
+    const refused = new Promise((r) => { ws.onmessage = (e) => { const m = JSON.parse(e.data); if (m.type === 'refused') r(m.reason); }; });
+    ws.send('[' + '1,'.repeat(50000) + '1]');
+    const reason = await refused;
+    const code = new Promise((r) => { ws.onclose = (e) => r(e.code); });
+    ws.send('[' + '1,'.repeat(1000000) + '1]');
+    return {reason, code: await code};
+  })())");
+  EXPECT_EQ(huge["reason"], "message of 100003 bytes, more than 4096");
+  EXPECT_TRUE(huge["code"] == 1009 || huge["code"] == 1006) << huge;
+
+  // A flood of 1000: each refused (unknown model, then too many messages); 20 answers a second,
+  // the unanswered ones counted in the next answer.
+  const Json flood = page.eval(R"((async () => {
+    const ws = new WebSocket(`ws://${location.host}/ws`);
+    await new Promise((r) => { ws.onopen = r; });
+    const answers = [];
+    ws.onmessage = (e) => { const m = JSON.parse(e.data); if (m.type === 'refused') answers.push(m); };
+    const bad = '{"type":"set_joint","model":"flood.gltf","joint":"shoulder","value":0.1}';
+    for (let i = 0; i < 1000; ++i) ws.send(bad);
+    await new Promise((r) => setTimeout(r, 1500));
+    ws.send(bad);
+    for (let i = 0; i < 300; ++i) {
+      if (answers.length && answers[answers.length - 1].unanswered_before > 0) break;
+      await new Promise((r) => setTimeout(r, 10));
+    }
+    ws.close();
+    return {answered: answers.length, unanswered: answers.reduce((n, m) => n + m.unanswered_before, 0),
+            too_many: answers.filter((m) => m.reason.startsWith('too many')).length};
+  })())");
+  EXPECT_EQ(flood["answered"].get<int>() + flood["unanswered"].get<int>(), 1001) << flood.dump();
+  EXPECT_LE(flood["answered"].get<int>(), 3 * 20 + 1) << flood.dump();
+
+  // Clients that vanish: half a request line, an upgrade then half a frame, another origin.
+  const int port = std::stoi(view.url().substr(view.url().rfind(':') + 1));
+  const auto connect_local = [&] {
+    const int fd = ::socket(AF_INET, SOCK_STREAM | SOCK_CLOEXEC, 0);
+    sockaddr_in address{};
+    address.sin_family = AF_INET;
+    address.sin_port = htons(static_cast<std::uint16_t>(port));
+    address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    if (::connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) != 0) throw std::runtime_error("connect");
+    return fd;
+  };
+  const auto send_text = [](int fd, const std::string& text) { return ::send(fd, text.data(), text.size(), MSG_NOSIGNAL); };
+  const auto receive = [](int fd) {
+    std::string in;
+    char buffer[4096];
+    pollfd p{fd, POLLIN, 0};
+    while (in.find("\r\n\r\n") == std::string::npos && ::poll(&p, 1, 5000) > 0) {
+      const ssize_t n = ::recv(fd, buffer, sizeof buffer, 0);
+      if (n <= 0) break;
+      in.append(buffer, static_cast<std::size_t>(n));
+    }
+    return in;
+  };
+  const std::string host = "127.0.0.1:" + std::to_string(port);
+  const std::string upgrade = "GET /ws HTTP/1.1\r\nHost: " + host +
+                              "\r\nUpgrade: websocket\r\nConnection: Upgrade\r\nSec-WebSocket-Version: 13\r\n"
+                              "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\n";
+  {
+    const int fd = connect_local();
+    send_text(fd, "GET /app/app.js HTTP/1.1\r\nHost: 127.");
+    ::close(fd);
+  }
+  {
+    const int fd = connect_local();
+    send_text(fd, upgrade + "Origin: http://" + host + "\r\n\r\n");
+    EXPECT_NE(receive(fd).find("101 Switching Protocols"), std::string::npos);
+    // A masked text frame announcing 1000 bytes, of which 10 come.
+    const std::string frame = std::string("\x81\xfe\x03\xe8" "abcd", 8) + "0123456789";
+    send_text(fd, frame);
+    ::close(fd);
+  }
+  {
+    const int fd = connect_local();
+    send_text(fd, upgrade + "Origin: http://evil.example\r\n\r\n");
+    EXPECT_NE(receive(fd).find("403 Forbidden"), std::string::npos);
+    ::close(fd);
+  }
+  EXPECT_FALSE(view.process().wait_exit(0s)) << view.log();
+  // Still serving: the page loads again and draws the model.
+  page.request({{"open", view.url()}});
+  ASSERT_FALSE(wait_drawn(page, kArm, 1).is_null()) << view.log();
+  // None of it reached the bus.
+  EXPECT_TRUE(on_kind(s.messages(), "JOINT_COMMAND").empty());
+}
+
+}  // namespace
+}  // namespace rdtf::itest

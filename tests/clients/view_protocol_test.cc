@@ -1,0 +1,147 @@
+// rdtf-view's checks of what pages send (clients/view/page_protocol.h) and of request paths and
+// WebSocket origins (clients/view/http_paths.h).
+#include <gtest/gtest.h>
+
+#include <string>
+#include <variant>
+
+#include "http_paths.h"
+#include "page_protocol.h"
+
+namespace rdtf::view {
+namespace {
+
+Catalog arm_catalog() {
+  CommandableModel arm;
+  arm.revision = 3;
+  arm.simulated = true;
+  arm.joints["shoulder"] = MovableJoint{-1.57, 1.57};
+  arm.joints["elbow"] = MovableJoint{};  // continuous
+  return {{"arm3.gltf", arm}};
+}
+
+std::string refusal(const PageRequest& request) {
+  const auto* r = std::get_if<Refusal>(&request);
+  return r ? r->reason : "";
+}
+
+TEST(ViewPageProtocol, TakesASetJointWithinTheLimits) {
+  const auto request = parse_page_message(R"({"type":"set_joint","model":"arm3.gltf","joint":"shoulder","value":1.57})",
+                                          arm_catalog());
+  ASSERT_TRUE(std::holds_alternative<SetJoint>(request)) << refusal(request);
+  const auto& set = std::get<SetJoint>(request);
+  EXPECT_EQ(set.model_id, "arm3.gltf");
+  EXPECT_EQ(set.joint, "shoulder");
+  EXPECT_EQ(set.value, 1.57);
+  const auto release = parse_page_message(R"({"type":"release","model":"arm3.gltf"})", arm_catalog());
+  ASSERT_TRUE(std::holds_alternative<Release>(release)) << refusal(release);
+  EXPECT_EQ(std::get<Release>(release).model_id, "arm3.gltf");
+}
+
+TEST(ViewPageProtocol, RefusesEveryHostileMessageWithItsReason) {
+  const Catalog catalog = arm_catalog();
+  const std::pair<std::string, std::string> cases[] = {
+      {"", "not JSON"},
+      {"{\"type\":", "not JSON"},
+      {"[1,2,3]", "not a JSON object"},
+      {"{\"model\":\"arm3.gltf\"}", "no \"type\" string"},
+      {R"({"type":"fly"})", "unknown type 'fly'"},
+      {R"({"type":"set_joint","model":"arm9.gltf","joint":"shoulder","value":0})", "unknown model 'arm9.gltf' (not live on the bus)"},
+      {R"({"type":"set_joint","model":7,"joint":"shoulder","value":0})", "\"model\" must be a string (a model id)"},
+      {R"({"type":"set_joint","model":"arm3.gltf","joint":"wrist","value":0})",
+       "model 'arm3.gltf' revision 3 has no movable joint 'wrist'"},
+      {R"({"type":"set_joint","model":"arm3.gltf","joint":["shoulder"],"value":0})", "\"joint\" must be a string (a joint's URDF name)"},
+      {R"({"type":"set_joint","model":"arm3.gltf","joint":"shoulder","value":null})", "\"value\" must be a number, not null"},
+      {R"({"type":"set_joint","model":"arm3.gltf","joint":"shoulder","value":"0.1"})", "\"value\" must be a number, not string"},
+      {R"({"type":"set_joint","model":"arm3.gltf","joint":"shoulder","value":[1,2]})", "\"value\" must be a number, not array"},
+      // nlohmann's parser refuses a number that overflows a double: no infinity gets through.
+      {R"({"type":"set_joint","model":"arm3.gltf","joint":"shoulder","value":1e999})", "not JSON"},
+      {R"({"type":"set_joint","model":"arm3.gltf","joint":"shoulder","value":NaN})", "not JSON"},
+      {R"({"type":"set_joint","model":"arm3.gltf","joint":"shoulder","value":1.5700000000000001e0,"kp":5})", "unknown key 'kp' in a set_joint message"},
+      {R"({"type":"set_joint","model":"arm3.gltf","joint":"shoulder"})", "a set_joint message needs \"value\""},
+      {R"({"type":"set_joint","model":"arm3.gltf","joint":"shoulder","value":1.58})",
+       "value 1.5800000000000001 of joint 'shoulder' outside its limits [-1.5700000000000001, 1.5700000000000001]"},
+      {R"({"type":"set_joint","model":"arm3.gltf","joint":"elbow","value":-10001})", "value -10001 of joint 'elbow' outside its limits [-10000, 10000]"},
+      {R"({"type":"release","model":"arm3.gltf","all":true})", "unknown key 'all' in a release message"},
+  };
+  for (const auto& [text, reason] : cases) EXPECT_EQ(refusal(parse_page_message(text, catalog)), reason) << text;
+  // Bytes that are not printable come back escaped, never raw.
+  EXPECT_EQ(refusal(parse_page_message("{\"type\":\"set_joint\",\"model\":\"a\\u0001b\",\"joint\":\"x\",\"value\":0}", catalog)),
+            "unknown model 'a\\x01b' (not live on the bus)");
+}
+
+TEST(ViewPageProtocol, RefusesHugeMessagesBeforeParsingAndModelsNotSimulated) {
+  const std::string huge = "{\"type\":\"set_joint\",\"pad\":\"" + std::string(5000, 'x') + "\"}";
+  EXPECT_EQ(refusal(parse_page_message(huge, arm_catalog())), "message of 5029 bytes, more than 4096");
+  Catalog idle = arm_catalog();
+  idle["arm3.gltf"].simulated = false;
+  EXPECT_EQ(refusal(parse_page_message(R"({"type":"set_joint","model":"arm3.gltf","joint":"shoulder","value":0})", idle)),
+            "model 'arm3.gltf' is not simulated (no JOINT_STATE heard)");
+}
+
+TEST(ViewPageProtocol, RateLimiterAllowsTheBurstThenTheRate) {
+  RateLimiter limiter(8, 20);  // times below are exact in binary: 1/16 s is half a token
+  int allowed = 0;
+  for (int i = 0; i < 100; ++i) allowed += limiter.allow(5.0);
+  EXPECT_EQ(allowed, 20);
+  EXPECT_FALSE(limiter.allow(5.0625));  // half a token
+  EXPECT_TRUE(limiter.allow(5.125));    // one token since 5.0
+  EXPECT_FALSE(limiter.allow(5.125));
+  allowed = 0;
+  for (int i = 0; i < 100; ++i) allowed += limiter.allow(1000.0);  // refilled to the burst, not beyond
+  EXPECT_EQ(allowed, 20);
+}
+
+TEST(ViewHttpPaths, RoutesThePageThreeAndModelFiles) {
+  EXPECT_EQ(route("/").kind, Route::Kind::kPage);
+  EXPECT_EQ(route("/ws").kind, Route::Kind::kSocket);
+  const Route app = route("/app/model.js?v=1");
+  EXPECT_EQ(app.kind, Route::Kind::kApp);
+  EXPECT_EQ(app.path, "model.js");
+  const Route three = route("/three/examples/jsm/loaders/GLTFLoader.js");
+  EXPECT_EQ(three.kind, Route::Kind::kThree);
+  EXPECT_EQ(three.path, "examples/jsm/loaders/GLTFLoader.js");
+  const std::string url = model_file_url("arms/arm 3.gltf", 12, "arm 3.rdtf.gltf");
+  EXPECT_EQ(url, "/model/arms%2Farm%203.gltf/12/arm%203.rdtf.gltf");
+  const Route file = route(url);
+  EXPECT_EQ(file.kind, Route::Kind::kModelFile);
+  EXPECT_EQ(file.model_id, "arms/arm 3.gltf");
+  EXPECT_EQ(file.revision, 12);
+  EXPECT_EQ(file.path, "arm 3.rdtf.gltf");
+  EXPECT_EQ(route("/model/a.gltf/2/urdf/meshes/base.stl").path, "urdf/meshes/base.stl");
+}
+
+TEST(ViewHttpPaths, RefusesPathsOutsideTheirFolders) {
+  for (const char* bad : {"/app/../main.cc", "/app/%2e%2e", "/app/a/b.js", "/app/x%2fy.js", "/three/../../etc/passwd",
+                          "/three/build/../../../x.js", "/three/src/Three.js", "/three/build/three.module.js%00",
+                          "/three/build/x.json", "/model/a.gltf/0/a.gltf", "/model/a.gltf/-1/a.gltf",
+                          "/model/a.gltf/1x/a.gltf", "/model/a.gltf/1/../b", "/model/a.gltf/1//b", "/model/a.gltf/1/a%5cb",
+                          "/model/%zz/1/a", "/model/a.gltf/1", "/etc/passwd", "relative", "/model/a.gltf/1/a%"}) {
+    EXPECT_EQ(route(bad).kind, Route::Kind::kNotFound) << bad;
+  }
+  EXPECT_EQ(percent_decode("a%20b%2F"), std::optional<std::string>("a b/"));
+  EXPECT_FALSE(percent_decode("%00"));
+  EXPECT_FALSE(percent_decode("%4"));
+}
+
+TEST(ViewHttpPaths, WebSocketOnlyFromTheViewersOwnPage) {
+  EXPECT_EQ(check_socket_origin("127.0.0.1:8765", "http://127.0.0.1:8765", true, 8765), "");
+  EXPECT_EQ(check_socket_origin("localhost:8765", "http://localhost:8765", true, 8765), "");
+  EXPECT_EQ(check_socket_origin("[::1]:8765", "http://[::1]:8765", true, 8765), "");
+  EXPECT_EQ(check_socket_origin("127.0.0.1:8765", "http://evil.example", true, 8765),
+            "Origin 'http://evil.example' is not this viewer's page (http://127.0.0.1:8765)");
+  EXPECT_EQ(check_socket_origin("127.0.0.1:8765", "", true, 8765),
+            "Origin '' is not this viewer's page (http://127.0.0.1:8765)");
+  // DNS rebinding: a name that resolves to loopback, Origin and Host alike.
+  EXPECT_EQ(check_socket_origin("evil.example:8765", "http://evil.example:8765", true, 8765),
+            "Host 'evil.example:8765' is not a loopback address (the viewer is bound to loopback)");
+  EXPECT_EQ(check_socket_origin("127.0.0.1:9999", "http://127.0.0.1:9999", true, 8765),
+            "Host '127.0.0.1:9999' does not name port 8765");
+  EXPECT_NE(check_socket_origin("127.0.0.256:8765", "http://127.0.0.256:8765", true, 8765), "");
+  // Bound to another address on purpose: any host, still only its own page.
+  EXPECT_EQ(check_socket_origin("robot.lan:8765", "http://robot.lan:8765", false, 8765), "");
+  EXPECT_NE(check_socket_origin("robot.lan:8765", "http://evil.example", false, 8765), "");
+}
+
+}  // namespace
+}  // namespace rdtf::view

@@ -1,0 +1,156 @@
+// rdtf-view's benchmarks (bench/view_bench.sh runs this inside a network namespace of its own:
+// LCM multicast on loopback only). Starts rdtfd and rdtf-view from BUILD (argv[2]) on temporary
+// folders and Debian's headless chromium (SwiftShader WebGL), then measures:
+//   latency: a save of arm3.gltf (the joint limit edited, so each save is a new content) to the
+//            rendered frame that first draws the new revision (the page's drawn_at, ms since the
+//            epoch, against the time the file was written, on the same clock), N saves;
+//            with --big, the same for a 1M-triangle model;
+//   fps:     frames rendered in 10 s with the 1M-triangle model drawn (--big);
+//   memory:  rdtf-view's VmRSS with 100 models live (copies of arm3 under 100 names).
+// Prints one JSON line per result.
+// Usage: node bench_view.mjs BUILD REPO [--saves N] [--big] [--models N] [--no-validate]
+// (--no-validate: rdtfd's ODE check off, so the latency is conversion, bus and drawing alone)
+import puppeteer from 'puppeteer-core';
+import { spawn } from 'node:child_process';
+import fs from 'node:fs';
+import os from 'node:os';
+import path from 'node:path';
+import crypto from 'node:crypto';
+
+const [build, repo] = process.argv.slice(2, 4);
+const flag = (name, fallback) => {
+  const i = process.argv.indexOf(name);
+  return i < 0 ? fallback : (process.argv[i + 1] && !process.argv[i + 1].startsWith('--') ? Number(process.argv[i + 1]) : true);
+};
+const saves = flag('--saves', 50);
+const big = flag('--big', false);
+const modelCount = flag('--models', 100);
+const validate = !process.argv.includes('--no-validate');
+const now = () => performance.timeOrigin + performance.now();
+const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
+
+const root = fs.mkdtempSync(path.join(os.tmpdir(), 'rdtf-view-bench-'));
+const watch = path.join(root, 'models');
+fs.mkdirSync(watch);
+const fixture = path.join(repo, 'tests/data/blender');
+fs.copyFileSync(path.join(fixture, 'arm3.bin'), path.join(watch, 'arm3.bin'));
+const arm3 = JSON.parse(fs.readFileSync(path.join(fixture, 'arm3.gltf'), 'utf8'));
+const writeArm = (name, upper) => {
+  for (const n of arm3.nodes) if (n.name === 'shoulder') n.extras.rdtf_upper = upper;
+  fs.writeFileSync(path.join(watch, name), JSON.stringify(arm3));
+};
+writeArm('arm3.gltf', 1.0);
+fs.writeFileSync(path.join(root, 'rdtfd.json'), JSON.stringify({ simulate: true, validate, status_period_ms: 200 }));
+
+const children = [];
+const run = (file, args, log) => {
+  const child = spawn(file, args, { stdio: ['ignore', fs.openSync(path.join(root, log), 'w'), fs.openSync(path.join(root, `${log}.err`), 'w')] });
+  children.push(child);
+  return child;
+};
+process.on('exit', () => children.forEach((c) => c.kill('SIGKILL')));
+run(path.join(build, 'daemon/rdtfd'), ['--config', path.join(root, 'rdtfd.json'), '--watch', watch, '--output', path.join(root, 'out'), '--settle-ms', '50'], 'rdtfd.log');
+const view = run(path.join(build, 'clients/view/rdtf-view'), ['--port', '8765'], 'view.log');
+await sleep(500);
+
+const browser = await puppeteer.launch({
+  executablePath: process.env.CHROMIUM || '/usr/bin/chromium', headless: true,
+  args: ['--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--disable-dev-shm-usage', '--window-size=1280,800'],
+  defaultViewport: { width: 1280, height: 800 },
+});
+const page = await browser.newPage();
+await page.goto('http://127.0.0.1:8765/', { waitUntil: 'load' });
+const model = (id) => page.evaluate((i) => window.rdtfView.state().models.find((m) => m.id === i) || null, id);
+// rdtfd's content_hash of a model file and the files it refers to (docs/lcm.md): SHA-256 over
+// each file's length (8 bytes, little endian) and bytes.
+const contentHash = (files) => {
+  const h = crypto.createHash('sha256');
+  for (const f of files) {
+    const bytes = fs.readFileSync(f);
+    const size = Buffer.alloc(8);
+    size.writeBigUInt64LE(BigInt(bytes.length));
+    h.update(size);
+    h.update(bytes);
+  }
+  return h.digest('hex');
+};
+// Waits until the page draws the revision of exactly this content (not one of an earlier save).
+async function waitRevision(id, above, hash, timeoutMs = 60000) {
+  const end = Date.now() + timeoutMs;
+  for (;;) {
+    const m = await model(id);
+    if (m && m.revision > above && m.drawn_at && (!hash || m.content_hash === hash)) return m;
+    if (Date.now() > end) throw new Error(`${id}: no revision above ${above} drawn`);
+    await sleep(2);
+  }
+}
+const percentile = (xs, p) => { const s = [...xs].sort((a, b) => a - b); return s[Math.min(s.length - 1, Math.ceil((p / 100) * s.length) - 1)]; };
+const report = (o) => console.log(JSON.stringify(o));
+
+async function latency(id, write, count, files) {
+  let m = await waitRevision(id, 0);
+  const ms = [];
+  for (let i = 0; i < count; ++i) {
+    const t0 = now();
+    write(i);
+    m = await waitRevision(id, m.revision, contentHash(files));
+    ms.push(m.drawn_at - t0);
+    await sleep(100);  // let the simulation's states of the new revision flow, as between real saves
+  }
+  return { p50: percentile(ms, 50), p99: percentile(ms, 99), max: Math.max(...ms), n: ms.length };
+}
+
+report({ bench: 'save_to_pixels_ms', validate, model: 'arm3 (3 links)', ...(await latency('arm3.gltf', (i) => writeArm('arm3.gltf', 1.1 + 0.001 * i), saves, [path.join(watch, 'arm3.gltf'), path.join(watch, 'arm3.bin')])) });
+
+if (big) {
+  // One link, a 1M-triangle grid (500,000 vertices) closed into a slab by nothing: an open
+  // surface is fine for drawing (rdtfd warns MESH_OPEN).
+  const n = 708;  // (n-1)^2 * 2 = 1,000,000 triangles
+  const positions = new Float32Array(n * n * 3);
+  for (let y = 0; y < n; ++y) for (let x = 0; x < n; ++x) {
+    const k = (y * n + x) * 3;
+    positions.set([x / n, 0.05 * Math.sin(x / 9) * Math.cos(y / 7), y / n], k);
+  }
+  const indices = new Uint32Array((n - 1) * (n - 1) * 6);
+  let k = 0;
+  for (let y = 0; y < n - 1; ++y) for (let x = 0; x < n - 1; ++x) {
+    const a = y * n + x, b = a + 1, c = a + n, d = c + 1;
+    indices.set([a, c, b, b, c, d], k);
+    k += 6;
+  }
+  const bin = Buffer.concat([Buffer.from(positions.buffer), Buffer.from(indices.buffer)]);
+  fs.writeFileSync(path.join(watch, 'big.bin'), bin);
+  const writeBig = (i) => fs.writeFileSync(path.join(watch, 'big.gltf'), JSON.stringify({
+    asset: { version: '2.0' }, scene: 0, scenes: [{ nodes: [0] }],
+    nodes: [{ name: `plate${i}`, mesh: 0 }],
+    meshes: [{ primitives: [{ attributes: { POSITION: 0 }, indices: 1 }] }],
+    buffers: [{ uri: 'big.bin', byteLength: bin.length }],
+    bufferViews: [{ buffer: 0, byteOffset: 0, byteLength: positions.byteLength },
+      { buffer: 0, byteOffset: positions.byteLength, byteLength: indices.byteLength }],
+    accessors: [{ bufferView: 0, componentType: 5126, count: n * n, type: 'VEC3', min: [0, -0.05, 0], max: [(n - 1) / n, 0.05, (n - 1) / n] },
+      { bufferView: 1, componentType: 5125, count: indices.length, type: 'SCALAR' }],
+  }));
+  writeBig(0);
+  report({ bench: 'save_to_pixels_ms', validate, model: `big (1 link, ${indices.length / 3} triangles)`, ...(await latency('big.gltf', (i) => writeBig(i + 1), Math.max(5, Math.round(saves / 10)), [path.join(watch, 'big.gltf'), path.join(watch, 'big.bin')])) });
+  await page.evaluate(() => window.rdtfView.select('big.gltf'));
+  const f0 = (await page.evaluate(() => window.rdtfView.state().frame));
+  const t0 = now();
+  await sleep(10000);
+  const f1 = (await page.evaluate(() => window.rdtfView.state().frame));
+  report({ bench: 'fps_swiftshader', model: 'big', fps: (f1 - f0) / ((now() - t0) / 1000) });
+  fs.rmSync(path.join(watch, 'big.gltf'));
+}
+
+const rss = () => Number(/VmRSS:\s+(\d+)/.exec(fs.readFileSync(`/proc/${view.pid}/status`, 'utf8'))[1]);
+const before = rss();
+for (let i = 0; i < modelCount; ++i) writeArm(`arm3_${String(i).padStart(3, '0')}.gltf`, 1.0 + i * 1e-3);
+const end = Date.now() + 300000;
+for (;;) {
+  const live = await page.evaluate(() => window.rdtfView.state().models.filter((m) => m.status === 'live').length);
+  if (live >= modelCount + 1) break;
+  if (Date.now() > end) throw new Error(`only ${live} models live`);
+  await sleep(200);
+}
+report({ bench: 'rdtf_view_rss_kib', models: modelCount + 1, before_kib: before, with_models_kib: rss() });
+await browser.close();
+process.exit(0);

@@ -272,6 +272,7 @@ int Daemon::run() {
       if (!outcome.cancelled) apply(std::move(outcome));
     }
   }
+  // The real clock: run() is rdtfd's own shutdown, which sleeps while the queue drains.
   const auto flush_until = Clock::now() + std::chrono::seconds(2);
   while (publisher_->queued() > 0 && Clock::now() < flush_until) {
     if (auto next = publisher_->drain(Clock::now())) std::this_thread::sleep_until(*next);

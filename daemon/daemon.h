@@ -1,24 +1,23 @@
-// rdtfd's event loop: inotify events -> settle -> conversions on worker threads -> registry ->
-// LCM. One thread owns all state; workers only run conversions and hand back plain values.
+// rdtfd's event loop: file events -> each model's state machine (model_schedule.h) -> conversions on
+// the job runner -> registry -> bus. One thread owns all state; workers only run conversions and
+// hand back plain values. The clock, the watcher, the job runner and the bus are ports (ports.h):
+// real ones in rdtfd, fakes when a test steps the loop.
 #pragma once
 
 #include <atomic>
-#include <condition_variable>
 #include <deque>
 #include <functional>
 #include <memory>
-#include <mutex>
 #include <optional>
-#include <thread>
+#include <set>
+#include <utility>
 
-#include <lcm/lcm-cpp.hpp>
-
-#include <rdtf/joint_command_t.hpp>
 #include <rdtf/request_t.hpp>
 
 #include "blob_server.h"
 #include "bus_input.h"
 #include "config.h"
+#include "ports.h"
 #include "publisher.h"
 #include "registry.h"
 #include "settle.h"
@@ -30,113 +29,121 @@ namespace rdtf::daemon {
 // Reads the configuration again (SIGHUP): the file plus the command line's overrides.
 using ConfigLoader = std::function<std::optional<DaemonConfig>(std::string& error)>;
 
+struct DaemonCounters {
+  std::int64_t conversions = 0;
+  std::int64_t rejections = 0;
+  std::int64_t skipped_unchanged = 0;
+  std::int64_t rescans = 0;
+};
+
 class Daemon {
  public:
-  Daemon(DaemonConfig config, ConfigLoader reload);
+  Daemon(DaemonConfig config, ConfigLoader reload, DaemonPorts ports = {});
   ~Daemon();
   Daemon(const Daemon&) = delete;
   Daemon& operator=(const Daemon&) = delete;
 
-  // Watches, connects to LCM, starts the workers and queues every model found.
+  // Watches, opens the bus, starts the workers and queues every model found.
   bool start(std::string& error);
   // Runs until SIGTERM/SIGINT (or request_stop); returns the process exit code.
   int run();
-  // One turn of the loop, waiting at most `max_wait` for something to happen.
+  // One turn of the loop, waiting at most `max_wait` for something to happen (ports without a
+  // file descriptor are asked every turn).
   void step(std::chrono::milliseconds max_wait);
   void request_stop() { stop_ = true; }
+  void reload_config();  // What SIGHUP does.
+
+  // For tests that step the loop: the models and what the daemon counted.
+  const Registry& registry() const { return registry_; }
+  const DaemonCounters& counters() const { return counters_; }
 
  private:
-  struct Counters {
-    std::int64_t conversions = 0;
-    std::int64_t rejections = 0;
-    std::int64_t skipped_unchanged = 0;
-    std::int64_t rescans = 0;
-  };
-
-  // A conversion that failed for the environment's sake (disk full) is tried again later.
-  struct Retry {
-    Clock::time_point due;
-    Clock::duration delay{};
-    int attempts = 0;
-  };
-
-  void handle_file_events();                        // Reads what inotify has into pending_events_.
+  // File events and the watched tree (daemon_files.cc).
+  void handle_file_events();                         // Reads what the watcher has into pending_events_.
   void process_file_events(std::size_t max_events);  // Handles the oldest of them.
   void remove_stale_temporaries();
   void remove_unreferenced_outputs();
-  void publish_daemon_error(const std::string& code, const std::string& file, const std::string& message);
-  void on_publisher_event(const PublisherEvent& event);
-  void schedule_retry(const ConversionOutcome& outcome, ModelRecord& record);
-  void retry_due(Clock::time_point now);
   void check_watches(Clock::time_point now);
-  void handle_signals();
   void rescan(const char* why);
-  // Announces REMOVED and forgets it; `checked`: how long finding it gone took.
-  void drop_model(const std::filesystem::path& source, std::chrono::microseconds checked);
-  void note_change(const std::filesystem::path& path, bool still_open, bool closed);
-  void dispatch_due();
+  void note_change(const std::filesystem::path& path, FileChange change);
+  bool ignored(const std::filesystem::path& path) const;
+  std::string unique_model_id(const std::filesystem::path& source) const;
+  // The watched folder a model lies in (the longest match when folders nest: the first listed).
+  std::filesystem::path root_of(const std::filesystem::path& source) const;
+
+  // Scheduling: state machines, timers, jobs and their outcomes (daemon_jobs.cc).
+  SettlePolicy settle_policy() const { return {config_.settle, config_.max_open_wait}; }
+  // Applies an event to a model's state machine, keeping the timer index in step.
+  template <typename Event>
+  ModelActions transition(ModelRecord& record, Event&& event);
+  void file_timer(ModelRecord& record);
+  void unfile_timer(ModelRecord& record);
+  void fire_timers(Clock::time_point now);
+  void start_job(ModelRecord& record);
+  bool waiting_for_writer(const ModelRecord& record, Clock::time_point now) const;
   void handle_outcomes(std::size_t max_outcomes);
   void apply(ConversionOutcome outcome);
+  void apply_converted(ConversionOutcome& outcome, ModelRecord& record);
+  // Announces REMOVED and forgets it; `checked`: how long finding it gone took.
+  void drop_model(const std::filesystem::path& source, std::chrono::microseconds checked);
+
+  // The bus (daemon_publish.cc).
+  bool open_bus(std::string& error);
+  void publish_daemon_error(const std::string& code, const std::string& file, const std::string& message);
+  void on_publisher_event(const PublisherEvent& event);
   std::size_t publish_model(const ModelRecord& record);  // 1 when it has a live revision.
   std::size_t publish_all();                             // How many models were published.
   void publish_status();
-  // Raw datagrams: decoded by bus_ only after the schema check (never lcm-gen's decoder alone).
-  void on_request_datagram(const lcm::ReceiveBuffer* buffer, const std::string& channel) noexcept;
-  void on_command_datagram(const lcm::ReceiveBuffer* buffer, const std::string& channel) noexcept;
-  void on_blob_request_datagram(const lcm::ReceiveBuffer* buffer, const std::string& channel) noexcept;
-  void handler_failed() noexcept;
   void on_request(const rdtf::request_t& request);
   void answer_request(const std::string& model_id, const std::string& requester);
   void answer_deferred_requests(Clock::time_point now);
-  void start_simulation_host();
-  bool ignored(const std::filesystem::path& path) const;
-  bool waiting_for_writer(const ModelRecord& record, Clock::time_point now) const;
-  std::string unique_model_id(const std::filesystem::path& source) const;
   std::string channel(const std::string& model_id, const char* kind) const;
-  // The watched folder a model lies in (the longest match when folders nest: the first listed).
-  std::filesystem::path root_of(const std::filesystem::path& source) const;
-  bool connect_lcm(std::string& error);
-  void worker_loop();
-  void reload_config();
+
+  // The loop (daemon.cc).
+  void handle_signals();
+  void start_simulation_host();
+  void periodic(Clock::time_point now);
+  std::string since(Clock::time_point start) const;
 
   DaemonConfig config_;
   ConfigLoader reload_;
-  InotifyWatcher watcher_;
-  SettleQueue settle_;
+  DaemonPorts ports_;
+  std::shared_ptr<DaemonClock> clock_;
+  std::unique_ptr<FileWatcher> watcher_;
+  std::unique_ptr<JobRunner> runner_;
   Registry registry_;
-  std::unique_ptr<lcm::LCM> lcm_;
+  // Every model's deadline (ModelSchedule::deadline), earliest first.
+  std::set<std::pair<Clock::time_point, std::filesystem::path>> timers_;
+  std::unique_ptr<Bus> lcm_;
   std::unique_ptr<Publisher> publisher_;
   std::unique_ptr<SimulationHost> simulation_;  // Null when `simulate` is off.
   BusInput bus_;
   BlobServer blobs_;  // The files of every live revision, by SHA-256 (blob_server.h).
   RequestThrottle request_throttle_;
-  std::uint64_t handler_failures_ = 0;  // LCM thread: exceptions caught outside BusInput.
-  Counters counters_;
+  DaemonCounters counters_;
   // Files modified and not yet closed by their writer, since when.
   OpenWrites open_for_writing_;
-  std::deque<FileEvent> pending_events_;  // Read from inotify, not yet handled.
+  std::deque<FileEvent> pending_events_;  // Read from the watcher, not yet handled.
   bool rescan_pending_ = false;           // One of them asks for a rescan.
   int signal_fd_ = -1;
-  int wake_fd_ = -1;  // eventfd: a worker finished.
   std::atomic<bool> stop_{false};
-  Clock::time_point started_ = Clock::now();
+  Clock::time_point started_;
   Clock::time_point next_republish_;
   Clock::time_point next_status_;
-  std::map<std::filesystem::path, Retry> retries_;
-  bool watches_failing_ = false;         // Some folder could not be watched (inotify limit).
+  bool watches_failing_ = false;  // Some folder could not be watched (inotify limit).
   Clock::time_point next_watch_retry_;
-
-  // Shared with the workers.
-  std::shared_ptr<ReadBudget> read_budget_;
-  std::mutex mutex_;
-  std::condition_variable work_ready_;
-  std::deque<ConversionJob> jobs_;
-  std::deque<ConversionOutcome> outcomes_;
-  bool workers_stop_ = false;
+  std::shared_ptr<ReadBudget> read_budget_;  // Shared with the workers.
   // Set on shutdown: a dynamics check in progress stops (SIM_CANCELLED) instead of being waited for.
   std::atomic<bool> cancel_validations_{false};
-  std::vector<std::thread> workers_;
 };
+
+template <typename Event>
+inline ModelActions Daemon::transition(ModelRecord& record, Event&& event) {
+  unfile_timer(record);
+  const ModelActions actions = event(record.schedule);
+  file_timer(record);
+  return actions;
+}
 
 // One log line on stderr with a UTC timestamp.
 void log_line(const std::string& text);

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "conversion.h"
+#include "model_schedule.h"
 #include "revision_store.h"
 
 namespace rdtf::daemon {
@@ -24,8 +25,8 @@ struct ModelRecord {
   std::optional<ConvertedModel> live;      // The revision served (number: `revisions`).
   std::string last_hash;                   // Content last converted, good or bad.
   std::vector<std::filesystem::path> dependencies;
-  bool in_flight = false;                  // A worker is converting it.
-  bool again = false;                      // It changed while in flight: convert once more.
+  ModelSchedule schedule;                  // Where its scheduling stands (model_schedule.h).
+  std::optional<Clock::time_point> timer;  // schedule's deadline as filed in the daemon's timer index.
   // The live revision of an earlier run (the state file), until the first conversion: the same
   // result keeps its number, another one is diffed against it.
   std::optional<StoredRevision> restored;

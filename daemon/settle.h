@@ -1,50 +1,43 @@
 // When to convert: a model is converted once its files have been quiet for the settle period,
-// so a burst of saves gives one conversion of the final content. Pure logic over an injected
-// clock, so tests drive it directly.
+// so a burst of saves gives one conversion of the final content. Pure values over times given
+// by the caller, so tests drive them directly.
 #pragma once
 
 #include <chrono>
 #include <filesystem>
 #include <map>
-#include <optional>
-#include <string>
 #include <vector>
 
 namespace rdtf::daemon {
 
 using Clock = std::chrono::steady_clock;
 
-class SettleQueue {
- public:
-  // settle: quiet time after the last event. max_open_wait: how long a file that is still open
-  // for writing (modified, not yet closed) may hold its model back before it is converted anyway.
-  SettleQueue(Clock::duration settle, Clock::duration max_open_wait)
-      : settle_(settle), max_open_wait_(max_open_wait) {}
+// settle: quiet time after the last event. max_open_wait: how long a file that is still open for
+// writing (modified, not yet closed) may hold its model back before it is converted anyway.
+struct SettlePolicy {
+  Clock::duration settle{};
+  Clock::duration max_open_wait{};
+};
 
-  // Something happened to a file of `model`. `still_open`: the file was modified and not yet
-  // closed by its writer (an in-place save in progress).
-  void touch(const std::string& model, Clock::time_point now, bool still_open = false);
-  void closed(const std::string& model, Clock::time_point now);  // Its writer closed the file.
-  void forget(const std::string& model);
+// The events of one model since it last settled: when its deadline falls.
+struct SettleWindow {
+  Clock::time_point first_event;
+  Clock::time_point last_event;
+  bool open_for_writing = false;
 
-  // Models whose quiet period has passed, removed from the queue.
-  std::vector<std::string> take_due(Clock::time_point now);
-  std::optional<Clock::time_point> next_deadline() const;
-  std::size_t size() const { return pending_.size(); }
-  void set_settle(Clock::duration settle) { settle_ = settle; }
-  void set_max_open_wait(Clock::duration wait) { max_open_wait_ = wait; }
-
- private:
-  struct Pending {
-    Clock::time_point last_event;
-    Clock::time_point first_event;
-    bool open_for_writing = false;
-  };
-  Clock::time_point deadline(const Pending& pending) const;
-
-  Clock::duration settle_;
-  Clock::duration max_open_wait_;
-  std::map<std::string, Pending> pending_;
+  // A window opened by an event at `now`. `still_open`: the file was modified and not yet closed
+  // by its writer (an in-place save in progress).
+  static SettleWindow opened(Clock::time_point now, bool still_open) { return {now, now, still_open}; }
+  // Another event: re-arms the quiet period; a file still open stays so until its close.
+  void touch(Clock::time_point now, bool still_open) {
+    last_event = now;
+    open_for_writing = open_for_writing || still_open;
+  }
+  void closed(Clock::time_point now) {  // Its writer closed the file.
+    last_event = now;
+    open_for_writing = false;
+  }
+  Clock::time_point deadline(const SettlePolicy& policy) const;
 };
 
 // Files modified and not yet closed by their writer, since when; indexed by folder too, so that

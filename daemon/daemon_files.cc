@@ -1,0 +1,284 @@
+// rdtfd's view of the watched folders: file events, rescans, which model a file belongs to, and
+// the output folder's leftovers of an earlier run.
+#include <sys/types.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <csignal>
+#include <fstream>
+#include <set>
+
+#include "daemon.h"
+#include "daemon_internal.h"
+#include "rdtf/atomic_file.h"
+#include "rdtf/diagnostic_codes.h"
+#include "rdtf/gltf.h"
+#include "rdtf/urdf.h"
+
+namespace rdtf::daemon {
+namespace {
+
+std::optional<std::string> read_text(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return std::nullopt;
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+bool is_gltf_output(const std::string& name) {
+  return name.size() > 10 && name.compare(name.size() - 10, 10, ".rdtf.gltf") == 0;
+}
+
+// The files a primary output (a .rdtf.gltf or a robot.urdf) refers to, canonical; none for any
+// other file; nothing when they cannot be known (unreadable file or folder).
+std::optional<std::set<std::filesystem::path>> files_referenced_by(const std::filesystem::path& path) {
+  const std::string name = path.filename().string();
+  if (!is_gltf_output(name) && name != "robot.urdf") return std::set<std::filesystem::path>{};
+  std::error_code ec;
+  const auto folder = std::filesystem::canonical(path.parent_path(), ec);
+  const auto text = read_text(path);
+  if (ec || !text) return std::nullopt;
+  std::set<std::filesystem::path> files;
+  if (is_gltf_output(name)) {
+    for (auto& file : referenced_files(std::vector<std::uint8_t>(text->begin(), text->end()), folder)) {
+      files.insert(file.lexically_normal());
+    }
+  } else {
+    // write_urdf puts every mesh in <folder>/meshes, whatever prefix its filename has.
+    for (const auto& filename : urdf_mesh_filenames(*text)) {
+      files.insert(folder / "meshes" / std::filesystem::path(filename).filename());
+    }
+  }
+  return files;
+}
+
+}  // namespace
+
+// Temporary files of write_file_atomically (".<name>.<pid>-<random>.tmp") whose writer is gone:
+// left by a daemon killed mid-write. Files of a live process (another rdtfd) are left alone.
+void Daemon::remove_stale_temporaries() {
+  std::error_code ec;
+  int removed = 0;
+  std::vector<std::filesystem::path> stale;
+  for (std::filesystem::recursive_directory_iterator it(config_.output, ec), end; !ec && it != end; it.increment(ec)) {
+    std::error_code type_error;
+    const auto status = it->symlink_status(type_error);
+    const bool folder = std::filesystem::is_directory(status);
+    if (!folder && !std::filesystem::is_regular_file(status)) continue;
+    const auto pid = temporary_writer_pid(it->path().filename().string());
+    if (!pid) continue;
+    // Stage folders (StagedOutput) are temporaries too, with all they hold.
+    if (folder) it.disable_recursion_pending();
+    const bool writer_alive = *pid > 0 && *pid != ::getpid() && (::kill(static_cast<pid_t>(*pid), 0) == 0 || errno == EPERM);
+    if (!writer_alive) stale.push_back(it->path());
+  }
+  for (const auto& path : stale) {
+    std::error_code remove_error;
+    if (std::filesystem::remove_all(path, remove_error) > 0) ++removed;
+  }
+  if (removed > 0) {
+    log_line("removed " + std::to_string(removed) + " temporary files left in " + config_.output.string() +
+             " by an earlier run");
+  }
+}
+
+// Content-addressed files (docs/daemon.md, "Outputs") that no primary output refers to: written by
+// a conversion killed before it renamed its primary file into place. Every model is converted
+// again after a start, so what the primary files on disk refer to is all a reader can need.
+void Daemon::remove_unreferenced_outputs() {
+  std::set<std::filesystem::path> referenced;
+  std::vector<std::filesystem::path> addressed;
+  std::error_code ec;
+  for (std::filesystem::recursive_directory_iterator it(config_.output, ec), end; !ec && it != end; it.increment(ec)) {
+    std::error_code path_error;
+    // Regular files only, never through a symlink: a link is no output of ours to follow or remove.
+    if (!std::filesystem::is_regular_file(it->symlink_status(path_error))) continue;
+    if (is_content_addressed_name(it->path().filename().string())) {
+      const auto folder = std::filesystem::canonical(it->path().parent_path(), path_error);
+      if (!path_error) addressed.push_back(folder / it->path().filename());
+      continue;
+    }
+    const auto files = files_referenced_by(it->path());
+    if (!files) return;  // Leftovers harm no one; removing a file an output needs would.
+    referenced.insert(files->begin(), files->end());
+  }
+  int removed = 0;
+  for (const auto& path : addressed) {
+    std::error_code remove_error;
+    if (referenced.count(path) == 0 && std::filesystem::remove(path, remove_error)) ++removed;
+  }
+  if (removed > 0) {
+    log_line("removed " + std::to_string(removed) + " files no output refers to from " + config_.output.string() +
+             " (written by an earlier run killed before it finished those outputs)");
+  }
+}
+
+// An error that belongs to no one model (a folder that cannot be watched, LCM sends that failed):
+// a model_error_t with an empty model_id on <prefix>/ERROR.
+void Daemon::check_watches(Clock::time_point now) {
+  const auto& unwatched = watcher_->unwatched();
+  if (unwatched.empty()) {
+    if (watches_failing_) log_line("every folder is watched again");
+    watches_failing_ = false;
+    return;
+  }
+  if (!watches_failing_) {
+    watches_failing_ = true;
+    next_watch_retry_ = now + kWatchRetryPeriod;
+    for (const auto& [folder, missing] : unwatched) {
+      if (missing) {
+        log_line("watched folder " + folder.string() + " is missing; looking for it every second");
+        publish_daemon_error(codes::WATCH_FAILED, folder.string(),
+                             "cannot watch " + folder.string() +
+                                 ": it is missing (deleted or moved away); its models were removed, and "
+                                 "it is looked for every second and watched again when it is back");
+      } else {
+        publish_daemon_error(codes::WATCH_FAILED, folder.string(),
+                             "cannot watch " + folder.string() +
+                                 ": inotify watches exhausted (raise /proc/sys/fs/inotify/max_user_watches); "
+                                 "its models were converted once, and the folder is tried again every second");
+      }
+    }
+    return;
+  }
+  if (now >= next_watch_retry_) {
+    next_watch_retry_ = now + kWatchRetryPeriod;
+    const bool worth_a_rescan = std::any_of(unwatched.begin(), unwatched.end(), [](const auto& entry) {
+      std::error_code ec;
+      return !entry.missing || std::filesystem::is_directory(std::filesystem::symlink_status(entry.folder, ec));
+    });
+    if (worth_a_rescan) rescan("retrying folders that could not be watched");
+  }
+}
+
+bool Daemon::ignored(const std::filesystem::path& path) const {
+  const std::string name = path.filename().string();
+  // Temporary files of editors and of our own atomic writes.
+  if (name.empty() || name.front() == '.' || name.back() == '~' ||
+      (name.size() > 4 && name.compare(name.size() - 4, 4, ".tmp") == 0)) {
+    return true;
+  }
+  const auto relative = path.lexically_relative(config_.output);
+  return !relative.empty() && *relative.begin() != "..";
+}
+
+std::filesystem::path Daemon::root_of(const std::filesystem::path& source) const {
+  for (const auto& root : config_.watch) {
+    const auto relative = source.lexically_relative(root);
+    if (!relative.empty() && *relative.begin() != "..") return root;
+  }
+  return source.parent_path();
+}
+
+void Daemon::note_change(const std::filesystem::path& path, FileChange change) {
+  if (ignored(path)) return;
+  const auto now = clock_->now();
+  auto touch = [&](const std::filesystem::path& model) {
+    if (ModelRecord* record = registry_.find(model)) {
+      transition(*record, [&](ModelSchedule& schedule) { return schedule.file_changed(now, change); });
+    }
+  };
+  if (is_model_file(path)) {
+    if (registry_.find(path) == nullptr) {
+      ModelRecord& record = registry_.ensure(path, unique_model_id(path));
+      const std::string refused = restore_revisions(config_.output, record);
+      if (!refused.empty()) log_line(refused);
+    }
+    touch(path);
+    return;
+  }
+  const auto dependents = registry_.dependents(path);
+  for (const auto& model : dependents) touch(model);
+  if (!dependents.empty()) return;
+  // A file no known model refers to yet: it may be the .bin of a model never converted (Blender
+  // writes the .gltf first). Such models in the same folder wait for it too.
+  for (const auto& [source, record] : registry_.all()) {
+    if (record.revisions == 0 && record.dependencies.empty() && source.parent_path() == path.parent_path()) {
+      touch(source);
+    }
+  }
+}
+
+std::string Daemon::unique_model_id(const std::filesystem::path& source) const {
+  const std::size_t max_id = kMaxChannelLength - config_.channel_prefix.size() - 1 - kLongestKind;
+  // Three characters kept free for a "_N" that tells apart ids that sanitise alike.
+  const std::string base = model_id_for(source, config_.watch, max_id - 3);
+  std::string id = base;
+  // Two names that sanitise alike ("a b.gltf", "a_b.gltf") must not share channels.
+  for (int n = 2; registry_.find_id(id) != nullptr; ++n) {
+    id = base + "_" + std::to_string(n);
+  }
+  return id;
+}
+
+void Daemon::rescan(const char* why) {
+  ++counters_.rescans;
+  open_for_writing_.clear();  // Close events may have been lost with the queue.
+  pending_events_.clear();    // What they told, the rescan finds.
+  rescan_pending_ = false;
+  // Models outside every watched folder (after a reload changed them) are gone from our view.
+  std::vector<std::filesystem::path> outside;
+  for (const auto& [source, record] : registry_.all()) {
+    // An init-capture: clang 14 cannot capture a structured binding (P1091 came in clang 16).
+    const bool watched = std::any_of(config_.watch.begin(), config_.watch.end(), [&model = source](const auto& root) {
+      const auto relative = model.lexically_relative(root);
+      return !relative.empty() && *relative.begin() != "..";
+    });
+    if (!watched) outside.push_back(source);
+  }
+  for (const auto& source : outside) drop_model(source, {});
+  watcher_->clear();
+  std::vector<std::filesystem::path> files;
+  for (const auto& root : config_.watch) {
+    std::string error;
+    auto found = watcher_->watch_tree(root, error);
+    if (!error.empty()) log_line("watch error: " + error);
+    files.insert(files.end(), found.begin(), found.end());
+  }
+  // Known models that are no longer there get converted too: the conversion finds them gone.
+  const auto now = clock_->now();
+  for (auto& [source, record] : registry_.all()) {
+    transition(record, [&](ModelSchedule& schedule) { return schedule.file_changed(now, FileChange::kTouched); });
+  }
+  for (const auto& file : files) note_change(file, FileChange::kClosed);
+  log_line(std::string("rescan (") + why + "): " + std::to_string(files.size()) + " files, " +
+           std::to_string(watcher_->watch_count()) + " folders watched");
+}
+
+void Daemon::handle_file_events() {
+  std::string error;
+  auto events = watcher_->read_events(error);
+  if (!error.empty()) log_line("watch error: " + error);
+  for (auto& event : events) {
+    if (event.kind == FileEvent::Kind::kRescan) rescan_pending_ = true;
+    pending_events_.push_back(std::move(event));
+  }
+}
+
+void Daemon::process_file_events(std::size_t max_events) {
+  // Events were lost, or a watched folder moved or went: the rescan finds what every event
+  // still waiting would tell, so they need no handling of their own.
+  if (rescan_pending_) {
+    rescan("inotify queue overflow or a watched folder moved or went");
+    return;
+  }
+  for (std::size_t handled = 0; handled < max_events && !pending_events_.empty(); ++handled) {
+    const FileEvent event = std::move(pending_events_.front());
+    pending_events_.pop_front();
+    switch (event.kind) {
+      case FileEvent::Kind::kRescan:
+        rescan("inotify queue overflow or a watched folder moved or went");
+        return;
+      case FileEvent::Kind::kModified:
+        if (!ignored(event.path)) open_for_writing_.opened(event.path, clock_->now());
+        note_change(event.path, FileChange::kModified);
+        break;
+      case FileEvent::Kind::kWritten:
+      case FileEvent::Kind::kRemoved:
+        open_for_writing_.closed(event.path);
+        note_change(event.path, FileChange::kClosed);
+        break;
+    }
+  }
+}
+
+}  // namespace rdtf::daemon

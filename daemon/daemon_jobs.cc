@@ -1,0 +1,257 @@
+// rdtfd's scheduling: each model's state machine (model_schedule.h) fed with timer expiries and job
+// outcomes; jobs handed to the runner; outcomes applied to the registry and published.
+#include <algorithm>
+
+#include "daemon.h"
+#include "daemon_internal.h"
+#include "delta_messages.h"
+#include "messages.h"
+#include "rdtf/diagnostic_codes.h"
+
+namespace rdtf::daemon {
+namespace {
+
+bool same_result(const ConvertedModel& live, const ConvertedModel& candidate) {
+  return live.content_hash == candidate.content_hash && live.written == candidate.written &&
+         live.output_path == candidate.output_path && live.rdtf_json == candidate.rdtf_json &&
+         live.urdf_path == candidate.urdf_path && live.urdf == candidate.urdf && live.files == candidate.files &&
+         live.validation.has_value() == candidate.validation.has_value() &&
+         (!live.validation || live.validation->passed == candidate.validation->passed);
+}
+
+// Whether `path` is a regular file reached from `root` through real folders only (no symlink on
+// the way, none at the end): where read_beneath would find a model.
+bool regular_file_below(const std::filesystem::path& root, const std::filesystem::path& path) {
+  const auto relative = path.lexically_relative(root);
+  if (relative.empty() || *relative.begin() == "..") return false;
+  std::filesystem::path at = root;
+  std::error_code ec;
+  for (auto it = relative.begin(); it != relative.end(); ++it) {
+    at /= *it;
+    const auto status = std::filesystem::symlink_status(at, ec);
+    const bool last = std::next(it) == relative.end();
+    if (ec || !(last ? std::filesystem::is_regular_file(status) : std::filesystem::is_directory(status))) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+void Daemon::file_timer(ModelRecord& record) {
+  record.timer = record.schedule.deadline(settle_policy());
+  if (record.timer) timers_.emplace(*record.timer, record.source);
+}
+
+void Daemon::unfile_timer(ModelRecord& record) {
+  if (record.timer) timers_.erase({*record.timer, record.source});
+  record.timer.reset();
+}
+
+void Daemon::fire_timers(Clock::time_point now) {
+  // The models due now, taken first: a transition files the model's next deadline, which is later.
+  std::vector<std::filesystem::path> due;
+  for (auto it = timers_.begin(); it != timers_.end() && it->first <= now; ++it) due.push_back(it->second);
+  for (const auto& source : due) {
+    ModelRecord* record = registry_.find(source);
+    if (record == nullptr) continue;
+    const bool writer_open = waiting_for_writer(*record, now);
+    const ModelActions actions =
+        transition(*record, [&](ModelSchedule& schedule) { return schedule.timer(now, settle_policy(), writer_open); });
+    if (actions.start_job) start_job(*record);
+  }
+}
+
+bool Daemon::waiting_for_writer(const ModelRecord& record, Clock::time_point now) const {
+  // The model file, a file it refers to, or (never converted yet: its .bin unknown) any file in its folder.
+  std::vector<std::filesystem::path> files = record.dependencies;
+  files.push_back(record.source);
+  const auto folder = record.source.parent_path();
+  return open_for_writing_.holds(files, record.dependencies.empty() ? &folder : nullptr, now, config_.max_open_wait);
+}
+
+void Daemon::drop_model(const std::filesystem::path& source, std::chrono::microseconds checked) {
+  const auto start = clock_->now();
+  ModelRecord* record = registry_.find(source);
+  if (record == nullptr) return;
+  if (record->live) publisher_->publish(channel(record->id, "REMOVED"), make_model_removed(*record));
+  if (simulation_) simulation_->remove(record->id);
+  blobs_.remove_model(record->id);
+  log_line("removed " + record->id + " in " +
+           milliseconds(checked + std::chrono::duration_cast<std::chrono::microseconds>(clock_->now() - start)) +
+           (record->live ? " (revision " + std::to_string(record->revisions) + " was live)" : ""));
+  unfile_timer(*record);
+  registry_.erase(source);
+}
+
+void Daemon::start_job(ModelRecord& record) {
+  ConversionJob job;
+  job.model_id = record.id;
+  job.root = root_of(record.source);
+  job.source = record.source;
+  if (record.live) {
+    job.live_rdtf_json = record.live->rdtf_json;
+    job.live_urdf = record.live->urdf;
+  }
+  job.max_read_bytes = config_.max_read_bytes;
+  job.budget = read_budget_;
+  job.output_dir = config_.output / record.id;
+  job.options = config_.convert;
+  job.previous_hash = record.last_hash;
+  job.write_failed = config_.publish_failed;
+  if (config_.validate) {
+    job.validation = validation_options(config_);
+    job.validation->cancel = &cancel_validations_;
+  }
+  if (config_.urdf) {
+    UrdfOptions urdf;
+    urdf.y_up = config_.urdf_y_up;
+    job.urdf = urdf;
+  }
+  runner_->submit(std::move(job));
+}
+
+void Daemon::handle_outcomes(std::size_t max_outcomes) {
+  bool more = false;
+  for (auto& outcome : runner_->take(max_outcomes, more)) apply(std::move(outcome));
+}
+
+void Daemon::apply(ConversionOutcome outcome) {
+  ModelRecord* record = registry_.find(outcome.source);
+  if (record == nullptr) return;
+  const std::string id = record->id;
+  JobResult result = JobResult::kDone;
+  switch (outcome.kind) {
+    case ConversionOutcome::Kind::kConverted:
+      apply_converted(outcome, *record);
+      break;
+    case ConversionOutcome::Kind::kUnchanged:
+      ++counters_.skipped_unchanged;
+      record->dependencies = outcome.dependencies;
+      break;
+    case ConversionOutcome::Kind::kRejected:
+      ++counters_.rejections;
+      if (outcome.retry) {
+        result = JobResult::kRetryable;  // last_hash kept: the same content is converted again.
+        break;
+      }
+      result = JobResult::kRejected;
+      record->last_hash = outcome.content_hash;
+      record->dependencies = outcome.dependencies;
+      log_line("rejected " + id + " in " + milliseconds(outcome.duration) + ": " +
+               first_error(outcome.diagnostics) +
+               (record->live ? "; still serving revision " + std::to_string(record->revisions) : ""));
+      break;
+    case ConversionOutcome::Kind::kVanished:
+      // Recreated while its conversion found it gone: the new file is converted.
+      result = regular_file_below(root_of(outcome.source), outcome.source) ? JobResult::kRecreated : JobResult::kVanished;
+      break;
+  }
+  const ModelActions actions = transition(*record, [&](ModelSchedule& schedule) {
+    return schedule.job_finished(clock_->now(), result, record->live.has_value());
+  });
+  if (actions.retry_in) {
+    log_line("could not write the outputs of " + id + ": " + first_error(outcome.diagnostics) + "; trying again in " +
+             std::to_string(std::chrono::duration_cast<std::chrono::milliseconds>(*actions.retry_in).count()) +
+             " ms (attempt " + std::to_string(record->schedule.attempts()) + ")");
+  }
+  if (actions.publish_error) {
+    publisher_->publish(channel(id, "ERROR"),
+                        make_model_error(*record, outcome.content_hash, outcome.diagnostics, config_.max_chunk_bytes));
+  }
+  if (actions.remove) drop_model(outcome.source, outcome.duration);
+}
+
+// A conversion that gave a result: a new revision (numbered, saved, published with its verdict and
+// delta), the same result as the live one (a reload), or one the dynamics check rejected.
+void Daemon::apply_converted(ConversionOutcome& outcome, ModelRecord& record) {
+  const std::string id = record.id;
+  const ConvertedModel& candidate = *outcome.converted;
+  const bool failed = candidate.validation && !candidate.validation->passed;
+  record.last_hash = outcome.content_hash;
+  record.dependencies = outcome.dependencies;
+  if (record.live && same_result(*record.live, candidate)) {
+    // A reload changed settings this model's result does not depend on.
+    ++counters_.skipped_unchanged;
+    log_line("unchanged " + id + " in " + milliseconds(outcome.duration) + ": still revision " +
+             std::to_string(record.revisions));
+    return;
+  }
+  // The first conversion after a restart that gives the result the earlier run served keeps
+  // its number; any other content that gets a VALIDATION gets a number of its own, accepted or
+  // not, saved before anything publishes it (docs/lcm.md, "Revision numbers").
+  const std::string candidate_result = result_digest(candidate);
+  const bool kept = !record.live && record.restored &&
+                    record.restored->content_hash == candidate.content_hash &&
+                    record.restored->result_digest == candidate_result;
+  const std::optional<StoredRevision> previous = stored_live(record);
+  const std::int64_t number = kept ? record.restored->revision : ++record.numbered;
+  if (!kept) {
+    // The live revision after this one: this one, unless the check rejects it unpublished.
+    const std::optional<StoredRevision> live =
+        failed && !config_.publish_failed
+            ? previous
+            : StoredRevision{number, candidate.content_hash, candidate_result, candidate.facts};
+    const std::string why = save_revisions(config_.output, record, live);
+    if (!why.empty()) {
+      log_line("could not save the revision state of " + id + " (revision " + std::to_string(number) +
+               " may be numbered again after a restart): " + why);
+    }
+  }
+  // Warnings of a conversion that succeeded: one log line each, and on LCM with the verdict
+  // (with the infos, which every Blender export has and which would only crowd the log).
+  for (const Diagnostic& d : outcome.diagnostics.all()) {
+    if (d.severity == Severity::kWarning) log_line("warning " + id + " revision " + std::to_string(number) + ": " + format(d));
+  }
+  // The verdict with the conversion's warnings: published before every description of the
+  // revision, so a subscriber that starts late gets the report too.
+  std::optional<ValidationSummary> report = candidate.validation;
+  if (report) report->diagnostics.append(outcome.diagnostics);
+  if (failed && !config_.publish_failed) {
+    publisher_->publish(channel(id, "VALIDATION"),
+                        make_validation_report(id, number, outcome.content_hash, *report, config_.max_chunk_bytes));
+    ++counters_.rejections;
+    log_line("rejected " + id + " revision " + std::to_string(number) + " (dynamics) in " +
+             milliseconds(outcome.duration) + ": " + candidate.validation->summary_line +
+             (record.live ? "; still serving revision " + std::to_string(record.revisions) : ""));
+    publisher_->publish(channel(id, "ERROR"),
+                        make_model_error(record, outcome.content_hash, candidate.validation->diagnostics, config_.max_chunk_bytes));
+    return;
+  }
+  ++counters_.conversions;
+  std::vector<ElementChange> changes;
+  if (!kept) changes = diff_robots(previous ? previous->facts : RobotFacts{}, candidate.facts);
+  record.revisions = number;
+  record.restored.reset();
+  record.live_result = candidate_result;
+  record.live = std::move(outcome.converted);
+  record.live->validation = std::move(report);
+  // From now on the previous revision's files are no longer served (docs/lcm.md, "Files and blobs").
+  blobs_.set_model(id, config_.output / id, record.live->files);
+  log_line("converted " + id + " revision " + std::to_string(record.revisions) + " (" +
+           std::to_string(record.live->robot.links.size()) + " links, " +
+           std::to_string(record.live->robot.joints.size()) + " joints" +
+           (record.live->validation ? std::string(", dynamics ") + (failed ? "FAILED" : "passed") : "") +
+           ") in " + milliseconds(outcome.duration) + (kept ? " (the result the earlier run served: its number kept)" : ""));
+  if (simulation_) {
+    if (failed) {
+      // A revision that failed the check would blow up in ODE, and the previous one is no
+      // longer what is published: no simulation runs until a revision passes.
+      simulation_->remove(id);
+      log_line("stopped the simulation of " + id + ": revision " + std::to_string(number) +
+               " failed the dynamics check");
+    } else {
+      simulation_->load(id, record.revisions, record.live->content_hash, record.live->robot);
+    }
+  }
+  publish_model(record);
+  if (!kept) {
+    // Once, after the revision's description: what changed since the revision it replaces.
+    const DeltaHeader header{id, previous ? previous->revision : 0, previous ? previous->content_hash : "",
+                             number, record.live->content_hash};
+    for (const auto& part : make_deltas(header, changes, now_utime(), config_.max_chunk_bytes)) {
+      publisher_->publish(channel(id, "DELTA"), part);
+    }
+  }
+}
+
+}  // namespace rdtf::daemon

@@ -1,0 +1,180 @@
+// rdtfd's loop stepped in-process (daemon_loop.h): models removed, recreated and renamed,
+// rescans, requests and republication, and reloads, as seen on the bus.
+#include "daemon_loop.h"
+
+namespace rdtf::daemon {
+namespace {
+
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+using Kind = FileEvent::Kind;
+
+TEST_F(DaemonLoop, DeletingAModelAnnouncesItRemovedAndForgetsIt) {
+  start();
+  save("arm3.glb", fixture("arm3.glb"));
+  advance(50ms);
+  convert();
+  fs::remove(watch_ / "arm3.glb");
+  notify(Kind::kRemoved, watch_ / "arm3.glb");
+  advance(50ms);
+  convert();
+  EXPECT_EQ(events("arm3.glb"), (std::vector<std::string>{"DESCRIPTION r1", "INERTIA", "REMOVED"}));
+  EXPECT_EQ(daemon_->registry().all().count(watch_ / "arm3.glb"), 0u);
+  advance(1s);
+  EXPECT_EQ(last_status().num_models, 0);
+}
+
+TEST_F(DaemonLoop, DeleteAndRecreateWithinTheSettleIsOneSave) {
+  start();
+  save("arm3.glb", fixture("arm3.glb"));
+  advance(50ms);
+  convert();
+  fs::remove(watch_ / "arm3.glb");
+  notify(Kind::kRemoved, watch_ / "arm3.glb");
+  advance(20ms);
+  save("arm3.glb", fixture("modelled_arm_no_extras.glb"));
+  advance(50ms);
+  ASSERT_EQ(runner_->waiting(), 1u);
+  convert();
+  EXPECT_EQ(events("arm3.glb"), (std::vector<std::string>{"DESCRIPTION r1", "INERTIA", "DESCRIPTION r2", "INERTIA"}));
+}
+
+TEST_F(DaemonLoop, AModelRecreatedAfterItsConversionFoundItGoneIsConvertedNotRemoved) {
+  start();
+  save("arm3.glb", fixture("arm3.glb"));
+  advance(50ms);
+  convert();
+  fs::remove(watch_ / "arm3.glb");
+  notify(Kind::kRemoved, watch_ / "arm3.glb");
+  advance(50ms);
+  runner_->start_next();                                          // Finds it gone...
+  save("arm3.glb", fixture("modelled_arm_no_extras.glb"));  // ...and it is back before the outcome.
+  runner_->finish();
+  step();
+  EXPECT_EQ(phase("arm3.glb"), ModelPhase::kSettling);
+  advance(50ms);
+  convert();
+  EXPECT_EQ(events("arm3.glb"), (std::vector<std::string>{"DESCRIPTION r1", "INERTIA", "DESCRIPTION r2", "INERTIA"}));
+}
+
+TEST_F(DaemonLoop, RenamingAModelIsARemovalAndANewModel) {
+  start();
+  save("arm3.glb", fixture("arm3.glb"));
+  advance(50ms);
+  convert();
+  fs::rename(watch_ / "arm3.glb", watch_ / "arm4.glb");
+  notify(Kind::kRemoved, watch_ / "arm3.glb");  // IN_MOVED_FROM, IN_MOVED_TO.
+  notify(Kind::kWritten, watch_ / "arm4.glb");
+  advance(50ms);
+  convert();
+  EXPECT_EQ(events("arm3.glb"), (std::vector<std::string>{"DESCRIPTION r1", "INERTIA", "REMOVED"}));
+  EXPECT_EQ(events("arm4.glb"), kRevision1);
+  advance(1s);
+  EXPECT_EQ(last_status().model_ids, std::vector<std::string>{"arm4.glb"});
+}
+
+TEST_F(DaemonLoop, ModelsWhoseNamesSanitiseAlikeGetDistinctChannels) {
+  rdtf::testing::write_file(watch_ / "a b.glb", fixture("arm3.glb"));
+  rdtf::testing::write_file(watch_ / "a_b.glb", fixture("modelled_arm.glb"));
+  start();
+  advance(50ms);
+  convert();
+  EXPECT_EQ(events("a_b.glb"), kRevision1);
+  EXPECT_EQ(events("a_b.glb_2"), kRevision1);
+  advance(1s);
+  EXPECT_EQ(last_status().num_models, 2);
+}
+
+TEST_F(DaemonLoop, ModelsSettleIndependently) {
+  start();
+  save("arm3.glb", fixture("arm3.glb"));
+  advance(30ms);
+  save("modelled_arm.glb", fixture("modelled_arm.glb"));
+  advance(20ms);
+  ASSERT_EQ(runner_->waiting(), 1u);
+  EXPECT_EQ(runner_->next().model_id, "arm3.glb");
+  save("arm3.glb", fixture("modelled_arm_no_extras.glb"));  // A's events do not move b's deadline.
+  advance(30ms);
+  ASSERT_EQ(runner_->waiting(), 2u);
+}
+
+TEST_F(DaemonLoop, RequestsAreAnsweredForOneModelOrAllAndRepeatsWithinASecondOnce) {
+  start();
+  save("arm3.glb", fixture("arm3.glb"));
+  save("modelled_arm.glb", fixture("modelled_arm.glb"));
+  advance(50ms);
+  convert();
+  clear_bus();
+  bus_->incoming.emplace_back("RDTF/REQUEST", fakes::encode_request("arm3.glb", "a"));
+  bus_->incoming.emplace_back("RDTF/REQUEST", fakes::encode_request("no-such-model", "b"));
+  step();
+  EXPECT_EQ(events("arm3.glb"), kRevision1);
+  EXPECT_TRUE(events("modelled_arm.glb").empty());
+  // Again within the second: answered once, when the second is over.
+  bus_->incoming.emplace_back("RDTF/REQUEST", fakes::encode_request("arm3.glb", "a"));
+  bus_->incoming.emplace_back("RDTF/REQUEST", fakes::encode_request("arm3.glb", "c"));
+  step();
+  EXPECT_EQ(events("arm3.glb"), kRevision1);
+  advance(1s);
+  EXPECT_EQ(events("arm3.glb"), (std::vector<std::string>{"DESCRIPTION r1", "INERTIA", "DESCRIPTION r1", "INERTIA"}));
+  bus_->incoming.emplace_back("RDTF/REQUEST", fakes::encode_request("", "all"));
+  step();
+  EXPECT_EQ(events("modelled_arm.glb"), kRevision1);
+}
+
+TEST_F(DaemonLoop, PeriodicRepublicationSendsEveryLiveModel) {
+  start([](DaemonConfig& config) { config.republish_period = 5000ms; });
+  save("arm3.glb", fixture("arm3.glb"));
+  advance(50ms);
+  convert();
+  advance(4900ms);
+  EXPECT_EQ(events("arm3.glb"), kRevision1);
+  advance(50ms);
+  EXPECT_EQ(events("arm3.glb"), (std::vector<std::string>{"DESCRIPTION r1", "INERTIA", "DESCRIPTION r1", "INERTIA"}));
+}
+
+TEST_F(DaemonLoop, AQueueOverflowRescansAndFindsWhatItsEventsWouldHaveTold) {
+  start();
+  save("arm3.glb", fixture("arm3.glb"));
+  advance(50ms);
+  convert();
+  // Events lost: a new model and a change of the known one, seen only by the rescan.
+  rdtf::testing::write_file(watch_ / "modelled_arm.glb", fixture("modelled_arm.glb"));
+  rdtf::testing::write_file(watch_ / "arm3.glb", fixture("modelled_arm_no_extras.glb"));
+  notify(Kind::kRescan, {});
+  advance(50ms);
+  ASSERT_EQ(runner_->waiting(), 2u);
+  convert();
+  EXPECT_EQ(events("modelled_arm.glb"), kRevision1);
+  EXPECT_EQ(events("arm3.glb"), (std::vector<std::string>{"DESCRIPTION r1", "INERTIA", "DESCRIPTION r2", "INERTIA"}));
+  EXPECT_EQ(daemon_->counters().rescans, 2);  // At start, and this one.
+}
+
+TEST_F(DaemonLoop, TemporariesAndTheOutputFolderNeverTriggerConversions) {
+  start([&](DaemonConfig& config) { config.output = watch_ / "out"; });
+  for (const char* name : {".arm3.glb.swp", "arm3.glb~", "arm3.glb.tmp", "out/arm3.glb/arm3.rdtf.gltf"}) {
+    fs::create_directories((watch_ / name).parent_path());
+    save(name, fixture("arm3.glb"));
+  }
+  advance(1s);
+  EXPECT_EQ(runner_->started() + runner_->waiting(), 0u);
+  EXPECT_TRUE(daemon_->registry().all().empty());
+}
+
+TEST_F(DaemonLoop, AReloadWithANewSettlePeriodAppliesItToModelsSettling) {
+  start({}, [this](std::string&) -> std::optional<DaemonConfig> {
+    DaemonConfig fresh = config_;
+    fresh.settle = 200ms;
+    return fresh;
+  });
+  save("arm3.glb", fixture("arm3.glb"));
+  step();
+  daemon_->reload_config();  // SIGHUP; its rescan counts as an event of every model.
+  advance(199ms);
+  EXPECT_EQ(runner_->waiting(), 0u);
+  advance(1ms);
+  EXPECT_EQ(runner_->waiting(), 1u);
+}
+
+}  // namespace
+}  // namespace rdtf::daemon

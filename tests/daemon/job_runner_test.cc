@@ -1,0 +1,88 @@
+// ThreadJobRunner (daemon/ports.h): the worker threads the daemon hands conversions to, with real
+// conversions; the loop is woken through the runner's descriptor, outcomes come back whole.
+#include <poll.h>
+
+#include <set>
+
+#include <gtest/gtest.h>
+
+#include "ports.h"
+#include "support/test_support.h"
+
+namespace rdtf::daemon {
+namespace {
+
+namespace fs = std::filesystem;
+
+class JobRunnerTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    fs::create_directories(tmp_ / "watch");
+    root_ = fs::canonical(tmp_ / "watch");
+  }
+  ConversionJob job(const std::string& name) {
+    rdtf::testing::write_file(root_ / name,
+                              rdtf::testing::read_file(rdtf::testing::data_dir() / "blender" / "arm3.glb"));
+    ConversionJob job;
+    job.model_id = name;
+    job.root = root_;
+    job.source = root_ / name;
+    job.output_dir = tmp_.path() / "out" / name;
+    return job;
+  }
+  // Waits (on the descriptor, as the loop does) until `count` outcomes came back.
+  std::vector<ConversionOutcome> collect(ThreadJobRunner& runner, std::size_t count) {
+    std::vector<ConversionOutcome> all;
+    while (all.size() < count) {
+      pollfd fd{runner.fd(), POLLIN, 0};
+      if (::poll(&fd, 1, 60000) <= 0) break;  // A minute: far beyond three small conversions.
+      // One at a time: the rest stay for the next turn, and the descriptor says so.
+      bool more = false;
+      auto taken = runner.take(1, more);
+      EXPECT_LE(taken.size(), 1u);
+      for (auto& outcome : taken) all.push_back(std::move(outcome));
+    }
+    return all;
+  }
+
+  rdtf::testing::TempDir tmp_;
+  fs::path root_;
+};
+
+TEST_F(JobRunnerTest, EveryJobComesBackConvertedAndWakesTheLoop) {
+  ThreadJobRunner runner(2);
+  ASSERT_GE(runner.fd(), 0);
+  for (const char* name : {"a.glb", "b.glb", "c.glb"}) runner.submit(job(name));
+  const auto outcomes = collect(runner, 3);
+  ASSERT_EQ(outcomes.size(), 3u);
+  std::set<std::string> ids;
+  for (const auto& outcome : outcomes) {
+    EXPECT_EQ(outcome.kind, ConversionOutcome::Kind::kConverted) << outcome.model_id;
+    ids.insert(outcome.model_id);
+  }
+  EXPECT_EQ(ids, (std::set<std::string>{"a.glb", "b.glb", "c.glb"}));
+}
+
+TEST_F(JobRunnerTest, StopDropsTheJobsNotStartedAndWaitsForTheRunningOnes) {
+  ThreadJobRunner runner(1);
+  for (const char* name : {"a.glb", "b.glb", "c.glb"}) runner.submit(job(name));
+  runner.stop();  // Whatever had started is finished; nothing runs any more.
+  bool more = true;
+  const auto outcomes = runner.take(10, more);
+  EXPECT_FALSE(more);
+  EXPECT_LE(outcomes.size(), 3u);
+  for (const auto& outcome : outcomes) EXPECT_EQ(outcome.kind, ConversionOutcome::Kind::kConverted) << outcome.model_id;
+}
+
+TEST_F(JobRunnerTest, AModelGoneBeforeItsJobRunsComesBackVanished) {
+  ThreadJobRunner runner(1);
+  ConversionJob gone = job("gone.glb");
+  fs::remove(gone.source);
+  runner.submit(std::move(gone));
+  const auto outcomes = collect(runner, 1);
+  ASSERT_EQ(outcomes.size(), 1u);
+  EXPECT_EQ(outcomes[0].kind, ConversionOutcome::Kind::kVanished);
+}
+
+}  // namespace
+}  // namespace rdtf::daemon

@@ -226,8 +226,10 @@ bool DracoDecoder::check_header(std::span<const std::uint8_t> source, const std:
     return false;
   }
   // Sequential streams give the point count; edgebreaker gives the connectivity vertices, each
-  // of which is at least one decoded point (attribute seams split a vertex into several).
-  const bool over = header->edgebreaker ? header->vertices > points : header->vertices != points;
+  // of which is at least one decoded point (attribute seams split a vertex into several). With no
+  // attribute accessor, the accessor limit bounds the points.
+  const bool exact = !header->edgebreaker && outputs.size() > 1;
+  const bool over = exact ? header->vertices != points : header->vertices > points;
   if (over) {
     diag_.error(codes::DRACO_INVALID, pointer, stream + std::to_string(header->vertices) +
                 (header->edgebreaker ? " vertices" : " points") + " but the attribute accessors declare " +

@@ -11,6 +11,7 @@
 #include <draco/compression/decode.h>
 
 #include "decode.h"
+#include "draco_header.h"
 #include "rdtf/diagnostic_codes.h"
 #include "validate_util.h"
 
@@ -112,6 +113,8 @@ class DracoDecoder {
   std::optional<std::span<const std::uint8_t>> compressed_bytes(const Json& extension, const std::string& pointer);
   bool plan(const Json& primitive, const Json& extension, const std::string& pointer,
             std::vector<Output>& outputs, std::uint64_t& total);
+  bool check_header(std::span<const std::uint8_t> source, const std::string& pointer,
+                    const std::vector<Output>& outputs);
   bool fill(const draco::Mesh& mesh, const Json& extension, const std::string& pointer,
             std::vector<Output>& outputs, std::vector<std::uint8_t>& bytes);
 
@@ -186,6 +189,52 @@ bool DracoDecoder::plan(const Json& primitive, const Json& extension, const std:
       diag_.error(codes::DRACO_INVALID, pointer + "/attributes/" + name, "a Draco attribute must be a SCALAR or VEC2-4 accessor");
       return false;
     }
+  }
+  return true;
+}
+
+// The counts the stream declares, before libdraco allocates from them: a decoded mesh must match
+// its accessors exactly (fill), so a stream declaring more faces or vertices than they do is
+// refused here, and libdraco's corner table and point arrays stay within what the accessors (and
+// so the limits validate_document applied to them) allow.
+bool DracoDecoder::check_header(std::span<const std::uint8_t> source, const std::string& pointer,
+                                const std::vector<Output>& outputs) {
+  std::string error;
+  const auto header = read_draco_header(source, error);
+  if (!header) {
+    diag_.error(codes::DRACO_INVALID, pointer, "the buffer view holds no Draco triangle mesh rdtf reads: " + error);
+    return false;
+  }
+  const std::uint64_t indices = doc_["accessors"][outputs[0].accessor]["count"].get<std::uint64_t>();
+  // Every attribute accessor must hold one value per decoded point; with none, the accessor limit.
+  std::uint64_t points = asset_.limits.max_accessor_count;
+  for (std::size_t k = 1; k < outputs.size(); ++k) {
+    points = std::min(points, doc_["accessors"][outputs[k].accessor]["count"].get<std::uint64_t>());
+  }
+  const std::string method = header->edgebreaker ? "edgebreaker" : "sequential";
+  const std::string stream = "the Draco stream (version " + std::to_string(header->major) + "." +
+                             std::to_string(header->minor) + ", " + method + ") declares ";
+  if (header->faces > asset_.limits.max_triangles) {
+    diag_.error(codes::LIMIT_EXCEEDED, pointer, stream + std::to_string(header->faces) +
+                " faces, over the limit of " + std::to_string(asset_.limits.max_triangles) + " (max_triangles)");
+    return false;
+  }
+  if (header->faces * 3 != indices) {
+    diag_.error(codes::DRACO_INVALID, pointer, stream + std::to_string(header->faces) + " faces (" +
+                std::to_string(header->faces * 3) + " indices) but the indices accessor declares " +
+                std::to_string(indices));
+    return false;
+  }
+  // Sequential streams give the point count; edgebreaker gives the connectivity vertices, each
+  // of which is at least one decoded point (attribute seams split a vertex into several). With no
+  // attribute accessor, the accessor limit bounds the points.
+  const bool exact = !header->edgebreaker && outputs.size() > 1;
+  const bool over = exact ? header->vertices != points : header->vertices > points;
+  if (over) {
+    diag_.error(codes::DRACO_INVALID, pointer, stream + std::to_string(header->vertices) +
+                (header->edgebreaker ? " vertices" : " points") + " but the attribute accessors declare " +
+                std::to_string(points));
+    return false;
   }
   return true;
 }
@@ -269,15 +318,9 @@ bool DracoDecoder::decode_primitive(std::size_t m, std::size_t p) {
                     " bytes, over the limit of " + std::to_string(asset_.limits.max_buffer_bytes) + " (max_buffer_bytes)");
     return false;
   }
+  if (!check_header(*source, pointer, outputs)) return false;
   draco::DecoderBuffer buffer;
   buffer.Init(reinterpret_cast<const char*>(source->data()), source->size());
-  const auto type = draco::Decoder::GetEncodedGeometryType(&buffer);
-  if (!type.ok() || type.value() != draco::TRIANGULAR_MESH) {
-    diag_.error(codes::DRACO_INVALID, pointer,
-                "the buffer view holds no Draco triangle mesh" +
-                    (type.ok() ? std::string() : " (" + type.status().error_msg_string() + ")"));
-    return false;
-  }
   draco::Decoder decoder;
   auto decoded = decoder.DecodeMeshFromBuffer(&buffer);
   if (!decoded.ok() || decoded.value() == nullptr) {

@@ -231,6 +231,50 @@ TEST(CompressedData, DracoDecodedSizeIsCheckedBeforeDecoding) {
   EXPECT_NE(d.message.find("max_buffer_bytes"), std::string::npos) << d.message;
 }
 
+// The first seed with its Draco connectivity counts (varints at bytes 18 and 19 of the fuzz
+// input: 64 encoded vertices, 124 faces) replaced.
+std::vector<std::uint8_t> seed_with_counts(const std::vector<std::uint8_t>& vertices, const std::vector<std::uint8_t>& faces) {
+  auto bytes = fuzz::read_bytes(testing::data_dir() / "fuzz-regressions/draco/arm_draco_mesh1");
+  EXPECT_EQ(bytes[18], 0x40);
+  EXPECT_EQ(bytes[19], 0x7c);
+  std::vector<std::uint8_t> out(bytes.begin(), bytes.begin() + 18);
+  out.insert(out.end(), vertices.begin(), vertices.end());
+  out.insert(out.end(), faces.begin(), faces.end());
+  out.insert(out.end(), bytes.begin() + 20, bytes.end());
+  return out;
+}
+
+TEST(CompressedData, DracoFacesOtherThanTheIndicesAreRefusedBeforeDecoding) {
+  const Diagnostic d = refusal(fuzz::draco_model(seed_with_counts({0x40}, {0x7d})));  // 125 faces
+  EXPECT_EQ(d.code, "DRACO_INVALID");
+  EXPECT_EQ(d.pointer, "/meshes/0/primitives/0/extensions/KHR_draco_mesh_compression");
+  EXPECT_NE(d.message.find("(version 2.2, edgebreaker) declares 125 faces (375 indices) but the indices "
+                           "accessor declares 372"), std::string::npos) << d.message;
+}
+
+TEST(CompressedData, DracoVerticesBeyondTheAttributesAreRefusedBeforeDecoding) {
+  const Diagnostic d = refusal(fuzz::draco_model(seed_with_counts({0xc1, 0x01}, {0x7c})));  // 193 vertices
+  EXPECT_EQ(d.code, "DRACO_INVALID");
+  EXPECT_NE(d.message.find("declares 193 vertices but the attribute accessors declare 192"), std::string::npos)
+      << d.message;
+}
+
+TEST(CompressedData, DracoFaceCountOverTheTriangleLimitIsRefusedBeforeDecoding) {
+  // 2^32 - 1 faces, the largest a varint of libdraco holds.
+  const Diagnostic d = refusal(fuzz::draco_model(seed_with_counts({0x40}, {0xff, 0xff, 0xff, 0xff, 0x0f})));
+  EXPECT_EQ(d.code, "LIMIT_EXCEEDED");
+  EXPECT_NE(d.message.find("declares 4294967295 faces, over the limit of 67108864 (max_triangles)"), std::string::npos)
+      << d.message;
+}
+
+TEST(CompressedData, DracoVersionsNotReadAreRefused) {
+  auto bytes = fuzz::read_bytes(testing::data_dir() / "fuzz-regressions/draco/arm_draco_mesh1");
+  bytes[12] = 3;  // Version 2.3
+  const Diagnostic d = refusal(fuzz::draco_model(bytes));
+  EXPECT_EQ(d.code, "DRACO_INVALID");
+  EXPECT_NE(d.message.find("version 2.3 is not read"), std::string::npos) << d.message;
+}
+
 TEST(CompressedData, MeshoptBytesThatDoNotDecodeAreRefused) {
   // 8 vertices of 12 bytes from a stream of 5 bytes that is no meshopt vertex stream.
   const Diagnostic d = refusal(fuzz::meshopt_model({8, 0, 36, 0, 0, 5, 0, 1, 2, 3, 4, 5, 9, 9}));

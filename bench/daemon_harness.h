@@ -1,6 +1,7 @@
-// What the daemon benchmarks (issues 3 and 4) share, after the ideas of tests/daemon/harness.h:
-// rdtfd runs as a child with a config file the benchmark writes, a subscriber on real LCM (UDP
-// multicast) is up before the daemon starts, and every wait is on a message, never a sleep.
+// What the daemon benchmarks share, built on the tests' harness library (rdtf_itest_harness,
+// tests/support/harness/): rdtfd runs as a child with a config file the benchmark writes, a
+// subscriber on real LCM (UDP multicast) is up before the daemon starts, and every wait is on a
+// message, never a sleep.
 //
 // Network: these programs multicast, so they only run inside a network namespace of their own.
 // main() calls run_in_own_network_namespace() first: it re-executes the program under
@@ -10,20 +11,17 @@
 
 #include <sys/types.h>
 
-#include <algorithm>
 #include <chrono>
-#include <condition_variable>
 #include <cstdint>
 #include <filesystem>
-#include <functional>
-#include <map>
-#include <mutex>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include <lcm/lcm-cpp.hpp>
 #include <nlohmann/json.hpp>
+
+#include "support/harness/lcm_listener.h"
+#include "support/harness/process.h"
 
 namespace rdtf::bench {
 
@@ -35,43 +33,29 @@ using Json = nlohmann::json;
 void run_in_own_network_namespace(int argc, char** argv);
 
 // A fresh folder under the system temp dir, removed with everything in it by the destructor.
-class TempFolder {
- public:
-  TempFolder();
-  ~TempFolder();
-  TempFolder(const TempFolder&) = delete;
-  TempFolder& operator=(const TempFolder&) = delete;
-  const fs::path& path() const { return path_; }
-  fs::path operator/(const std::string& name) const { return path_ / name; }
-
- private:
-  fs::path path_;
-};
+using TempFolder = rdtf::testing::TempDir;
 
 // Writes in place (open with O_TRUNC, write, close), as Blender saves. Returns the time right
 // after close(): the moment of the last write.
 Clock::time_point write_in_place(const fs::path& path, const std::string& bytes);
-std::string read_file(const fs::path& path);
+using rdtf::testing::read_file;
 
 // A one-link model: a box of half-size 0.05 m, its buffer embedded (about 1 KB), its node named
 // `name` so that each name gives other content.
 std::string small_box_gltf(const std::string& name);
 
-// rdtfd as a child: `config` over {"status_period_ms": 200, "republish_period_ms": 0}, the watched
-// and output folders on the command line, its log in a file. Killed by the destructor.
+// rdtfd as a child (the tests' DaemonProcess): `config` over {"status_period_ms": 200,
+// "republish_period_ms": 0}, the watched and output folders on the command line, rdtfd's own
+// settle time, its log in a file. Killed by the destructor.
 class Daemon {
  public:
   Daemon(const fs::path& watch, const fs::path& output, const Json& config);
-  ~Daemon();
-  Daemon(const Daemon&) = delete;
-  Daemon& operator=(const Daemon&) = delete;
-  pid_t pid() const { return pid_; }
-  std::string log() const;
-  bool stop();  // SIGTERM; true when it exited within 5 s.
+  pid_t pid() const { return process_.pid(); }
+  std::string log() const { return process_.log(); }
+  bool stop() { return process_.stop(std::chrono::seconds(5)).has_value(); }  // SIGTERM; true when it exited within 5 s.
 
  private:
-  TempFolder files_;
-  pid_t pid_ = -1;
+  itest::DaemonProcess process_;
 };
 
 // VmRSS and VmHWM of a process, in KiB, from /proc/<pid>/status.
@@ -91,39 +75,16 @@ struct UdpCounters {
 UdpCounters udp_counters();
 
 // An LCM subscriber on every channel under `prefix`, on its own thread, with a 4 MiB kernel receive
-// buffer and a deep queue. Each message goes to `handler` (under the lock, with its arrival time);
-// wait() blocks until a predicate over the caller's state holds.
-class Subscriber {
+// buffer and a deep queue. Each message goes to the handler (under the lock, with its arrival
+// time); wait() blocks until a predicate over the caller's state holds.
+class Subscriber : public itest::LcmListener {
  public:
-  using Handler = std::function<void(const std::string& channel, const lcm::ReceiveBuffer& buffer, Clock::time_point received)>;
   Subscriber(const std::string& prefix, Handler handler);
-  ~Subscriber();
-  Subscriber(const Subscriber&) = delete;
-  Subscriber& operator=(const Subscriber&) = delete;
-
-  // Waits until `done()` (evaluated under the lock after each message) holds; false at the deadline.
-  bool wait(const std::function<bool()>& done, Clock::duration timeout);
-  // Runs `f` under the lock (to read what the handler recorded).
-  void locked(const std::function<void()>& f);
-  template <typename T>
-  void publish(const std::string& channel, const T& message) {
-    lcm_.publish(channel, &message);
-  }
-
- private:
-  void on_message(const lcm::ReceiveBuffer* buffer, const std::string& channel);
-
-  Handler handler_;
-  lcm::LCM lcm_;
-  bool stop_ = false;
-  std::mutex mutex_;
-  std::condition_variable changed_;
-  std::thread thread_;
 };
 
 // "<prefix>/<model_id>/<KIND>" -> KIND and model_id.
-std::string kind_of(const std::string& channel);
-std::string model_id_of(const std::string& channel);
+using itest::kind_of;
+using itest::model_id_of;
 
 // Quantile q (0..1) of `samples` (nearest rank), and the mean.
 double quantile(std::vector<double> samples, double q);

@@ -98,6 +98,17 @@ std::string sha256_hex(const std::vector<const std::vector<std::uint8_t>*>& part
   return to_hex(digest, length);
 }
 
+std::string content_hash(const std::vector<std::uint8_t>& model, const std::vector<std::filesystem::path>& named,
+                         const SourceFiles& files) {
+  static const std::vector<std::uint8_t> kUnread;
+  std::vector<const std::vector<std::uint8_t>*> parts{&model};
+  for (const auto& path : named) {
+    const auto found = files.find(path);
+    parts.push_back(found != files.end() && found->second.size ? &found->second.bytes : &kUnread);
+  }
+  return sha256_hex(parts);
+}
+
 std::string sha256_hex(std::string_view text) {
   unsigned char digest[EVP_MAX_MD_SIZE];
   unsigned int length = 0;
@@ -286,25 +297,16 @@ ConversionOutcome run_conversion(const ConversionJob& job) {
   }
   HeldBytes held(job.budget.get(), to_read);
 
-  // The content hash covers the model and every file it refers to, so a new .bin alone counts.
-  std::vector<std::vector<std::uint8_t>> referenced;
-  for (const auto& file : outcome.dependencies) {
-    std::vector<std::uint8_t> bytes;
-    std::string read_why;
-    if (!internal::read_confined_file(folder, file, job.options.limits.max_file_bytes, bytes, read_why)) bytes.clear();
-    referenced.push_back(std::move(bytes));
-  }
-  std::vector<const std::vector<std::uint8_t>*> parts{&model_bytes};
-  for (const auto& bytes : referenced) parts.push_back(&bytes);
-  outcome.content_hash = sha256_hex(parts);
-  referenced.clear();
-  referenced.shrink_to_fit();
+  // Every file the model names is read once, here: the content hash covers these bytes (so a new
+  // .bin alone counts), and the loader converts the same bytes, whatever is written meanwhile.
+  SourceFiles files = read_source_files(outcome.dependencies, folder, job.options.limits, job.read_file);
+  outcome.content_hash = content_hash(model_bytes, outcome.dependencies, files);
   if (outcome.content_hash == job.previous_hash) {
     outcome.kind = ConversionOutcome::Kind::kUnchanged;
     return finish();
   }
 
-  auto asset = load_gltf_from_memory(model_bytes, job.source, folder, job.options.limits,
+  auto asset = load_gltf_from_memory(model_bytes, job.source, folder, job.options.limits, std::move(files),
                                      outcome.diagnostics);
   if (!asset) return finish();
   auto conversion = convert(std::move(*asset), job.options, outcome.diagnostics);

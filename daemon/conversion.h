@@ -17,6 +17,7 @@
 #include "rdtf/diagnostics.h"
 #include "rdtf/diff.h"
 #include "rdtf/dynamics.h"
+#include "rdtf/gltf.h"
 #include "rdtf/urdf.h"
 #include "rdtf/robot.h"
 #include "rdtf/summary.h"
@@ -62,6 +63,9 @@ struct ConversionJob {
   // What one conversion may read, the model and every file it names (each time it is named).
   std::uint64_t max_read_bytes = std::uint64_t{1} << 30;
   std::shared_ptr<ReadBudget> budget;  // Shared by every worker; none: no limit across workers.
+  // Reads each file the model names (once per conversion); empty: the loader's own. Tests count
+  // and interfere with reads through it.
+  ConfinedReader read_file;
 };
 
 // The dynamics check of a revision, without the ODE world.
@@ -116,6 +120,10 @@ ConversionOutcome run_conversion(const ConversionJob& job);
 // Content hash of several files: hex SHA-256 over each part's length (8 bytes, little endian)
 // followed by its bytes, so that moving bytes from one file to the next changes it.
 std::string sha256_hex(const std::vector<const std::vector<std::uint8_t>*>& parts);
+// The content hash of a model: its bytes, then each file it names (`named`, in the order of its
+// buffers and images, as often as named) as read in `files` (no bytes when it could not be read).
+std::string content_hash(const std::vector<std::uint8_t>& model, const std::vector<std::filesystem::path>& named,
+                         const SourceFiles& files);
 // Plain hex SHA-256 of a text (e.g. rdtf_json_sha256, checkable with sha256sum).
 std::string sha256_hex(std::string_view text);
 

@@ -9,6 +9,8 @@
 #include <limits>
 #include <memory>
 
+#include "../geometry/big_arrays.h"
+
 namespace rdtf::internal {
 namespace {
 
@@ -212,6 +214,24 @@ bool read_confined_file(const std::filesystem::path& folder, const std::filesyst
   Fd fd(raw_fd);
   if (!size) return false;
   return read_all(fd.get(), *size, out, why);
+}
+
+std::optional<std::uint64_t> read_confined_file_within(const std::filesystem::path& folder,
+                                                       const std::filesystem::path& path,
+                                                       std::uint64_t max_bytes,
+                                                       std::vector<std::uint8_t>& out, std::string& why) {
+  int raw_fd = -1;
+  const auto size =
+      open_checked(&folder, path, std::numeric_limits<std::uint64_t>::max(), raw_fd, why);
+  Fd fd(raw_fd);
+  if (!size || *size > max_bytes) return size;
+  // A buffer is kept as it is read (the loader moves it into the asset): huge pages for a large one.
+  reserve_huge(out, static_cast<std::size_t>(*size));
+  if (!read_all(fd.get(), *size, out, why)) {
+    out.clear();
+    return std::nullopt;
+  }
+  return size;
 }
 
 std::optional<std::uint64_t> confined_file_size(const std::filesystem::path& folder,

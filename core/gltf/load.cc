@@ -138,14 +138,46 @@ std::optional<Json> parse_json(std::string_view text, Diagnostics& diag) {
   }
 }
 
-// Files that passed our checks, by the token tinygltf is given instead of the model's URI.
+// The files a document names (external buffers and images) inside `folder`, as resolve_uri maps
+// them; unusable URIs are left out.
+std::vector<std::filesystem::path> files_named_by(const Json& document, const std::filesystem::path& folder) {
+  std::vector<std::filesystem::path> files;
+  for (const char* array : {"buffers", "images"}) {
+    if (!document.contains(array) || !document[array].is_array()) continue;
+    for (const Json& item : document[array]) {
+      if (!item.is_object() || !item.contains("uri") || !item["uri"].is_string()) continue;
+      const std::string uri = item["uri"].get<std::string>();
+      if (internal::is_data_uri(uri)) continue;
+      std::string why;
+      if (auto path = internal::resolve_uri(folder, uri, why)) files.push_back(std::move(*path));
+    }
+  }
+  return files;
+}
+
+// The files the model names, read once before the load (read_source_files), and the external
+// buffers that passed our checks by the token tinygltf is given instead of the model's URI.
+// tinygltf reads nothing from disk: its filesystem callbacks serve these bytes.
 struct ConfinedReads {
-  std::filesystem::path folder;
-  std::uint64_t max_bytes = 0;
+  SourceFiles* source = nullptr;
   std::map<std::string, std::filesystem::path> files;
-  std::map<std::string, std::uint64_t> sizes;  // byteLength of each, checked against the file.
+  std::map<std::filesystem::path, int> uses;  // Buffers not yet loaded that name each file.
   std::vector<std::size_t> fallbacks;  // Buffers that EXT_meshopt_compression decodes into.
 };
+
+// The file read for `path`, or nothing and `why` (refused, unreadable, or never read).
+const SourceFile* source_file(const ConfinedReads& reads, const std::filesystem::path& path, std::string& why) {
+  const auto found = reads.source->find(path);
+  if (found == reads.source->end()) {
+    why = "was not read with the model";
+    return nullptr;
+  }
+  if (!found->second.size) {
+    why = found->second.why;
+    return nullptr;
+  }
+  return &found->second;
+}
 
 bool fs_file_exists(const std::string& name, void* user) {
   const auto* reads = static_cast<const ConfinedReads*>(user);
@@ -156,20 +188,24 @@ std::string fs_expand(const std::string& name, void*) { return name; }
 
 bool fs_read(std::vector<unsigned char>* out, std::string* err, const std::string& name,
              void* user) {
-  const auto* reads = static_cast<const ConfinedReads*>(user);
+  auto* reads = static_cast<ConfinedReads*>(user);
   const auto found = reads->files.find(name);
   if (found == reads->files.end()) {
     if (err) *err = "refused: not a file of this model";
     return false;
   }
-  std::string why;
-  // tinygltf keeps this vector as the buffer (it swaps it in): huge pages for a large one.
-  if (const auto size = reads->sizes.find(name); size != reads->sizes.end()) {
-    if (size->second <= reads->max_bytes) internal::reserve_huge(*out, static_cast<std::size_t>(size->second));
-  }
-  if (!internal::read_confined_file(reads->folder, found->second, reads->max_bytes, *out, why)) {
-    if (err) *err = why;
+  const auto source = reads->source->find(found->second);
+  if (source == reads->source->end() || !source->second.size) {
+    if (err) *err = "was not read with the model";
     return false;
+  }
+  // tinygltf keeps this vector as the buffer (it swaps it in): the last buffer naming a file takes
+  // its bytes (in huge pages when large, read_confined_file_within), the others a copy.
+  if (--reads->uses[found->second] == 0) {
+    *out = std::move(source->second.bytes);
+  } else {
+    internal::reserve_huge(*out, source->second.bytes.size());
+    out->assign(source->second.bytes.begin(), source->second.bytes.end());
   }
   return true;
 }
@@ -244,7 +280,8 @@ std::optional<Json> prepare_buffers(const Json& document, bool binary, const Loa
       diag.error(codes::URI_REFUSED, pointer + "/uri", "'" + uri + "': " + why);
       continue;
     }
-    const auto size = internal::confined_file_size(folder, *path, why);
+    const SourceFile* file = source_file(reads, *path, why);
+    const auto size = file != nullptr ? file->size : std::nullopt;
     if (!size) {
       diag.error(codes::IO_ERROR, pointer + "/uri", "'" + uri + "' (" + path->string() + ") " + why);
       continue;
@@ -264,7 +301,7 @@ std::optional<Json> prepare_buffers(const Json& document, bool binary, const Loa
     }
     const std::string token = "rdtf-confined-buffer-" + std::to_string(i);
     reads.files[token] = *path;
-    reads.sizes[token] = declared;
+    ++reads.uses[*path];
     entry["uri"] = token;
     loader_document["buffers"].push_back(entry);
   }
@@ -280,7 +317,7 @@ std::optional<Json> prepare_buffers(const Json& document, bool binary, const Loa
       const auto path = internal::resolve_uri(folder, uri, why);
       if (!path) {
         diag.error(codes::URI_REFUSED, pointer, "'" + uri + "': " + why);
-      } else if (!internal::confined_file_size(folder, *path, why)) {
+      } else if (source_file(reads, *path, why) == nullptr) {
         diag.warning(codes::IO_ERROR, pointer,
                      "image '" + uri + "' " + why + "; it will be missing from the output");
       }
@@ -367,13 +404,38 @@ bool load_buffers(const Json& loader_document, bool binary, std::span<const std:
   return true;
 }
 
+// The external images' bytes, kept in the asset for its writers (a file a buffer names too is
+// copied: the buffer takes its bytes).
+void keep_images(const Json& document, const std::filesystem::path& folder, ConfinedReads& reads,
+                 GltfAsset& asset) {
+  if (!document.contains("images")) return;
+  for (const Json& image : document["images"]) {
+    if (!image.is_object() || !image.contains("uri") || !image["uri"].is_string()) continue;
+    const std::string& uri = image["uri"].get_ref<const std::string&>();
+    if (internal::is_data_uri(uri)) continue;
+    std::string why;
+    const auto path = internal::resolve_uri(folder, uri, why);
+    if (!path || asset.images.count(*path) > 0) continue;
+    const auto found = reads.source->find(*path);
+    if (found == reads.source->end() || !found->second.size || *found->second.size > asset.limits.max_file_bytes) {
+      continue;
+    }
+    if (reads.uses[*path] > 0) {
+      asset.images[*path] = found->second.bytes;
+    } else {
+      asset.images[*path] = std::move(found->second.bytes);
+    }
+  }
+}
+
 // load_gltf_from_memory; `owned`, when given, holds `bytes` and may be consumed (load_gltf
 // hands over the file it read, whose BIN chunk then becomes the buffer in place).
 std::optional<GltfAsset> load_from_bytes(const std::vector<std::uint8_t>& bytes,
                                          std::vector<std::uint8_t>* owned,
                                          const std::filesystem::path& display_path,
                                          const std::filesystem::path& folder,
-                                         const LoadLimits& limits, Diagnostics& diag) {
+                                         const LoadLimits& limits,
+                                         std::optional<SourceFiles> files, Diagnostics& diag) {
   diag.set_file(display_path.string());
   if (bytes.empty()) {
     diag.error(codes::EMPTY_FILE, "", "the file is empty");
@@ -399,12 +461,14 @@ std::optional<GltfAsset> load_from_bytes(const std::vector<std::uint8_t>& bytes,
   validate_document(*document, limits, diag);
   if (diag.has_errors()) return std::nullopt;
 
+  // Every file the model names, read once (unless the caller already did, to hash them).
+  if (!files) files = read_source_files(files_named_by(*document, folder), folder, limits);
   ConfinedReads reads;
-  reads.folder = folder;
-  reads.max_bytes = limits.max_file_bytes;
+  reads.source = &*files;
   const auto loader_document =
       prepare_buffers(*document, asset.binary, limits, folder, reads, diag);
   if (!loader_document) return std::nullopt;
+  keep_images(*document, folder, reads, asset);
 
   if (const auto chunk = lone_bin_chunk(*loader_document, asset.binary, bin)) {
     asset.buffers.push_back(bin_chunk_buffer(*chunk, owned));
@@ -433,32 +497,29 @@ std::optional<GltfAsset> load_gltf_from_memory(const std::vector<std::uint8_t>& 
                                                const std::filesystem::path& display_path,
                                                const std::filesystem::path& folder,
                                                const LoadLimits& limits, Diagnostics& diag) {
-  return load_from_bytes(bytes, nullptr, display_path, folder, limits, diag);
+  return load_from_bytes(bytes, nullptr, display_path, folder, limits, std::nullopt, diag);
+}
+
+std::optional<GltfAsset> load_gltf_from_memory(const std::vector<std::uint8_t>& bytes,
+                                               const std::filesystem::path& display_path,
+                                               const std::filesystem::path& folder,
+                                               const LoadLimits& limits, SourceFiles files,
+                                               Diagnostics& diag) {
+  return load_from_bytes(bytes, nullptr, display_path, folder, limits, std::move(files), diag);
 }
 
 std::vector<std::filesystem::path> referenced_files(const std::vector<std::uint8_t>& bytes,
                                                     const std::filesystem::path& folder) {
-  std::vector<std::filesystem::path> files;
   Diagnostics ignored;
   std::string_view text(reinterpret_cast<const char*>(bytes.data()), bytes.size());
   if (looks_like_glb(bytes)) {
     const auto chunks = parse_glb(bytes, ignored);
-    if (!chunks) return files;
+    if (!chunks) return {};
     text = chunks->json;
   }
   const auto document = parse_json(text, ignored);
-  if (!document) return files;
-  for (const char* array : {"buffers", "images"}) {
-    if (!document->contains(array) || !(*document)[array].is_array()) continue;
-    for (const Json& item : (*document)[array]) {
-      if (!item.is_object() || !item.contains("uri") || !item["uri"].is_string()) continue;
-      const std::string uri = item["uri"].get<std::string>();
-      if (internal::is_data_uri(uri)) continue;
-      std::string why;
-      if (auto path = internal::resolve_uri(folder, uri, why)) files.push_back(std::move(*path));
-    }
-  }
-  return files;
+  if (!document) return {};
+  return files_named_by(*document, folder);
 }
 
 std::optional<GltfAsset> load_gltf(const std::filesystem::path& path, const LoadLimits& limits,
@@ -483,7 +544,7 @@ std::optional<GltfAsset> load_gltf(const std::filesystem::path& path, const Load
     diag.error(codes::IO_ERROR, "", "cannot resolve the model's folder: " + error.message());
     return std::nullopt;
   }
-  return load_from_bytes(bytes, &bytes, path, folder, limits, diag);
+  return load_from_bytes(bytes, &bytes, path, folder, limits, std::nullopt, diag);
 }
 
 }  // namespace rdtf

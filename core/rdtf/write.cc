@@ -45,18 +45,17 @@ bool write_bytes(const std::filesystem::path& path, std::span<const std::uint8_t
   return true;
 }
 
-// The bytes of an image referenced by URI, read again from the model's folder under its caps.
+// The bytes of an image referenced by URI, as the loader read them with the model (never the
+// file again: what is written is what was hashed and checked).
 std::optional<std::vector<std::uint8_t>> read_image(const GltfAsset& asset, const std::string& uri,
                                                     std::filesystem::path& source) {
   std::string why;
   const auto path = internal::resolve_uri(asset.folder, uri, why);
   if (!path) return std::nullopt;
-  std::vector<std::uint8_t> bytes;
-  if (!internal::read_confined_file(asset.folder, *path, asset.limits.max_file_bytes, bytes, why)) {
-    return std::nullopt;
-  }
+  const auto found = asset.images.find(*path);
+  if (found == asset.images.end()) return std::nullopt;
   source = *path;
-  return bytes;
+  return found->second;
 }
 
 std::string mime_type_for(const std::string& uri) {

@@ -9,6 +9,8 @@
 // is about 0.04 rad for the shoulder (about 16 N m) and 0.008 rad for the elbow (about 3 N m).
 // The measured rest pose must also match the computed equilibrium to kEquilibriumTolerance: the
 // PD law runs in rdtfd at every 1 ms step, so only ODE's joint error (ERP, CFM) separates them.
+#include <cmath>
+
 #include "clients/live_arm.h"
 
 namespace rdtf::itest {

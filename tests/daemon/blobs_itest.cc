@@ -7,6 +7,7 @@
 #include <rdtf/blob_unavailable_t.hpp>
 #include <rdtf/manifest_t.hpp>
 
+#include <atomic>
 #include <set>
 
 #include "harness.h"

@@ -2,7 +2,8 @@
 // range keeps the running config and the daemon serving; file names reach the log escaped.
 #include <sys/stat.h>
 
-#include "daemon/fs_support.h"
+#include "daemon/harness.h"
+#include "support/harness/fs_support.h"
 
 namespace rdtf::itest {
 namespace {

@@ -16,6 +16,7 @@
 // The number of kills: RDTF_CRASH_KILLS, else 1000 (200 under the sanitizers). The random moments
 // come from a fixed seed (printed), RDTF_CRASH_SEED overrides it.
 #include <algorithm>
+#include <iostream>
 #include <random>
 #include <regex>
 #include <set>

@@ -10,8 +10,8 @@
 // namespace) is injected through the watcher's seam RDTFD_TEST_INOTIFY_LIMIT_FILE.
 #include <sys/stat.h>
 
-#include "daemon/fs_support.h"
 #include "daemon/harness.h"
+#include "support/harness/fs_support.h"
 
 namespace rdtf::itest {
 namespace {

@@ -5,9 +5,11 @@
 // Each must be refused or recovered from with a clear report, the live revision's files intact.
 #include <sys/stat.h>
 
+#include <iostream>
 #include <set>
 
-#include "daemon/fs_support.h"
+#include "daemon/harness.h"
+#include "support/harness/fs_support.h"
 
 namespace rdtf::itest {
 namespace {

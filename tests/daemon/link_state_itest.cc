@@ -4,6 +4,7 @@
 // alike and, at rest, those of the forward kinematics of the joint positions; a floating box
 // falling as ODE's integrator says it must.
 #include <cfloat>
+#include <cmath>
 #include <set>
 
 #include <rdtf/link_state_t.hpp>

@@ -25,7 +25,8 @@
 // through in 30 s at 40 Mbit/s against 49 Mbit/s sent).
 #include <cmath>
 
-#include "daemon/two_hosts.h"
+#include "daemon/harness.h"
+#include "support/harness/two_hosts.h"
 
 namespace rdtf::itest {
 namespace {

@@ -3,6 +3,8 @@
 // LINK_STATE and INERTIA whose `name` is the <joint name> / <link name> of the URDF published with
 // the same revision (parsed here with urdfdom) and whose `gltf_name` is the glTF node's name; a
 // JOINT_COMMAND by URDF name moves the joint of that name.
+#include <set>
+
 #include <urdf_parser/urdf_parser.h>
 
 #include <rdtf/link_state_t.hpp>

@@ -9,6 +9,7 @@
 // but for the drift of centres of mass that lie on the axis only to rounding (about 1e-18 m off
 // it; drift seen: 3e-30 rad), while the 0.5 N m the rejected commands ask for would turn the
 // shoulder (about 0.01 kg m^2 about its axis) by more than a radian in half a second.
+#include <cmath>
 #include <set>
 
 #include "clients/live_arm.h"

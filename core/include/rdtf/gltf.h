@@ -7,6 +7,8 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -33,8 +35,34 @@ struct GltfAsset {
   bool binary = false;           // Loaded from a GLB container.
   Json document;
   std::vector<std::vector<std::uint8_t>> buffers;  // One per document["buffers"] entry.
-  LoadLimits limits;  // The caps it was loaded with; writers read external images under them.
+  LoadLimits limits;  // The caps it was loaded with.
+  // The bytes of each external image (by its path in `folder`), read with the buffers at load time:
+  // a writer copies these, never the file again.
+  std::map<std::filesystem::path, std::vector<std::uint8_t>> images;
 };
+
+// One file a model names, as read once for a load (read_source_files).
+struct SourceFile {
+  std::optional<std::uint64_t> size;  // Nothing: refused or unreadable (`why` says why).
+  std::vector<std::uint8_t> bytes;    // The file, when its size is within max_file_bytes.
+  std::string why;
+};
+
+// Every file a model names (referenced_files), each read once, by its path in the model's folder:
+// what is hashed is what is converted, whatever happens to the files afterwards.
+using SourceFiles = std::map<std::filesystem::path, SourceFile>;
+
+// Reads one confined file (the checks of the loader: no symlink out of the folder, one hard link,
+// a regular file): its size, and its bytes in `out` when the size is within `max_bytes`.
+using ConfinedReader = std::function<std::optional<std::uint64_t>(
+    const std::filesystem::path& folder, const std::filesystem::path& path, std::uint64_t max_bytes,
+    std::vector<std::uint8_t>& out, std::string& why)>;
+
+// Reads each of `files` once (a file named twice is read once) under limits.max_file_bytes, through
+// `reader` when given (tests count reads with it), else the loader's own.
+SourceFiles read_source_files(const std::vector<std::filesystem::path>& files,
+                              const std::filesystem::path& folder, const LoadLimits& limits,
+                              const ConfinedReader& reader = {});
 
 // Reads and validates a model file. Returns nothing (and errors in `diagnostics`) when the file
 // cannot be used: every error names the file and the place in it.
@@ -42,10 +70,19 @@ std::optional<GltfAsset> load_gltf(const std::filesystem::path& path, const Load
                                    Diagnostics& diagnostics);
 
 // The same from bytes already in memory; `folder` confines external URIs (empty: none allowed).
+// The files the model names are read once here (read_source_files).
 std::optional<GltfAsset> load_gltf_from_memory(const std::vector<std::uint8_t>& bytes,
                                                const std::filesystem::path& display_path,
                                                const std::filesystem::path& folder,
                                                const LoadLimits& limits,
+                                               Diagnostics& diagnostics);
+
+// The same with the files the model names already read (read_source_files over referenced_files
+// of `bytes`): nothing is read from disk, and the buffers are these bytes (moved, not copied).
+std::optional<GltfAsset> load_gltf_from_memory(const std::vector<std::uint8_t>& bytes,
+                                               const std::filesystem::path& display_path,
+                                               const std::filesystem::path& folder,
+                                               const LoadLimits& limits, SourceFiles files,
                                                Diagnostics& diagnostics);
 
 bool looks_like_glb(const std::vector<std::uint8_t>& bytes);

@@ -20,5 +20,5 @@ trap 'kill "$view_pid" 2>/dev/null || true' EXIT
 echo "run.sh: rdtfd is watching examples/models; open http://127.0.0.1:8765/ (rdtf-view) to see them."
 echo "run.sh: in another shell try:"
 echo "  build/clients/echo/rdtf-echo --omit-documents      # every message as a JSON line"
-echo "  CLASSPATH=build/lcmtypes/rdtf_lcmtypes.jar lcm-spy   # if a display is available"
+echo "  scripts/rdtf-spy                                     # lcm-spy decoding every channel, if a display is available"
 build/daemon/rdtfd --config config/rdtfd.json "$@"

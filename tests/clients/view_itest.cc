@@ -39,7 +39,13 @@ std::optional<rdtf::link_state_t> link_state_at(const std::vector<Message>& all,
 
 // Every drawn link at the position LINK_STATE gave it for the step the page shows.
 void expect_links_where_link_state_puts_them(Session& s, const Json& m, const std::string& id) {
-  const auto state = link_state_at(s.messages(), id, m["revision"].get<std::int64_t>(), m["sim_time"].get<double>());
+  const auto revision = m["revision"].get<std::int64_t>();
+  const double sim_time = m["sim_time"].get<double>();
+  // The page and this test's subscriber receive the same datagram on two sockets: under load the
+  // page may have drawn it before the subscriber's thread has stored it, so wait for it here.
+  s.wait_for([&](const std::vector<Message>& all) { return link_state_at(all, id, revision, sim_time).has_value(); },
+             10s);
+  const auto state = link_state_at(s.messages(), id, revision, sim_time);
   ASSERT_TRUE(state) << "no LINK_STATE of sim_time " << m["sim_time"];
   ASSERT_EQ(m["links"].size(), state->name.size());
   for (const auto& link : m["links"]) {
@@ -275,19 +281,26 @@ TEST(View, RefusesHostileMessagesAndSurvivesClientsThatVanish) {
     const answers = [];
     ws.onmessage = (e) => { const m = JSON.parse(e.data); if (m.type === 'refused') answers.push(m); };
     const bad = '{"type":"set_joint","model":"flood.gltf","joint":"shoulder","value":0.1}';
+    const start = performance.now();
     for (let i = 0; i < 1000; ++i) ws.send(bad);
+    let sent = 1000;
+    const unanswered = () => answers.reduce((n, m) => n + m.unanswered_before, 0);
     await new Promise((r) => setTimeout(r, 1500));
-    ws.send(bad);
-    for (let i = 0; i < 300; ++i) {
-      if (answers.length && answers[answers.length - 1].unanswered_before > 0) break;
-      await new Promise((r) => setTimeout(r, 10));
+    // The server works through the flood at its own pace (slower under a sanitizer, on a loaded
+    // machine): probe every 100 ms until an answer accounts for every message sent before it.
+    for (let i = 0; i < 300 && answers.length + unanswered() < sent; ++i) {
+      ws.send(bad);
+      ++sent;
+      await new Promise((r) => setTimeout(r, 100));
     }
     ws.close();
-    return {answered: answers.length, unanswered: answers.reduce((n, m) => n + m.unanswered_before, 0),
+    return {sent, seconds: (performance.now() - start) / 1000, answered: answers.length, unanswered: unanswered(),
             too_many: answers.filter((m) => m.reason.startsWith('too many')).length};
   })())");
-  EXPECT_EQ(flood["answered"].get<int>() + flood["unanswered"].get<int>(), 1001) << flood.dump();
-  EXPECT_LE(flood["answered"].get<int>(), 3 * 20 + 1) << flood.dump();
+  EXPECT_GT(flood["sent"].get<int>(), 1000) << flood.dump();
+  EXPECT_EQ(flood["answered"].get<int>() + flood["unanswered"].get<int>(), flood["sent"].get<int>()) << flood.dump();
+  // At most 20 answers in each second of the server's clock the flood spanned.
+  EXPECT_LE(flood["answered"].get<int>(), 20 * (static_cast<int>(flood["seconds"].get<double>()) + 2)) << flood.dump();
 
   // Clients that vanish: half a request line, an upgrade then half a frame, another origin.
   const int port = std::stoi(view.url().substr(view.url().rfind(':') + 1));

@@ -42,6 +42,14 @@ struct TypedView {
     out[2] = xyz[2];
   }
   using Coordinate = P;
+  // x and y of vertex v in one 16-byte vector (double positions only).
+  template <typename Pair>
+  [[gnu::always_inline]] Pair pair(std::uint32_t v) const {
+    static_assert(sizeof(Pair) == 2 * sizeof(P));
+    Pair value;
+    std::memcpy(&value, positions + std::size_t{v} * position_stride, sizeof(Pair));
+    return value;
+  }
   // Coordinate c of vertex v as stored. (Read through memcpy: the bytes are a glTF buffer's,
   // with no float or double object in them, and need not be aligned for the type.)
   [[gnu::always_inline]] P coordinate(std::uint32_t v, int c) const {

@@ -45,9 +45,12 @@ void reserve_huge(std::vector<T>& v, std::size_t n) {
   advise_huge_pages(v.data(), v.capacity() * sizeof(T));
 }
 
-// An array of n trivially copyable elements, not initialised. From 1 MiB up it takes whole huge
-// pages (aligned, its size rounded up to them): 256 faults of 4 KiB pages already cost more than
-// clearing one 2 MiB page.
+// Asks BigArray for all-zero bytes.
+struct ZeroFilled {};
+
+// An array of n trivially copyable elements, not initialised (or all bytes zero with
+// ZeroFilled). From 1 MiB up it takes whole huge pages (aligned, its size rounded up to them):
+// 256 faults of 4 KiB pages already cost more than clearing one 2 MiB page.
 template <typename T>
 class BigArray {
   static_assert(std::is_trivially_copyable_v<T> && std::is_trivially_destructible_v<T>);
@@ -57,26 +60,50 @@ class BigArray {
   explicit BigArray(std::size_t n) : size_(n) {
     const std::size_t bytes = n * sizeof(T);
     if (bytes < kHugePage / 2) {
-      data_.reset(static_cast<T*>(std::malloc(bytes == 0 ? 1 : bytes)));
+      block_.reset(std::malloc(bytes == 0 ? 1 : bytes));
+      data_ = static_cast<T*>(block_.get());
     } else {
       // aligned_alloc needs a size that is a multiple of the alignment.
       const std::size_t rounded = (bytes + kHugePage - 1) & ~(kHugePage - 1);
-      data_.reset(static_cast<T*>(std::aligned_alloc(kHugePage, rounded)));
-      if (data_) advise_huge_pages(data_.get(), rounded);
+      block_.reset(std::aligned_alloc(kHugePage, rounded));
+      data_ = static_cast<T*>(block_.get());
+      if (data_) advise_huge_pages(data_, rounded);
     }
     if (!data_) throw std::bad_alloc();
   }
-  T* data() { return data_.get(); }
-  const T* data() const { return data_.get(); }
-  T& operator[](std::size_t i) { return data_.get()[i]; }
-  const T& operator[](std::size_t i) const { return data_.get()[i]; }
+  // All bytes zero, through calloc: memory fresh from the kernel (a large block is mapped anew,
+  // and is always so in a short process) is zero already and calloc writes nothing, where a fill
+  // would write every byte once more after the kernel cleared it; reused heap memory calloc
+  // clears. The block is one huge page larger than asked, so that the array can start at a huge
+  // page boundary without touching anything before it (calloc's own header lies below).
+  BigArray(std::size_t n, ZeroFilled) : size_(n) {
+    const std::size_t bytes = n * sizeof(T);
+    if (bytes < kHugePage / 2) {
+      block_.reset(std::calloc(bytes == 0 ? 1 : bytes, 1));
+      data_ = static_cast<T*>(block_.get());
+    } else {
+      const std::size_t rounded = (bytes + kHugePage - 1) & ~(kHugePage - 1);
+      block_.reset(std::calloc(rounded + kHugePage, 1));
+      if (block_) {
+        const auto start = (reinterpret_cast<std::uintptr_t>(block_.get()) + kHugePage - 1) & ~(kHugePage - 1);
+        data_ = reinterpret_cast<T*>(start);
+        advise_huge_pages(data_, rounded);
+      }
+    }
+    if (!data_) throw std::bad_alloc();
+  }
+  T* data() { return data_; }
+  const T* data() const { return data_; }
+  T& operator[](std::size_t i) { return data_[i]; }
+  const T& operator[](std::size_t i) const { return data_[i]; }
   std::size_t size() const { return size_; }
 
  private:
   struct Free {
-    void operator()(T* p) const { std::free(p); }
+    void operator()(void* p) const { std::free(p); }
   };
-  std::unique_ptr<T, Free> data_;
+  std::unique_ptr<void, Free> block_;
+  T* data_ = nullptr;
   std::size_t size_ = 0;
 };
 

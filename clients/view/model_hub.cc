@@ -100,6 +100,7 @@ void ModelHub::on_revision(std::shared_ptr<const rdtf::client::Snapshot> snapsho
   m.status = "live";
   m.error.reset();
   m.recent.push_front(snapshot);
+  m.complete_utime = now_utime();
   while (m.recent.size() > 2) m.recent.pop_back();
   m.urdf_error.clear();
   m.joints = joints_of_urdf(snapshot->description.urdf, &m.urdf_error);
@@ -284,6 +285,16 @@ std::shared_ptr<const std::string> ModelHub::model_message(const std::string& id
   message["content_hash"] = d.content_hash;
   message["validated"] = d.validated;
   message["validation_passed"] = d.validation_passed;
+  // Where the time from a save to the page went (docs/view.md, "Timing"): rdtfd published the
+  // DESCRIPTION, the snapshot came whole here; ms since the Unix epoch, the page's clock too.
+  message["timing"] = {{"published_at", static_cast<double>(d.utime) / 1000.0},
+                       {"complete_at", static_cast<double>(m.complete_utime) / 1000.0}};
+  Json files = Json::array();
+  for (const auto& f : s.manifest) {
+    files.push_back({{"path", f.path}, {"sha256", f.sha256}, {"size", f.size}, {"role", f.role},
+                     {"url", model_file_url(id, d.revision, f.path)}});
+  }
+  message["files"] = files;
   for (const auto& f : s.manifest) {
     if (f.role == "rdtf") message["gltf"] = model_file_url(id, d.revision, f.path);
   }

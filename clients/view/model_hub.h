@@ -81,6 +81,7 @@ class ModelHub {
   struct Model {
     std::string status = "pending";  // pending, live, error, removed
     std::deque<std::shared_ptr<const rdtf::client::Snapshot>> recent;  // newest first, at most 2
+    std::int64_t complete_utime = 0;  // when the newest snapshot came whole (its blobs fetched)
     std::vector<JointInfo> joints;
     std::string urdf_error;
     std::optional<rdtf::model_error_t> error;  // the last rejected save since the live revision

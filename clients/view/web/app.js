@@ -4,6 +4,7 @@
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { ModelView } from './model.js';
+import { retain } from './files.js';
 
 const $ = (id) => document.getElementById(id);
 const models = new Map();  // id -> {info, view, loading, links, joints, targets}
@@ -42,16 +43,25 @@ function resize() {
 window.addEventListener('resize', resize);
 resize();
 
+const now = () => performance.timeOrigin + performance.now();
 const justSwapped = [];  // models whose new revision this frame draws first
-function render() {
-  requestAnimationFrame(render);
+function renderFrame() {
   controls.update();
   renderer.render(scene, camera);
   ++frame;
-  // When the frame that first drew a revision was rendered (ms since the epoch: the latency
-  // benchmark's save -> pixels end point).
-  const now = performance.timeOrigin + performance.now();
-  for (const m of justSwapped.splice(0)) m.drawnAt = now;
+  if (!justSwapped.length) return;
+  // The frame that first draws a revision: wait until its pixels are in the drawing buffer, then
+  // stamp it (ms since the epoch: the latency benchmark's save -> pixels end point).
+  renderer.getContext().finish();
+  const at = now();
+  for (const m of justSwapped.splice(0)) {
+    m.drawnAt = at;
+    if (m.view) m.view.timing.drawn_at = at;
+  }
+}
+function render() {
+  requestAnimationFrame(render);
+  renderFrame();
 }
 requestAnimationFrame(render);
 
@@ -131,7 +141,11 @@ async function onModel(info) {
     }
     if (m.loading !== view || m.info.status === 'removed') { view.dispose(); return; }
     m.loading = null;
-    if (m.view) { world.remove(m.view.root); m.view.dispose(); }
+    // The old revision is disposed after the new one is drawn: its materials' shader programs,
+    // which the new revision's materials share, stay compiled (three.js frees a program when
+    // nothing uses it, and compiling them again costs SwiftShader tens of ms).
+    const old = m.view;
+    if (old) world.remove(old.root);
     m.view = view;
     world.add(view.root);
     m.drawnAt = null;  // until the frame that draws it is rendered
@@ -139,9 +153,24 @@ async function onModel(info) {
     view.setVisible(visibleParts());
     if (m.lastState) applyState(m, m.lastState);
     if (!cameraFitted && info.id === selected) fitCamera(view);
+    if (m.view) m.view.highlight(diagnosticsOf(m.info));
+    refreshPanel();
+    // Drawn now, not at the next animation frame (up to a refresh interval later).
+    renderFrame();
+    if (old) old.dispose();
+    retainDrawn();
+    return;
   }
   if (m.view) m.view.highlight(diagnosticsOf(m.info));
   refreshPanel();
+  retainDrawn();
+}
+
+// The page keeps the file contents of the revisions drawn or loading only.
+function retainDrawn() {
+  const keep = new Set();
+  for (const m of models.values()) for (const v of [m.view, m.loading]) if (v) v.hashes.forEach((h) => keep.add(h));
+  retain(keep);
 }
 
 function applyState(m, state) {
@@ -251,7 +280,9 @@ function connect() {
     setTimeout(connect, 1000);
   };
   socket.onmessage = (event) => {
+    const received = now();
     const message = JSON.parse(event.data);
+    if (message.type === 'model' && message.timing) message.timing.received_at = received;
     switch (message.type) {
       case 'model': onModel(message); break;
       case 'state': onState(message); break;
@@ -301,6 +332,7 @@ window.rdtfView = {
         error: m.info.error ?? null,
         targets: m.targets,
         drawn_at: m.drawnAt ?? null,
+        timing: m.view ? m.view.timing : null,
         links: [], joints: [],
         ...(m.view ? m.view.state() : {}),
       })),

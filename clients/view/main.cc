@@ -3,12 +3,13 @@
 //   rdtf-view [--port 8765] [--bind 127.0.0.1] [--lcm-url URL]
 //
 // One thread: a Boost.Asio io_context runs the HTTP/WebSocket server (server.h), waits on LCM's
-// socket and ticks the client library every 20 ms (it asks for at least every 100 ms), which also
-// flushes the newest joint and link states to the pages (at most 50 messages a second per model
+// socket and ticks the client library after each batch of datagrams (so blob requests leave at
+// once) and every 20 ms (it asks for at least every 100 ms); the timer also flushes the newest joint and link states to the pages (at most 50 messages a second per model
 // however fast rdtfd publishes).
 #include <CLI/CLI.hpp>
 
 #include <chrono>
+#include <functional>
 #include <iostream>
 #include <memory>
 #include <string>
@@ -36,7 +37,11 @@ using namespace std::chrono_literals;
 // LCM's socket in the io_context: when it is readable, dispatch what is there.
 class LcmPump {
  public:
-  LcmPump(asio::io_context& io, lcm::LCM& lcm) : lcm_(lcm), descriptor_(io, lcm.getFileno()) { wait(); }
+  // `after_batch` runs after each batch dispatched.
+  LcmPump(asio::io_context& io, lcm::LCM& lcm, std::function<void()> after_batch)
+      : lcm_(lcm), descriptor_(io, lcm.getFileno()), after_batch_(std::move(after_batch)) {
+    wait();
+  }
   ~LcmPump() {
     descriptor_.cancel();
     descriptor_.release();  // LCM owns the descriptor
@@ -57,11 +62,13 @@ class LcmPump {
         }
         if (handled == 0) break;
       }
+      after_batch_();
       wait();
     });
   }
   lcm::LCM& lcm_;
   asio::posix::stream_descriptor descriptor_;
+  std::function<void()> after_batch_;
   bool failed_ = false;
 };
 
@@ -147,7 +154,9 @@ int main(int argc, char** argv) {
   const std::string host = address.is_v6() ? "[" + bind + "]" : bind;
   std::cout << "rdtf-view: http://" << host << ":" << server->port() << "/" << std::endl;
 
-  LcmPump pump(io, lcm);
+  // The client is ticked after every batch, not only by the timer: a MANIFEST's blob requests
+  // leave at once instead of up to a timer period later (a tick that has nothing due is cheap).
+  LcmPump pump(io, lcm, [&] { client.tick(); });
   asio::steady_timer timer(io);
   std::function<void()> tick = [&] {
     timer.expires_after(20ms);

@@ -50,6 +50,22 @@ bool is_simulation_error(const rdtf::model_error_t& error) {
   return true;
 }
 
+// A revision's glTF (its JSON text) up to this size rides in the model message itself, which
+// spares the page a request before it can parse: the page's first step after a save. Larger ones
+// are fetched (100 models' welcome stays well under a page's send queue limit either way).
+constexpr std::size_t kInlineGltfBytes = 64 * 1024;
+
+// The text when it can go into JSON as it is (UTF-8), else nothing (the page fetches it).
+std::optional<std::string> inline_text(const std::shared_ptr<const std::string>& bytes) {
+  if (!bytes || bytes->size() > kInlineGltfBytes) return std::nullopt;
+  try {
+    (void)Json(*bytes).dump();  // throws on invalid UTF-8
+  } catch (const Json::exception&) {
+    return std::nullopt;
+  }
+  return *bytes;
+}
+
 bool movable(const std::string& type) { return type == "revolute" || type == "continuous" || type == "prismatic"; }
 
 }  // namespace
@@ -291,8 +307,13 @@ std::shared_ptr<const std::string> ModelHub::model_message(const std::string& id
                        {"complete_at", static_cast<double>(m.complete_utime) / 1000.0}};
   Json files = Json::array();
   for (const auto& f : s.manifest) {
-    files.push_back({{"path", f.path}, {"sha256", f.sha256}, {"size", f.size}, {"role", f.role},
-                     {"url", model_file_url(id, d.revision, f.path)}});
+    Json file = {{"path", f.path}, {"sha256", f.sha256}, {"size", f.size}, {"role", f.role},
+                 {"url", model_file_url(id, d.revision, f.path)}};
+    if (f.role == "rdtf") {
+      const auto blob = s.blobs.find(f.sha256);
+      if (auto text = inline_text(blob == s.blobs.end() ? nullptr : blob->second)) file["text"] = std::move(*text);
+    }
+    files.push_back(std::move(file));
   }
   message["files"] = files;
   for (const auto& f : s.manifest) {

@@ -48,7 +48,10 @@ const run = (file, args, log) => {
   children.push(child);
   return child;
 };
-process.on('exit', () => children.forEach((c) => c.kill('SIGKILL')));
+process.on('exit', () => {
+  children.forEach((c) => c.kill('SIGKILL'));
+  fs.rmSync(root, { recursive: true, force: true });
+});
 run(path.join(build, 'daemon/rdtfd'), ['--config', path.join(root, 'rdtfd.json'), '--watch', watch, '--output', path.join(root, 'out'), '--settle-ms', '50'], 'rdtfd.log');
 const view = run(path.join(build, 'clients/view/rdtf-view'), ['--port', '8765'], 'view.log');
 await sleep(500);

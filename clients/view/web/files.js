@@ -7,6 +7,12 @@ const held = new Map();  // sha256 -> {url, promise}
 
 function fetchOnce(file) {
   let entry = held.get(file.sha256);
+  if (!entry && typeof file.text === 'string') {
+    // The glTF's text came in the model message: nothing to fetch.
+    const blob = new Blob([file.text], { type: 'model/gltf+json' });
+    entry = { url: URL.createObjectURL(blob), promise: Promise.resolve(blob) };
+    held.set(file.sha256, entry);
+  }
   if (!entry) {
     entry = { url: null };
     entry.promise = fetch(file.url).then(async (response) => {

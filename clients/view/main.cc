@@ -14,6 +14,10 @@
 #include <memory>
 #include <string>
 
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
+
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/ip/address.hpp>
 #include <boost/asio/posix/stream_descriptor.hpp>
@@ -71,6 +75,12 @@ class LcmPump {
   std::function<void()> after_batch_;
   bool failed_ = false;
 };
+
+void release_free_memory() {
+#ifdef __GLIBC__
+  malloc_trim(0);
+#endif
+}
 
 }  // namespace
 
@@ -139,11 +149,24 @@ int main(int argc, char** argv) {
   rdtf::client::Options client_options;
   client_options.prefix = prefix;
   client_options.blobs = rdtf::client::Blobs::kAll;
+  // The page draws the glTF: its buffers and images, never the URDF's meshes (a 1M-triangle
+  // link's STL is 50 MB, new with every revision).
+  client_options.blob_roles = {"rdtf", "buffer", "image"};
+  // Blobs are held while a revision the hub keeps (the live one and the one before) uses them,
+  // no longer: memory follows those two revisions, not how many came before (docs/view.md).
+  client_options.limits.max_store_bytes = 0;
   client_options.requester = "rdtf-view";
   rdtf::client::Callbacks callbacks;
-  callbacks.on_revision = [&](std::shared_ptr<const rdtf::client::Snapshot> s) { hub.on_revision(std::move(s)); };
+  bool trim_due = false;
+  callbacks.on_revision = [&](std::shared_ptr<const rdtf::client::Snapshot> s) {
+    hub.on_revision(std::move(s));
+    trim_due = true;
+  };
   callbacks.on_error = [&](const rdtf::model_error_t& e) { hub.on_error(e); };
-  callbacks.on_removed = [&](const rdtf::model_removed_t& r) { hub.on_removed(r); };
+  callbacks.on_removed = [&](const rdtf::model_removed_t& r) {
+    hub.on_removed(r);
+    trim_due = true;
+  };
   callbacks.on_joint_state = [&](const rdtf::client::Snapshot& s, const rdtf::joint_state_t& q) { hub.on_joint_state(s, q); };
   callbacks.on_link_state = [&](const rdtf::client::Snapshot& s, const rdtf::link_state_t& x) { hub.on_link_state(s, x); };
   callbacks.on_problem = [](const std::string& model_id, const std::string& problem) {
@@ -156,7 +179,15 @@ int main(int argc, char** argv) {
 
   // The client is ticked after every batch, not only by the timer: a MANIFEST's blob requests
   // leave at once instead of up to a timer period later (a tick that has nothing due is cheap).
-  LcmPump pump(io, lcm, [&] { client.tick(); });
+  LcmPump pump(io, lcm, [&] {
+    client.tick();  // also evicts the blobs of the revision the hub just let go
+    if (trim_due) {
+      trim_due = false;
+      // glibc keeps freed memory for reuse, and a big blob freed in the middle of the heap is
+      // never handed back: return it to the system once a revision's blobs are gone.
+      release_free_memory();
+    }
+  });
   asio::steady_timer timer(io);
   std::function<void()> tick = [&] {
     timer.expires_after(20ms);

@@ -124,6 +124,21 @@ TEST(ViewHttpPaths, RefusesPathsOutsideTheirFolders) {
   EXPECT_FALSE(percent_decode("%4"));
 }
 
+// One decoder for request paths and glTF URIs (rdtf/percent_decode.h), with the reason.
+TEST(PercentDecode, DecodesEveryEscapeAndSaysWhyNot) {
+  std::string why;
+  EXPECT_EQ(rdtf::percent_decode("mesh%20one+two%2Fx%C3%A9.bin", &why), std::optional<std::string>("mesh one+two/x\xC3\xA9.bin"));
+  EXPECT_EQ(why, "");
+  EXPECT_FALSE(rdtf::percent_decode("a.bin%00.png", &why));
+  EXPECT_EQ(why, "the URI encodes a NUL byte (%00) at byte 5");
+  EXPECT_FALSE(rdtf::percent_decode("ab%4", &why));
+  EXPECT_EQ(why, "malformed percent-escape at byte 2");
+  EXPECT_FALSE(rdtf::percent_decode("ab%g1", &why));
+  EXPECT_EQ(why, "malformed percent-escape at byte 2");
+  EXPECT_FALSE(rdtf::percent_decode("%", &why));
+  EXPECT_EQ(rdtf::percent_decode("%41%62"), std::optional<std::string>("Ab"));
+}
+
 TEST(ViewHttpPaths, WebSocketOnlyFromTheViewersOwnPage) {
   EXPECT_EQ(check_socket_origin("127.0.0.1:8765", "http://127.0.0.1:8765", true, 8765), "");
   EXPECT_EQ(check_socket_origin("localhost:8765", "http://localhost:8765", true, 8765), "");

@@ -91,18 +91,24 @@ int main(int argc, char** argv) {
   std::string url;
   std::string prefix = "RDTF";
   std::string web_dir = RDTF_VIEW_WEB_DIR;
-  rdtf::view::Gains gains;
+  rdtf::view::GainRule gains;
+  double kp = -1, kd = -1;
   app.add_option("--port", port, "TCP port of the page (0: any free port)")->capture_default_str()->check(CLI::Range(0, 65535));
   app.add_option("--bind", bind, "Address to listen on (loopback unless you mean others to command joints)")
       ->capture_default_str();
   app.add_option("--lcm-url", url, "LCM URL (default: LCM_DEFAULT_URL, else LCM's default)");
   app.add_option("--channel-prefix", prefix, "rdtfd's channel prefix")->capture_default_str();
   app.add_option("--web-dir", web_dir, "Folder of the page (index.html, *.js, node_modules/three)")->capture_default_str();
-  app.add_option("--kp", gains.kp, "Position gain of the sliders' commands, N m/rad (N/m)")->capture_default_str()
+  app.add_option("--gain-hz", gains.frequency_hz,
+                 "Natural frequency of each joint's slider response: kp = M w^2, kd = 2 M w for the inertia M it moves")
+      ->capture_default_str()->check(CLI::Range(0.01, 100.0));
+  app.add_option("--kp", kp, "The same position gain for every joint instead, N m/rad (N/m)")
       ->check(CLI::NonNegativeNumber);
-  app.add_option("--kd", gains.kd, "Velocity gain of the sliders' commands, N m s/rad (N s/m)")->capture_default_str()
+  app.add_option("--kd", kd, "The same velocity gain for every joint instead, N m s/rad (N s/m)")
       ->check(CLI::NonNegativeNumber);
   CLI11_PARSE(app, argc, argv);
+  if (kp >= 0) gains.kp = kp;
+  if (kd >= 0) gains.kd = kd;
 
   boost::system::error_code ec;
   const auto address = asio::ip::make_address(bind, ec);

@@ -1,5 +1,6 @@
 #include "model_hub.h"
 
+#include <algorithm>
 #include <chrono>
 #include <set>
 
@@ -102,12 +103,20 @@ std::vector<JointInfo> joints_of_urdf(const std::string& urdf, std::string* erro
       j.lower = joint->limits->lower;
       j.upper = joint->limits->upper;
     }
+    j.moved_inertia = moved_inertia(*model, *joint);
     out.push_back(std::move(j));
   }
   return out;
 }
 
-ModelHub::ModelHub(Gains gains, Broadcast broadcast, PublishCommand publish)
+Gains GainRule::of(const JointInfo& joint) const {
+  Gains g = gains_for(joint.moved_inertia, frequency_hz);
+  if (kp) g.kp = *kp;
+  if (kd) g.kd = *kd;
+  return g;
+}
+
+ModelHub::ModelHub(GainRule gains, Broadcast broadcast, PublishCommand publish)
     : gains_(gains), broadcast_(std::move(broadcast)), publish_(std::move(publish)) {}
 
 void ModelHub::on_revision(std::shared_ptr<const rdtf::client::Snapshot> snapshot) {
@@ -120,6 +129,7 @@ void ModelHub::on_revision(std::shared_ptr<const rdtf::client::Snapshot> snapsho
   while (m.recent.size() > 2) m.recent.pop_back();
   m.urdf_error.clear();
   m.joints = joints_of_urdf(snapshot->description.urdf, &m.urdf_error);
+  for (auto& j : m.joints) j.gains = gains_.of(j);
   m.joint_state.reset();
   m.link_state.reset();
   // Targets are kept by name where the joint still moves within its limits (a hot reload keeps
@@ -189,12 +199,15 @@ void ModelHub::on_joint_state(const rdtf::client::Snapshot& snapshot, const rdtf
   command.revision = state.revision;
   command.content_hash = state.content_hash;
   for (const auto& [joint, value] : m.targets) {
+    const auto info = std::find_if(m.joints.begin(), m.joints.end(), [&](const JointInfo& j) { return j.name == joint; });
+    if (info == m.joints.end()) continue;  // targets are kept for the revision's joints only
     command.name.push_back(joint);
     command.mode.push_back(rdtf::joint_command_t::POSITION);
     command.value.push_back(value);
-    command.kp.push_back(gains_.kp);
-    command.kd.push_back(gains_.kd);
+    command.kp.push_back(info->gains.kp);
+    command.kd.push_back(info->gains.kd);
   }
+  if (command.name.empty()) return;
   rdtf::set_counts(command);
   publish_(state.model_id, command);
 }
@@ -336,6 +349,9 @@ std::shared_ptr<const std::string> ModelHub::model_message(const std::string& id
   for (const auto& j : m.joints) {
     Json joint = {{"name", j.name}, {"type", j.type}, {"parent", j.parent}, {"child", j.child},
                   {"axis", {j.axis[0], j.axis[1], j.axis[2]}}};
+    joint["moved_inertia"] = j.moved_inertia;
+    joint["kp"] = j.gains.kp;
+    joint["kd"] = j.gains.kd;
     joint["lower"] = j.lower ? Json(*j.lower) : Json(nullptr);
     joint["upper"] = j.upper ? Json(*j.upper) : Json(nullptr);
     joints.push_back(joint);

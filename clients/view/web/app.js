@@ -252,6 +252,12 @@ function buildSliders(m) {
     input.min = lower; input.max = upper;
     input.value = m.targets[j.name] ?? m.view.jointPositions.get(j.name) ?? 0;
     input.dataset.joint = j.name;
+    input.dataset.gains = Number.isFinite(j.kp) ? ` kp ${j.kp.toPrecision(3)} kd ${j.kd.toPrecision(3)}` : '';
+    const unit = j.type === 'prismatic' ? ['kg', 'N/m', 'N s/m'] : ['kg m^2', 'N m/rad', 'N m s/rad'];
+    div.title = Number.isFinite(j.kp)
+      ? `gains of this joint's commands: kp ${j.kp} ${unit[1]}, kd ${j.kd} ${unit[2]} ` +
+        `(it moves ${j.moved_inertia} ${unit[0]}; docs/view.md, "Sliders")`
+      : '';
     input.addEventListener('input', () => setJoint(m.info.id, j.name, Number(input.value)));
     $('sliders').appendChild(div);
   }
@@ -266,7 +272,7 @@ function refreshSliderValues() {
     const q = m.view.jointPositions.get(name);
     const target = m.targets[name];
     input.previousSibling.textContent = `${name}: ${q === undefined ? '-' : q.toFixed(3)}` +
-      `${target === undefined ? '' : ` (target ${target.toFixed(3)})`}`;
+      `${target === undefined ? '' : ` (target ${target.toFixed(3)})`}${input.dataset.gains}`;
   }
 }
 

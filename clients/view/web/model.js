@@ -256,7 +256,8 @@ export class ModelView {
         return { name: l.name, position: [p.x, p.y, p.z], box: l.box ? l.box.sides : null };
       }),
       joints: this.joints.map((j) => ({ name: j.name, type: j.type, lower: j.lower, upper: j.upper,
-        position: this.jointPositions.has(j.name) ? this.jointPositions.get(j.name) : null })),
+        position: this.jointPositions.has(j.name) ? this.jointPositions.get(j.name) : null,
+        kp: j.kp ?? null, kd: j.kd ?? null, moved_inertia: j.moved_inertia ?? null })),
       total_mass: this.totalMass,
       com: this.totalComPosition.toArray(),
       sim_time: this.simTime,

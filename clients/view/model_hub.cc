@@ -1,6 +1,5 @@
 #include "model_hub.h"
 
-#include <algorithm>
 #include <chrono>
 #include <set>
 
@@ -198,14 +197,14 @@ void ModelHub::on_joint_state(const rdtf::client::Snapshot& snapshot, const rdtf
   command.model_id = state.model_id;
   command.revision = state.revision;
   command.content_hash = state.content_hash;
-  for (const auto& [joint, value] : m.targets) {
-    const auto info = std::find_if(m.joints.begin(), m.joints.end(), [&](const JointInfo& j) { return j.name == joint; });
-    if (info == m.joints.end()) continue;  // targets are kept for the revision's joints only
-    command.name.push_back(joint);
+  for (const auto& j : m.joints) {
+    const auto target = m.targets.find(j.name);
+    if (target == m.targets.end()) continue;
+    command.name.push_back(j.name);
     command.mode.push_back(rdtf::joint_command_t::POSITION);
-    command.value.push_back(value);
-    command.kp.push_back(info->gains.kp);
-    command.kd.push_back(info->gains.kd);
+    command.value.push_back(target->second);
+    command.kp.push_back(j.gains.kp);
+    command.kd.push_back(j.gains.kd);
   }
   if (command.name.empty()) return;
   rdtf::set_counts(command);

@@ -55,6 +55,7 @@ process.on('exit', () => {
 run(path.join(build, 'daemon/rdtfd'), ['--config', path.join(root, 'rdtfd.json'), '--watch', watch, '--output', path.join(root, 'out'), '--settle-ms', '50'], 'rdtfd.log');
 const view = run(path.join(build, 'clients/view/rdtf-view'), ['--port', '8765'], 'view.log');
 await sleep(500);
+const rss = () => Number(/VmRSS:\s+(\d+)/.exec(fs.readFileSync(`/proc/${view.pid}/status`, 'utf8'))[1]);
 
 const browser = await puppeteer.launch({
   executablePath: process.env.CHROMIUM || '/usr/bin/chromium', headless: true,
@@ -129,6 +130,7 @@ async function latency(id, write, count, files) {
   let m = await waitRevision(id, 0);
   const ms = [];
   const runs = [];
+  const rss_kib = [rss()];  // rdtf-view's, once the first revision is drawn and after each save's
   for (let i = 0; i < count; ++i) {
     const t0 = now();
     write(i);
@@ -136,13 +138,15 @@ async function latency(id, write, count, files) {
     ms.push(m.drawn_at - t0);
     runs.push({ t0, revision: m.revision, timing: m.timing });
     await sleep(100);  // let the simulation's states of the new revision flow, as between real saves
+    rss_kib.push(rss());
   }
   const log = conversions();
   const stages = runs.map((r) => stagesOf(r.t0, log.get(`${id}#${r.revision}`), r.timing || {})).filter(Boolean);
   const stage_median_ms = Object.fromEntries(STAGES.map((s) => [s, Math.round(10 * median(stages.map((x) => x[s]))) / 10]));
   const stage_p99_ms = Object.fromEntries(STAGES.map((s) => [s, Math.round(10 * percentile(stages.map((x) => x[s]), 99)) / 10]));
   return { p50: percentile(ms, 50), p99: percentile(ms, 99), max: Math.max(...ms), n: ms.length,
-    load: os.loadavg().map((x) => Math.round(100 * x) / 100), broken_down: stages.length, stage_median_ms, stage_p99_ms };
+    load: os.loadavg().map((x) => Math.round(100 * x) / 100), broken_down: stages.length, stage_median_ms, stage_p99_ms,
+    rss_kib };
 }
 
 report({ bench: 'save_to_pixels_ms', validate, model: 'arm3 (3 links)', ...(await latency('arm3.gltf', (i) => writeArm('arm3.gltf', 1.1 + 0.001 * i), saves, [path.join(watch, 'arm3.gltf'), path.join(watch, 'arm3.bin')])) });
@@ -186,7 +190,6 @@ if (big) {
   fs.rmSync(path.join(watch, 'big.gltf'));
 }
 
-const rss = () => Number(/VmRSS:\s+(\d+)/.exec(fs.readFileSync(`/proc/${view.pid}/status`, 'utf8'))[1]);
 const before = rss();
 for (let i = 0; i < modelCount; ++i) writeArm(`arm3_${String(i).padStart(3, '0')}.gltf`, 1.0 + i * 1e-3);
 const end = Date.now() + 300000;

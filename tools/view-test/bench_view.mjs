@@ -117,11 +117,12 @@ const median = (xs) => percentile(xs, 50);
 //   fetch:    -> the revision's files in the page (contents already held are not fetched)
 //   parse:    -> GLTFLoader done
 //   build:    -> links tinted, frames, centres of mass, inertia boxes and joints made
-//   draw:     -> the first frame drawing it rendered (gl.finish)
-const STAGES = ['settle', 'convert', 'publish', 'bus', 'push', 'fetch', 'parse', 'build', 'draw'];
+//   submit:   -> the first frame drawing it handed to WebGL (three.js's render())
+//   raster:   -> that frame's pixels in the drawing buffer (a one-pixel readPixels returned)
+const STAGES = ['settle', 'convert', 'publish', 'bus', 'push', 'fetch', 'parse', 'build', 'submit', 'raster'];
 function stagesOf(t0, conversion, timing) {
   const marks = [t0, conversion?.start, conversion?.end, timing.published_at, timing.complete_at,
-    timing.received_at, timing.fetched_at, timing.parsed_at, timing.built_at, timing.drawn_at];
+    timing.received_at, timing.fetched_at, timing.parsed_at, timing.built_at, timing.submitted_at, timing.drawn_at];
   if (marks.some((x) => typeof x !== 'number')) return null;
   return Object.fromEntries(STAGES.map((s, i) => [s, marks[i + 1] - marks[i]]));
 }

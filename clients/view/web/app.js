@@ -45,18 +45,22 @@ resize();
 
 const now = () => performance.timeOrigin + performance.now();
 const justSwapped = [];  // models whose new revision this frame draws first
+const onePixel = new Uint8Array(4);
 function renderFrame() {
   controls.update();
   renderer.render(scene, camera);
   ++frame;
   if (!justSwapped.length) return;
-  // The frame that first draws a revision: wait until its pixels are in the drawing buffer, then
-  // stamp it (ms since the epoch: the latency benchmark's save -> pixels end point).
-  renderer.getContext().finish();
+  // The frame that first draws a revision: wait until its pixels are in the drawing buffer (a
+  // one-pixel read waits for the GPU process to raster the frame; Chromium's gl.finish() does
+  // not), then stamp it (ms since the epoch: the latency benchmark's save -> pixels end point).
+  const submitted = now();
+  const gl = renderer.getContext();
+  gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, onePixel);
   const at = now();
   for (const m of justSwapped.splice(0)) {
     m.drawnAt = at;
-    if (m.view) m.view.timing.drawn_at = at;
+    if (m.view) Object.assign(m.view.timing, { submitted_at: submitted, drawn_at: at });
   }
 }
 function render() {

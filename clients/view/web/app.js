@@ -12,6 +12,9 @@ let selected = null;
 let socket = null;
 let frame = 0;
 const refusals = [];
+let dirty = true;        // a frame is due (render(), below)
+let everyFrame = false;  // the frame-rate benchmark's hook
+function invalidate() { dirty = true; }
 const notices = [];
 
 // --- three.js scene ---------------------------------------------------------------------------
@@ -23,6 +26,7 @@ scene.background = new THREE.Color(0x303238);
 const camera = new THREE.PerspectiveCamera(45, 1, 0.01, 1000);
 camera.position.set(1.2, 1.0, 1.6);
 const controls = new OrbitControls(camera, renderer.domElement);
+controls.addEventListener('change', () => invalidate());
 scene.add(new THREE.HemisphereLight(0xffffff, 0x444444, 2.0));
 const sun = new THREE.DirectionalLight(0xffffff, 1.5);
 sun.position.set(3, 5, 4);
@@ -35,6 +39,7 @@ scene.add(world);
 let cameraFitted = false;
 
 function resize() {
+  dirty = true;
   const w = $('view').clientWidth, h = $('view').clientHeight;
   renderer.setSize(w, h);
   camera.aspect = w / Math.max(h, 1);
@@ -63,13 +68,19 @@ function renderFrame() {
     if (m.view) Object.assign(m.view.timing, { submitted_at: submitted, drawn_at: at });
   }
 }
+// Frames are rendered when something changed (a state, the camera, a toggle, a new revision),
+// not 60 times a second: under SwiftShader every frame costs CPU that rdtfd, the bus and the
+// next revision need, and frames queued in the GPU process delay the pixels of the next one.
 function render() {
   requestAnimationFrame(render);
+  if (!dirty && !everyFrame) return;
+  dirty = false;
   renderFrame();
 }
 requestAnimationFrame(render);
 
 function fitCamera(view) {
+  invalidate();
   const box = new THREE.Box3().setFromObject(view.root);
   if (box.isEmpty()) return;
   const centre = box.getCenter(new THREE.Vector3());
@@ -86,9 +97,13 @@ function visibleParts() {
   return { frames: $('show-frames').checked, com: $('show-com').checked, inertia: $('show-inertia').checked };
 }
 for (const id of ['show-frames', 'show-com', 'show-inertia']) {
-  $(id).addEventListener('change', () => { for (const m of models.values()) if (m.view) m.view.setVisible(visibleParts()); });
+  $(id).addEventListener('change', () => {
+    for (const m of models.values()) if (m.view) m.view.setVisible(visibleParts());
+    invalidate();
+  });
 }
 function setUp(up) {
+  invalidate();
   world.rotation.set(up === 'z' ? -Math.PI / 2 : 0, 0, 0);
   $('up').value = up;
 }
@@ -178,6 +193,7 @@ function retainDrawn() {
 }
 
 function applyState(m, state) {
+  invalidate();
   if (!m.view) return;
   if (state.links && state.links.revision === m.view.revision) m.view.setLinkState(state.links);
   if (state.joints && state.joints.revision === m.view.revision) m.view.setJointState(state.joints);
@@ -192,6 +208,7 @@ function onState(state) {
 
 // --- panel ------------------------------------------------------------------------------------
 function refreshPanel() {
+  invalidate();  // which model is shown, what is red
   for (const [id, m] of models) if (m.view) m.view.root.visible = id === selected;
   const list = $('models');
   list.replaceChildren(...[...models.values()].map((m) => {
@@ -358,7 +375,11 @@ window.rdtfView = {
       if (k in parts) $(id).checked = !!parts[k];
     }
     for (const m of models.values()) if (m.view) m.view.setVisible(visibleParts());
+    invalidate();
   },
+  // Renders every animation frame (true) or only when something changed (false, the default):
+  // for the frame-rate benchmark.
+  renderEveryFrame(on) { everyFrame = !!on; },
   // Sends raw text on the page's socket (tests of hostile messages).
   sendRaw(text) { socket.send(text); },
 };

@@ -201,6 +201,8 @@ for (;;) {
   if (Date.now() > end) throw new Error(`only ${live} models live`);
   await sleep(200);
 }
-report({ bench: 'rdtf_view_rss_kib', models: modelCount + 1, before_kib: before, with_models_kib: rss() });
+const withModels = rss();
+await sleep(5000);  // what stays once the pages' queues drained
+report({ bench: 'rdtf_view_rss_kib', models: modelCount + 1, before_kib: before, with_models_kib: withModels, five_s_later_kib: rss() });
 await browser.close();
 process.exit(0);

@@ -140,6 +140,9 @@ int main(int argc, char** argv) {
       gains, [&](std::shared_ptr<const std::string> json) { if (server) server->broadcast(json); },
       [&](const std::string& model_id, rdtf::joint_command_t& command) {
         lcm.publish(prefix + "/" + model_id + "/JOINT_COMMAND", &command);
+      },
+      [&](const std::string& model_id, std::shared_ptr<const std::string> json) {
+        if (server) server->broadcast_state(model_id, json);
       });
   try {
     rdtf::view::ServerOptions options;

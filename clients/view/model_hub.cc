@@ -115,8 +115,8 @@ Gains GainRule::of(const JointInfo& joint) const {
   return g;
 }
 
-ModelHub::ModelHub(GainRule gains, Broadcast broadcast, PublishCommand publish)
-    : gains_(gains), broadcast_(std::move(broadcast)), publish_(std::move(publish)) {}
+ModelHub::ModelHub(GainRule gains, Broadcast broadcast, PublishCommand publish, BroadcastState broadcast_state)
+    : gains_(gains), broadcast_(std::move(broadcast)), broadcast_state_(std::move(broadcast_state)), publish_(std::move(publish)) {}
 
 void ModelHub::on_revision(std::shared_ptr<const rdtf::client::Snapshot> snapshot) {
   const std::string id = snapshot->model_id();
@@ -238,7 +238,11 @@ void ModelHub::flush_states() {
       message["joints"] = {{"revision", s.revision}, {"sim_time", s.sim_time}, {"names", s.name},
                            {"position", s.position}};
     }
-    broadcast_(to_text(message));
+    if (broadcast_state_) {
+      broadcast_state_(id, to_text(message));
+    } else {
+      broadcast_(to_text(message));
+    }
   }
 }
 

@@ -52,8 +52,11 @@ class ModelHub {
  public:
   using Broadcast = std::function<void(std::shared_ptr<const std::string> json)>;
   using PublishCommand = std::function<void(const std::string& model_id, rdtf::joint_command_t& command)>;
+  // A model's state message (a newer one of the same model may replace it before it is sent).
+  using BroadcastState = std::function<void(const std::string& model_id, std::shared_ptr<const std::string> json)>;
 
-  ModelHub(GainRule gains, Broadcast broadcast, PublishCommand publish);
+  // Without `broadcast_state`, states go through `broadcast`.
+  ModelHub(GainRule gains, Broadcast broadcast, PublishCommand publish, BroadcastState broadcast_state = nullptr);
 
   // rdtf_client's callbacks.
   void on_revision(std::shared_ptr<const rdtf::client::Snapshot> snapshot);
@@ -103,6 +106,7 @@ class ModelHub {
 
   GainRule gains_;
   Broadcast broadcast_;
+  BroadcastState broadcast_state_;
   PublishCommand publish_;
   std::map<std::string, Model> models_;
   Catalog catalog_;

@@ -30,6 +30,10 @@ void BlobStore::insert(const std::string& sha256, std::shared_ptr<const std::str
   if (blobs_.count(sha256)) return;
   bytes_ += static_cast<std::int64_t>(bytes->size());
   blobs_[sha256] = Held{std::move(bytes), ++clock_};
+  trim();
+}
+
+void BlobStore::trim() {
   // Evict what only the store holds (no snapshot refers to it), least recently used first.
   while (bytes_ > capacity_) {
     auto victim = blobs_.end();

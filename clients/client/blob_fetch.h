@@ -27,6 +27,8 @@ class BlobStore {
   std::shared_ptr<const std::string> find(const std::string& sha256);
   // Adds a checked blob; evicts the least recently used blobs nobody else holds while over capacity.
   void insert(const std::string& sha256, std::shared_ptr<const std::string> bytes);
+  // Evicts, while over capacity, the least recently used blobs nobody else holds (any more).
+  void trim();
   std::int64_t bytes() const { return bytes_; }
 
  private:

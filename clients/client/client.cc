@@ -387,6 +387,7 @@ struct Client::State {
     if (options.blobs == Blobs::kAll) {
       for (const auto& file : snapshot->manifest) {
         if (snapshot->blobs.count(file.sha256)) continue;
+        if (!options.blob_roles.empty() && !options.blob_roles.count(file.role)) continue;
         if (auto bytes = store.find(file.sha256)) {
           snapshot->blobs[file.sha256] = std::move(bytes);
         } else {
@@ -442,6 +443,9 @@ struct Client::State {
   }
 
   void tick(Clock::time_point now) {
+    // Blobs the caller stopped holding since (an older snapshot dropped) go now if over capacity,
+    // not only when the next blob arrives.
+    store.trim();
     // Until the first description of a followed model, ask again with back-off: the first
     // answer may have been lost, or rdtfd started after this client.
     if (!described_any() && now >= next_start_request) {

@@ -7,10 +7,13 @@
 #include <string>
 #include <string_view>
 
+#include "rdtf/percent_decode.h"
+
 namespace rdtf::view {
 
-// %XX decoded; nullopt for a malformed escape or a decoded NUL.
-std::optional<std::string> percent_decode(std::string_view text);
+// Request paths are decoded by rdtf::percent_decode (rdtf/percent_decode.h: nothing for a
+// malformed escape or an encoded NUL).
+using rdtf::percent_decode;
 // encodeURIComponent's set: everything but A-Z a-z 0-9 - _ . ! ~ * ' ( ) as %XX.
 std::string percent_encode(std::string_view text);
 

@@ -3,15 +3,20 @@
 //   rdtf-view [--port 8765] [--bind 127.0.0.1] [--lcm-url URL]
 //
 // One thread: a Boost.Asio io_context runs the HTTP/WebSocket server (server.h), waits on LCM's
-// socket and ticks the client library every 20 ms (it asks for at least every 100 ms), which also
-// flushes the newest joint and link states to the pages (at most 50 messages a second per model
+// socket and ticks the client library after each batch of datagrams (so blob requests leave at
+// once) and every 20 ms (it asks for at least every 100 ms); the timer also flushes the newest joint and link states to the pages (at most 50 messages a second per model
 // however fast rdtfd publishes).
 #include <CLI/CLI.hpp>
 
 #include <chrono>
+#include <functional>
 #include <iostream>
 #include <memory>
 #include <string>
+
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
 
 #include <boost/asio/io_context.hpp>
 #include <boost/asio/ip/address.hpp>
@@ -36,7 +41,11 @@ using namespace std::chrono_literals;
 // LCM's socket in the io_context: when it is readable, dispatch what is there.
 class LcmPump {
  public:
-  LcmPump(asio::io_context& io, lcm::LCM& lcm) : lcm_(lcm), descriptor_(io, lcm.getFileno()) { wait(); }
+  // `after_batch` runs after each batch dispatched.
+  LcmPump(asio::io_context& io, lcm::LCM& lcm, std::function<void()> after_batch)
+      : lcm_(lcm), descriptor_(io, lcm.getFileno()), after_batch_(std::move(after_batch)) {
+    wait();
+  }
   ~LcmPump() {
     descriptor_.cancel();
     descriptor_.release();  // LCM owns the descriptor
@@ -57,13 +66,21 @@ class LcmPump {
         }
         if (handled == 0) break;
       }
+      after_batch_();
       wait();
     });
   }
   lcm::LCM& lcm_;
   asio::posix::stream_descriptor descriptor_;
+  std::function<void()> after_batch_;
   bool failed_ = false;
 };
+
+void release_free_memory() {
+#ifdef __GLIBC__
+  malloc_trim(0);
+#endif
+}
 
 }  // namespace
 
@@ -74,18 +91,24 @@ int main(int argc, char** argv) {
   std::string url;
   std::string prefix = "RDTF";
   std::string web_dir = RDTF_VIEW_WEB_DIR;
-  rdtf::view::Gains gains;
+  rdtf::view::GainRule gains;
+  double kp = -1, kd = -1;
   app.add_option("--port", port, "TCP port of the page (0: any free port)")->capture_default_str()->check(CLI::Range(0, 65535));
   app.add_option("--bind", bind, "Address to listen on (loopback unless you mean others to command joints)")
       ->capture_default_str();
   app.add_option("--lcm-url", url, "LCM URL (default: LCM_DEFAULT_URL, else LCM's default)");
   app.add_option("--channel-prefix", prefix, "rdtfd's channel prefix")->capture_default_str();
   app.add_option("--web-dir", web_dir, "Folder of the page (index.html, *.js, node_modules/three)")->capture_default_str();
-  app.add_option("--kp", gains.kp, "Position gain of the sliders' commands, N m/rad (N/m)")->capture_default_str()
+  app.add_option("--gain-hz", gains.frequency_hz,
+                 "Natural frequency of each joint's slider response: kp = M w^2, kd = 2 M w for the inertia M it moves")
+      ->capture_default_str()->check(CLI::Range(0.01, 100.0));
+  app.add_option("--kp", kp, "The same position gain for every joint instead, N m/rad (N/m)")
       ->check(CLI::NonNegativeNumber);
-  app.add_option("--kd", gains.kd, "Velocity gain of the sliders' commands, N m s/rad (N s/m)")->capture_default_str()
+  app.add_option("--kd", kd, "The same velocity gain for every joint instead, N m s/rad (N s/m)")
       ->check(CLI::NonNegativeNumber);
   CLI11_PARSE(app, argc, argv);
+  if (kp >= 0) gains.kp = kp;
+  if (kd >= 0) gains.kd = kd;
 
   boost::system::error_code ec;
   const auto address = asio::ip::make_address(bind, ec);
@@ -117,6 +140,9 @@ int main(int argc, char** argv) {
       gains, [&](std::shared_ptr<const std::string> json) { if (server) server->broadcast(json); },
       [&](const std::string& model_id, rdtf::joint_command_t& command) {
         lcm.publish(prefix + "/" + model_id + "/JOINT_COMMAND", &command);
+      },
+      [&](const std::string& model_id, std::shared_ptr<const std::string> json) {
+        if (server) server->broadcast_state(model_id, json);
       });
   try {
     rdtf::view::ServerOptions options;
@@ -132,11 +158,24 @@ int main(int argc, char** argv) {
   rdtf::client::Options client_options;
   client_options.prefix = prefix;
   client_options.blobs = rdtf::client::Blobs::kAll;
+  // The page draws the glTF: its buffers and images, never the URDF's meshes (a 1M-triangle
+  // link's STL is 50 MB, new with every revision).
+  client_options.blob_roles = {"rdtf", "buffer", "image"};
+  // Blobs are held while a revision the hub keeps (the live one and the one before) uses them,
+  // no longer: memory follows those two revisions, not how many came before (docs/view.md).
+  client_options.limits.max_store_bytes = 0;
   client_options.requester = "rdtf-view";
   rdtf::client::Callbacks callbacks;
-  callbacks.on_revision = [&](std::shared_ptr<const rdtf::client::Snapshot> s) { hub.on_revision(std::move(s)); };
+  bool trim_due = false;
+  callbacks.on_revision = [&](std::shared_ptr<const rdtf::client::Snapshot> s) {
+    hub.on_revision(std::move(s));
+    trim_due = true;
+  };
   callbacks.on_error = [&](const rdtf::model_error_t& e) { hub.on_error(e); };
-  callbacks.on_removed = [&](const rdtf::model_removed_t& r) { hub.on_removed(r); };
+  callbacks.on_removed = [&](const rdtf::model_removed_t& r) {
+    hub.on_removed(r);
+    trim_due = true;
+  };
   callbacks.on_joint_state = [&](const rdtf::client::Snapshot& s, const rdtf::joint_state_t& q) { hub.on_joint_state(s, q); };
   callbacks.on_link_state = [&](const rdtf::client::Snapshot& s, const rdtf::link_state_t& x) { hub.on_link_state(s, x); };
   callbacks.on_problem = [](const std::string& model_id, const std::string& problem) {
@@ -147,7 +186,17 @@ int main(int argc, char** argv) {
   const std::string host = address.is_v6() ? "[" + bind + "]" : bind;
   std::cout << "rdtf-view: http://" << host << ":" << server->port() << "/" << std::endl;
 
-  LcmPump pump(io, lcm);
+  // The client is ticked after every batch, not only by the timer: a MANIFEST's blob requests
+  // leave at once instead of up to a timer period later (a tick that has nothing due is cheap).
+  LcmPump pump(io, lcm, [&] {
+    client.tick();  // also evicts the blobs of the revision the hub just let go
+    if (trim_due) {
+      trim_due = false;
+      // glibc keeps freed memory for reuse, and a big blob freed in the middle of the heap is
+      // never handed back: return it to the system once a revision's blobs are gone.
+      release_free_memory();
+    }
+  });
   asio::steady_timer timer(io);
   std::function<void()> tick = [&] {
     timer.expires_after(20ms);

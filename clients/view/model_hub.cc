@@ -50,6 +50,22 @@ bool is_simulation_error(const rdtf::model_error_t& error) {
   return true;
 }
 
+// A revision's glTF (its JSON text) up to this size rides in the model message itself, which
+// spares the page a request before it can parse: the page's first step after a save. Larger ones
+// are fetched (100 models' welcome stays well under a page's send queue limit either way).
+constexpr std::size_t kInlineGltfBytes = 64 * 1024;
+
+// The text when it can go into JSON as it is (UTF-8), else nothing (the page fetches it).
+std::optional<std::string> inline_text(const std::shared_ptr<const std::string>& bytes) {
+  if (!bytes || bytes->size() > kInlineGltfBytes) return std::nullopt;
+  try {
+    (void)Json(*bytes).dump();  // throws on invalid UTF-8
+  } catch (const Json::exception&) {
+    return std::nullopt;
+  }
+  return *bytes;
+}
+
 bool movable(const std::string& type) { return type == "revolute" || type == "continuous" || type == "prismatic"; }
 
 }  // namespace
@@ -86,13 +102,21 @@ std::vector<JointInfo> joints_of_urdf(const std::string& urdf, std::string* erro
       j.lower = joint->limits->lower;
       j.upper = joint->limits->upper;
     }
+    j.moved_inertia = moved_inertia(*model, *joint);
     out.push_back(std::move(j));
   }
   return out;
 }
 
-ModelHub::ModelHub(Gains gains, Broadcast broadcast, PublishCommand publish)
-    : gains_(gains), broadcast_(std::move(broadcast)), publish_(std::move(publish)) {}
+Gains GainRule::of(const JointInfo& joint) const {
+  Gains g = gains_for(joint.moved_inertia, frequency_hz);
+  if (kp) g.kp = *kp;
+  if (kd) g.kd = *kd;
+  return g;
+}
+
+ModelHub::ModelHub(GainRule gains, Broadcast broadcast, PublishCommand publish, BroadcastState broadcast_state)
+    : gains_(gains), broadcast_(std::move(broadcast)), broadcast_state_(std::move(broadcast_state)), publish_(std::move(publish)) {}
 
 void ModelHub::on_revision(std::shared_ptr<const rdtf::client::Snapshot> snapshot) {
   const std::string id = snapshot->model_id();
@@ -100,9 +124,11 @@ void ModelHub::on_revision(std::shared_ptr<const rdtf::client::Snapshot> snapsho
   m.status = "live";
   m.error.reset();
   m.recent.push_front(snapshot);
+  m.complete_utime = now_utime();
   while (m.recent.size() > 2) m.recent.pop_back();
   m.urdf_error.clear();
   m.joints = joints_of_urdf(snapshot->description.urdf, &m.urdf_error);
+  for (auto& j : m.joints) j.gains = gains_.of(j);
   m.joint_state.reset();
   m.link_state.reset();
   // Targets are kept by name where the joint still moves within its limits (a hot reload keeps
@@ -171,13 +197,16 @@ void ModelHub::on_joint_state(const rdtf::client::Snapshot& snapshot, const rdtf
   command.model_id = state.model_id;
   command.revision = state.revision;
   command.content_hash = state.content_hash;
-  for (const auto& [joint, value] : m.targets) {
-    command.name.push_back(joint);
+  for (const auto& j : m.joints) {
+    const auto target = m.targets.find(j.name);
+    if (target == m.targets.end()) continue;
+    command.name.push_back(j.name);
     command.mode.push_back(rdtf::joint_command_t::POSITION);
-    command.value.push_back(value);
-    command.kp.push_back(gains_.kp);
-    command.kd.push_back(gains_.kd);
+    command.value.push_back(target->second);
+    command.kp.push_back(j.gains.kp);
+    command.kd.push_back(j.gains.kd);
   }
+  if (command.name.empty()) return;
   rdtf::set_counts(command);
   publish_(state.model_id, command);
 }
@@ -209,7 +238,11 @@ void ModelHub::flush_states() {
       message["joints"] = {{"revision", s.revision}, {"sim_time", s.sim_time}, {"names", s.name},
                            {"position", s.position}};
     }
-    broadcast_(to_text(message));
+    if (broadcast_state_) {
+      broadcast_state_(id, to_text(message));
+    } else {
+      broadcast_(to_text(message));
+    }
   }
 }
 
@@ -284,6 +317,21 @@ std::shared_ptr<const std::string> ModelHub::model_message(const std::string& id
   message["content_hash"] = d.content_hash;
   message["validated"] = d.validated;
   message["validation_passed"] = d.validation_passed;
+  // Where the time from a save to the page went (docs/view.md, "Timing"): rdtfd published the
+  // DESCRIPTION, the snapshot came whole here; ms since the Unix epoch, the page's clock too.
+  message["timing"] = {{"published_at", static_cast<double>(d.utime) / 1000.0},
+                       {"complete_at", static_cast<double>(m.complete_utime) / 1000.0}};
+  Json files = Json::array();
+  for (const auto& f : s.manifest) {
+    Json file = {{"path", f.path}, {"sha256", f.sha256}, {"size", f.size}, {"role", f.role},
+                 {"url", model_file_url(id, d.revision, f.path)}};
+    if (f.role == "rdtf") {
+      const auto blob = s.blobs.find(f.sha256);
+      if (auto text = inline_text(blob == s.blobs.end() ? nullptr : blob->second)) file["text"] = std::move(*text);
+    }
+    files.push_back(std::move(file));
+  }
+  message["files"] = files;
   for (const auto& f : s.manifest) {
     if (f.role == "rdtf") message["gltf"] = model_file_url(id, d.revision, f.path);
   }
@@ -304,6 +352,9 @@ std::shared_ptr<const std::string> ModelHub::model_message(const std::string& id
   for (const auto& j : m.joints) {
     Json joint = {{"name", j.name}, {"type", j.type}, {"parent", j.parent}, {"child", j.child},
                   {"axis", {j.axis[0], j.axis[1], j.axis[2]}}};
+    joint["moved_inertia"] = j.moved_inertia;
+    joint["kp"] = j.gains.kp;
+    joint["kd"] = j.gains.kd;
     joint["lower"] = j.lower ? Json(*j.lower) : Json(nullptr);
     joint["upper"] = j.upper ? Json(*j.upper) : Json(nullptr);
     joints.push_back(joint);

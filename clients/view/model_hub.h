@@ -4,7 +4,7 @@
 // Fed by rdtf_client's callbacks (on the thread that dispatches LCM; the hub has no thread and is
 // not thread-safe). It turns what it hears into page messages (JSON text, docs/view.md "Page
 // protocol") handed to `broadcast`, and answers each JOINT_STATE of a model that has targets with
-// one JOINT_COMMAND (POSITION mode, the hub's gains) stamped with that state's revision and hash,
+// one JOINT_COMMAND (POSITION mode, each joint's gains: GainRule) stamped with that state's revision and hash,
 // as rdtf-pd-controller does: a command lives joint_command_timeout_s in rdtfd, so it is renewed
 // with every state while a target is held.
 #pragma once
@@ -22,6 +22,7 @@
 #include <rdtf/joint_state_t.hpp>
 #include <rdtf/link_state_t.hpp>
 
+#include "joint_gains.h"
 #include "page_protocol.h"
 #include "rdtf/client.h"
 
@@ -32,22 +33,30 @@ struct JointInfo {
   std::string name, type, parent, child;
   double axis[3] = {1, 0, 0};
   std::optional<double> lower, upper;
+  double moved_inertia = 0;  // kg m^2 (kg for a prismatic joint): joint_gains.h
+  Gains gains;               // of the slider's commands (set by the hub's GainRule)
 };
 
 // The joints of a URDF text; empty with `error` set when it does not parse.
 std::vector<JointInfo> joints_of_urdf(const std::string& urdf, std::string* error);
 
-struct Gains {
-  double kp = 200;  // N m/rad (N/m)
-  double kd = 10;   // N m s/rad (N s/m)
+// How the hub picks each joint's gains: the rule of joint_gains.h at `frequency_hz`, or the same
+// kp and/or kd for every joint when given.
+struct GainRule {
+  double frequency_hz = 4;
+  std::optional<double> kp, kd;
+  Gains of(const JointInfo& joint) const;
 };
 
 class ModelHub {
  public:
   using Broadcast = std::function<void(std::shared_ptr<const std::string> json)>;
   using PublishCommand = std::function<void(const std::string& model_id, rdtf::joint_command_t& command)>;
+  // A model's state message (a newer one of the same model may replace it before it is sent).
+  using BroadcastState = std::function<void(const std::string& model_id, std::shared_ptr<const std::string> json)>;
 
-  ModelHub(Gains gains, Broadcast broadcast, PublishCommand publish);
+  // Without `broadcast_state`, states go through `broadcast`.
+  ModelHub(GainRule gains, Broadcast broadcast, PublishCommand publish, BroadcastState broadcast_state = nullptr);
 
   // rdtf_client's callbacks.
   void on_revision(std::shared_ptr<const rdtf::client::Snapshot> snapshot);
@@ -81,6 +90,7 @@ class ModelHub {
   struct Model {
     std::string status = "pending";  // pending, live, error, removed
     std::deque<std::shared_ptr<const rdtf::client::Snapshot>> recent;  // newest first, at most 2
+    std::int64_t complete_utime = 0;  // when the newest snapshot came whole (its blobs fetched)
     std::vector<JointInfo> joints;
     std::string urdf_error;
     std::optional<rdtf::model_error_t> error;  // the last rejected save since the live revision
@@ -94,8 +104,9 @@ class ModelHub {
   std::shared_ptr<const std::string> targets_message(const std::string& id, const Model& model) const;
   void update_catalog(const std::string& id);
 
-  Gains gains_;
+  GainRule gains_;
   Broadcast broadcast_;
+  BroadcastState broadcast_state_;
   PublishCommand publish_;
   std::map<std::string, Model> models_;
   Catalog catalog_;

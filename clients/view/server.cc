@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <deque>
+#include <map>
 #include <fstream>
 #include <iostream>
 #include <sstream>
@@ -88,7 +89,21 @@ class SocketSession : public std::enable_shared_from_this<SocketSession> {
       return;
     }
     queue_.push_back(message);
-    if (queue_.size() == 1) write();
+    write_next();
+  }
+
+  // The newest state of a model: replaces one of the same model not sent yet.
+  void send_state(const std::string& model_id, const std::shared_ptr<const std::string>& message) {
+    if (closed_) return;
+    auto [it, added] = states_.try_emplace(model_id, message);
+    if (added) {
+      state_order_.push_back(model_id);
+    } else {
+      queued_bytes_ -= it->second->size();
+      it->second = message;
+    }
+    queued_bytes_ += message->size();
+    write_next();
   }
 
   void close() {
@@ -169,10 +184,22 @@ class SocketSession : public std::enable_shared_from_this<SocketSession> {
     send(std::make_shared<const std::string>(answer.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace)));
   }
 
-  void write() {
+  // One write at a time: the queued messages in order, then the states waiting (oldest model first).
+  void write_next() {
+    if (writing_ || closed_) return;
+    if (!queue_.empty()) {
+      writing_ = queue_.front();
+      queue_.pop_front();
+    } else if (!state_order_.empty()) {
+      const auto state = states_.find(state_order_.front());
+      state_order_.pop_front();
+      writing_ = state->second;
+      states_.erase(state);
+    } else {
+      return;
+    }
     ws_.text(true);
-    ws_.async_write(asio::buffer(*queue_.front()),
-                    beast::bind_front_handler(&SocketSession::on_write, shared_from_this()));
+    ws_.async_write(asio::buffer(*writing_), beast::bind_front_handler(&SocketSession::on_write, shared_from_this()));
   }
 
   void on_write(beast::error_code ec, std::size_t) {
@@ -180,15 +207,18 @@ class SocketSession : public std::enable_shared_from_this<SocketSession> {
       close();
       return;
     }
-    queued_bytes_ -= queue_.front()->size();
-    queue_.pop_front();
-    if (!queue_.empty() && !closed_) write();
+    queued_bytes_ -= writing_->size();
+    writing_.reset();
+    write_next();
   }
 
   websocket::stream<beast::tcp_stream> ws_;
   std::shared_ptr<Server::Impl> server_;
   beast::flat_buffer buffer_;
   std::deque<std::shared_ptr<const std::string>> queue_;
+  std::map<std::string, std::shared_ptr<const std::string>> states_;  // by model id, not sent yet
+  std::deque<std::string> state_order_;
+  std::shared_ptr<const std::string> writing_;  // the message being written (the buffer Beast reads)
   std::size_t queued_bytes_ = 0;
   bool closed_ = false;
   RateLimiter limiter_;
@@ -332,6 +362,11 @@ const ServerStats& Server::stats() const { return impl_->stats; }
 void Server::broadcast(const std::shared_ptr<const std::string>& json) {
   const auto sockets = impl_->sockets;  // a send may close a socket, which leaves the set
   for (const auto& socket : sockets) socket->send(json);
+}
+
+void Server::broadcast_state(const std::string& model_id, const std::shared_ptr<const std::string>& json) {
+  const auto sockets = impl_->sockets;
+  for (const auto& socket : sockets) socket->send_state(model_id, json);
 }
 
 }  // namespace rdtf::view

@@ -52,6 +52,9 @@ class Server {
   std::uint16_t port() const;
   // Sends a message to every open page.
   void broadcast(const std::shared_ptr<const std::string>& json);
+  // Sends a model's state message to every open page; one still waiting for a page's socket is
+  // replaced by the newer one (a page that reads slowly gets the newest states, not a backlog).
+  void broadcast_state(const std::string& model_id, const std::shared_ptr<const std::string>& json);
   const ServerStats& stats() const;
 
   struct Impl;

@@ -10,16 +10,10 @@
 #include <memory>
 
 #include "../geometry/big_arrays.h"
+#include "rdtf/percent_decode.h"
 
 namespace rdtf::internal {
 namespace {
-
-int hex_value(char c) {
-  if (c >= '0' && c <= '9') return c - '0';
-  if (c >= 'a' && c <= 'f') return c - 'a' + 10;
-  if (c >= 'A' && c <= 'F') return c - 'A' + 10;
-  return -1;
-}
 
 std::string describe_file_type(mode_t mode) {
   if (S_ISDIR(mode)) return "a directory";
@@ -126,24 +120,6 @@ bool read_all(int fd, std::uint64_t size, std::vector<std::uint8_t>& out, std::s
 
 }  // namespace
 
-std::optional<std::string> percent_decode(std::string_view uri) {
-  std::string out;
-  out.reserve(uri.size());
-  for (std::size_t i = 0; i < uri.size(); ++i) {
-    if (uri[i] != '%') {
-      out += uri[i];
-      continue;
-    }
-    if (i + 2 >= uri.size()) return std::nullopt;
-    const int high = hex_value(uri[i + 1]);
-    const int low = hex_value(uri[i + 2]);
-    if (high < 0 || low < 0) return std::nullopt;
-    out += static_cast<char>(high * 16 + low);
-    i += 2;
-  }
-  return out;
-}
-
 bool is_data_uri(std::string_view uri) { return uri.substr(0, 5) == "data:"; }
 
 std::optional<std::filesystem::path> resolve_uri(const std::filesystem::path& folder,
@@ -164,11 +140,8 @@ std::optional<std::filesystem::path> resolve_uri(const std::filesystem::path& fo
     why = "URIs with a query or fragment are refused";
     return std::nullopt;
   }
-  const auto decoded = percent_decode(uri);
-  if (!decoded) {
-    why = "malformed percent-escape";
-    return std::nullopt;
-  }
+  const auto decoded = rdtf::percent_decode(uri, &why);
+  if (!decoded) return std::nullopt;
   if (decoded->find('\0') != std::string::npos) {
     why = "the decoded URI contains a NUL byte";
     return std::nullopt;

@@ -12,10 +12,11 @@
 #include <string_view>
 #include <vector>
 
+#include "rdtf/percent_decode.h"
+
 namespace rdtf::internal {
 
-// RFC 3986 percent-decoding of a URI path ('+' stays '+'). Nothing on a malformed escape.
-std::optional<std::string> percent_decode(std::string_view uri);
+using rdtf::percent_decode;  // rdtf/percent_decode.h, the one decoder of URI paths
 
 bool is_data_uri(std::string_view uri);
 

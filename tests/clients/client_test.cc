@@ -51,9 +51,13 @@ FakeRevision arm(std::int64_t revision = 1) {
 
 // A client without LCM, a fake rdtfd answering its requests, and a clock moved by the test.
 struct Bench {
-  explicit Bench(Blobs blobs = Blobs::kAll, std::string model = "") : server(1000) {
+  explicit Bench(Blobs blobs = Blobs::kAll, std::string model = "", std::set<std::string> roles = {},
+                 std::int64_t store_bytes = rdtf::client::Limits{}.max_store_bytes)
+      : server(1000) {
     rdtf::client::Options options;
     options.blobs = blobs;
+    options.blob_roles = std::move(roles);
+    options.limits.max_store_bytes = store_bytes;
     options.model = std::move(model);
     options.requester = "test";
     rdtf::client::Callbacks callbacks;
@@ -212,6 +216,61 @@ TEST(Client, FetchesEveryBlobAndChecksIt) {
   std::sort(asked.begin(), asked.end());
   EXPECT_EQ(std::adjacent_find(asked.begin(), asked.end()), asked.end());
   EXPECT_EQ(asked.size(), arm().files.size());
+}
+
+TEST(Client, FetchesOnlyTheBlobsOfTheRolesAskedFor) {
+  Bench b(Blobs::kAll, "", {"rdtf", "buffer"});
+  b.live(arm());
+  ASSERT_TRUE(b.run_until([&] { return !b.revisions.empty(); }));
+  const Snapshot& s = *b.revisions[0];
+  expect_snapshot(s, arm(), /*with_blobs=*/false);
+  ASSERT_EQ(s.manifest.size(), arm().files.size());  // the manifest is whole
+  std::set<std::string> wanted;
+  for (const auto& f : arm().files) {
+    const std::string* bytes = s.file(f.path);
+    if (f.role == "rdtf" || f.role == "buffer") {
+      wanted.insert(client::sha256_hex(f.bytes.data(), f.bytes.size()));
+      ASSERT_NE(bytes, nullptr) << f.path;
+      EXPECT_EQ(*bytes, f.bytes) << f.path;
+    } else {
+      EXPECT_EQ(bytes, nullptr) << f.path;
+    }
+  }
+  const auto asked = b.requested_blobs();
+  EXPECT_EQ(std::set<std::string>(asked.begin(), asked.end()), wanted);
+  EXPECT_TRUE(b.drops.empty());
+}
+
+// With no room beyond what is in use, a blob goes as soon as no snapshot holds it: the next
+// tick after the caller dropped the old revision. A later revision with that content fetches it
+// again (with room, NeverAsksAgain... below shows it is not).
+TEST(Client, EvictsBlobsNoSnapshotHoldsAtTheNextTickWhenTheStoreHasNoRoom) {
+  Bench b(Blobs::kAll, "", {}, /*store_bytes=*/0);
+  const FakeRevision r1 = arm(1);
+  b.live(r1);
+  ASSERT_TRUE(b.run_until([&] { return b.revisions.size() == 1; }));
+  const std::string& buffer = r1.files[1].bytes;
+  const std::string buffer_sha = client::sha256_hex(buffer.data(), buffer.size());
+  const auto asked_for_buffer = [&] {
+    const auto asked = b.requested_blobs();
+    return std::count(asked.begin(), asked.end(), buffer_sha);
+  };
+  ASSERT_EQ(asked_for_buffer(), 1);
+  FakeRevision r2 = arm(2);
+  r2.files[1].bytes = text_of(5000, 9);  // another buffer
+  b.live(r2);
+  b.feed(publication(r2));
+  ASSERT_TRUE(b.run_until([&] { return b.revisions.size() == 2; }));
+  expect_snapshot(*b.revisions[1], r2);
+  b.revisions.erase(b.revisions.begin());  // the caller lets revision 1 go
+  b.round();                               // a tick
+  FakeRevision r3 = arm(3);                // revision 1's content again
+  b.live(r3);
+  b.feed(publication(r3));
+  ASSERT_TRUE(b.run_until([&] { return b.revisions.size() == 2; }));
+  expect_snapshot(*b.revisions[1], r3);
+  EXPECT_EQ(asked_for_buffer(), 2);
+  EXPECT_TRUE(b.drops.empty());
 }
 
 TEST(Client, NeverAsksAgainForABlobItHoldsFromAnEarlierRevisionOrAnotherModel) {

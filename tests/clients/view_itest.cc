@@ -186,6 +186,21 @@ TEST(View, SetJointMovesTheJointInTheLiveSimulation) {
     return false;
   })) << m.dump();
   expect_links_where_link_state_puts_them(s, m, kArm);
+  // The commands carry the shoulder's own gains, which the page shows (docs/view.md, "Sliders").
+  double kp = -1, kd = -1;
+  for (const auto& j : m["joints"]) {
+    if (j["name"] == "shoulder" && j["kp"].is_number()) {
+      kp = j["kp"].get<double>();
+      kd = j["kd"].get<double>();
+    }
+  }
+  ASSERT_GT(kp, 0) << m.dump();
+  ASSERT_GT(kd, 0) << m.dump();
+  bool with_its_gains = false;
+  for (const auto& c : decoded<rdtf::joint_command_t>(s.messages(), "JOINT_COMMAND", kArm)) {
+    with_its_gains = with_its_gains || (c.name == std::vector<std::string>{"shoulder"} && c.kp[0] == kp && c.kd[0] == kd);
+  }
+  EXPECT_TRUE(with_its_gains) << "no JOINT_COMMAND with the shoulder's kp " << kp << " and kd " << kd;
   // Beyond the limit (1.57): refused with the reason, nothing sent.
   const Json refused = page.eval("window.rdtfView.setJoint('arm3.gltf', 'shoulder', 2)");
   EXPECT_NE(refused.get<std::string>().find("outside its limits"), std::string::npos) << refused;

@@ -1,11 +1,15 @@
 // rdtf-view's checks of what pages send (clients/view/page_protocol.h) and of request paths and
-// WebSocket origins (clients/view/http_paths.h).
+// WebSocket origins (clients/view/http_paths.h), and the sliders' per-joint gains (joint_gains.h).
 #include <gtest/gtest.h>
 
 #include <string>
 #include <variant>
 
+#include <cmath>
+#include <numbers>
+
 #include "http_paths.h"
+#include "model_hub.h"
 #include "page_protocol.h"
 
 namespace rdtf::view {
@@ -124,6 +128,21 @@ TEST(ViewHttpPaths, RefusesPathsOutsideTheirFolders) {
   EXPECT_FALSE(percent_decode("%4"));
 }
 
+// One decoder for request paths and glTF URIs (rdtf/percent_decode.h), with the reason.
+TEST(PercentDecode, DecodesEveryEscapeAndSaysWhyNot) {
+  std::string why;
+  EXPECT_EQ(rdtf::percent_decode("mesh%20one+two%2Fx%C3%A9.bin", &why), std::optional<std::string>("mesh one+two/x\xC3\xA9.bin"));
+  EXPECT_EQ(why, "");
+  EXPECT_FALSE(rdtf::percent_decode("a.bin%00.png", &why));
+  EXPECT_EQ(why, "the URI encodes a NUL byte (%00) at byte 5");
+  EXPECT_FALSE(rdtf::percent_decode("ab%4", &why));
+  EXPECT_EQ(why, "malformed percent-escape at byte 2");
+  EXPECT_FALSE(rdtf::percent_decode("ab%g1", &why));
+  EXPECT_EQ(why, "malformed percent-escape at byte 2");
+  EXPECT_FALSE(rdtf::percent_decode("%", &why));
+  EXPECT_EQ(rdtf::percent_decode("%41%62"), std::optional<std::string>("Ab"));
+}
+
 TEST(ViewHttpPaths, WebSocketOnlyFromTheViewersOwnPage) {
   EXPECT_EQ(check_socket_origin("127.0.0.1:8765", "http://127.0.0.1:8765", true, 8765), "");
   EXPECT_EQ(check_socket_origin("localhost:8765", "http://localhost:8765", true, 8765), "");
@@ -141,6 +160,68 @@ TEST(ViewHttpPaths, WebSocketOnlyFromTheViewersOwnPage) {
   // Bound to another address on purpose: any host, still only its own page.
   EXPECT_EQ(check_socket_origin("robot.lan:8765", "http://robot.lan:8765", false, 8765), "");
   EXPECT_NE(check_socket_origin("robot.lan:8765", "http://evil.example", false, 8765), "");
+}
+
+}  // namespace
+}  // namespace rdtf::view
+
+namespace rdtf::view {
+namespace {
+
+// shoulder (about z) moves upper and, through elbow, fore; elbow (about its x) moves fore; slide
+// (along x) moves carriage and, through a fixed joint, tool. Hand-computed in the comments.
+constexpr const char* kGainsUrdf = R"(<robot name="gains">
+  <link name="base"><inertial><mass value="50"/><inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial></link>
+  <joint name="shoulder" type="revolute"><parent link="base"/><child link="upper"/>
+    <origin xyz="0 0 1" rpy="0 0 0"/><axis xyz="0 0 2"/><limit lower="-1" upper="1" effort="10" velocity="1"/></joint>
+  <link name="upper"><inertial><origin xyz="0.5 0 0" rpy="0 0 0"/><mass value="2"/>
+    <inertia ixx="0.01" ixy="0" ixz="0" iyy="0.2" iyz="0" izz="0.3"/></inertial></link>
+  <joint name="elbow" type="continuous"><parent link="upper"/><child link="fore"/>
+    <origin xyz="1 0 0" rpy="0 0 1.5707963267948966"/><axis xyz="1 0 0"/></joint>
+  <link name="fore"><inertial><origin xyz="0 0.5 0.25" rpy="1.5707963267948966 0 0"/><mass value="1"/>
+    <inertia ixx="0.1" ixy="0" ixz="0" iyy="0.2" iyz="0" izz="0.4"/></inertial></link>
+  <joint name="slide" type="prismatic"><parent link="base"/><child link="carriage"/>
+    <origin xyz="0 1 0" rpy="0.3 0.2 0.1"/><axis xyz="1 0 0"/><limit lower="0" upper="0.5" effort="100" velocity="1"/></joint>
+  <link name="carriage"><inertial><mass value="3"/><inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial></link>
+  <joint name="tool_mount" type="fixed"><parent link="carriage"/><child link="tool"/><origin xyz="0.2 0 0"/></joint>
+  <link name="tool"><inertial><mass value="0.5"/><inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial></link>
+</robot>)";
+
+TEST(ViewJointGains, FollowTheInertiaEachJointMoves) {
+  std::string error;
+  const auto joints = joints_of_urdf(kGainsUrdf, &error);
+  ASSERT_EQ(error, "");
+  std::map<std::string, JointInfo> by_name;
+  for (const auto& j : joints) by_name[j.name] = j;
+  ASSERT_EQ(by_name.size(), 4u);
+  // shoulder: upper izz + m d^2 = 0.3 + 2 (0.5)^2 = 0.8; fore's centre of mass in the shoulder
+  // frame is (1, 0, 0) + Rz(90) (0, 0.5, 0.25) = (0.5, 0, 0.25), 0.5 off the axis, and the axis is
+  // fore's inertial y (Rz(90) Rx(90) takes y to z): 0.2 + 1 (0.5)^2 = 0.45. Total 1.25.
+  EXPECT_NEAR(by_name["shoulder"].moved_inertia, 1.25, 1e-12);
+  // elbow: about fore's x, which is the inertial x: 0.1 + 1 (0.5^2 + 0.25^2) = 0.4125.
+  EXPECT_NEAR(by_name["elbow"].moved_inertia, 0.4125, 1e-12);
+  // slide: the mass it carries, 3 + 0.5, whatever the orientation.
+  EXPECT_NEAR(by_name["slide"].moved_inertia, 3.5, 1e-12);
+  EXPECT_EQ(by_name["tool_mount"].moved_inertia, 0);
+
+  // kp = M w^2, kd = 2 M w, w = 2 pi f.
+  const double w = 2 * std::numbers::pi * 4;
+  const Gains g = gains_for(1.25, 4);
+  EXPECT_NEAR(g.kp, 1.25 * w * w, 1e-12 * g.kp);
+  EXPECT_NEAR(g.kd, 2 * 1.25 * w, 1e-12 * g.kd);
+  // The rule gives every joint the same damping ratio (1) and frequency: kd^2 = 4 M kp.
+  for (const auto& name : {"shoulder", "elbow", "slide"}) {
+    const GainRule rule;
+    const Gains j = rule.of(by_name[name]);
+    EXPECT_NEAR(j.kd * j.kd, 4 * by_name[name].moved_inertia * j.kp, 1e-12 * j.kd * j.kd) << name;
+    EXPECT_NEAR(std::sqrt(j.kp / by_name[name].moved_inertia), 2 * std::numbers::pi * rule.frequency_hz, 1e-12) << name;
+  }
+  // --kp / --kd replace the rule for every joint.
+  GainRule fixed;
+  fixed.kp = 200;
+  const Gains f = fixed.of(by_name["elbow"]);
+  EXPECT_EQ(f.kp, 200);
+  EXPECT_NEAR(f.kd, 2 * 0.4125 * w, 1e-12 * f.kd);
 }
 
 }  // namespace

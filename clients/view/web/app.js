@@ -4,6 +4,7 @@
 import * as THREE from 'three';
 import { OrbitControls } from 'three/addons/controls/OrbitControls.js';
 import { ModelView } from './model.js';
+import { retain } from './files.js';
 
 const $ = (id) => document.getElementById(id);
 const models = new Map();  // id -> {info, view, loading, links, joints, targets}
@@ -11,6 +12,9 @@ let selected = null;
 let socket = null;
 let frame = 0;
 const refusals = [];
+let dirty = true;        // a frame is due (render(), below)
+let everyFrame = false;  // the frame-rate benchmark's hook
+function invalidate() { dirty = true; }
 const notices = [];
 
 // --- three.js scene ---------------------------------------------------------------------------
@@ -22,6 +26,7 @@ scene.background = new THREE.Color(0x303238);
 const camera = new THREE.PerspectiveCamera(45, 1, 0.01, 1000);
 camera.position.set(1.2, 1.0, 1.6);
 const controls = new OrbitControls(camera, renderer.domElement);
+controls.addEventListener('change', () => invalidate());
 scene.add(new THREE.HemisphereLight(0xffffff, 0x444444, 2.0));
 const sun = new THREE.DirectionalLight(0xffffff, 1.5);
 sun.position.set(3, 5, 4);
@@ -34,6 +39,7 @@ scene.add(world);
 let cameraFitted = false;
 
 function resize() {
+  dirty = true;
   const w = $('view').clientWidth, h = $('view').clientHeight;
   renderer.setSize(w, h);
   camera.aspect = w / Math.max(h, 1);
@@ -42,20 +48,39 @@ function resize() {
 window.addEventListener('resize', resize);
 resize();
 
+const now = () => performance.timeOrigin + performance.now();
 const justSwapped = [];  // models whose new revision this frame draws first
-function render() {
-  requestAnimationFrame(render);
+const onePixel = new Uint8Array(4);
+function renderFrame() {
   controls.update();
   renderer.render(scene, camera);
   ++frame;
-  // When the frame that first drew a revision was rendered (ms since the epoch: the latency
-  // benchmark's save -> pixels end point).
-  const now = performance.timeOrigin + performance.now();
-  for (const m of justSwapped.splice(0)) m.drawnAt = now;
+  if (!justSwapped.length) return;
+  // The frame that first draws a revision: wait until its pixels are in the drawing buffer (a
+  // one-pixel read waits for the GPU process to raster the frame; Chromium's gl.finish() does
+  // not), then stamp it (ms since the epoch: the latency benchmark's save -> pixels end point).
+  const submitted = now();
+  const gl = renderer.getContext();
+  gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, onePixel);
+  const at = now();
+  for (const m of justSwapped.splice(0)) {
+    m.drawnAt = at;
+    if (m.view) Object.assign(m.view.timing, { submitted_at: submitted, drawn_at: at });
+  }
+}
+// Frames are rendered when something changed (a state, the camera, a toggle, a new revision),
+// not 60 times a second: under SwiftShader every frame costs CPU that rdtfd, the bus and the
+// next revision need, and frames queued in the GPU process delay the pixels of the next one.
+function render() {
+  requestAnimationFrame(render);
+  if (!dirty && !everyFrame) return;
+  dirty = false;
+  renderFrame();
 }
 requestAnimationFrame(render);
 
 function fitCamera(view) {
+  invalidate();
   const box = new THREE.Box3().setFromObject(view.root);
   if (box.isEmpty()) return;
   const centre = box.getCenter(new THREE.Vector3());
@@ -72,9 +97,13 @@ function visibleParts() {
   return { frames: $('show-frames').checked, com: $('show-com').checked, inertia: $('show-inertia').checked };
 }
 for (const id of ['show-frames', 'show-com', 'show-inertia']) {
-  $(id).addEventListener('change', () => { for (const m of models.values()) if (m.view) m.view.setVisible(visibleParts()); });
+  $(id).addEventListener('change', () => {
+    for (const m of models.values()) if (m.view) m.view.setVisible(visibleParts());
+    invalidate();
+  });
 }
 function setUp(up) {
+  invalidate();
   world.rotation.set(up === 'z' ? -Math.PI / 2 : 0, 0, 0);
   $('up').value = up;
 }
@@ -131,7 +160,11 @@ async function onModel(info) {
     }
     if (m.loading !== view || m.info.status === 'removed') { view.dispose(); return; }
     m.loading = null;
-    if (m.view) { world.remove(m.view.root); m.view.dispose(); }
+    // The old revision is disposed after the new one is drawn: its materials' shader programs,
+    // which the new revision's materials share, stay compiled (three.js frees a program when
+    // nothing uses it, and compiling them again costs SwiftShader tens of ms).
+    const old = m.view;
+    if (old) world.remove(old.root);
     m.view = view;
     world.add(view.root);
     m.drawnAt = null;  // until the frame that draws it is rendered
@@ -139,12 +172,28 @@ async function onModel(info) {
     view.setVisible(visibleParts());
     if (m.lastState) applyState(m, m.lastState);
     if (!cameraFitted && info.id === selected) fitCamera(view);
+    if (m.view) m.view.highlight(diagnosticsOf(m.info));
+    refreshPanel();
+    // Drawn now, not at the next animation frame (up to a refresh interval later).
+    renderFrame();
+    if (old) old.dispose();
+    retainDrawn();
+    return;
   }
   if (m.view) m.view.highlight(diagnosticsOf(m.info));
   refreshPanel();
+  retainDrawn();
+}
+
+// The page keeps the file contents of the revisions drawn or loading only.
+function retainDrawn() {
+  const keep = new Set();
+  for (const m of models.values()) for (const v of [m.view, m.loading]) if (v) v.hashes.forEach((h) => keep.add(h));
+  retain(keep);
 }
 
 function applyState(m, state) {
+  invalidate();
   if (!m.view) return;
   if (state.links && state.links.revision === m.view.revision) m.view.setLinkState(state.links);
   if (state.joints && state.joints.revision === m.view.revision) m.view.setJointState(state.joints);
@@ -159,6 +208,7 @@ function onState(state) {
 
 // --- panel ------------------------------------------------------------------------------------
 function refreshPanel() {
+  invalidate();  // which model is shown, what is red
   for (const [id, m] of models) if (m.view) m.view.root.visible = id === selected;
   const list = $('models');
   list.replaceChildren(...[...models.values()].map((m) => {
@@ -223,6 +273,12 @@ function buildSliders(m) {
     input.min = lower; input.max = upper;
     input.value = m.targets[j.name] ?? m.view.jointPositions.get(j.name) ?? 0;
     input.dataset.joint = j.name;
+    input.dataset.gains = Number.isFinite(j.kp) ? ` kp ${j.kp.toPrecision(3)} kd ${j.kd.toPrecision(3)}` : '';
+    const unit = j.type === 'prismatic' ? ['kg', 'N/m', 'N s/m'] : ['kg m^2', 'N m/rad', 'N m s/rad'];
+    div.title = Number.isFinite(j.kp)
+      ? `gains of this joint's commands: kp ${j.kp} ${unit[1]}, kd ${j.kd} ${unit[2]} ` +
+        `(it moves ${j.moved_inertia} ${unit[0]}; docs/view.md, "Sliders")`
+      : '';
     input.addEventListener('input', () => setJoint(m.info.id, j.name, Number(input.value)));
     $('sliders').appendChild(div);
   }
@@ -237,7 +293,7 @@ function refreshSliderValues() {
     const q = m.view.jointPositions.get(name);
     const target = m.targets[name];
     input.previousSibling.textContent = `${name}: ${q === undefined ? '-' : q.toFixed(3)}` +
-      `${target === undefined ? '' : ` (target ${target.toFixed(3)})`}`;
+      `${target === undefined ? '' : ` (target ${target.toFixed(3)})`}${input.dataset.gains}`;
   }
 }
 
@@ -251,7 +307,9 @@ function connect() {
     setTimeout(connect, 1000);
   };
   socket.onmessage = (event) => {
+    const received = now();
     const message = JSON.parse(event.data);
+    if (message.type === 'model' && message.timing) message.timing.received_at = received;
     switch (message.type) {
       case 'model': onModel(message); break;
       case 'state': onState(message); break;
@@ -301,6 +359,7 @@ window.rdtfView = {
         error: m.info.error ?? null,
         targets: m.targets,
         drawn_at: m.drawnAt ?? null,
+        timing: m.view ? m.view.timing : null,
         links: [], joints: [],
         ...(m.view ? m.view.state() : {}),
       })),
@@ -316,7 +375,11 @@ window.rdtfView = {
       if (k in parts) $(id).checked = !!parts[k];
     }
     for (const m of models.values()) if (m.view) m.view.setVisible(visibleParts());
+    invalidate();
   },
+  // Renders every animation frame (true) or only when something changed (false, the default):
+  // for the frame-rate benchmark.
+  renderEveryFrame(on) { everyFrame = !!on; },
   // Sends raw text on the page's socket (tests of hostile messages).
   sendRaw(text) { socket.send(text); },
 };

@@ -10,6 +10,9 @@
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { equivalentBox } from './inertia.js';
+import { loadRevisionFiles } from './files.js';
+
+const now = () => performance.timeOrigin + performance.now();
 
 const JOINT_KEYS = ['rdtf_joint', 'rdtf_axis', 'rdtf_lower', 'rdtf_upper', 'rdtf_effort', 'rdtf_velocity',
   'rdtf_damping', 'rdtf_friction', 'rdtf_spring_stiffness'];
@@ -43,10 +46,17 @@ export class ModelView {
     this.jointPositions = new Map();
     this.simTime = null;
     this.highlighted = { links: [], joints: [] };
+    this.hashes = new Set((info.files || []).map((f) => f.sha256));  // the contents it draws from
+    this.timing = { ...(info.timing || {}) };
   }
 
+  // Fetches the revision's files (each content once, files.js) and parses them; `timing` gets
+  // when the files were in (fetched_at) and when GLTFLoader was done (parsed_at), ms since the epoch.
   async load() {
-    const gltf = await new GLTFLoader().loadAsync(this.info.gltf);
+    const files = await loadRevisionFiles(this.info);
+    this.timing.fetched_at = now();
+    const gltf = await new GLTFLoader().parseAsync(JSON.stringify(files.json), files.resourcePath);
+    this.timing.parsed_at = now();
     const json = gltf.parser.json;
     const nodeObjects = [];
     for (const [object, where] of gltf.parser.associations) {
@@ -100,6 +110,7 @@ export class ModelView {
     this.buildOverlays();
     this.buildJoints();
     this.applyPose();
+    this.timing.built_at = now();
   }
 
   buildOverlays() {
@@ -245,7 +256,8 @@ export class ModelView {
         return { name: l.name, position: [p.x, p.y, p.z], box: l.box ? l.box.sides : null };
       }),
       joints: this.joints.map((j) => ({ name: j.name, type: j.type, lower: j.lower, upper: j.upper,
-        position: this.jointPositions.has(j.name) ? this.jointPositions.get(j.name) : null })),
+        position: this.jointPositions.has(j.name) ? this.jointPositions.get(j.name) : null,
+        kp: j.kp ?? null, kd: j.kd ?? null, moved_inertia: j.moved_inertia ?? null })),
       total_mass: this.totalMass,
       com: this.totalComPosition.toArray(),
       sim_time: this.simTime,

@@ -64,7 +64,9 @@ struct Limits {
   std::int32_t max_files = 1 << 16;           // files of one manifest
   std::int64_t max_blob_bytes = std::int64_t{1} << 30;         // one blob
   std::int64_t max_fetch_bytes = std::int64_t{1} << 30;        // blobs being received at once
-  std::int64_t max_store_bytes = std::int64_t{4} << 30;        // blobs held (unused ones evicted first)
+  // Blobs held. Over it, those no snapshot the client or its caller holds are evicted, least
+  // recently used first, when a blob arrives and at each tick(). 0: hold only what is in use.
+  std::int64_t max_store_bytes = std::int64_t{4} << 30;
   std::size_t max_pending_revisions = 4;      // incomplete revisions held per model (oldest dropped)
   std::int64_t max_pending_bytes = std::int64_t{256} << 20;  // chunks held by every incomplete revision
   std::size_t max_models = 4096;              // models followed at once
@@ -81,6 +83,9 @@ struct Options {
   std::string model;            // one model id (exact), or ...
   std::string pattern;          // ... an LCM regular expression of model ids; both empty: all models
   Blobs blobs = Blobs::kNone;
+  // With Blobs::kAll: fetch only the files of these manifest roles ("rdtf", "buffer", "image",
+  // "urdf", "urdf_mesh"); empty: every file. A viewer drawing the glTF needs no URDF meshes.
+  std::set<std::string> blob_roles;
   bool states = true;           // deliver JOINT_STATE and LINK_STATE
   bool send_requests = true;    // false: never send request_t (wait for rdtfd's republications)
   std::string requester;        // names this client in requests; default "rdtf_client <host> <pid>"
@@ -103,7 +108,8 @@ struct Snapshot {
   // The output files of the revision (MANIFEST), when it arrived (always with Blobs::kAll).
   std::vector<rdtf::file_t> manifest;
   bool has_manifest = false;
-  // The bytes of every manifest file, by SHA-256 (Blobs::kAll; empty with kNone).
+  // The bytes of every manifest file (of Options::blob_roles when set), by SHA-256 (Blobs::kAll;
+  // empty with kNone).
   std::map<std::string, std::shared_ptr<const std::string>> blobs;
 
   const std::string& model_id() const { return description.model_id; }

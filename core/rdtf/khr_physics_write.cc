@@ -1,6 +1,7 @@
 // Writing KHR_physics_rigid_bodies: motion on link nodes, joints through attachment nodes.
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include <Eigen/Eigenvalues>
 
@@ -97,19 +98,31 @@ Json* node_physics(Json& node) {
   return ext[kKhrPhysics].is_object() ? &ext[kKhrPhysics] : nullptr;
 }
 
-// An attachment node under `parent`, placed at X_SA in the scene: translation exact; rotation
-// exact when the parent's frame carries no or uniform scale (docs/format.md).
-std::size_t append_attachment(Json& document, std::vector<NodeType>& types,
-                              const std::vector<Eigen::Affine3d>& world, int parent,
-                              const std::string& name, const Eigen::Isometry3d& X_SA) {
-  const Eigen::Affine3d X_PS = world[parent].inverse();
-  const Eigen::Vector3d p_PA = X_PS * X_SA.translation();
-  const Eigen::Affine3d linear(Eigen::Matrix3d(X_PS.linear() * X_SA.linear()));
-  Eigen::Quaterniond q(rigid_part(linear).linear());
+// An attachment node's local transform under a node at X_SP for the frame X_SA in the scene:
+// translation exact; rotation exact when the parent's frame carries no or a uniform scale.
+// Nothing when the parent's non-uniform scale leaves the node's frame off X_SA (a TRS node cannot
+// undo it): such a joint gets no KHR joint rather than a wrong one.
+std::optional<Eigen::Isometry3d> attachment_local(const Eigen::Affine3d& X_SP, const Eigen::Isometry3d& X_SA) {
+  const Eigen::Affine3d X_PS = X_SP.inverse();
+  Eigen::Isometry3d X_PA = Eigen::Isometry3d::Identity();
+  X_PA.translation() = X_PS * X_SA.translation();
+  X_PA.linear() = rigid_part(Eigen::Affine3d(Eigen::Matrix3d(X_PS.linear() * X_SA.linear()))).linear();
+  const Eigen::Isometry3d reached = rigid_part(X_SP * Eigen::Affine3d(X_PA.matrix()));
+  const double length = std::max(1.0, X_SA.translation().norm());
+  if ((reached.translation() - X_SA.translation()).norm() > 1e-12 * length ||
+      (reached.linear() - X_SA.linear()).cwiseAbs().maxCoeff() > 1e-12) {
+    return std::nullopt;
+  }
+  return X_PA;
+}
+
+std::size_t append_attachment(Json& document, std::vector<NodeType>& types, int parent, const std::string& name,
+                              const Eigen::Isometry3d& X_PA) {
+  Eigen::Quaterniond q(X_PA.linear());
   q.normalize();
   if (q.w() < 0) q.coeffs() = -q.coeffs();
   Json node{{"name", name}};
-  if (!p_PA.isZero(0)) node["translation"] = vector_to_json(p_PA);
+  if (!X_PA.translation().isZero(0)) node["translation"] = vector_to_json(X_PA.translation());
   if (!q.isApprox(Eigen::Quaterniond::Identity(), 0)) node["rotation"] = quaternion_to_json(q);
   Json& nodes = document["nodes"];
   nodes.push_back(std::move(node));
@@ -203,6 +216,9 @@ void write_khr_physics(Json& document, std::vector<NodeType>& types, const Robot
     }
     Eigen::Isometry3d X_SA = child.X_SL;
     X_SA.linear() = child.X_SL.linear() * R_LA;
+    const auto X_PA = attachment_local(world[static_cast<std::size_t>(parent.node)], X_SA);
+    const auto X_CA = attachment_local(world[static_cast<std::size_t>(child.node)], X_SA);
+    if (!X_PA || !X_CA) continue;
     if (!extension.contains("physicsJoints") || !extension["physicsJoints"].is_array()) {
       extension["physicsJoints"] = Json::array();
     }
@@ -210,8 +226,8 @@ void write_khr_physics(Json& document, std::vector<NodeType>& types, const Robot
     const std::size_t definition = extension["physicsJoints"].size() - 1;
     // On the parent's side, so that the connected (child) node's position in the joint frame is
     // the joint position with RDTF's sign.
-    const std::size_t on_parent = append_attachment(document, types, world, parent.node, joint.name + "_khr_parent", X_SA);
-    const std::size_t on_child = append_attachment(document, types, world, child.node, joint.name + "_khr_child", X_SA);
+    const std::size_t on_parent = append_attachment(document, types, parent.node, joint.name + "_khr_parent", *X_PA);
+    const std::size_t on_child = append_attachment(document, types, child.node, joint.name + "_khr_child", *X_CA);
     Json* physics = node_physics(document["nodes"][on_parent]);
     (*physics)["joint"] = Json{{"connectedNode", on_child}, {"joint", definition}};
   }

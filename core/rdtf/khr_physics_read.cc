@@ -180,7 +180,9 @@ void read_motion(const Json& document, const std::vector<Eigen::Affine3d>& world
   }
   if (motion->center) khr.center_of_mass = frame.X_NL.inverse() * *motion->center;
   if (motion->moments) {
-    khr.inertia = frame.R_NL.transpose() * inertia_from_principal(*motion->moments, motion->rotation) * frame.R_NL;
+    const Eigen::Matrix3d I = frame.R_NL.transpose() * inertia_from_principal(*motion->moments, motion->rotation) * frame.R_NL;
+    // Symmetric to the bit, as the six numbers RDTF writes will read back.
+    khr.inertia = 0.5 * (I + I.transpose());
   }
   if (rdtf_describes_mass(document, link)) {
     const MassProperties& own = link.inertial;

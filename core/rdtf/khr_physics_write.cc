@@ -99,9 +99,10 @@ Json* node_physics(Json& node) {
 }
 
 // An attachment node's local transform under a node at X_SP for the frame X_SA in the scene:
-// translation exact; rotation exact when the parent's frame carries no or a uniform scale.
-// Nothing when the parent's non-uniform scale leaves the node's frame off X_SA (a TRS node cannot
-// undo it): such a joint gets no KHR joint rather than a wrong one.
+// translation exact; rotation the one whose frame, scale removed (rigid_part, as RDTF's link
+// frames), is X_SA's. That holds under any parent scale (polar(S polar(S^-1 Q)) = Q); the check
+// guards against rounding. Nothing when it fails: such a joint gets no KHR joint rather than one
+// whose frames disagree.
 std::optional<Eigen::Isometry3d> attachment_local(const Eigen::Affine3d& X_SP, const Eigen::Isometry3d& X_SA) {
   const Eigen::Affine3d X_PS = X_SP.inverse();
   Eigen::Isometry3d X_PA = Eigen::Isometry3d::Identity();

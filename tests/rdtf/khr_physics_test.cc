@@ -88,7 +88,8 @@ json generated_arm() {
        "translation": [0.05, 0.0, 0.02]},
       {"name": "bar", "mesh": 0, "translation": [0.0, 0.3, 0.0], "rotation": [0.0, 0.0, 0.3826834323650898, 0.9238795325112867],
        "scale": [0.1, 0.1, 0.6], "children": [3]},
-      {"name": "cube", "mesh": 0, "translation": [0.0, 0.0, 0.5], "rotation": [0.5, 0.5, 0.5, 0.5], "scale": [2.0, 2.0, 2.0]}
+      {"name": "cube", "mesh": 0, "translation": [0.0, 0.0, 0.5], "rotation": [0.5, 0.5, 0.5, 0.5], "scale": [2.0, 2.0, 2.0],
+       "extras": {"rdtf_joint": "revolute", "rdtf_axis": [1, 1, 0], "rdtf_lower": -1.0, "rdtf_upper": 1.0, "rdtf_damping": 0.5}}
     ],
     "meshes": [)" + box + R"(],
     "accessors": [
@@ -196,8 +197,15 @@ TEST(KhrPhysicsWrite, MotionGivesTheExactTensorAndTheFileValidates) {
   const json& used = written["extensionsUsed"];
   EXPECT_NE(std::find(used.begin(), used.end(), json(kKhrPhysics)), used.end());
   EXPECT_FALSE(written.contains("extensionsRequired"));
-  // One physics joint per robot joint, attached on the parent's side.
-  EXPECT_EQ(written["extensions"][kKhrPhysics]["physicsJoints"].size(), conversion->robot.joints.size());
+  // A physics joint per robot joint: base_bar fixed (all locked), bar_cube revolute; bar_cube's
+  // attachment under bar, whose scale is non-uniform, still has the joint frame as its frame with
+  // scale removed (checked on re-conversion: frames that disagree are an error).
+  ASSERT_EQ(conversion->robot.joints.size(), 2u);
+  const json& physics_joints = written["extensions"][kKhrPhysics]["physicsJoints"];
+  ASSERT_EQ(physics_joints.size(), 2u);
+  EXPECT_EQ(physics_joints[0]["limits"].size(), 2u);
+  EXPECT_EQ(physics_joints[1]["limits"].size(), 3u);
+  EXPECT_EQ(physics_joints[1]["drives"][0]["damping"].get<double>(), 0.5);
 
   const auto input_report = testing::khronos_report(dir / "arm.gltf");
   const auto report = testing::khronos_report(dir / "out.gltf");

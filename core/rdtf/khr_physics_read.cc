@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 #include <map>
 #include <set>
 
@@ -49,9 +50,14 @@ std::vector<int> bodies(const Json& document, const std::vector<NodeType>& types
   return body;
 }
 
+// A non-negative integer below `size` (parsed JSON holds them unsigned, a document built in
+// memory may hold them signed).
 std::optional<std::size_t> index_in(const Json& value, std::size_t size) {
-  if (!value.is_number_unsigned() || value.get<std::size_t>() >= size) return std::nullopt;
-  return value.get<std::size_t>();
+  if (!value.is_number_integer() || value.get<std::int64_t>() < 0 ||
+      static_cast<std::uint64_t>(value.get<std::int64_t>()) >= size) {
+    return std::nullopt;
+  }
+  return static_cast<std::size_t>(value.get<std::int64_t>());
 }
 
 // Reads `count` finite numbers at key; nothing (and an error) when the value is not that.
@@ -231,7 +237,8 @@ std::optional<ParsedJoint> parse_definition(const Json& definition, const std::s
     std::set<int> seen;
     if (!axes.is_array() || axes.empty() || axes.size() > 3) return bad(at, "axes " + value_text(axes) + " are not 1 to 3 indices");
     for (const Json& a : axes) {
-      if (!a.is_number_unsigned() || a.get<unsigned>() > 2 || !seen.insert(a.get<int>()).second) {
+      const auto axis = index_in(a, 3);
+      if (!axis || !seen.insert(static_cast<int>(*axis)).second) {
         return bad(at, "axes " + value_text(axes) + " are not distinct indices 0, 1, 2");
       }
     }
@@ -260,11 +267,11 @@ std::optional<ParsedJoint> parse_definition(const Json& definition, const std::s
   for (std::size_t i = 0; i < drives.size(); ++i) {
     const Json& drive = drives[i];
     const std::string at = json_pointer(pointer + "/drives", i);
-    if (!drive.is_object() || !drive.contains("axis") || !drive["axis"].is_number_unsigned() || drive["axis"].get<unsigned>() > 2 ||
+    if (!drive.is_object() || !drive.contains("axis") || !index_in(drive["axis"], 3) ||
         !drive.contains("type") || (drive["type"] != "linear" && drive["type"] != "angular")) {
       return bad(at, "drive " + value_text(drive) + " needs type linear or angular and axis 0, 1 or 2");
     }
-    const std::size_t d = drive["axis"].get<std::size_t>() + (drive["type"] == "linear" ? 0 : 3);
+    const std::size_t d = *index_in(drive["axis"], 3) + (drive["type"] == "linear" ? 0 : 3);
     for (const auto& [key, value] : {std::pair{"stiffness", &out.stiffness[d]}, {"damping", &out.damping[d]}, {"maxForce", &out.max_force[d]}}) {
       if (!drive.contains(key)) continue;
       if (!drive[key].is_number() || drive[key].get<double>() < 0) {

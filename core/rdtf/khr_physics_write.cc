@@ -36,8 +36,10 @@ Eigen::Vector3d perpendicular(const Eigen::Vector3d& a) {
 
 Json quaternion_to_json(const Eigen::Quaterniond& q) { return Json::array({q.x(), q.y(), q.z(), q.w()}); }
 
-Json limit(const char* axes_key, std::initializer_list<int> axes, double min, double max) {
-  return Json{{axes_key, Json(axes)}, {"min", min}, {"max", max}};
+Json limit(const char* axes_key, std::initializer_list<unsigned> axes, double min, double max) {
+  Json list = Json::array();
+  for (unsigned a : axes) list.push_back(a);
+  return Json{{axes_key, std::move(list)}, {"min", min}, {"max", max}};
 }
 
 // The draft's composition of a joint from limits on the attachment frame's axes; the joint axis is
@@ -77,7 +79,7 @@ Json physics_joint(const Joint& joint) {
   if (moves && (joint.damping != 0 || joint.spring_stiffness != 0)) {
     Json drive{{"type", joint.kind == JointKind::kPrismatic ? "linear" : "angular"},
                {"mode", "force"},
-               {"axis", 0},
+               {"axis", 0u},
                {"positionTarget", 0.0},
                {"velocityTarget", 0.0},
                {"stiffness", joint.spring_stiffness},

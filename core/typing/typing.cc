@@ -1,5 +1,7 @@
 #include "rdtf/typing.h"
 
+#include <cstdint>
+
 #include "rdtf/completion.h"
 #include "rdtf/geometry.h"
 #include "rdtf/mesh_carriers.h"
@@ -165,7 +167,10 @@ std::vector<char> khr_attachment_nodes(const Json& nodes) {
     if (!physics.contains("joint") || !physics["joint"].is_object()) continue;
     out[i] = 1;
     const Json& connected = physics["joint"].value("connectedNode", Json());
-    if (connected.is_number_unsigned() && connected.get<std::size_t>() < nodes.size()) out[connected.get<std::size_t>()] = 1;
+    if (connected.is_number_integer() && connected.get<std::int64_t>() >= 0 &&
+        static_cast<std::uint64_t>(connected.get<std::int64_t>()) < nodes.size()) {
+      out[static_cast<std::size_t>(connected.get<std::int64_t>())] = 1;
+    }
   }
   return out;
 }

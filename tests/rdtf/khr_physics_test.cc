@@ -360,3 +360,32 @@ TEST(KhrPhysicsRead, RdtfTakesPrecedenceAndSaysSo) {
 
 }  // namespace
 }  // namespace rdtf
+
+namespace rdtf {
+namespace {
+
+// The command line: written by default, left out with --no-khr-physics, bad KHR data refused.
+TEST(KhrPhysicsCli, WrittenByDefaultOffOnRequestBadInputRefused) {
+  testing::TempDir dir;
+  const std::string input = (testing::data_dir() / "blender" / "arm3.gltf").string();
+  const auto on = testing::run_command(testing::cli_path() + " convert '" + input + "' -o '" + (dir / "on.gltf").string() + "'");
+  ASSERT_EQ(on.exit_code, 0) << on.err;
+  EXPECT_NE(testing::read_file(dir / "on.gltf").find(kKhrPhysics), std::string::npos);
+  const auto off = testing::run_command(testing::cli_path() + " convert '" + input + "' --no-khr-physics -o '" +
+                                        (dir / "off.gltf").string() + "'");
+  ASSERT_EQ(off.exit_code, 0) << off.err;
+  EXPECT_EQ(testing::read_file(dir / "off.gltf").find(kKhrPhysics), std::string::npos);
+
+  json doc = khr_twin();
+  doc["nodes"][1]["extensions"][kKhrPhysics]["motion"]["mass"] = -3;
+  testing::write_file(dir / "bad.gltf", doc.dump());
+  const auto bad = testing::run_command(testing::cli_path() + " convert '" + (dir / "bad.gltf").string() + "' -o '" +
+                                        (dir / "bad_out.gltf").string() + "'");
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.err.find("/nodes/1/extensions/KHR_physics_rigid_bodies/motion/mass: error KHR_PHYSICS_INVALID: node 1 'arm': mass -3"),
+            std::string::npos) << bad.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "bad_out.gltf"));
+}
+
+}  // namespace
+}  // namespace rdtf

@@ -46,6 +46,8 @@ void add_convert_command(CLI::App& app, int& exit_code) {
                       ".glb name implies --glb; its folder is created when missing");
   command->add_flag("--glb", args->glb, "Write a binary .glb with every buffer and image embedded");
   command->add_flag("-v,--verbose", args->verbose, "Also print info diagnostics");
+  command->add_flag("--no-khr-physics{false}", args->options.khr_physics,
+                    "Do not write KHR_physics_rigid_bodies (motion and joints) beside extras.RDTF");
   add_conversion_options(*command, args->options);
   command->callback([args, &exit_code] { exit_code = run_convert(*args); });
 }

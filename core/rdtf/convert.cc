@@ -5,6 +5,7 @@
 
 #include "rdtf/completion.h"
 #include "rdtf/geometry.h"
+#include "rdtf/khr_physics.h"
 #include "rdtf/link_inertia.h"
 #include "rdtf/rdtf_extras.h"
 #include "rdtf/typing.h"
@@ -82,7 +83,10 @@ std::optional<Conversion> convert(GltfAsset asset, const ConvertOptions& options
   robot.name = robot_name(asset);
   compute_link_inertia(asset, types, options.default_density, robot, diag);
   if (diag.has_errors()) return std::nullopt;
+  read_khr_physics(asset.document, types, robot, diag);
+  if (diag.has_errors()) return std::nullopt;
   check_units(asset.document, robot, diag);
+  if (options.khr_physics) write_khr_physics(asset.document, types, robot);
   if (!write_rdtf_extras(asset.document, types, robot, diag)) return std::nullopt;
   return Conversion{std::move(asset), std::move(robot)};
 }

@@ -1,5 +1,7 @@
 #include "rdtf/typing.h"
 
+#include <cstdint>
+
 #include "rdtf/completion.h"
 #include "rdtf/geometry.h"
 #include "rdtf/mesh_carriers.h"
@@ -151,6 +153,28 @@ NodeType mesh_or_visual(const Json& nodes, const MeshOwnership& meshes, int pare
   return NodeType::kNone;
 }
 
+// KHR_physics_rigid_bodies joint attachment frames: nodes that carry a joint or are a joint's
+// connectedNode. As mesh-less leaves they are visual nodes, whatever their siblings (a frame
+// beside a mesh would otherwise be typed a link by Algorithm 3).
+std::vector<char> khr_attachment_nodes(const Json& nodes) {
+  std::vector<char> out(nodes.size(), 0);
+  for (std::size_t i = 0; i < nodes.size(); ++i) {
+    const Json& node = nodes[i];
+    if (!node.contains("extensions") || !node["extensions"].is_object()) continue;
+    const Json& ext = node["extensions"];
+    if (!ext.contains("KHR_physics_rigid_bodies") || !ext["KHR_physics_rigid_bodies"].is_object()) continue;
+    const Json& physics = ext["KHR_physics_rigid_bodies"];
+    if (!physics.contains("joint") || !physics["joint"].is_object()) continue;
+    out[i] = 1;
+    const Json& connected = physics["joint"].value("connectedNode", Json());
+    if (connected.is_number_integer() && connected.get<std::int64_t>() >= 0 &&
+        static_cast<std::uint64_t>(connected.get<std::int64_t>()) < nodes.size()) {
+      out[static_cast<std::size_t>(connected.get<std::int64_t>())] = 1;
+    }
+  }
+  return out;
+}
+
 // Algorithm 3.
 NodeType joint_or_link(const Json& nodes, const MeshOwnership& meshes, std::size_t index) {
   const auto children = children_of(nodes[index]);
@@ -227,8 +251,13 @@ std::vector<NodeType> type_nodes(const Json& document, std::size_t scene, Diagno
     if (!in_scene[i] && !fixed[i]) types[i] = NodeType::kNone;
   }
   const MeshOwnership meshes(document);
+  const auto khr_frames = khr_attachment_nodes(nodes);
   for (const auto& [parent, node] : order) {
     if (fixed[node]) continue;
+    if (khr_frames[node] && !meshes.has_mesh(node) && children_of(nodes[node]).empty()) {
+      types[node] = NodeType::kVisual;
+      continue;
+    }
     types[node] = mesh_or_visual(nodes, meshes, parent, parent < 0 ? NodeType::kNone : types[parent], node);
   }
   for (const auto& [parent, node] : order) {

@@ -281,7 +281,7 @@ TEST(BlenderModelled, NodeExtrasAloneGiveTheSameRobot) {
     stripped.document["extras"].erase("RDTF");
     Diagnostics again_diag;
     const auto again = convert(std::move(stripped), ConvertOptions{}, again_diag);
-    ASSERT_TRUE(again);
+    ASSERT_TRUE(again) << (again_diag.all().empty() ? "" : format(again_diag.all().back()));
     const Robot& a = first.robot;
     const Robot& b = again->robot;
     ASSERT_EQ(b.links.size(), a.links.size());

@@ -14,6 +14,9 @@ namespace rdtf {
 struct ConvertOptions {
   LoadLimits limits;
   double default_density = 1000.0;  // kg/m^3 (Gazebo's default), used when no node sets one.
+  // Write KHR_physics_rigid_bodies (motion and joints) beside extras.RDTF. Authored KHR physics
+  // in the input is read either way.
+  bool khr_physics = true;
 };
 
 struct Conversion {

@@ -115,6 +115,10 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(JOINT_AXIS_ZERO, kSeverityError, "model") \
   X(JOINT_CHAIN, kSeverityInfo, "model") \
   X(JOINT_LIMITS_INVERTED, kSeverityError, "model") \
+  X(KHR_JOINT_FRAMES_DISAGREE, kSeverityError, "model") \
+  X(KHR_PHYSICS_IGNORED, kSeverityWarning, "model") \
+  X(KHR_PHYSICS_INVALID, kSeverityError, "model") \
+  X(KHR_PHYSICS_UNSUPPORTED, kSeverityWarning, "model") \
   X(LINK_MESH_SPLIT, kSeverityInfo, "model") \
   X(LINK_NO_VOLUME, kSeverityWarning, "model") \
   X(MESH_INCONSISTENT_WINDING, kSeverityWarning, "model") \

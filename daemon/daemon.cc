@@ -122,6 +122,7 @@ bool Daemon::start(std::string& error) {
   }
   remove_stale_temporaries();
   remove_unreferenced_outputs();
+  open_result_cache();
   if (!runner_) runner_ = std::make_unique<ThreadJobRunner>(config_.workers);
   start_simulation_host();
   rescan("start");
@@ -133,6 +134,19 @@ bool Daemon::start(std::string& error) {
            "; LCM " + (config_.lcm_url.empty() ? std::string("default URL") : config_.lcm_url) +
            "; channels " + config_.channel_prefix + "/...");
   return true;
+}
+
+void Daemon::open_result_cache() {
+  cache_key_ = settings_key(config_);
+  cache_.reset();
+  if (config_.max_cached_results == 0) return;
+  cache_ = std::make_shared<ResultCache>(ResultCache::folder_for(config_.output), config_.max_cached_results);
+  const std::size_t removed = cache_->open();
+  log_line("result cache " + ResultCache::folder_for(config_.output).string() + ": " +
+           std::to_string(cache_->entries()) + " entries" +
+           (removed > 0 ? " (" + std::to_string(removed) + " least recently used removed, beyond the bound of " +
+                              std::to_string(config_.max_cached_results) + ")"
+                        : ""));
 }
 
 void Daemon::start_simulation_host() {
@@ -175,7 +189,14 @@ void Daemon::reload_config() {
   const bool conversion_changed = change.has(kReconvert);
   const bool simulation_changed = change.has(kRestartSimulation);
   keep_restart_settings(config_, *fresh);  // E.g. the worker pool keeps its size until a restart.
+  const bool output_changed = fresh->output != config_.output;
   config_ = std::move(*fresh);
+  // Results are keyed by the settings they were computed under: new settings, a new key.
+  if (output_changed) {
+    open_result_cache();
+  } else {
+    cache_key_ = settings_key(config_);
+  }
   // A new settle period or open-write wait moves the deadlines of the models settling.
   for (auto& [source, record] : registry_.all()) {
     unfile_timer(record);

@@ -139,6 +139,8 @@ class Daemon {
   std::shared_ptr<ResultCache> cache_;       // Shared with the workers; null when off.
   std::string cache_key_;                    // settings_key(config_).
   void open_result_cache();
+  bool take_clean_stop_mark();   // The last run left the mark (now removed): nothing to clean.
+  void leave_clean_stop_mark();  // At the end of a clean stop.
   // Set on shutdown: a dynamics check in progress stops (SIM_CANCELLED) instead of being waited for.
   std::atomic<bool> cancel_validations_{false};
 };

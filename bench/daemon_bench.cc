@@ -235,7 +235,7 @@ void BM_Restart(benchmark::State& state) {
     double first_seconds = 0;
     {
       Daemon first(watch, output, pipeline_config(full_pipeline));
-      if (!subscriber.wait(all_published, 150s)) {
+      if (!subscriber.wait(all_published, 600s)) {  // A loaded machine: the first scan may take minutes.
         state.SkipWithError(("first run: only " + std::to_string(published.size()) + " models published").c_str());
         break;
       }

@@ -82,7 +82,7 @@ Json robot_json(const Robot& robot) {
       for (int c = 0; c < 3; ++c) inertia.push_back(l.inertial.inertia(r, c));
     }
     links.push_back({{"name", l.name}, {"node", l.node}, {"parent_joint", l.parent_joint},
-                     {"child_joints", l.child_joints}, {"X_SL", pose_json(l.X_SL)}, {"meshes", meshes},
+                     {"child_joints", l.child_joints}, {"x_sl", pose_json(l.X_SL)}, {"meshes", meshes},
                      {"volume", l.inertial.volume}, {"mass", l.inertial.mass},
                      {"center_of_mass", vector_json(l.inertial.center_of_mass)}, {"inertia", inertia},
                      {"authored", l.inertial_source == InertialSource::kAuthored}, {"inertial_node", l.inertial_node}});
@@ -93,7 +93,7 @@ Json robot_json(const Robot& robot) {
     if (j.limits) limits = {j.limits->lower, j.limits->upper, j.limits->effort, j.limits->velocity};
     joints.push_back({{"name", j.name}, {"node", j.node}, {"frame_node", j.frame_node}, {"source_node", j.source_node},
                       {"source_is_entry", j.source_is_entry}, {"parent_link", j.parent_link},
-                      {"child_link", j.child_link}, {"kind", to_string(j.kind)}, {"X_PJ", pose_json(j.X_PJ)},
+                      {"child_link", j.child_link}, {"kind", to_string(j.kind)}, {"x_pj", pose_json(j.X_PJ)},
                       {"axis", vector_json(j.axis)}, {"limits", limits}, {"damping", j.damping},
                       {"friction", j.friction}, {"spring_stiffness", j.spring_stiffness}});
   }
@@ -117,7 +117,7 @@ Robot robot_from(const Json& j) {
     link.node = integer(at(l, "node"));
     link.parent_joint = integer(at(l, "parent_joint"));
     link.child_joints = indices(at(l, "child_joints"));
-    link.X_SL = pose_from(at(l, "X_SL"));
+    link.X_SL = pose_from(at(l, "x_sl"));
     for (const Json& m : at(l, "meshes")) {
       if (!m.is_array() || m.size() != 3) throw Refused{"a link mesh needs 3 values"};
       link.meshes.push_back({integer(m[0]), number(m[1]), number(m[2])});
@@ -149,7 +149,7 @@ Robot robot_from(const Json& j) {
     const auto kind = joint_kind_from_string(text(at(j2, "kind")));
     if (!kind) throw Refused{"unknown joint kind"};
     joint.kind = *kind;
-    joint.X_PJ = pose_from(at(j2, "X_PJ"));
+    joint.X_PJ = pose_from(at(j2, "x_pj"));
     const Json& axis = at(j2, "axis");
     if (!axis.is_array() || axis.size() != 3) throw Refused{"an axis needs 3 numbers"};
     for (std::size_t i = 0; i < 3; ++i) joint.axis(static_cast<Eigen::Index>(i)) = number(axis[i]);

@@ -7,6 +7,8 @@
 //   counters also give the latency minus the settle period.
 // - BM_InitialScan: rdtfd started on a tree of N small models; models per second from spawning the
 //   daemon until the subscriber has a DESCRIPTION of every model, and VmRSS / VmHWM of rdtfd then.
+// - BM_Restart: the same tree scanned once, rdtfd stopped and started again: the second start's
+//   time to every model published (from the result cache) and its memory.
 #include <benchmark/benchmark.h>
 
 #include <cstdio>
@@ -211,6 +213,66 @@ void BM_InitialScan(benchmark::State& state) {
 BENCHMARK(BM_InitialScan)->Args({1000, 0})->Args({10000, 0})->Args({1000, 1})
     ->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
 
+// range(0): number of models; range(1) as for BM_InitialScan. rdtfd scans the tree once (which
+// fills its result cache), stops, and is started again over the unchanged tree: the time is from
+// spawning the second rdtfd to the subscriber holding a DESCRIPTION of every model from it, the
+// memory its VmRSS / VmHWM then.
+void BM_Restart(benchmark::State& state) {
+  const int count = static_cast<int>(state.range(0));
+  const bool full_pipeline = state.range(1) == 1;
+  TempFolder root;
+  const fs::path watch = root / "models", output = root / "out";
+  write_model_tree(watch, count);
+
+  std::set<std::string> published;
+  Clock::time_point last_description;
+  Subscriber subscriber("RDTF", [&](const std::string& channel, const lcm::ReceiveBuffer&, Clock::time_point at) {
+    if (kind_of(channel) == "DESCRIPTION" && published.insert(model_id_of(channel)).second) last_description = at;
+  });
+  auto all_published = [&] { return static_cast<int>(published.size()) == count; };
+  for (auto _ : state) {
+    Clock::time_point started = Clock::now();
+    double first_seconds = 0;
+    {
+      Daemon first(watch, output, pipeline_config(full_pipeline));
+      if (!subscriber.wait(all_published, 600s)) {  // A loaded machine: the first scan may take minutes.
+        state.SkipWithError(("first run: only " + std::to_string(published.size()) + " models published").c_str());
+        break;
+      }
+      subscriber.locked([&] { first_seconds = ms_between(started, last_description) / 1e3; });
+      first.stop();
+    }
+    subscriber.locked([&] { published.clear(); });
+    started = Clock::now();
+    Daemon daemon(watch, output, pipeline_config(full_pipeline));
+    const bool all = subscriber.wait(all_published, 150s);
+    const Memory memory = process_memory(daemon.pid());
+    double seconds = 0;
+    subscriber.locked([&] { seconds = ms_between(started, last_description) / 1e3; });
+    const std::string log = daemon.log();
+    std::size_t from_cache = 0;
+    for (std::size_t at = log.find(" from the result cache"); at != std::string::npos;
+         at = log.find(" from the result cache", at + 1)) {
+      ++from_cache;
+    }
+    if (!all) {
+      state.SkipWithError(("restart: only " + std::to_string(published.size()) + " of " + std::to_string(count) +
+                           " models published in 150 s").c_str());
+    }
+    state.SetIterationTime(seconds);
+    state.counters["first_run_s"] = first_seconds;
+    state.counters["models_per_s"] = static_cast<double>(published.size()) / seconds;
+    state.counters["from_cache"] = static_cast<double>(from_cache);
+    state.counters["VmRSS_MiB"] = static_cast<double>(memory.rss_kib) / 1024.0;
+    state.counters["VmHWM_MiB"] = static_cast<double>(memory.hwm_kib) / 1024.0;
+    state.counters["published"] = static_cast<double>(published.size());
+    daemon.stop();
+  }
+  state.SetLabel(std::to_string(count) + " models, restart, " +
+                 (full_pipeline ? "defaults" : "validate/simulate/urdf off"));
+}
+BENCHMARK(BM_Restart)->Args({1000, 1})->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
+
 // 10,000 models with the defaults: about 100 s of scanning plus minutes of writing and deleting
 // the trees on a busy disk, so only on request (--with-10k-defaults).
 bool take_flag(int& argc, char** argv, const std::string& flag) {
@@ -230,6 +292,8 @@ int main(int argc, char** argv) {
   run_in_own_network_namespace(argc, argv);
   if (take_flag(argc, argv, "--with-10k-defaults")) {
     benchmark::RegisterBenchmark("BM_InitialScan", BM_InitialScan)
+        ->Args({10000, 1})->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
+    benchmark::RegisterBenchmark("BM_Restart", BM_Restart)
         ->Args({10000, 1})->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
   }
   benchmark::Initialize(&argc, argv);

@@ -42,16 +42,6 @@ class UniqueFd {
   int fd_;
 };
 
-std::string to_hex(const unsigned char* digest, unsigned int length) {
-  static const char* const kHex = "0123456789abcdef";
-  std::string out;
-  for (unsigned int i = 0; i < length; ++i) {
-    out += kHex[digest[i] >> 4];
-    out += kHex[digest[i] & 15];
-  }
-  return out;
-}
-
 // Opens <root>/<relative> for reading: the output folder as configured, then every folder below
 // it and the file itself without following a symlink; the file must be a regular file with one
 // link (an output of ours never has more; a hard link may be a file from elsewhere).
@@ -395,7 +385,7 @@ bool BlobServer::verify(Job& job, std::size_t& budget, std::string& why) {
   unsigned int length = 0;
   EVP_DigestFinal_ex(job.hash.get(), digest, &length);
   job.hash.reset();
-  if (to_hex(digest, length) != job.sha256) {
+  if (to_hex({digest, length}) != job.sha256) {
     why = "it changed on disk: its bytes no longer have the manifest's SHA-256";
     return false;
   }

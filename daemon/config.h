@@ -67,6 +67,9 @@ struct DaemonConfig {
   // URDF beside each RDTF output (docs/urdf.md), and its text in the description.
   bool urdf = true;
   bool urdf_y_up = false;                 // Keep glTF's Y up instead of ROS's Z up.
+
+  // Results kept across restarts (daemon/result_cache.h): at most this many entries; 0: no cache.
+  std::size_t max_cached_results = 20000;
 };
 
 // "auto", "world_step" or "quick_step"; nothing for another name.

@@ -355,6 +355,12 @@ std::vector<ConfigKey> make_registry() {
             RDTF_FIELD(urdf)),
       plain({.name = "urdf_y_up", .reload = kReconvert, .doc = "keep glTF's Y up in the URDF instead of ROS's Z up"},
             RDTF_FIELD(urdf_y_up)),
+      plain({.name = "max_cached_results", .min = 0, .max = 1e7, .range_text = "0 (off) .. 10000000",
+             .reload = kNeedsRestart,
+             .doc = "results kept across restarts in `<output>/.rdtfd-state/results/` (one entry per model file, a "
+                    "few KiB for a small robot), so that a restart publishes unchanged models without converting "
+                    "them; beyond this many the least recently used go (see Result cache); 0: no cache"},
+            RDTF_FIELD(max_cached_results)),
   };
 }
 #pragma GCC diagnostic pop

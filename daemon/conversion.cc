@@ -16,6 +16,7 @@
 #include "rdtf/urdf_names.h"
 #include "rdtf/write.h"
 #include "rdtf/diagnostic_codes.h"
+#include "result_cache.h"
 
 namespace rdtf::daemon {
 namespace {
@@ -67,17 +68,18 @@ bool has_code(const Diagnostics& diag, const char* code) {
   return false;
 }
 
-std::string to_hex(const unsigned char* digest, unsigned int length) {
+}  // namespace
+
+std::string to_hex(std::span<const unsigned char> bytes) {
   static const char* const kHex = "0123456789abcdef";
   std::string out;
-  for (unsigned int i = 0; i < length; ++i) {
-    out += kHex[digest[i] >> 4];
-    out += kHex[digest[i] & 15];
+  out.reserve(2 * bytes.size());
+  for (const unsigned char b : bytes) {
+    out += kHex[b >> 4];
+    out += kHex[b & 15];
   }
   return out;
 }
-
-}  // namespace
 
 std::string output_digest(std::span<const std::uint8_t> bytes) {
   return sha256_hex(std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
@@ -95,7 +97,7 @@ std::string sha256_hex(const std::vector<const std::vector<std::uint8_t>*>& part
   unsigned char digest[EVP_MAX_MD_SIZE];
   unsigned int length = 0;
   EVP_DigestFinal_ex(context.get(), digest, &length);
-  return to_hex(digest, length);
+  return to_hex({digest, length});
 }
 
 std::string content_hash(const std::vector<std::uint8_t>& model, const std::vector<std::filesystem::path>& named,
@@ -113,7 +115,7 @@ std::string sha256_hex(std::string_view text) {
   unsigned char digest[EVP_MAX_MD_SIZE];
   unsigned int length = 0;
   EVP_Digest(text.data(), text.size(), digest, &length, EVP_sha256(), nullptr);
-  return to_hex(digest, length);
+  return to_hex({digest, length});
 }
 
 namespace {
@@ -219,6 +221,96 @@ bool write_outputs(const ConversionJob& job, const Conversion& conversion, Conve
   return true;
 }
 
+// The outputs a cached result names, as they are on disk now: the primary files (read and
+// hashed: their text goes into the description) and every other file of the manifest (by type and
+// size: content-addressed names carry their hash, and reading an 18 MB buffer back would cost
+// what the cache saves). Empty when they match; else what does not.
+std::string outputs_differ(const ConversionJob& job, const CachedResult& cached, std::string& rdtf_json,
+                           std::string& urdf) {
+  if (!cached.written) return {};
+  if (cached.output_name != job.source.stem().string() + ".rdtf.gltf") return "another output name";
+  std::string why;
+  auto read_text = [&](const std::filesystem::path& path, const std::string& sha256, std::string& out) {
+    std::vector<std::uint8_t> bytes;
+    if (!internal::read_regular_file(path, std::uint64_t{1} << 30, bytes, why)) {
+      why = path.string() + ": " + why;
+      return false;
+    }
+    out.assign(bytes.begin(), bytes.end());
+    if (sha256_hex(out) != sha256) {
+      why = path.string() + " was changed";
+      return false;
+    }
+    return true;
+  };
+  if (!read_text(job.output_dir / cached.output_name, cached.rdtf_sha256, rdtf_json)) return why;
+  if (cached.has_urdf && !read_text(job.output_dir / "urdf" / "robot.urdf", cached.urdf_sha256, urdf)) return why;
+  for (const OutputFile& file : cached.files) {
+    struct stat info {};
+    const auto path = job.output_dir / file.path;
+    if (::lstat(path.c_str(), &info) != 0) return path.string() + ": " + std::strerror(errno);
+    if (!S_ISREG(info.st_mode) || info.st_size != file.size) return path.string() + " was changed";
+  }
+  return {};
+}
+
+// The outcome from the cache when it holds this content's result and its outputs are on disk.
+bool from_cache(const ConversionJob& job, ConversionOutcome& outcome) {
+  CachedResult cached;
+  std::string why;
+  switch (job.cache->find(job.source.string(), job.cache_key, outcome.content_hash, cached, why)) {
+    case ResultCache::Lookup::kMiss:
+      return false;
+    case ResultCache::Lookup::kRefused:
+      outcome.cache_note = "result cache entry refused (" + why + "): converting again";
+      return false;
+    case ResultCache::Lookup::kHit:
+      break;
+  }
+  ConvertedModel converted;
+  const std::string differ = outputs_differ(job, cached, converted.rdtf_json, converted.urdf);
+  if (!differ.empty()) {
+    outcome.cache_note = "result cache entry not used, the outputs changed on disk (" + differ + "): converting again";
+    return false;
+  }
+  converted.content_hash = outcome.content_hash;
+  converted.written = cached.written;
+  if (cached.written) converted.output_path = job.output_dir / cached.output_name;
+  if (cached.has_urdf) converted.urdf_path = job.output_dir / "urdf" / "robot.urdf";
+  converted.validation = std::move(cached.validation);
+  converted.facts = std::move(cached.facts);
+  converted.files = std::move(cached.files);
+  converted.totals = robot_totals(cached.robot);
+  converted.robot = std::move(cached.robot);
+  outcome.diagnostics.append(cached.diagnostics);
+  outcome.converted = std::move(converted);
+  outcome.kind = ConversionOutcome::Kind::kConverted;
+  outcome.from_cache = true;
+  return true;
+}
+
+void store_in_cache(const ConversionJob& job, ConversionOutcome& outcome) {
+  const ConvertedModel& m = *outcome.converted;
+  CachedResult entry;
+  entry.key = job.cache_key;
+  entry.source = job.source.string();
+  entry.content_hash = outcome.content_hash;
+  entry.written = m.written;
+  if (m.written) {
+    entry.output_name = m.output_path.filename().string();
+    entry.rdtf_sha256 = sha256_hex(m.rdtf_json);
+  }
+  entry.has_urdf = !m.urdf_path.empty();
+  if (entry.has_urdf) entry.urdf_sha256 = sha256_hex(m.urdf);
+  entry.files = m.files;
+  entry.validation = m.validation;
+  entry.diagnostics = outcome.diagnostics;
+  entry.robot = m.robot;
+  entry.facts = m.facts;
+  std::string why;
+  if (!job.cache->store(entry, why)) outcome.cache_note = "result not cached: " + why;
+}
+
 }  // namespace
 
 void ReadBudget::set_capacity(std::uint64_t capacity) {
@@ -305,6 +397,7 @@ ConversionOutcome run_conversion(const ConversionJob& job) {
     outcome.kind = ConversionOutcome::Kind::kUnchanged;
     return finish();
   }
+  if (job.cache && from_cache(job, outcome)) return finish();
 
   auto asset = load_gltf_from_memory(model_bytes, job.source, folder, job.options.limits, std::move(files),
                                      outcome.diagnostics);
@@ -348,6 +441,12 @@ ConversionOutcome run_conversion(const ConversionJob& job) {
   converted.robot = std::move(conversion->robot);
   outcome.converted = std::move(converted);
   outcome.kind = ConversionOutcome::Kind::kConverted;
+  // Not cached: a written result whose manifest is incomplete (a hit could not check its files),
+  // and a verdict the machine's load decided (the check ran out of its CPU budget).
+  const bool manifest_whole = !outcome.converted->written || !outcome.converted->files.empty();
+  const bool load_decided = outcome.converted->validation &&
+                            outcome.converted->validation->diagnostics.contains(codes::SIM_BUDGET_EXCEEDED);
+  if (job.cache && manifest_whole && !load_decided) store_in_cache(job, outcome);
   return finish();
 }
 

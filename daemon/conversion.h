@@ -26,6 +26,8 @@
 
 namespace rdtf::daemon {
 
+class ResultCache;
+
 // The bytes conversions may read at once, across every worker: a conversion holds what it will
 // read (the model and every file it names) from before its first read to its end.
 class ReadBudget {
@@ -66,6 +68,10 @@ struct ConversionJob {
   // Reads each file the model names (once per conversion); empty: the loader's own. Tests count
   // and interfere with reads through it.
   ConfinedReader read_file;
+  // Results of earlier conversions (result_cache.h), under `cache_key` (settings_key()): a hit whose
+  // outputs are still on disk is the outcome, without converting, checking or writing. None: no cache.
+  std::shared_ptr<ResultCache> cache;
+  std::string cache_key;
 };
 
 // The dynamics check of a revision, without the ODE world.
@@ -113,6 +119,11 @@ struct ConversionOutcome {
   bool retry = false;
   // The dynamics check was cancelled (the daemon is stopping): nothing was written or judged.
   bool cancelled = false;
+  // The result came from the result cache (nothing was converted, checked or written).
+  bool from_cache = false;
+  // What the cache had to say for the log: an entry refused (torn, altered), outputs that no longer
+  // match one, an entry that could not be written. Empty when nothing.
+  std::string cache_note;
 };
 
 ConversionOutcome run_conversion(const ConversionJob& job);
@@ -124,6 +135,9 @@ std::string sha256_hex(const std::vector<const std::vector<std::uint8_t>*>& part
 // buffers and images, as often as named) as read in `files` (no bytes when it could not be read).
 std::string content_hash(const std::vector<std::uint8_t>& model, const std::vector<std::filesystem::path>& named,
                          const SourceFiles& files);
+// Lowercase hex of a digest's bytes.
+std::string to_hex(std::span<const unsigned char> bytes);
+
 // Plain hex SHA-256 of a text (e.g. rdtf_json_sha256, checkable with sha256sum).
 std::string sha256_hex(std::string_view text);
 

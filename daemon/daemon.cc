@@ -1,6 +1,8 @@
 #include "daemon.h"
 
+#include <fcntl.h>
 #include <poll.h>
+#include <sys/stat.h>
 #include <sys/signalfd.h>
 #include <unistd.h>
 
@@ -13,6 +15,8 @@
 #include <optional>
 
 #include "daemon_internal.h"
+#include "rdtf/atomic_file.h"
+#include "revision_store.h"
 
 namespace rdtf::daemon {
 
@@ -120,8 +124,15 @@ bool Daemon::start(std::string& error) {
       return false;
     }
   }
-  remove_stale_temporaries();
-  remove_unreferenced_outputs();
+  const auto cleaning = clock_->now();
+  if (take_clean_stop_mark()) {
+    log_line("the last run stopped cleanly: no leftovers to look for in " + config_.output.string());
+  } else {
+    remove_stale_temporaries();
+    remove_unreferenced_outputs();
+    log_line("looked for leftovers of an interrupted run in " + config_.output.string() + " in " + since(cleaning));
+  }
+  open_result_cache();
   if (!runner_) runner_ = std::make_unique<ThreadJobRunner>(config_.workers);
   start_simulation_host();
   rescan("start");
@@ -133,6 +144,44 @@ bool Daemon::start(std::string& error) {
            "; LCM " + (config_.lcm_url.empty() ? std::string("default URL") : config_.lcm_url) +
            "; channels " + config_.channel_prefix + "/...");
   return true;
+}
+
+// A mark that the last run stopped cleanly: every conversion finished, each removing what its
+// outputs no longer refer to, so there are neither temporaries nor unreferenced files to look for,
+// and the start skips reading every output (seconds for 10,000 models). Taken (removed, the
+// removal made durable) before anything is written, so a run killed from now on leaves none.
+bool Daemon::take_clean_stop_mark() {
+  const auto mark = RevisionStore::folder_for(config_.output) / "clean-stop";
+  struct stat info {};
+  if (::lstat(mark.c_str(), &info) != 0 || !S_ISREG(info.st_mode)) return false;
+  if (::unlink(mark.c_str()) != 0) return false;
+  const int folder = ::open(mark.parent_path().c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  const bool synced = folder >= 0 && ::fsync(folder) == 0;
+  if (folder >= 0) ::close(folder);
+  return synced;
+}
+
+void Daemon::leave_clean_stop_mark() {
+  std::string why;
+  const auto folder = RevisionStore::folder_for(config_.output);
+  std::error_code ec;
+  std::filesystem::create_directories(folder, ec);
+  if (ec || !write_file_atomically(folder / "clean-stop", std::string_view("rdtfd stopped cleanly\n"), why)) {
+    log_line("could not mark the stop as clean (the next start looks for leftovers): " + (ec ? ec.message() : why));
+  }
+}
+
+void Daemon::open_result_cache() {
+  cache_key_ = settings_key(config_);
+  cache_.reset();
+  if (config_.max_cached_results == 0) return;
+  cache_ = std::make_shared<ResultCache>(ResultCache::folder_for(config_.output), config_.max_cached_results);
+  const std::size_t removed = cache_->open();
+  log_line("result cache " + ResultCache::folder_for(config_.output).string() + ": " +
+           std::to_string(cache_->entries()) + " entries" +
+           (removed > 0 ? " (" + std::to_string(removed) + " least recently used removed, beyond the bound of " +
+                              std::to_string(config_.max_cached_results) + ")"
+                        : ""));
 }
 
 void Daemon::start_simulation_host() {
@@ -175,7 +224,14 @@ void Daemon::reload_config() {
   const bool conversion_changed = change.has(kReconvert);
   const bool simulation_changed = change.has(kRestartSimulation);
   keep_restart_settings(config_, *fresh);  // E.g. the worker pool keeps its size until a restart.
+  const bool output_changed = fresh->output != config_.output;
   config_ = std::move(*fresh);
+  // Results are keyed by the settings they were computed under: new settings, a new key.
+  if (output_changed) {
+    open_result_cache();
+  } else {
+    cache_key_ = settings_key(config_);
+  }
   // A new settle period or open-write wait moves the deadlines of the models settling.
   for (auto& [source, record] : registry_.all()) {
     unfile_timer(record);
@@ -277,6 +333,7 @@ int Daemon::run() {
   while (publisher_->queued() > 0 && Clock::now() < flush_until) {
     if (auto next = publisher_->drain(Clock::now())) std::this_thread::sleep_until(*next);
   }
+  leave_clean_stop_mark();
   log_line("rdtfd stopped");
   return 0;
 }

@@ -20,6 +20,7 @@
 #include "ports.h"
 #include "publisher.h"
 #include "registry.h"
+#include "result_cache.h"
 #include "settle.h"
 #include "simulation_host.h"
 #include "watcher.h"
@@ -34,6 +35,8 @@ struct DaemonCounters {
   std::int64_t rejections = 0;
   std::int64_t skipped_unchanged = 0;
   std::int64_t rescans = 0;
+  std::int64_t from_cache = 0;     // Results taken from the result cache (nothing converted).
+  std::int64_t cache_refused = 0;  // Cache entries refused (torn, altered) or whose outputs had changed.
 };
 
 class Daemon {
@@ -133,6 +136,11 @@ class Daemon {
   bool watches_failing_ = false;  // Some folder could not be watched (inotify limit).
   Clock::time_point next_watch_retry_;
   std::shared_ptr<ReadBudget> read_budget_;  // Shared with the workers.
+  std::shared_ptr<ResultCache> cache_;       // Shared with the workers; null when off.
+  std::string cache_key_;                    // settings_key(config_).
+  void open_result_cache();
+  bool take_clean_stop_mark();   // The last run left the mark (now removed): nothing to clean.
+  void leave_clean_stop_mark();  // At the end of a clean stop.
   // Set on shutdown: a dynamics check in progress stops (SIM_CANCELLED) instead of being waited for.
   std::atomic<bool> cancel_validations_{false};
 };

@@ -98,6 +98,8 @@ void Daemon::start_job(ModelRecord& record) {
   job.options = config_.convert;
   job.previous_hash = record.last_hash;
   job.write_failed = config_.publish_failed;
+  job.cache = cache_;
+  job.cache_key = cache_key_;
   if (config_.validate) {
     job.validation = validation_options(config_);
     job.validation->cancel = &cancel_validations_;
@@ -119,6 +121,10 @@ void Daemon::apply(ConversionOutcome outcome) {
   ModelRecord* record = registry_.find(outcome.source);
   if (record == nullptr) return;
   const std::string id = record->id;
+  if (!outcome.cache_note.empty()) {
+    if (outcome.cache_note.rfind("result not cached", 0) != 0) ++counters_.cache_refused;
+    log_line(id + ": " + outcome.cache_note);
+  }
   JobResult result = JobResult::kDone;
   switch (outcome.kind) {
     case ConversionOutcome::Kind::kConverted:
@@ -165,6 +171,7 @@ void Daemon::apply(ConversionOutcome outcome) {
 // delta), the same result as the live one (a reload), or one the dynamics check rejected.
 void Daemon::apply_converted(ConversionOutcome& outcome, ModelRecord& record) {
   const std::string id = record.id;
+  if (outcome.from_cache) ++counters_.from_cache;
   const ConvertedModel& candidate = *outcome.converted;
   const bool failed = candidate.validation && !candidate.validation->passed;
   record.last_hash = outcome.content_hash;
@@ -231,7 +238,7 @@ void Daemon::apply_converted(ConversionOutcome& outcome, ModelRecord& record) {
            std::to_string(record.live->robot.links.size()) + " links, " +
            std::to_string(record.live->robot.joints.size()) + " joints" +
            (record.live->validation ? std::string(", dynamics ") + (failed ? "FAILED" : "passed") : "") +
-           ") in " + milliseconds(outcome.duration) + (kept ? " (the result the earlier run served: its number kept)" : ""));
+           ") in " + milliseconds(outcome.duration) + (outcome.from_cache ? " from the result cache" : "") + (kept ? " (the result the earlier run served: its number kept)" : ""));
   if (simulation_) {
     if (failed) {
       // A revision that failed the check would blow up in ODE, and the previous one is no

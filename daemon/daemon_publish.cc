@@ -5,6 +5,7 @@
 
 #include "daemon.h"
 #include "daemon_internal.h"
+#include "rdtf/version.h"
 #include "messages.h"
 #include "rdtf/diagnostic_codes.h"
 
@@ -87,7 +88,7 @@ std::size_t Daemon::publish_all() {
 void Daemon::publish_status() {
   rdtf::status_t status;
   status.utime = now_utime();
-  status.version = "rdtfd 0.1.0";
+  status.version = version_line("rdtfd");
   status.pid = static_cast<std::int32_t>(::getpid());
   status.uptime = std::chrono::duration<double>(clock_->now() - started_).count();
   status.num_watched_dirs = static_cast<std::int32_t>(config_.watch.size());

@@ -112,6 +112,32 @@ std::string hex_of_id(const std::string& model_id) { return sha256_hex(model_id)
 
 }  // namespace
 
+Json facts_to_json(const RobotFacts& facts) {
+  Json links = Json::array();
+  for (const LinkFacts& l : facts.links) links.push_back(to_json(l));
+  Json joints = Json::array();
+  for (const JointFacts& f : facts.joints) joints.push_back(to_json(f));
+  return {{"links", links}, {"joints", joints}};
+}
+
+std::optional<RobotFacts> facts_from_json(const Json& json, std::string& why) {
+  try {
+    RobotFacts facts;
+    const Json& links = field(json, "links", Json::value_t::array, "");
+    for (std::size_t i = 0; i < links.size(); ++i) facts.links.push_back(link_from(links[i], "/links/" + std::to_string(i)));
+    const Json& joints = field(json, "joints", Json::value_t::array, "");
+    for (std::size_t i = 0; i < joints.size(); ++i) {
+      facts.joints.push_back(joint_from(joints[i], "/joints/" + std::to_string(i)));
+    }
+    return facts;
+  } catch (const Refused& refused) {
+    why = refused.why;
+  } catch (const std::exception& error) {
+    why = error.what();
+  }
+  return std::nullopt;
+}
+
 std::string result_digest(const ConvertedModel& m) {
   const std::string flags = std::string(m.written ? "w" : "-") + (m.validation ? "v" : "-") +
                             (m.validation && m.validation->passed ? "p" : "-");

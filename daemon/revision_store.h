@@ -12,6 +12,8 @@
 #include <string>
 #include <string_view>
 
+#include <nlohmann/json.hpp>
+
 #include "conversion.h"
 #include "rdtf/diff.h"
 
@@ -43,6 +45,11 @@ std::string result_digest(const ConvertedModel& model);
 // revision above `numbered`.
 std::string state_to_json(const ModelState& state);
 std::optional<ModelState> state_from_json(std::string_view text, std::string& why);
+
+// The facts a DELTA compares, as the state file holds them (also the result cache's form). The
+// reader refuses (nothing, with `why`) anything but such an object.
+nlohmann::json facts_to_json(const RobotFacts& facts);
+std::optional<RobotFacts> facts_from_json(const nlohmann::json& json, std::string& why);
 
 // Revision numbers above any this daemon can have handed out before now: microseconds since the
 // Unix epoch. Numbers are handed out one at a time, each after a conversion and an fsync (far more

@@ -117,7 +117,7 @@ TEST(DaemonConfigRegistry, ReloadEffectsAreTheDocumentedOnes) {
                                    "bound_inertia_kgm2", "joint_command_timeout_s"}));
   EXPECT_EQ(keys_with(kReconnect), (std::set<std::string>{"lcm_url", "channel_prefix"}));
   EXPECT_EQ(keys_with(kFoldersChanged), (std::set<std::string>{"watch", "output"}));
-  EXPECT_EQ(keys_with(kNeedsRestart), (std::set<std::string>{"workers"}));
+  EXPECT_EQ(keys_with(kNeedsRestart), (std::set<std::string>{"workers", "max_cached_results"}));
 }
 
 TEST(DaemonConfigRegistry, AReloadKeepsTheRunningValueOfARestartKey) {

@@ -69,7 +69,10 @@ std::optional<rdtf::description_t> description_since(Session& s, std::size_t fro
 
 fs::path state_file_of(const fs::path& output) {
   std::vector<fs::path> files;
-  for (const auto& entry : fs::directory_iterator(output / ".rdtfd-state")) files.push_back(entry.path());
+  // The revision states ("m-<hex>.json"); the folder also holds the result cache and the clean-stop mark.
+  for (const auto& entry : fs::directory_iterator(output / ".rdtfd-state")) {
+    if (entry.path().filename().string().rfind("m-", 0) == 0) files.push_back(entry.path());
+  }
   if (files.size() != 1) throw std::runtime_error("expected one state file, found " + std::to_string(files.size()));
   return files[0];
 }

@@ -1,0 +1,215 @@
+// rdtfd's result cache across restarts, with the loop stepped in-process (daemon_loop.h): a restart
+// over unchanged models publishes what the first run published without converting anything; a
+// setting that changes results, a changed model, a torn or altered entry and outputs removed from
+// disk each make that model convert again; the number of entries stays within its bound.
+#include <sys/stat.h>
+
+#include <fstream>
+
+#include "daemon_loop.h"
+#include "rdtf/version.h"
+#include "result_cache.h"
+
+namespace rdtf::daemon {
+namespace {
+
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+
+class DaemonCache : public DaemonLoop {
+ protected:
+  // The full pipeline (the gate, the URDF), as rdtfd runs by default; no live simulation.
+  void start_full(const std::function<void(DaemonConfig&)>& tweak = {}) {
+    start([&](DaemonConfig& config) {
+      config.validate = true;
+      config.urdf = true;
+      if (tweak) tweak(config);
+    });
+    advance(50ms);  // The settle of the initial scan.
+    convert();
+  }
+  void restart(const std::function<void(DaemonConfig&)>& tweak = {}) {
+    daemon_.reset();
+    clear_bus();
+    start_full(tweak);
+  }
+  void write_models() {
+    rdtf::testing::write_file(watch_ / "arm3.glb", fixture("arm3.glb"));
+    rdtf::testing::write_file(watch_ / "two_cylinder.gltf", fixture("two_cylinder.gltf"));
+    rdtf::testing::write_file(watch_ / "two_cylinder.bin", fixture("two_cylinder.bin"));
+  }
+  // Every message a subscriber gets about a revision (description, inertia table, verdict, manifest),
+  // by channel, with the time of sending (every type's first field) zeroed.
+  std::vector<std::string> revision_messages() {
+    std::vector<std::string> out;
+    for (const auto& sent : bus_->sent) {
+      const auto kind = sent.channel.substr(sent.channel.rfind('/') + 1);
+      if (kind != "DESCRIPTION" && kind != "INERTIA" && kind != "VALIDATION" && kind != "MANIFEST") continue;
+      std::string bytes(sent.bytes.begin(), sent.bytes.end());
+      EXPECT_GE(bytes.size(), 16u);
+      if (bytes.size() >= 16) bytes.replace(8, 8, 8, '\0');  // After the 8-byte fingerprint: utime.
+      out.push_back(sent.channel + " " + bytes);
+    }
+    return out;
+  }
+  // Each output file with its inode and modification time: rewritten files get a new inode.
+  std::map<fs::path, std::pair<ino_t, std::int64_t>> outputs() {
+    std::map<fs::path, std::pair<ino_t, std::int64_t>> files;
+    for (const auto& entry : fs::recursive_directory_iterator(out_)) {
+      if (!entry.is_regular_file() || entry.path().string().find(".rdtfd-state") != std::string::npos) continue;
+      struct stat info {};
+      EXPECT_EQ(::lstat(entry.path().c_str(), &info), 0);
+      files[entry.path()] = {info.st_ino, info.st_mtim.tv_sec * 1'000'000'000LL + info.st_mtim.tv_nsec};
+    }
+    return files;
+  }
+  std::vector<fs::path> cache_entries() {
+    std::vector<fs::path> files;
+    const fs::path folder = ResultCache::folder_for(out_);
+    if (!fs::exists(folder)) return files;
+    for (const auto& entry : fs::directory_iterator(folder)) files.push_back(entry.path());
+    return files;
+  }
+  fs::path entry_of(const std::string& name) {
+    return ResultCache(ResultCache::folder_for(out_), 1).file_for((watch_ / name).string());
+  }
+};
+
+TEST_F(DaemonCache, ARestartOverUnchangedModelsPublishesTheSameRevisionsWithoutConverting) {
+  write_models();
+  start_full();
+  ASSERT_EQ(events("arm3.glb"), kRevision1);
+  ASSERT_EQ(events("two_cylinder.gltf"), kRevision1);
+  EXPECT_EQ(daemon_->counters().from_cache, 0);
+  const auto first = revision_messages();
+  const auto written = outputs();
+  ASSERT_FALSE(written.empty());
+  EXPECT_EQ(cache_entries().size(), 2u);
+
+  restart();
+  EXPECT_EQ(daemon_->counters().from_cache, 2);
+  EXPECT_EQ(daemon_->counters().conversions, 2);
+  EXPECT_EQ(daemon_->counters().cache_refused, 0);
+  EXPECT_EQ(events("arm3.glb"), kRevision1);  // The same number, and no DELTA: nothing changed.
+  EXPECT_EQ(events("two_cylinder.gltf"), kRevision1);
+  // Byte for byte what the first run published (the verdict and the inertia table included).
+  EXPECT_EQ(revision_messages(), first);
+  EXPECT_EQ(outputs(), written) << "an output was written again";
+}
+
+TEST_F(DaemonCache, ASettingThatChangesResultsConvertsAgainAndOneThatDoesNotKeepsTheCache) {
+  write_models();
+  start_full();
+  restart([](DaemonConfig& config) { config.state_rate_hz = 50; });  // The live simulation's only.
+  EXPECT_EQ(daemon_->counters().from_cache, 2);
+  restart([](DaemonConfig& config) { config.convert.default_density = 2000; });  // Every mass changes.
+  EXPECT_EQ(daemon_->counters().from_cache, 0);
+  EXPECT_EQ(events("arm3.glb"), (std::vector<std::string>{"DESCRIPTION r2", "INERTIA"}));
+  restart([](DaemonConfig& config) { config.validation_seconds = 1; });  // The verdict may change.
+  EXPECT_EQ(daemon_->counters().from_cache, 0);
+  // The entries now hold the results under the last settings.
+  restart();
+  EXPECT_EQ(daemon_->counters().from_cache, 2);
+}
+
+TEST_F(DaemonCache, AModelChangedWhileTheDaemonWasStoppedIsConvertedAgain) {
+  write_models();
+  start_full();
+  daemon_.reset();
+  std::string gltf = fixture("two_cylinder.gltf");
+  rdtf::testing::write_file(watch_ / "two_cylinder.gltf", gltf + " ");
+  clear_bus();
+  start_full();
+  EXPECT_EQ(daemon_->counters().from_cache, 1);  // arm3 only.
+  EXPECT_EQ(events("arm3.glb"), kRevision1);
+  // New content, converted and checked: a number of its own (docs/lcm.md, "Revision numbers").
+  EXPECT_EQ(events("two_cylinder.gltf"), (std::vector<std::string>{"DESCRIPTION r2", "INERTIA"}));
+  EXPECT_EQ(daemon_->counters().conversions, 2);
+  // A new .bin alone is a change too (the content hash covers the files a model names).
+  daemon_.reset();
+  std::string bin = fixture("two_cylinder.bin");
+  bin[bin.size() / 2] = static_cast<char>(bin[bin.size() / 2] ^ 1);
+  rdtf::testing::write_file(watch_ / "two_cylinder.bin", bin);
+  clear_bus();
+  start_full();
+  EXPECT_EQ(daemon_->counters().from_cache, 1);
+}
+
+TEST_F(DaemonCache, ATornOrAlteredEntryIsReportedAndRecomputed) {
+  write_models();
+  start_full();
+  daemon_.reset();
+  const fs::path torn = entry_of("arm3.glb"), altered = entry_of("two_cylinder.gltf");
+  ASSERT_TRUE(fs::exists(torn));
+  ASSERT_TRUE(fs::exists(altered));
+  fs::resize_file(torn, fs::file_size(torn) / 2);  // A crash before all of it reached the disk.
+  std::string bytes = rdtf::testing::read_file(altered);
+  bytes[bytes.size() - 40] = static_cast<char>(bytes[bytes.size() - 40] ^ 0x20);  // One flipped bit.
+  rdtf::testing::write_file(altered, bytes);
+  clear_bus();
+  ::testing::internal::CaptureStderr();
+  start_full();
+  const std::string log = ::testing::internal::GetCapturedStderr();
+  EXPECT_EQ(daemon_->counters().from_cache, 0);
+  EXPECT_EQ(daemon_->counters().cache_refused, 2);
+  EXPECT_NE(log.find("arm3.glb: result cache entry refused (" + torn.string()), std::string::npos) << log;
+  EXPECT_NE(log.find("two_cylinder.gltf: result cache entry refused (" + altered.string() +
+                     ": its checksum does not match"),
+            std::string::npos)
+      << log;
+  EXPECT_EQ(events("arm3.glb"), kRevision1);
+  EXPECT_EQ(events("two_cylinder.gltf"), kRevision1);
+  // Both were written again, whole: the next restart uses them.
+  restart();
+  EXPECT_EQ(daemon_->counters().from_cache, 2);
+  EXPECT_EQ(daemon_->counters().cache_refused, 0);
+}
+
+TEST_F(DaemonCache, OutputsRemovedOrChangedOnDiskAreWrittenAgain) {
+  write_models();
+  start_full();
+  daemon_.reset();
+  const fs::path urdf = out_ / "arm3.glb" / "urdf" / "robot.urdf";
+  const fs::path gltf = out_ / "two_cylinder.gltf" / "two_cylinder.rdtf.gltf";
+  ASSERT_TRUE(fs::exists(urdf));
+  ASSERT_TRUE(fs::exists(gltf));
+  fs::remove(urdf);
+  rdtf::testing::write_file(gltf, rdtf::testing::read_file(gltf) + " ");
+  clear_bus();
+  ::testing::internal::CaptureStderr();
+  start_full();
+  const std::string log = ::testing::internal::GetCapturedStderr();
+  EXPECT_EQ(daemon_->counters().from_cache, 0);
+  EXPECT_EQ(daemon_->counters().cache_refused, 2);
+  EXPECT_NE(log.find("the outputs changed on disk (" + urdf.string()), std::string::npos) << log;
+  EXPECT_NE(log.find("the outputs changed on disk (" + gltf.string() + " was changed)"), std::string::npos) << log;
+  EXPECT_TRUE(fs::exists(urdf));
+  EXPECT_EQ(events("arm3.glb"), kRevision1);
+  restart();
+  EXPECT_EQ(daemon_->counters().from_cache, 2);
+}
+
+TEST_F(DaemonCache, EntriesStayWithinTheirBound) {
+  for (int i = 0; i < 5; ++i) rdtf::testing::write_file(watch_ / ("arm" + std::to_string(i) + ".glb"), fixture("arm3.glb"));
+  start_full([](DaemonConfig& config) { config.max_cached_results = 3; });
+  EXPECT_EQ(daemon_->counters().conversions, 5);
+  EXPECT_EQ(cache_entries().size(), 3u);
+  restart([](DaemonConfig& config) { config.max_cached_results = 5; });
+  EXPECT_EQ(daemon_->counters().from_cache, 3);  // The three kept; the two evicted converted again.
+  EXPECT_EQ(cache_entries().size(), 5u);
+  // A smaller bound: the least recently used beyond it go, at start and as entries are written.
+  restart([](DaemonConfig& config) { config.max_cached_results = 2; });
+  EXPECT_LE(cache_entries().size(), 2u);
+  EXPECT_EQ(daemon_->counters().conversions, 5);
+  // 0: no cache at all.
+  restart([](DaemonConfig& config) { config.max_cached_results = 0; });
+  EXPECT_EQ(daemon_->counters().from_cache, 0);
+}
+
+TEST_F(DaemonCache, TheStatusNamesTheBuildsVersionAndCommit) {
+  start();
+  EXPECT_EQ(last_status().version, version_line("rdtfd"));
+}
+
+}  // namespace
+}  // namespace rdtf::daemon

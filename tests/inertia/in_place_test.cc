@@ -26,6 +26,7 @@
 #include "rdtf/mass_properties.h"
 #include "rdtf/mesh_checks.h"
 #include "rdtf/triangle_mesh.h"
+#include "surface_reference.h"
 
 namespace rdtf {
 namespace {
@@ -280,44 +281,6 @@ TEST(SurfaceTopology, PiecesInDifferentStoragesWeldTogether) {
   EXPECT_FALSE(analyze_surface(std::span<const TriangleMeshView>(&pieces[0], 1)).closed());
 }
 
-// The counts by definition: weld by exact position (-0 = +0), then tally every edge's uses each
-// way in an ordered map.
-SurfaceTopology brute_force(const std::vector<TriangleMesh>& pieces) {
-  SurfaceTopology topology;
-  std::map<std::tuple<double, double, double>, std::uint32_t> ids;
-  std::map<std::pair<std::uint32_t, std::uint32_t>, std::pair<std::size_t, std::size_t>> uses;  // (v<w): v->w, w->v
-  for (const TriangleMesh& piece : pieces) {
-    std::vector<std::uint32_t> welded;
-    for (const Vector3d& p : piece.positions) {
-      const auto key = std::make_tuple(p.x() + 0.0, p.y() + 0.0, p.z() + 0.0);
-      welded.push_back(ids.emplace(key, static_cast<std::uint32_t>(ids.size())).first->second);
-    }
-    for (const Triangle& t : piece.triangles) {
-      ++topology.triangles;
-      const std::uint32_t v[3] = {welded[t[0]], welded[t[1]], welded[t[2]]};
-      if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2]) {
-        ++topology.degenerate_triangles;
-        continue;
-      }
-      for (int k = 0; k < 3; ++k) {
-        const std::uint32_t from = v[k], to = v[(k + 1) % 3];
-        auto& counts = uses[{std::min(from, to), std::max(from, to)}];
-        ++(from < to ? counts.first : counts.second);
-      }
-    }
-  }
-  for (const auto& [edge, counts] : uses) {
-    const std::size_t total = counts.first + counts.second;
-    if (total == 1) {
-      ++topology.boundary_edges;
-    } else if (total > 2) {
-      ++topology.nonmanifold_edges;
-    } else if (counts.first != 1) {
-      ++topology.misoriented_edges;
-    }
-  }
-  return topology;
-}
 
 // Random damage to closed spheres with their vertices renumbered at random (so that a vertex's
 // edges fall in rows of every size, past the sorting networks' 2, 4, 6 and 8), split into pieces,
@@ -370,7 +333,7 @@ TEST(SurfaceTopology, MatchesBruteForceOnRandomMeshes) {
     pieces[0].positions = pieces[1].positions = mesh.positions;
     for (std::size_t t = 0; t < mesh.triangles.size(); ++t) pieces[t % 3 == 0].triangles.push_back(mesh.triangles[t]);
     SCOPED_TRACE(::testing::Message() << "trial " << trial);
-    const SurfaceTopology want = brute_force(pieces);
+    const SurfaceTopology want = testing::reference_topology(pieces);
     expect_same_counts(analyze_surface(pieces), want);
     seen.degenerate_triangles += want.degenerate_triangles;
     seen.boundary_edges += want.boundary_edges;
@@ -407,7 +370,7 @@ TEST(SurfaceTopology, LongRowsOfAHighValenceVertex) {
     }
     const std::vector<TriangleMesh> pieces{bicone};
     const SurfaceTopology topology = analyze_surface(pieces);
-    expect_same_counts(topology, brute_force(pieces));
+    expect_same_counts(topology, testing::reference_topology(pieces));
     EXPECT_TRUE(topology.closed());
     EXPECT_TRUE(topology.consistently_oriented());
     EXPECT_GT(integrate_solid(pieces, Affine3d::Identity()).volume, 0.0);

@@ -2,10 +2,7 @@
 // every kind: open, closed, non-manifold, misoriented, with duplicated vertices, signed zeros and
 // degenerate triangles, in one or several pieces and in every storage a glTF buffer can have.
 // Every count must be equal, not close: the surface check decides whether a mass is trusted.
-//
-// The reference welds with an ordered map keyed by the coordinates (+0.0 added, so -0 = +0) and
-// tallies each undirected edge's uses in another ordered map: nothing of the fast path (hash
-// table, rows laid out by counting, sorting networks) is shared with it.
+// The reference is surface_reference.h.
 
 #include <algorithm>
 #include <array>
@@ -23,48 +20,15 @@
 
 #include "rdtf/mesh_checks.h"
 #include "rdtf/triangle_mesh.h"
+#include "surface_reference.h"
 
 namespace rdtf {
 namespace {
 
 using Eigen::Vector3d;
 using Triangle = std::array<std::uint32_t, 3>;
+using testing::reference_topology;
 
-SurfaceTopology reference_topology(const std::vector<TriangleMesh>& pieces) {
-  SurfaceTopology topology;
-  std::map<std::tuple<double, double, double>, std::size_t> ids;
-  std::map<std::pair<std::size_t, std::size_t>, std::pair<std::size_t, std::size_t>> uses;  // v < w: v->w, w->v
-  for (const TriangleMesh& piece : pieces) {
-    std::vector<std::size_t> welded;
-    for (const Vector3d& p : piece.positions) {
-      welded.push_back(ids.emplace(std::make_tuple(p.x() + 0.0, p.y() + 0.0, p.z() + 0.0), ids.size()).first->second);
-    }
-    for (const Triangle& t : piece.triangles) {
-      ++topology.triangles;
-      const std::size_t v[3] = {welded[t[0]], welded[t[1]], welded[t[2]]};
-      if (v[0] == v[1] || v[1] == v[2] || v[2] == v[0]) {
-        ++topology.degenerate_triangles;
-        continue;
-      }
-      for (int k = 0; k < 3; ++k) {
-        const std::size_t from = v[k], to = v[(k + 1) % 3];
-        auto& counts = uses[{std::min(from, to), std::max(from, to)}];
-        ++(from < to ? counts.first : counts.second);
-      }
-    }
-  }
-  for (const auto& [edge, counts] : uses) {
-    const std::size_t total = counts.first + counts.second;
-    if (total == 1) {
-      ++topology.boundary_edges;
-    } else if (total > 2) {
-      ++topology.nonmanifold_edges;
-    } else if (counts.first != 1) {
-      ++topology.misoriented_edges;
-    }
-  }
-  return topology;
-}
 
 void expect_equal(const SurfaceTopology& got, const SurfaceTopology& want) {
   EXPECT_EQ(got.triangles, want.triangles);

@@ -290,16 +290,7 @@ TEST(SurfaceTopology, MatchesBruteForceOnRandomMeshes) {
   SurfaceTopology seen;  // Sums over the trials: every kind of fault must have come up.
   for (int trial = 0; trial < 60; ++trial) {
     TriangleMesh mesh = float_sphere(3 + trial % 9, 0.5, Vector3d::Zero());
-    // Renumber the vertices.
-    std::vector<std::uint32_t> order(mesh.positions.size());
-    for (std::uint32_t i = 0; i < order.size(); ++i) order[i] = i;
-    std::shuffle(order.begin(), order.end(), random);
-    std::vector<Vector3d> positions(mesh.positions.size());
-    for (std::size_t i = 0; i < order.size(); ++i) positions[order[i]] = mesh.positions[i];
-    mesh.positions = positions;
-    for (Triangle& t : mesh.triangles)
-      for (std::uint32_t& v : t) v = order[v];
-    std::shuffle(mesh.triangles.begin(), mesh.triangles.end(), random);
+    testing::shuffle_mesh(mesh, random);
     // Damage: flips, removals, duplicates, degenerate triangles, a signed zero.
     const int damage = trial % 5 == 0 ? 0 : 1 + trial % 7;
     for (int d = 0; d < damage; ++d) {

@@ -6,7 +6,9 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <cstdint>
 #include <map>
+#include <random>
 #include <tuple>
 #include <utility>
 #include <vector>
@@ -52,6 +54,19 @@ inline SurfaceTopology reference_topology(const std::vector<TriangleMesh>& piece
     }
   }
   return topology;
+}
+
+// Vertices renumbered and triangles reordered at random: the same surface, in another order.
+inline void shuffle_mesh(TriangleMesh& mesh, std::mt19937& random) {
+  std::vector<std::uint32_t> order(mesh.positions.size());
+  for (std::uint32_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::shuffle(order.begin(), order.end(), random);
+  std::vector<Eigen::Vector3d> positions(mesh.positions.size());
+  for (std::size_t i = 0; i < order.size(); ++i) positions[order[i]] = mesh.positions[i];
+  mesh.positions = positions;
+  for (auto& t : mesh.triangles)
+    for (std::uint32_t& v : t) v = order[v];
+  std::shuffle(mesh.triangles.begin(), mesh.triangles.end(), random);
 }
 
 }  // namespace rdtf::testing

@@ -28,6 +28,7 @@ namespace {
 using Eigen::Vector3d;
 using Triangle = std::array<std::uint32_t, 3>;
 using testing::reference_topology;
+using testing::shuffle_mesh;
 
 
 void expect_equal(const SurfaceTopology& got, const SurfaceTopology& want) {
@@ -92,19 +93,6 @@ void split_vertices(TriangleMesh& mesh, std::mt19937& random, int copies) {
   for (Triangle& t : mesh.triangles) {
     for (std::uint32_t& v : t) v = copies_of[v][random() % copies_of[v].size()];
   }
-}
-
-// Vertices renumbered and triangles reordered at random.
-void shuffle_mesh(TriangleMesh& mesh, std::mt19937& random) {
-  std::vector<std::uint32_t> order(mesh.positions.size());
-  for (std::uint32_t i = 0; i < order.size(); ++i) order[i] = i;
-  std::shuffle(order.begin(), order.end(), random);
-  std::vector<Vector3d> positions(mesh.positions.size());
-  for (std::size_t i = 0; i < order.size(); ++i) positions[order[i]] = mesh.positions[i];
-  mesh.positions = positions;
-  for (Triangle& t : mesh.triangles)
-    for (std::uint32_t& v : t) v = order[v];
-  std::shuffle(mesh.triangles.begin(), mesh.triangles.end(), random);
 }
 
 // Triangles over a small pool of positions (so that many coincide after welding): any mixture

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include <Eigen/Core>
+#include <gtest/gtest.h>
 
 #include "rdtf/mesh_checks.h"
 #include "rdtf/triangle_mesh.h"
@@ -67,6 +68,17 @@ inline void shuffle_mesh(TriangleMesh& mesh, std::mt19937& random) {
   for (auto& t : mesh.triangles)
     for (std::uint32_t& v : t) v = order[v];
   std::shuffle(mesh.triangles.begin(), mesh.triangles.end(), random);
+}
+
+// Every count equal, and the verdicts they make.
+inline void expect_equal(const SurfaceTopology& got, const SurfaceTopology& want) {
+  EXPECT_EQ(got.triangles, want.triangles);
+  EXPECT_EQ(got.degenerate_triangles, want.degenerate_triangles);
+  EXPECT_EQ(got.boundary_edges, want.boundary_edges);
+  EXPECT_EQ(got.misoriented_edges, want.misoriented_edges);
+  EXPECT_EQ(got.nonmanifold_edges, want.nonmanifold_edges);
+  EXPECT_EQ(got.closed(), want.closed());
+  EXPECT_EQ(got.consistently_oriented(), want.consistently_oriented());
 }
 
 }  // namespace rdtf::testing

@@ -29,17 +29,7 @@ using Eigen::Vector3d;
 using Triangle = std::array<std::uint32_t, 3>;
 using testing::reference_topology;
 using testing::shuffle_mesh;
-
-
-void expect_equal(const SurfaceTopology& got, const SurfaceTopology& want) {
-  EXPECT_EQ(got.triangles, want.triangles);
-  EXPECT_EQ(got.degenerate_triangles, want.degenerate_triangles);
-  EXPECT_EQ(got.boundary_edges, want.boundary_edges);
-  EXPECT_EQ(got.misoriented_edges, want.misoriented_edges);
-  EXPECT_EQ(got.nonmanifold_edges, want.nonmanifold_edges);
-  EXPECT_EQ(got.closed(), want.closed());
-  EXPECT_EQ(got.consistently_oriented(), want.consistently_oriented());
-}
+using testing::expect_equal;
 
 // A closed, consistently wound octahedron subdivided `level` times (every face into four), with
 // its vertices shared: the base every closed random mesh below starts from.

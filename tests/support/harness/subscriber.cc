@@ -1,5 +1,7 @@
 #include "support/harness/subscriber.h"
 
+#include <algorithm>
+
 #include "message_json.h"
 
 namespace rdtf::itest {
@@ -37,7 +39,20 @@ std::size_t Subscriber::size() const {
 
 bool Subscriber::wait_for(const std::function<bool(const std::vector<Message>&)>& predicate,
                           Clock::duration timeout) const {
-  return listener_->wait([&] { return predicate(messages_); }, timeout * deadline_scale());
+  // The predicate runs on this waiter's own copy, outside the lock: many predicates decode every
+  // message so far, and evaluated under the lock they held the receiving thread back until LCM's
+  // ring buffer overflowed and dropped datagrams (seen under ASan with 50 Hz states). Messages are
+  // only appended, so the copy grows by what arrived since the last look.
+  const auto deadline = Clock::now() + timeout * deadline_scale();
+  std::vector<Message> seen;
+  for (;;) {
+    listener_->locked([&] { seen.insert(seen.end(), messages_.begin() + static_cast<std::ptrdiff_t>(seen.size()), messages_.end()); });
+    if (predicate(seen)) return true;
+    const auto now = Clock::now();
+    if (now >= deadline) return false;
+    // Until a new message, or 5 ms for conditions on anything else.
+    listener_->wait([&] { return messages_.size() > seen.size(); }, std::min<Clock::duration>(deadline - now, 5ms));
+  }
 }
 
 }  // namespace rdtf::itest

@@ -46,7 +46,8 @@ class Subscriber {
     listener_->publish(channel, message);
   }
 
-  // Waits until `predicate(messages)` holds; false at the deadline (scaled: basics.h).
+  // Waits until `predicate(messages)` holds; false at the deadline (scaled: basics.h). The
+  // predicate sees a copy of the messages so far, taken without holding up the receiving thread.
   bool wait_for(const std::function<bool(const std::vector<Message>&)>& predicate, Clock::duration timeout = 5s) const;
 
  private:

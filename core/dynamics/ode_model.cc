@@ -342,11 +342,17 @@ void read_frames(Simulation::Model& model) {
     const dBodyID id = model.bodies[b].id;
     const dReal* p = dBodyGetPosition(id);
     const dReal* q = dBodyGetQuaternion(id);
+    const dReal* v = dBodyGetLinearVel(id);
     const dReal* w = dBodyGetAngularVel(id);
     BodyFrame& frame = model.frames[b];
     frame.R = Eigen::Quaterniond(q[0], q[1], q[2], q[3]).normalized().toRotationMatrix();
     frame.p = Eigen::Vector3d(p[0], p[1], p[2]);
+    frame.v = Eigen::Vector3d(v[0], v[1], v[2]);
     frame.w = Eigen::Vector3d(w[0], w[1], w[2]);
+    frame.finite = frame.p.allFinite() && frame.v.allFinite() && frame.w.allFinite() &&
+                   Eigen::Vector4d(q[0], q[1], q[2], q[3]).allFinite();
+    frame.steppable = frame.finite && frame.p.cwiseAbs().maxCoeff() <= kStateBound &&
+                      frame.v.cwiseAbs().maxCoeff() <= kStateBound && frame.w.cwiseAbs().maxCoeff() <= kStateBound;
   }
 }
 

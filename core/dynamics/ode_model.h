@@ -92,12 +92,16 @@ struct BodyModel {
   int root_link = -1;
 };
 
-// A body's pose and angular velocity in the scene frame, read from ODE once per step for the health
-// measurements and the exact-step errors (quaternion to matrix once, not once per use).
+// A body's state in the scene frame, read from ODE once per step (read_frames) for the health
+// measurements, the exact-step errors and the check before the next step: ODE's state changes only
+// in a step, so one read serves them all (quaternion to matrix once, not once per use).
 struct BodyFrame {
   Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
   Eigen::Vector3d p = Eigen::Vector3d::Zero();
+  Eigen::Vector3d v = Eigen::Vector3d::Zero();
   Eigen::Vector3d w = Eigen::Vector3d::Zero();
+  bool finite = true;      // position, quaternion and velocities all finite
+  bool steppable = true;   // finite, and no position or velocity component beyond kStateBound
 };
 
 struct LinkModel {
@@ -150,6 +154,9 @@ struct JointModel {
   double stiffness = 0;
   std::optional<JointCommand> command;
   double effort = 0;  // actuator effort applied in the last step
+  // Within a step: the position before it and the damping effort applied in it (for the work).
+  double q_before = 0;
+  double damping_effort = 0;
 };
 
 }  // namespace rdtf::dynamics_internal
@@ -198,7 +205,7 @@ std::unique_ptr<Simulation::Model> build_model(const Robot& robot, const Simulat
                                                Diagnostics& diag);
 
 Eigen::Isometry3d body_pose(dBodyID body);  // X_SB
-void read_frames(Simulation::Model& model);  // model.frames from ODE's bodies
+void read_frames(Simulation::Model& model);  // model.frames from ODE's bodies (after set-up and every step)
 // Reads back the ODE state of the one-dof joints without unwrapping (after set-up).
 void prime_joint_states(Simulation::Model& model);
 // The ODE messages the calling thread received since the last call.

@@ -40,29 +40,13 @@ Eigen::Vector3d angular_velocity(const Simulation::Model& model, int body) {
   return body == kWorld ? Eigen::Vector3d::Zero() : vec(dBodyGetAngularVel(model.bodies[body].id));
 }
 
-bool body_finite(dBodyID id) {
-  const dReal* values[] = {dBodyGetPosition(id), dBodyGetLinearVel(id), dBodyGetAngularVel(id)};
-  for (const dReal* v : values) {
-    if (!std::isfinite(v[0]) || !std::isfinite(v[1]) || !std::isfinite(v[2])) return false;
-  }
-  const dReal* q = dBodyGetQuaternion(id);
-  return std::isfinite(q[0]) && std::isfinite(q[1]) && std::isfinite(q[2]) && std::isfinite(q[3]);
-}
+// The world's frame: identity, at rest (a constant, not a function-local static whose guard every
+// call would test).
+const BodyFrame kWorldFrame{};
 
-// A state ODE can step: finite, and no position or velocity beyond kStateBound.
-bool body_steppable(dBodyID id) {
-  if (!body_finite(id)) return false;
-  const dReal* values[] = {dBodyGetPosition(id), dBodyGetLinearVel(id), dBodyGetAngularVel(id)};
-  for (const dReal* v : values) {
-    if (vec(v).cwiseAbs().maxCoeff() > dynamics_internal::kStateBound) return false;
-  }
-  return true;
-}
-
-// The frame of a body, or the world's (identity, at rest).
+// The frame of a body, or the world's.
 const BodyFrame& frame_of(const Simulation::Model& m, int body) {
-  static const BodyFrame world;
-  return body == kWorld ? world : m.frames[static_cast<std::size_t>(body)];
+  return body == kWorld ? kWorldFrame : m.frames[static_cast<std::size_t>(body)];
 }
 
 // The misalignment an exact step adds to a joint. ODE solves the constraints on velocities and
@@ -140,30 +124,28 @@ void Simulation::step(double dt) {
   init_ode();
   Model& m = *model_;
   if (m.failed) return;
-  for (const BodyModel& body : m.bodies) {
-    if (!body_steppable(body.id)) {
+  // The state as of the last step (or the set-up), read once then (read_frames).
+  for (std::size_t b = 0; b < m.bodies.size(); ++b) {
+    if (!m.frames[b].steppable) {
       m.failed = true;
-      m.messages.push_back("the state of link '" + m.robot.links[body.link].name + "' at t = " +
+      m.messages.push_back("the state of link '" + m.robot.links[m.bodies[b].link].name + "' at t = " +
                            std::to_string(m.time) +
                            " s is not finite or beyond 1e100: the simulation stopped");
       return;
     }
   }
-  std::vector<double> damping_effort(m.joints.size(), 0.0);
-  std::vector<double> previous(m.joints.size(), 0.0);
   for (JointModel& jm : m.joints) {
     if (!jm.id) continue;
-    const std::size_t j = static_cast<std::size_t>(jm.joint);
     if (jm.dof) {
       jm.effort = command_effort(jm);
-      damping_effort[j] = -jm.damping * jm.qdot;
-      const double total = jm.effort + damping_effort[j] - jm.stiffness * jm.q;
+      jm.damping_effort = -jm.damping * jm.qdot;
+      const double total = jm.effort + jm.damping_effort - jm.stiffness * jm.q;
       if (jm.kind == JointKind::kPrismatic) {
         dJointAddSliderForce(jm.id, total);
       } else {
         dJointAddHingeTorque(jm.id, total);
       }
-      previous[j] = jm.q;
+      jm.q_before = jm.q;
     } else if (jm.kind == JointKind::kBall && jm.damping > 0) {
       const Eigen::Vector3d w = angular_velocity(m, jm.child_body) - angular_velocity(m, jm.parent_body);
       const Eigen::Vector3d tau = -jm.damping * w;
@@ -192,7 +174,6 @@ void Simulation::step(double dt) {
   const double erp = m.options.erp;
   for (JointModel& jm : m.joints) {
     if (!jm.id) continue;
-    const std::size_t j = static_cast<std::size_t>(jm.joint);
     const bool resolved = update_exact_step_errors(m, jm, dt, erp);
     if (jm.dof) {
       if (jm.kind == JointKind::kPrismatic) {
@@ -204,7 +185,7 @@ void Simulation::step(double dt) {
         jm.ode_angle = angle;
         jm.qdot = dJointGetHingeAngleRate(jm.id);
       }
-      const double dq = jm.q - previous[j];
+      const double dq = jm.q - jm.q_before;
       // A stop acts once the joint is past it: the step that crosses it can carry the joint its
       // whole travel beyond, and the stop's ERP (the world's) then takes back erp of the excess per
       // step. Every step's travel while past the stop counts (QuickStep resolves the stop only in
@@ -212,7 +193,7 @@ void Simulation::step(double dt) {
       const bool past = jm.stops && (jm.q < jm.lower || jm.q > jm.upper);
       jm.stop_overshoot = (1 - erp) * jm.stop_overshoot + (past && resolved ? std::abs(dq) : 0.0);
       if (jm.stops) jm.stop_yield = stop_load(m, jm) * dt * m.options.cfm / erp;
-      m.dissipated -= damping_effort[j] * dq;
+      m.dissipated -= jm.damping_effort * dq;
       m.actuator_work += jm.effort * dq;
     } else if (jm.kind == JointKind::kBall && jm.damping > 0) {
       const Eigen::Vector3d w = angular_velocity(m, jm.child_body) - angular_velocity(m, jm.parent_body);
@@ -237,8 +218,8 @@ int Simulation::body_count() const { return static_cast<int>(model_->bodies.size
 
 bool Simulation::steppable() const {
   if (model_->failed) return false;
-  for (const BodyModel& body : model_->bodies) {
-    if (!body_steppable(body.id)) return false;
+  for (const dynamics_internal::BodyFrame& frame : model_->frames) {
+    if (!frame.steppable) return false;
   }
   return true;
 }
@@ -323,9 +304,9 @@ SimulationHealth Simulation::health(const HealthTolerances& tolerances) const {
   // last changed.
   for (std::size_t b = 0; b < m.bodies.size(); ++b) {
     const BodyModel& body = m.bodies[b];
-    if (!body_finite(body.id)) h.finite = false;
     const BodyFrame& f = m.frames[b];
-    const Eigen::Vector3d v = vec(dBodyGetLinearVel(body.id));
+    if (!f.finite) h.finite = false;
+    const Eigen::Vector3d& v = f.v;
     const Eigen::Vector3d Iw = f.R * (body.inertia * (f.R.transpose() * f.w));
     h.kinetic_energy += 0.5 * body.mass * v.squaredNorm() + 0.5 * f.w.dot(Iw);
     h.potential_energy -= body.mass * m.options.gravity.dot(f.p);
@@ -352,14 +333,15 @@ SimulationHealth Simulation::health(const HealthTolerances& tolerances) const {
       const Eigen::Vector3d a = P.R * jm.axis_parent;
       d -= a.dot(d) * a;
     }
-    if (d.norm() > h.worst_joint_separation) {
-      h.worst_joint_separation = d.norm();
+    const double separation = d.norm();
+    if (separation > h.worst_joint_separation) {
+      h.worst_joint_separation = separation;
       h.worst_separation_joint = jm.joint;
     }
     const double separation_bound = tolerances.separation + jm.separation_drift;
-    if (d.norm() / separation_bound > h.worst_separation_ratio) {
-      h.worst_separation_ratio = d.norm() / separation_bound;
-      h.separation_at_worst_ratio = d.norm();
+    if (separation / separation_bound > h.worst_separation_ratio) {
+      h.worst_separation_ratio = separation / separation_bound;
+      h.separation_at_worst_ratio = separation;
       h.separation_bound = separation_bound;
       h.worst_separation_ratio_joint = jm.joint;
     }

@@ -86,6 +86,34 @@ Sample run(const std::vector<std::string>& args) {
   return sample;
 }
 
+// Ticks of every core since boot from /proc/stat's first line: busy (user, nice, system, irq,
+// softirq, steal: the hypervisor running someone else counts as taken) and all.
+struct CpuTicks {
+  double busy = 0, all = 0;
+};
+
+CpuTicks cpu_ticks() {
+  CpuTicks ticks;
+  std::ifstream stat("/proc/stat");
+  std::string label;
+  double user = 0, nice = 0, system = 0, idle = 0, iowait = 0, irq = 0, softirq = 0, steal = 0;
+  if (stat >> label >> user >> nice >> system >> idle >> iowait >> irq >> softirq >> steal && label == "cpu") {
+    ticks.busy = user + nice + system + irq + softirq + steal;
+    ticks.all = ticks.busy + idle + iowait;
+  }
+  return ticks;
+}
+
+// The share of the machine's cores that other processes kept busy while a pair ran: the busy
+// ticks of the interval less the pair's own CPU time, over the interval's ticks (10 ms ticks:
+// about +-0.02 for a pair of 400 ms on two cores).
+double others_busy(const CpuTicks& before, const CpuTicks& after, double own_cpu_ms) {
+  const double tick_ms = 1000.0 / static_cast<double>(sysconf(_SC_CLK_TCK));
+  const double all = after.all - before.all;
+  if (all <= 0) return 0;
+  return std::clamp((after.busy - before.busy - own_cpu_ms / tick_ms) / all, 0.0, 1.0);
+}
+
 struct Side {
   std::string name;
   std::vector<std::string> command;
@@ -108,9 +136,19 @@ struct Comparison {
   std::string name;
   double goal;  // Largest ratio rdtf / peer (wall) the goal allows.
   Side rdtf, peer;
+  std::vector<double> others;  // Per pair: others_busy during it.
   std::vector<double> ratios(double (*field)(const Sample&)) const {
     std::vector<double> out;
     for (std::size_t i = 0; i < rdtf.samples.size(); ++i) out.push_back(field(rdtf.samples[i]) / field(peer.samples[i]));
+    return out;
+  }
+  // The per-pair ratios of the pairs whose others_busy lies in [low, high).
+  std::vector<double> ratios_when(double (*field)(const Sample&), double low, double high) const {
+    const auto all = ratios(field);
+    std::vector<double> out;
+    for (std::size_t i = 0; i < all.size(); ++i) {
+      if (others[i] >= low && others[i] < high) out.push_back(all[i]);
+    }
     return out;
   }
 };
@@ -151,8 +189,8 @@ std::string verdict(const std::vector<double>& ratios, double goal) {
 // Every run slower than its program's far-out limit, with what explains it.
 void print_outliers(const std::vector<Comparison>& comparisons) {
   std::printf("\nOutliers (wall time above Q3 + 3 IQR of the program's runs; kept in every statistic):\n\n");
-  std::printf("| program | pair | wall ms | user ms | sys ms | minor faults | invol. switches | pair's wall ratio |\n"
-              "| --- | --- | --- | --- | --- | --- | --- | --- |\n");
+  std::printf("| program | pair | wall ms | user ms | sys ms | minor faults | invol. switches | others' share | pair's wall ratio |\n"
+              "| --- | --- | --- | --- | --- | --- | --- | --- | --- |\n");
   int count = 0;
   for (const auto& comparison : comparisons) {
     const auto ratios = comparison.ratios(wall);
@@ -162,23 +200,25 @@ void print_outliers(const std::vector<Comparison>& comparisons) {
         const Sample& s = side->samples[i];
         if (s.wall_ms <= limit) continue;
         ++count;
-        std::printf("| %s | %zu | %.1f | %.1f | %.1f | %.0f | %.0f | %.3fx |\n", side->name.c_str(), i, s.wall_ms,
-                    s.user_ms, s.sys_ms, s.minor_faults, s.involuntary_switches, ratios[i]);
+        std::printf("| %s | %zu | %.1f | %.1f | %.1f | %.0f | %.0f | %.2f | %.3fx |\n", side->name.c_str(), i,
+                    s.wall_ms, s.user_ms, s.sys_ms, s.minor_faults, s.involuntary_switches, comparison.others[i],
+                    ratios[i]);
       }
     }
   }
-  if (count == 0) std::printf("| (none) | | | | | | | |\n");
+  if (count == 0) std::printf("| (none) | | | | | | | | |\n");
 }
 
 void write_csv(const std::string& path, const std::vector<Comparison>& comparisons) {
   std::ofstream out(path);
-  out << "comparison,program,pair,wall_ms,user_ms,sys_ms,minor_faults,involuntary_switches,max_rss_mib\n";
+  out << "comparison,program,pair,wall_ms,user_ms,sys_ms,minor_faults,involuntary_switches,max_rss_mib,others_busy\n";
   for (const auto& comparison : comparisons) {
     for (const Side* side : {&comparison.rdtf, &comparison.peer}) {
       for (std::size_t i = 0; i < side->samples.size(); ++i) {
         const Sample& s = side->samples[i];
         out << comparison.name << ',' << side->name << ',' << i << ',' << s.wall_ms << ',' << s.user_ms << ','
-            << s.sys_ms << ',' << s.minor_faults << ',' << s.involuntary_switches << ',' << s.max_rss_mib << '\n';
+            << s.sys_ms << ',' << s.minor_faults << ',' << s.involuntary_switches << ',' << s.max_rss_mib << ','
+            << comparison.others[i] << '\n';
       }
     }
   }
@@ -237,10 +277,12 @@ int main(int argc, char** argv) {
   std::vector<Comparison> comparisons = {
       {"convert (write GLB)", 1.2,
        {"rdtf convert --glb", {rdtf, "convert", model, "-o", (folder / "rdtf_out.glb").string()}, {}},
-       {"tinygltf load + write GLB", {peer, "write", model, (folder / "peer_out.glb").string()}, {}}},
+       {"tinygltf load + write GLB", {peer, "write", model, (folder / "peer_out.glb").string()}, {}},
+       {}},
       {"inspect", 1.3,
        {"rdtf inspect", {rdtf, "inspect", model}, {}},
-       {"tinygltf load", {peer, "load", model}, {}}},
+       {"tinygltf load", {peer, "load", model}, {}},
+       {}},
   };
   const auto started = std::chrono::steady_clock::now();
   try {
@@ -249,11 +291,14 @@ int main(int argc, char** argv) {
         const bool rdtf_first = round % 2 == 0;
         Side& first = rdtf_first ? comparison.rdtf : comparison.peer;
         Side& second = rdtf_first ? comparison.peer : comparison.rdtf;
+        const CpuTicks before = cpu_ticks();
         const Sample a = run(first.command);
         const Sample b = run(second.command);
+        const CpuTicks after = cpu_ticks();
         if (round >= 0) {
           first.samples.push_back(a);
           second.samples.push_back(b);
+          comparison.others.push_back(others_busy(before, after, a.cpu_ms() + b.cpu_ms()));
         }
       }
     }
@@ -281,6 +326,22 @@ int main(int argc, char** argv) {
     std::printf("| %s | %s | %s | %s | %.3fx | <= %.1fx: %s |\n", comparison.name.c_str(), interval_text(walls).c_str(),
                 interval_text(comparison.ratios(cpu)).c_str(), interval_text(comparison.ratios(user)).c_str(),
                 of_medians, comparison.goal, verdict(walls, comparison.goal).c_str());
+  }
+  // The ratio depends on how busy the machine is (the peer's many small page faults and rdtf's
+  // cache-bound surface check suffer differently), so the pairs are also split by the share of
+  // the cores other processes took while they ran: quiet below 0.25 (on two cores, other work
+  // of at most half a core), busy above.
+  std::printf("\nBy how busy other processes kept the cores during the pair (share of all cores):\n\n"
+              "| comparison | others' share, median [min, max] | quiet pairs (< 0.25): n, wall ratio | busy pairs (>= 0.25): n, wall ratio | goal, quiet pairs |\n"
+              "| --- | --- | --- | --- | --- |\n");
+  for (const auto& comparison : comparisons) {
+    const auto quiet = comparison.ratios_when(wall, 0.0, 0.25);
+    const auto busy = comparison.ratios_when(wall, 0.25, 2.0);
+    const auto [lo, hi] = std::minmax_element(comparison.others.begin(), comparison.others.end());
+    std::printf("| %s | %.2f [%.2f, %.2f] | %zu, %s | %zu, %s | %s |\n", comparison.name.c_str(),
+                median_of(comparison.others), *lo, *hi, quiet.size(),
+                quiet.empty() ? "-" : interval_text(quiet).c_str(), busy.size(),
+                busy.empty() ? "-" : interval_text(busy).c_str(), verdict(quiet, comparison.goal).c_str());
   }
   print_outliers(comparisons);
   return 0;

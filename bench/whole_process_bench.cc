@@ -2,7 +2,10 @@
 // timed against a tinygltf peer doing the least comparable work (tinygltf_peer.cc: load + write
 // GLB, and load), on a closed UV sphere GLB generated here (default 1.3M triangles, 24 MB).
 //
-//   whole_process_bench [--pairs N] [--triangles N] [--csv FILE] RDTF TINYGLTF_PEER
+//   whole_process_bench [--pairs N] [--triangles N] [--csv FILE] [--baseline OLD_RDTF] RDTF TINYGLTF_PEER
+//
+// With --baseline, two more comparisons time RDTF against OLD_RDTF (say, main's build) the same
+// way, pair by pair: a change's before and after as users meet it.
 //
 // The machine is shared, so the method (docs/benchmarks.md, "Whole processes") leans on pairs:
 // each round runs, per comparison, rdtf and its peer back to back, in alternating order (A B, then
@@ -134,7 +137,7 @@ double switches(const Sample& s) { return s.involuntary_switches; }
 
 struct Comparison {
   std::string name;
-  double goal;  // Largest ratio rdtf / peer (wall) the goal allows.
+  double goal;  // Largest ratio rdtf / peer (wall) the goal allows; 0: none (a before/after).
   Side rdtf, peer;
   std::vector<double> others;  // Per pair: others_busy during it.
   std::vector<double> ratios(double (*field)(const Sample&)) const {
@@ -173,6 +176,7 @@ std::string interval_text(const std::vector<double>& ratios) {
 }
 
 std::string verdict(const std::vector<double>& ratios, double goal) {
+  if (goal == 0) return "-";
   const auto interval = rdtf::bench::median_interval(ratios, 0.95);
   if (!interval) return "too few pairs to say";
   char text[160];
@@ -230,6 +234,7 @@ int main(int argc, char** argv) {
   int rounds = 41;
   std::size_t triangles = 1'300'000;
   std::string csv;
+  std::string baseline;
   std::vector<std::string> positional;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
@@ -239,12 +244,16 @@ int main(int argc, char** argv) {
       triangles = static_cast<std::size_t>(std::atoll(argv[++i]));
     } else if (arg == "--csv" && i + 1 < argc) {
       csv = argv[++i];
+    } else if (arg == "--baseline" && i + 1 < argc) {
+      baseline = std::filesystem::absolute(argv[++i]);
     } else {
       positional.push_back(arg);
     }
   }
   if (positional.size() != 2 || rounds < 1) {
-    std::fprintf(stderr, "usage: whole_process_bench [--pairs N] [--triangles N] [--csv FILE] RDTF TINYGLTF_PEER\n");
+    std::fprintf(stderr,
+                 "usage: whole_process_bench [--pairs N] [--triangles N] [--csv FILE] [--baseline OLD_RDTF] RDTF "
+                 "TINYGLTF_PEER\n");
     return 2;
   }
   const std::string rdtf = std::filesystem::absolute(positional[0]);
@@ -284,6 +293,16 @@ int main(int argc, char** argv) {
        {"tinygltf load", {peer, "load", model}, {}},
        {}},
   };
+  if (!baseline.empty()) {
+    comparisons.push_back({"convert, new / old rdtf", 0,
+                           {"rdtf convert --glb", comparisons[0].rdtf.command, {}},
+                           {"old rdtf convert --glb", {baseline, "convert", model, "-o", (folder / "old_out.glb").string()}, {}},
+                           {}});
+    comparisons.push_back({"inspect, new / old rdtf", 0,
+                           {"rdtf inspect", comparisons[1].rdtf.command, {}},
+                           {"old rdtf inspect", {baseline, "inspect", model}, {}},
+                           {}});
+  }
   const auto started = std::chrono::steady_clock::now();
   try {
     for (int round = -1; round < rounds; ++round) {  // round -1: warm-up, not counted
@@ -323,9 +342,11 @@ int main(int argc, char** argv) {
   for (const auto& comparison : comparisons) {
     const auto walls = comparison.ratios(wall);
     const double of_medians = median_of(comparison.rdtf.values(wall)) / median_of(comparison.peer.values(wall));
-    std::printf("| %s | %s | %s | %s | %.3fx | <= %.1fx: %s |\n", comparison.name.c_str(), interval_text(walls).c_str(),
+    char goal[32] = "none";
+    if (comparison.goal > 0) std::snprintf(goal, sizeof(goal), "<= %.1fx", comparison.goal);
+    std::printf("| %s | %s | %s | %s | %.3fx | %s: %s |\n", comparison.name.c_str(), interval_text(walls).c_str(),
                 interval_text(comparison.ratios(cpu)).c_str(), interval_text(comparison.ratios(user)).c_str(),
-                of_medians, comparison.goal, verdict(walls, comparison.goal).c_str());
+                of_medians, goal, verdict(walls, comparison.goal).c_str());
   }
   // The ratio depends on how busy the machine is (the peer's many small page faults and rdtf's
   // cache-bound surface check suffer differently), so the pairs are also split by the share of

@@ -20,6 +20,7 @@
 #include <utility>
 #include <vector>
 
+#include "mass_properties_bench_fma.h"
 #include "rdtf/mass_properties.h"
 #include "side_by_side.h"
 #include "synthetic_models.h"
@@ -208,6 +209,30 @@ void BM_RdtfKernelFloatInPlace(benchmark::State& state) {
   report_differences(state, result, Eigen::Vector3d::Zero(), Storage::kFloat);
 }
 
+// What fused multiply-adds would give (mass_properties_bench_fma.cc; rdtf does not run it): the
+// kernel's loop compiled for AVX2 + FMA, about the origin (the sphere's centre), timed, and its
+// differences from the reference reported like the others'.
+void BM_RdtfKernelFmaExperiment(benchmark::State& state) {
+  if (!rdtf::bench::fma_available()) {
+    state.SkipWithError("this processor has no AVX2 + FMA");
+    return;
+  }
+  const TriangleMesh& mesh = sphere(state.range(0));
+  const TriangleMeshView view = TriangleMeshView::of(mesh);
+  rdtf::bench::FmaSums sums;
+  for (auto _ : state) {
+    sums = rdtf::bench::fma_sums_about_origin(view);
+    benchmark::DoNotOptimize(sums);
+  }
+  set_triangles(state, mesh.triangles.size());
+  Reference r;
+  r.volume = sums.six_volume / 6;
+  r.cx = sums.first24[0], r.cy = sums.first24[1], r.cz = sums.first24[2];
+  r.xx = sums.second120[0], r.yy = sums.second120[1], r.zz = sums.second120[2];
+  r.xy = sums.second120[3], r.yz = sums.second120[4], r.zx = sums.second120[5];
+  report_differences(state, integrals_of(r));
+}
+
 void BM_ScalarReference(benchmark::State& state) {
   const TriangleMesh& mesh = sphere(state.range(0));
   for (auto _ : state) {
@@ -316,6 +341,7 @@ void print_summary(const rdtf::bench::SideBySide& runs) {
     line("rdtf kernel, sphere 10 km from the origin", "BM_RdtfKernelFar");
     line("rdtf kernel, float32 + uint32 read in place (GLB)", "BM_RdtfKernelFloatInPlace");
     line("streaming read of the same bytes (memory bound)", "BM_StreamingRead");
+    line("kernel with FMA (AVX2 + FMA; experiment, not used)", "BM_RdtfKernelFmaExperiment");
     line("plain scalar reference (about the origin)", "BM_ScalarReference");
     line("plain scalar reference, 10 km away", "BM_ScalarReferenceFar");
     line("ODE dMassSetTrimesh", "BM_OdeTrimesh");
@@ -331,6 +357,7 @@ BENCHMARK(BM_RdtfKernelAvx)->Arg(kSizes[0])->Arg(kSizes[1])->Unit(benchmark::kMi
 BENCHMARK(BM_RdtfKernelFar)->Arg(kSizes[0])->Arg(kSizes[1])->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_RdtfKernelFloatInPlace)->Arg(kSizes[0])->Arg(kSizes[1])->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_StreamingRead)->Arg(kSizes[0])->Arg(kSizes[1])->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_RdtfKernelFmaExperiment)->Arg(kSizes[0])->Arg(kSizes[1])->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ScalarReference)->Arg(kSizes[0])->Arg(kSizes[1])->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ScalarReferenceFar)->Arg(kSizes[0])->Arg(kSizes[1])->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_OdeTrimesh)->Arg(kSizes[0])->Arg(kSizes[1])->Unit(benchmark::kMillisecond);

@@ -4,18 +4,25 @@
 //   subscriber (and to its last DESCRIPTION_CHUNK when the document is chunked), p50 / p99, for the
 //   arm3 fixture and a one-million-triangle GLB, with rdtfd's defaults (validate, simulate, urdf on)
 //   and with conversion only. The settle period (50 ms, the default) is part of every sample; the
-//   counters also give the latency minus the settle period.
+//   counters also give the latency minus the settle period, rdtfd's stages from its log and its
+//   CPU time per save. What each save changes (the third argument, arm3 only): the generator
+//   string (metadata), a material's colour (visuals), or a joint's damping (the robot itself, so
+//   that the dynamics check must run again).
 // - BM_InitialScan: rdtfd started on a tree of N small models; models per second from spawning the
 //   daemon until the subscriber has a DESCRIPTION of every model, and VmRSS / VmHWM of rdtfd then.
 // - BM_Restart: the same tree scanned once, rdtfd stopped and started again: the second start's
 //   time to every model published (from the result cache) and its memory.
 #include <benchmark/benchmark.h>
+#include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <iterator>
 #include <regex>
 #include <set>
+#include <sstream>
 #include <string>
 
 #include <rdtf/description_chunk_t.hpp>
@@ -45,13 +52,37 @@ struct EditableModel {
   std::function<std::string(int)> revision_bytes;  // Content of save number k.
 };
 
-EditableModel arm3_model(const fs::path& folder) {
+enum class Edit { kGenerator = 0, kColour = 1, kRobot = 2 };
+
+const char* edit_name(Edit edit) {
+  switch (edit) {
+    case Edit::kGenerator: return "generator";
+    case Edit::kColour: return "colour";
+    case Edit::kRobot: return "joint damping";
+  }
+  return "?";
+}
+
+// Save k of arm3: the generator string names k, and, by `edit`, a material's base colour or the
+// elbow's damping (0.4 N m s/rad plus k * 1e-5: every save another robot) depends on k too.
+EditableModel arm3_model(const fs::path& folder, Edit edit) {
   const fs::path source = fs::path(RDTF_BENCH_DATA_DIR) / "blender";
   fs::copy_file(source / "arm3.bin", folder / "arm3.bin");
-  const Json document = Json::parse(read_file(source / "arm3.gltf"));
-  return {"arm3.gltf", [document](int k) {
+  Json document = Json::parse(read_file(source / "arm3.gltf"));
+  document["materials"] = Json::array({{{"name", "paint"}, {"pbrMetallicRoughness", {{"baseColorFactor", {0.5, 0.5, 0.5, 1.0}}}}}});
+  for (auto& mesh : document["meshes"]) {
+    for (auto& primitive : mesh["primitives"]) primitive["material"] = 0;
+  }
+  return {"arm3.gltf", [document, edit](int k) {
             Json edited = document;
             edited["asset"]["generator"] = "rdtf bench save " + std::to_string(k);
+            if (edit == Edit::kColour) {
+              edited["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"][0] = (k % 1000) / 1000.0;
+            } else if (edit == Edit::kRobot) {
+              for (auto& node : edited["nodes"]) {
+                if (node.value("name", "") == "elbow") node["extras"]["rdtf_damping"] = 0.4 + k * 1e-5;
+              }
+            }
             return edited.dump(1);
           }};
 }
@@ -95,25 +126,53 @@ void record(Arrivals& arrivals, const std::string& channel, const lcm::ReceiveBu
   }
 }
 
-// rdtfd's own time per conversion job (read, hash, convert, validate, URDF, write), from its log
-// lines "converted <id> revision N (...) in X ms", for revisions from `first_revision` on.
-std::vector<double> worker_times_ms(const std::string& log, std::int64_t first_revision) {
-  static const std::regex kLine(R"(converted \S+ revision (\d+) \(.*\) in ([0-9.]+) ms)");
-  std::vector<double> times;
+// rdtfd's own time per conversion job (read, hash, convert, validate, URDF, write) and each of its
+// stages, from its log lines "converted <id> revision N (...) in X ms; stages: read X ms, ...",
+// for revisions from `first_revision` on. By name: "worker", then each stage's.
+std::map<std::string, std::vector<double>> stage_times_ms(const std::string& log, std::int64_t first_revision) {
+  static const std::regex kLine(R"(converted \S+ revision (\d+) \([^)]*\) in ([0-9.]+) ms([^\n]*))");
+  static const std::regex kStage(R"(([a-z][a-z ]*[a-z]) ([0-9.]+) ms)");
+  std::map<std::string, std::vector<double>> times;
   for (std::sregex_iterator it(log.begin(), log.end(), kLine), end; it != end; ++it) {
-    if (std::stoll((*it)[1]) >= first_revision) times.push_back(std::stod((*it)[2]));
+    if (std::stoll((*it)[1]) < first_revision) continue;
+    times["worker"].push_back(std::stod((*it)[2]));
+    const std::string stages = (*it)[3];
+    for (std::sregex_iterator st(stages.begin(), stages.end(), kStage); st != end; ++st) {
+      times[(*st)[1]].push_back(std::stod((*st)[2]));
+    }
   }
   return times;
 }
 
-// range(0): 0 arm3, 1 the 1M-triangle sphere; range(1): 1 rdtfd's defaults, 0 conversion only.
+// CPU time (user + system) of a process so far, in ms, from /proc/<pid>/stat.
+double process_cpu_ms(pid_t pid) {
+  std::ifstream in("/proc/" + std::to_string(pid) + "/stat");
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const auto close = text.rfind(')');
+  if (close == std::string::npos) return 0;
+  std::istringstream fields(text.substr(close + 2));
+  std::string field;
+  double user = 0, system = 0;
+  for (int i = 3; fields >> field; ++i) {  // Field 3 is the state; 14 utime, 15 stime.
+    if (i == 14) user = std::stod(field);
+    if (i == 15) {
+      system = std::stod(field);
+      break;
+    }
+  }
+  return (user + system) * 1000.0 / static_cast<double>(::sysconf(_SC_CLK_TCK));
+}
+
+// range(0): 0 arm3, 1 the 1M-triangle sphere; range(1): 1 rdtfd's defaults, 0 conversion only;
+// range(2) what each save of arm3 changes (Edit).
 void BM_SaveToPublish(benchmark::State& state) {
   const bool big = state.range(0) == 1;
   const bool full_pipeline = state.range(1) == 1;
+  const auto edit = static_cast<Edit>(state.range(2));
   TempFolder root;
   const fs::path watch = root / "models", output = root / "out";
   fs::create_directories(watch);
-  const EditableModel model = big ? sphere_model() : arm3_model(watch);
+  const EditableModel model = big ? sphere_model() : arm3_model(watch, edit);
   const auto timeout = big ? 60s : 10s;
 
   Arrivals arrivals;
@@ -129,6 +188,7 @@ void BM_SaveToPublish(benchmark::State& state) {
   }
 
   std::vector<double> to_description, to_complete;
+  const double cpu_before = process_cpu_ms(daemon.pid());
   for (auto _ : state) {
     const std::string bytes = model.revision_bytes(++saves);
     const Clock::time_point saved = write_in_place(watch / model.file_name, bytes);
@@ -143,7 +203,10 @@ void BM_SaveToPublish(benchmark::State& state) {
     });
     state.SetIterationTime(to_complete.back() / 1e3);
   }
-  state.SetLabel(std::string(big ? "1M-triangle GLB" : "arm3") + (full_pipeline ? ", defaults" : ", convert only"));
+  // Everything rdtfd did meanwhile, the live simulation of the model (with the defaults) included.
+  state.counters["cpu_per_save_ms"] = (process_cpu_ms(daemon.pid()) - cpu_before) / static_cast<double>(to_description.size());
+  state.SetLabel(std::string(big ? "1M-triangle GLB" : std::string("arm3, ") + edit_name(edit) + " changed") +
+                 (full_pipeline ? ", defaults" : ", convert only"));
   state.counters["settle_ms"] = kSettleMs;
   state.counters["p50_ms"] = quantile(to_description, 0.5);
   state.counters["p99_ms"] = quantile(to_description, 0.99);
@@ -153,15 +216,20 @@ void BM_SaveToPublish(benchmark::State& state) {
   state.counters["p50_complete_ms"] = quantile(to_complete, 0.5);
   state.counters["p99_complete_ms"] = quantile(to_complete, 0.99);
   state.counters["samples"] = static_cast<double>(to_description.size());
-  const std::vector<double> worker = worker_times_ms(daemon.log(), 2);
-  state.counters["p50_worker_ms"] = quantile(worker, 0.5);
-  state.counters["p99_worker_ms"] = quantile(worker, 0.99);
+  for (const auto& [stage, times] : stage_times_ms(daemon.log(), 2)) {
+    std::string name = stage;
+    std::replace(name.begin(), name.end(), ' ', '_');
+    state.counters["p50_" + name + "_ms"] = quantile(times, 0.5);
+    state.counters["p99_" + name + "_ms"] = quantile(times, 0.99);
+  }
   daemon.stop();
 }
-BENCHMARK(BM_SaveToPublish)->Args({0, 1})->Iterations(200)->UseManualTime()->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_SaveToPublish)->Args({0, 0})->Iterations(200)->UseManualTime()->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_SaveToPublish)->Args({1, 1})->Iterations(20)->UseManualTime()->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_SaveToPublish)->Args({1, 0})->Iterations(20)->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_SaveToPublish)->Args({0, 1, 0})->Iterations(200)->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_SaveToPublish)->Args({0, 1, 1})->Iterations(200)->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_SaveToPublish)->Args({0, 1, 2})->Iterations(200)->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_SaveToPublish)->Args({0, 0, 0})->Iterations(200)->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_SaveToPublish)->Args({1, 1, 0})->Iterations(20)->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_SaveToPublish)->Args({1, 0, 0})->Iterations(20)->UseManualTime()->Unit(benchmark::kMillisecond);
 
 // ------------------------------------------------------------------------------------------------
 // Initial scan

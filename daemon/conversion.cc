@@ -17,6 +17,7 @@
 #include "rdtf/write.h"
 #include "rdtf/diagnostic_codes.h"
 #include "result_cache.h"
+#include "verdict_memo.h"
 
 namespace rdtf::daemon {
 namespace {
@@ -346,9 +347,16 @@ ConversionOutcome run_conversion(const ConversionJob& job) {
   outcome.model_id = job.model_id;
   outcome.source = job.source;
   outcome.diagnostics.set_file(job.source.string());
+  // Each stage's time: from the end of the one before to now.
+  auto lap_start = start;
+  auto lap = [&](std::chrono::microseconds& stage) {
+    const auto now = std::chrono::steady_clock::now();
+    stage += std::chrono::duration_cast<std::chrono::microseconds>(now - lap_start);
+    lap_start = now;
+  };
   auto finish = [&]() -> ConversionOutcome {
-    outcome.duration = std::chrono::duration_cast<std::chrono::microseconds>(
-        std::chrono::steady_clock::now() - start);
+    outcome.finished = std::chrono::steady_clock::now();
+    outcome.duration = std::chrono::duration_cast<std::chrono::microseconds>(outcome.finished - start);
     return std::move(outcome);
   };
 
@@ -393,39 +401,62 @@ ConversionOutcome run_conversion(const ConversionJob& job) {
   // .bin alone counts), and the loader converts the same bytes, whatever is written meanwhile.
   SourceFiles files = read_source_files(outcome.dependencies, folder, job.options.limits, job.read_file);
   outcome.content_hash = content_hash(model_bytes, outcome.dependencies, files);
+  lap(outcome.stages.read);
   if (outcome.content_hash == job.previous_hash) {
     outcome.kind = ConversionOutcome::Kind::kUnchanged;
     return finish();
   }
-  if (job.cache && from_cache(job, outcome)) return finish();
+  const bool cached = job.cache && from_cache(job, outcome);
+  lap(outcome.stages.cache);
+  if (cached) return finish();
 
   auto asset = load_gltf_from_memory(model_bytes, job.source, folder, job.options.limits, std::move(files),
                                      outcome.diagnostics);
   if (!asset) return finish();
   auto conversion = convert(std::move(*asset), job.options, outcome.diagnostics);
   if (!conversion) return finish();
+  lap(outcome.stages.convert);
 
   // The check runs before anything is written: a revision it rejects must never replace the live
   // revision's files (docs/daemon.md, "Outputs").
   std::optional<ValidationSummary> validation;
   if (job.validation) {
-    ValidationReport report = validate_dynamics(*conversion, *job.validation, job.source.string());
-    if (report.cancelled) {
-      outcome.cancelled = true;
-      outcome.diagnostics.append(report.diagnostics);
-      return finish();
+    LinkBounds bounds = link_geometry_bounds(conversion->asset, conversion->robot);
+    const std::string file = job.source.string();
+    if (job.verdict && verdict_applies(*job.verdict, file, job.cache_key, conversion->robot, bounds)) {
+      // Exactly the check that gave this verdict (verdict_memo.h): running it again would too.
+      validation = job.verdict->verdict;
+      outcome.verdict_reused = true;
+    } else {
+      ValidationReport report = validate_dynamics(conversion->robot, *job.validation, &bounds, file);
+      if (report.cancelled) {
+        outcome.cancelled = true;
+        outcome.diagnostics.append(report.diagnostics);
+        return finish();
+      }
+      ValidationSummary summary;
+      summary.passed = report.passed;
+      summary.simulated_time = report.simulated_time;
+      summary.steps = report.steps;
+      summary.energy_drift = report.energy_drift;
+      summary.worst_joint_error = report.worst_joint_error;
+      summary.wall_time = report.wall_time;
+      summary.summary_line = validation_summary_line(report);
+      summary.diagnostics = std::move(report.diagnostics);
+      // A verdict the machine's load decided (the check ran out of its CPU budget) is not kept.
+      if (!job.cache_key.empty() && !summary.diagnostics.contains(codes::SIM_BUDGET_EXCEEDED)) {
+        auto memo = std::make_shared<VerdictMemo>();
+        memo->source = file;
+        memo->settings_key = job.cache_key;
+        memo->robot = conversion->robot;
+        memo->bounds = std::move(bounds);
+        memo->verdict = summary;
+        outcome.verdict = std::move(memo);
+      }
+      validation = std::move(summary);
     }
-    ValidationSummary summary;
-    summary.passed = report.passed;
-    summary.simulated_time = report.simulated_time;
-    summary.steps = report.steps;
-    summary.energy_drift = report.energy_drift;
-    summary.worst_joint_error = report.worst_joint_error;
-    summary.wall_time = report.wall_time;
-    summary.summary_line = validation_summary_line(report);
-    summary.diagnostics = std::move(report.diagnostics);
-    validation = std::move(summary);
   }
+  lap(outcome.stages.check);
   const bool write = !(validation && !validation->passed) || job.write_failed;
   ConvertedModel converted;
   converted.content_hash = outcome.content_hash;
@@ -434,11 +465,13 @@ ConversionOutcome run_conversion(const ConversionJob& job) {
     if (!write_outputs(job, *conversion, converted, outcome.diagnostics, outcome.retry)) return finish();
     converted.written = true;
   }
+  lap(outcome.stages.write);
   const UrdfNames names = urdf_names(conversion->robot);
   converted.facts = robot_facts(conversion->robot, names.links, names.joints,
                                 link_geometry_digests(conversion->asset, conversion->robot, output_digest));
   converted.totals = robot_totals(conversion->robot);
   converted.robot = std::move(conversion->robot);
+  lap(outcome.stages.convert);
   outcome.converted = std::move(converted);
   outcome.kind = ConversionOutcome::Kind::kConverted;
   // Not cached: a written result whose manifest is incomplete (a hit could not check its files),
@@ -447,6 +480,7 @@ ConversionOutcome run_conversion(const ConversionJob& job) {
   const bool load_decided = outcome.converted->validation &&
                             outcome.converted->validation->diagnostics.contains(codes::SIM_BUDGET_EXCEEDED);
   if (job.cache && manifest_whole && !load_decided) store_in_cache(job, outcome);
+  lap(outcome.stages.cache);
   return finish();
 }
 

@@ -27,6 +27,7 @@
 namespace rdtf::daemon {
 
 class ResultCache;
+struct VerdictMemo;
 
 // The bytes conversions may read at once, across every worker: a conversion holds what it will
 // read (the model and every file it names) from before its first read to its end.
@@ -72,6 +73,9 @@ struct ConversionJob {
   // outputs are still on disk is the outcome, without converting, checking or writing. None: no cache.
   std::shared_ptr<ResultCache> cache;
   std::string cache_key;
+  // The gate's last verdict on this model (verdict_memo.h): reused when the robot, its geometry's
+  // bounds, the file and cache_key are exactly those it was computed for. None: the check runs.
+  std::shared_ptr<const VerdictMemo> verdict;
 };
 
 // The dynamics check of a revision, without the ODE world.
@@ -104,6 +108,16 @@ struct ConvertedModel {
   std::vector<OutputFile> files;
 };
 
+// Where a conversion's time went, for the log's "converted" line (docs/benchmarks.md breaks a
+// save's latency down by these).
+struct StageTimes {
+  std::chrono::microseconds read{0};     // The model and its files read, the content hashed.
+  std::chrono::microseconds convert{0};  // Loaded, converted, the revision's facts taken.
+  std::chrono::microseconds check{0};    // The dynamics check (the gate).
+  std::chrono::microseconds write{0};    // The outputs staged and moved into place.
+  std::chrono::microseconds cache{0};    // The result cache looked up and written.
+};
+
 struct ConversionOutcome {
   enum class Kind { kConverted, kUnchanged, kRejected, kVanished };
   Kind kind = Kind::kRejected;
@@ -114,6 +128,9 @@ struct ConversionOutcome {
   Diagnostics diagnostics;                   // Errors for kRejected; warnings otherwise.
   std::vector<std::filesystem::path> dependencies;  // Files the model refers to.
   std::chrono::microseconds duration{0};
+  StageTimes stages;
+  // When the worker finished it (the event loop's pick-up delay is measured from here).
+  std::chrono::steady_clock::time_point finished{};
   // The failure was the environment's, not the model's (an output could not be written: disk
   // full, read-only folder): the daemon tries the same content again after a back-off.
   bool retry = false;
@@ -121,6 +138,11 @@ struct ConversionOutcome {
   bool cancelled = false;
   // The result came from the result cache (nothing was converted, checked or written).
   bool from_cache = false;
+  // The dynamics check ran and its verdict may be reused (not cancelled, not decided by the
+  // machine's load, a cache_key given): what the daemon keeps for the next save of the model.
+  std::shared_ptr<const VerdictMemo> verdict;
+  // The check did not run: job.verdict applied to this conversion exactly.
+  bool verdict_reused = false;
   // What the cache had to say for the log: an entry refused (torn, altered), outputs that no longer
   // match one, an entry that could not be written. Empty when nothing.
   std::string cache_note;

@@ -7,6 +7,7 @@
 #include <atomic>
 #include <deque>
 #include <functional>
+#include <map>
 #include <memory>
 #include <optional>
 #include <set>
@@ -23,6 +24,7 @@
 #include "result_cache.h"
 #include "settle.h"
 #include "simulation_host.h"
+#include "verdict_memo.h"
 #include "watcher.h"
 
 namespace rdtf::daemon {
@@ -138,6 +140,8 @@ class Daemon {
   std::shared_ptr<ReadBudget> read_budget_;  // Shared with the workers.
   std::shared_ptr<ResultCache> cache_;       // Shared with the workers; null when off.
   std::string cache_key_;                    // settings_key(config_).
+  // The gate's last verdict on each model (verdict_memo.h), handed to its next conversion.
+  std::map<std::filesystem::path, std::shared_ptr<const VerdictMemo>> verdicts_;
   void open_result_cache();
   bool take_clean_stop_mark();   // The last run left the mark (now removed): nothing to clean.
   void leave_clean_stop_mark();  // At the end of a clean stop.

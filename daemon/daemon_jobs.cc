@@ -80,6 +80,7 @@ void Daemon::drop_model(const std::filesystem::path& source, std::chrono::micros
            milliseconds(checked + std::chrono::duration_cast<std::chrono::microseconds>(clock_->now() - start)) +
            (record->live ? " (revision " + std::to_string(record->revisions) + " was live)" : ""));
   unfile_timer(*record);
+  verdicts_.erase(source);
   registry_.erase(source);
 }
 
@@ -103,6 +104,7 @@ void Daemon::start_job(ModelRecord& record) {
   if (config_.validate) {
     job.validation = validation_options(config_);
     job.validation->cancel = &cancel_validations_;
+    if (const auto memo = verdicts_.find(record.source); memo != verdicts_.end()) job.verdict = memo->second;
   }
   if (config_.urdf) {
     UrdfOptions urdf;
@@ -121,6 +123,8 @@ void Daemon::apply(ConversionOutcome outcome) {
   ModelRecord* record = registry_.find(outcome.source);
   if (record == nullptr) return;
   const std::string id = record->id;
+  // Kept whatever the outcome: a verdict depends only on what it was computed from.
+  if (outcome.verdict) verdicts_[outcome.source] = outcome.verdict;
   if (!outcome.cache_note.empty()) {
     if (outcome.cache_note.rfind("result not cached", 0) != 0) ++counters_.cache_refused;
     log_line(id + ": " + outcome.cache_note);
@@ -192,6 +196,9 @@ void Daemon::apply_converted(ConversionOutcome& outcome, ModelRecord& record) {
                     record.restored->result_digest == candidate_result;
   const std::optional<StoredRevision> previous = stored_live(record);
   const std::int64_t number = kept ? record.restored->revision : ++record.numbered;
+  // The event loop's share of the latency, for the log line: from the worker's end to here, the
+  // revision state saved, the messages queued and sent.
+  const auto picked_up = std::chrono::steady_clock::now();
   if (!kept) {
     // The live revision after this one: this one, unless the check rejects it unpublished.
     const std::optional<StoredRevision> live =
@@ -219,6 +226,7 @@ void Daemon::apply_converted(ConversionOutcome& outcome, ModelRecord& record) {
     ++counters_.rejections;
     log_line("rejected " + id + " revision " + std::to_string(number) + " (dynamics) in " +
              milliseconds(outcome.duration) + ": " + candidate.validation->summary_line +
+             (outcome.verdict_reused ? " (the verdict of the same robot, reused)" : "") +
              (record.live ? "; still serving revision " + std::to_string(record.revisions) : ""));
     publisher_->publish(channel(id, "ERROR"),
                         make_model_error(record, outcome.content_hash, candidate.validation->diagnostics, config_.max_chunk_bytes));
@@ -234,11 +242,23 @@ void Daemon::apply_converted(ConversionOutcome& outcome, ModelRecord& record) {
   record.live->validation = std::move(report);
   // From now on the previous revision's files are no longer served (docs/lcm.md, "Files and blobs").
   blobs_.set_model(id, config_.output / id, record.live->files);
+  const auto saved = std::chrono::steady_clock::now();
+  // Sent now, not at the end of this turn of the loop: nothing below is needed for the
+  // description, and the live simulation is rebuilt after it (on the host's own thread).
+  publish_model(record);
+  publisher_->drain(clock_->now());
+  const auto sent = std::chrono::steady_clock::now();
+  auto ms = [](auto duration) { return milliseconds(std::chrono::duration_cast<std::chrono::microseconds>(duration)); };
+  const StageTimes& stages = outcome.stages;
   log_line("converted " + id + " revision " + std::to_string(record.revisions) + " (" +
            std::to_string(record.live->robot.links.size()) + " links, " +
            std::to_string(record.live->robot.joints.size()) + " joints" +
            (record.live->validation ? std::string(", dynamics ") + (failed ? "FAILED" : "passed") : "") +
-           ") in " + milliseconds(outcome.duration) + (outcome.from_cache ? " from the result cache" : "") + (kept ? " (the result the earlier run served: its number kept)" : ""));
+           (outcome.verdict_reused ? ", verdict reused" : "") + ") in " + milliseconds(outcome.duration) + (outcome.from_cache ? " from the result cache" : "") + (kept ? " (the result the earlier run served: its number kept)" : "") +
+           "; stages: read " + milliseconds(stages.read) + ", convert " + milliseconds(stages.convert) + ", check " +
+           milliseconds(stages.check) + ", write " + milliseconds(stages.write) + ", cache " + milliseconds(stages.cache) +
+           ", picked up " + ms(picked_up - outcome.finished) + ", state saved " + ms(saved - picked_up) + ", sent " +
+           ms(sent - saved));
   if (simulation_) {
     if (failed) {
       // A revision that failed the check would blow up in ODE, and the previous one is no
@@ -250,7 +270,6 @@ void Daemon::apply_converted(ConversionOutcome& outcome, ModelRecord& record) {
       simulation_->load(id, record.revisions, record.live->content_hash, record.live->robot);
     }
   }
-  publish_model(record);
   if (!kept) {
     // Once, after the revision's description: what changed since the revision it replaces.
     const DeltaHeader header{id, previous ? previous->revision : 0, previous ? previous->content_hash : "",

@@ -137,8 +137,10 @@ TEST(DaemonLife, LogsOneLinePerEventWithTimings) {
   ASSERT_TRUE(s.wait_revision("a.gltf", 1, content_hash(a)));
   ASSERT_TRUE(s.wait_revision("b.gltf", 1, content_hash(b)));
   const std::string ms = R"([0-9]+\.[0-9] ms)";
+  const std::string stages = "; stages: read " + ms + ", convert " + ms + ", check " + ms + ", write " + ms +
+                             ", cache " + ms + ", picked up " + ms + ", state saved " + ms + ", sent " + ms;
   for (const char* id : {"a", "b"}) {
-    EXPECT_EQ(log_lines(daemon.log(), std::string("converted ") + id + R"(\.gltf revision 1 \(1 links, 0 joints\) in )" + ms).size(), 1u)
+    EXPECT_EQ(log_lines(daemon.log(), std::string("converted ") + id + R"(\.gltf revision 1 \(1 links, 0 joints\) in )" + ms + stages).size(), 1u)
         << daemon.log();
   }
   // Periodic republication: one line per period for both models, never one per model.

@@ -27,6 +27,8 @@
 
 #include <rdtf/description_chunk_t.hpp>
 #include <rdtf/description_t.hpp>
+#include <rdtf/request_t.hpp>
+#include <rdtf/status_t.hpp>
 
 #include "daemon_harness.h"
 #include "synthetic_models.h"
@@ -281,10 +283,45 @@ void BM_InitialScan(benchmark::State& state) {
 BENCHMARK(BM_InitialScan)->Args({1000, 0})->Args({10000, 0})->Args({1000, 1})
     ->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
 
+// What a subscriber of a restart sees: the first DESCRIPTION of each model and when it came, and
+// rdtfd's latest STATUS (periodic, so a lost one is followed by another).
+struct RestartView {
+  std::map<std::string, Clock::time_point> described;
+  Clock::time_point last_description{};
+  int status_models = -1, status_pending = -1;
+  std::int64_t status_queue_bytes = -1, status_send_dropped = 0;
+  std::int32_t status_pid = 0;
+  void clear() { *this = RestartView{}; }
+};
+
+void record_restart(RestartView& view, const std::string& channel, const lcm::ReceiveBuffer& buffer,
+                    Clock::time_point at) {
+  const std::string kind = kind_of(channel);
+  if (kind == "DESCRIPTION") {
+    if (view.described.emplace(model_id_of(channel), at).second) view.last_description = at;
+  } else if (kind == "STATUS") {
+    rdtf::status_t status;
+    if (status.decode(buffer.data, 0, static_cast<int>(buffer.data_size)) < 0) return;
+    view.status_pid = status.pid;
+    view.status_models = status.num_models;
+    view.status_pending = status.pending;
+    view.status_queue_bytes = status.send_queue_bytes;
+    view.status_send_dropped = status.send_dropped;
+  }
+}
+
 // range(0): number of models; range(1) as for BM_InitialScan. rdtfd scans the tree once (which
 // fills its result cache), stops, and is started again over the unchanged tree: the time is from
 // spawning the second rdtfd to the subscriber holding a DESCRIPTION of every model from it, the
 // memory its VmRSS / VmHWM then.
+//
+// Nothing republishes here (republish_period_ms 0), so a DESCRIPTION the subscriber's socket
+// dropped (its buffer full: with the defaults every model's live simulation multicasts its states
+// on the same group) would never come. The first run is therefore over when rdtfd's STATUS says
+// every model is live and none pending, not when every DESCRIPTION arrived; on the restart, once
+// STATUS says so and rdtfd's send queue is empty, each model still missing is asked for with a
+// REQUEST, as a subscriber that starts late does (docs/lcm.md). `lost` counts those, and
+// `s_before_requests` is the time to the last DESCRIPTION that came unasked.
 void BM_Restart(benchmark::State& state) {
   const int count = static_cast<int>(state.range(0));
   const bool full_pipeline = state.range(1) == 1;
@@ -292,31 +329,62 @@ void BM_Restart(benchmark::State& state) {
   const fs::path watch = root / "models", output = root / "out";
   write_model_tree(watch, count);
 
-  std::set<std::string> published;
-  Clock::time_point last_description;
-  Subscriber subscriber("RDTF", [&](const std::string& channel, const lcm::ReceiveBuffer&, Clock::time_point at) {
-    if (kind_of(channel) == "DESCRIPTION" && published.insert(model_id_of(channel)).second) last_description = at;
+  RestartView view;
+  Subscriber subscriber("RDTF", [&](const std::string& channel, const lcm::ReceiveBuffer& buffer, Clock::time_point at) {
+    record_restart(view, channel, buffer, at);
   });
-  auto all_published = [&] { return static_cast<int>(published.size()) == count; };
+  auto all_live = [&](pid_t pid) {
+    return [&view, &count, pid] {
+      return view.status_pid == pid && view.status_models == count && view.status_pending == 0;
+    };
+  };
   for (auto _ : state) {
     Clock::time_point started = Clock::now();
     double first_seconds = 0;
     {
       Daemon first(watch, output, pipeline_config(full_pipeline));
-      if (!subscriber.wait(all_published, 600s)) {  // A loaded machine: the first scan may take minutes.
-        state.SkipWithError(("first run: only " + std::to_string(published.size()) + " models published").c_str());
+      if (!subscriber.wait(all_live(first.pid()), 900s)) {  // A loaded machine: the first scan may take minutes.
+        state.SkipWithError(("first run: " + std::to_string(view.status_models) + " models live").c_str());
         break;
       }
-      subscriber.locked([&] { first_seconds = ms_between(started, last_description) / 1e3; });
+      first_seconds = ms_between(started, Clock::now()) / 1e3;
       first.stop();
     }
-    subscriber.locked([&] { published.clear(); });
+    subscriber.locked([&] { view.clear(); });
+    const UdpCounters udp_before = udp_counters();
     started = Clock::now();
     Daemon daemon(watch, output, pipeline_config(full_pipeline));
-    const bool all = subscriber.wait(all_published, 150s);
+    auto all_described = [&] { return static_cast<int>(view.described.size()) == count; };
+    // Every model live and everything rdtfd queued sent: what is still missing was lost.
+    auto sent = [&] { return all_described() || (all_live(daemon.pid())() && view.status_queue_bytes == 0); };
+    bool all = subscriber.wait(sent, 150s) && subscriber.wait(all_described, 1s);
+    double unasked_seconds = 0;
+    std::vector<std::string> missing;
+    subscriber.locked([&] {
+      unasked_seconds = ms_between(started, view.last_description) / 1e3;
+      const fs::path tree = watch;
+      for (const auto& entry : fs::recursive_directory_iterator(tree)) {
+        if (!entry.is_regular_file()) continue;
+        const std::string id = entry.path().lexically_relative(tree).generic_string();
+        if (!view.described.count(id)) missing.push_back(id);
+      }
+    });
+    for (const std::string& id : missing) {
+      rdtf::request_t request;
+      request.utime = 0;
+      request.model_id = id;
+      request.requester = "daemon_bench BM_Restart";
+      subscriber.publish("RDTF/REQUEST", request);
+    }
+    if (!missing.empty()) all = subscriber.wait(all_described, 60s);
     const Memory memory = process_memory(daemon.pid());
+    const UdpCounters udp_after = udp_counters();
     double seconds = 0;
-    subscriber.locked([&] { seconds = ms_between(started, last_description) / 1e3; });
+    std::int64_t send_dropped = 0;
+    subscriber.locked([&] {
+      seconds = ms_between(started, view.last_description) / 1e3;
+      send_dropped = view.status_send_dropped;
+    });
     const std::string log = daemon.log();
     std::size_t from_cache = 0;
     for (std::size_t at = log.find(" from the result cache"); at != std::string::npos;
@@ -324,16 +392,21 @@ void BM_Restart(benchmark::State& state) {
       ++from_cache;
     }
     if (!all) {
-      state.SkipWithError(("restart: only " + std::to_string(published.size()) + " of " + std::to_string(count) +
-                           " models published in 150 s").c_str());
+      state.SkipWithError(("restart: only " + std::to_string(view.described.size()) + " of " + std::to_string(count) +
+                           " models described, " + std::to_string(missing.size()) + " asked for again").c_str());
     }
     state.SetIterationTime(seconds);
     state.counters["first_run_s"] = first_seconds;
-    state.counters["models_per_s"] = static_cast<double>(published.size()) / seconds;
+    state.counters["s_before_requests"] = unasked_seconds;
+    state.counters["lost"] = static_cast<double>(missing.size());
+    state.counters["rcvbuf_errors"] =
+        static_cast<double>(udp_after.receive_buffer_errors - udp_before.receive_buffer_errors);
+    state.counters["send_dropped"] = static_cast<double>(send_dropped);
+    state.counters["models_per_s"] = static_cast<double>(view.described.size()) / seconds;
     state.counters["from_cache"] = static_cast<double>(from_cache);
     state.counters["VmRSS_MiB"] = static_cast<double>(memory.rss_kib) / 1024.0;
     state.counters["VmHWM_MiB"] = static_cast<double>(memory.hwm_kib) / 1024.0;
-    state.counters["published"] = static_cast<double>(published.size());
+    state.counters["published"] = static_cast<double>(view.described.size());
     daemon.stop();
   }
   state.SetLabel(std::to_string(count) + " models, restart, " +

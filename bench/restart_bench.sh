@@ -7,11 +7,12 @@
 set -euo pipefail
 rdtfd=$1 models=$2 out=$3 count=$4
 shift 4
+rm -f "$out.log"  # A log of an earlier run must not count.
 start=$(date +%s.%N)
 "$rdtfd" -w "$models" -o "$out" --republish-ms 0 "$@" 2> "$out.log" &
 pid=$!
 for _ in $(seq 1 6000); do
-  [ "$(grep -c "converted " "$out.log")" -ge "$count" ] && break
+  [ -f "$out.log" ] && [ "$(grep -c "converted " "$out.log")" -ge "$count" ] && break
   sleep 0.1
 done
 end=$(date +%s.%N)

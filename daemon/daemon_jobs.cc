@@ -13,8 +13,10 @@ namespace {
 
 bool same_result(const ConvertedModel& live, const ConvertedModel& candidate) {
   return live.content_hash == candidate.content_hash && live.written == candidate.written &&
-         live.output_path == candidate.output_path && live.rdtf_json == candidate.rdtf_json &&
-         live.urdf_path == candidate.urdf_path && live.urdf == candidate.urdf && live.files == candidate.files &&
+         // The manifests hold the SHA-256 of both texts (the live one's texts may be on disk only).
+         live.output_path == candidate.output_path && live.urdf_path == candidate.urdf_path &&
+         live.rdtf_json.empty() == candidate.rdtf_json.empty() && live.urdf.empty() == candidate.urdf.empty() &&
+         live.files == candidate.files &&
          live.validation.has_value() == candidate.validation.has_value() &&
          (!live.validation || live.validation->passed == candidate.validation->passed);
 }
@@ -89,9 +91,11 @@ void Daemon::start_job(ModelRecord& record) {
   job.model_id = record.id;
   job.root = root_of(record.source);
   job.source = record.source;
-  if (record.live) {
-    job.live_rdtf_json = record.live->rdtf_json;
-    job.live_urdf = record.live->urdf;
+  LiveTexts live;
+  std::string why;
+  if (record.live && live_texts(record, live, why)) {
+    job.live_rdtf_json = std::move(live.rdtf_json);
+    job.live_urdf = std::move(live.urdf);
   }
   job.max_read_bytes = config_.max_read_bytes;
   job.budget = read_budget_;
@@ -239,6 +243,7 @@ void Daemon::apply_converted(ConversionOutcome& outcome, ModelRecord& record) {
   record.restored.reset();
   record.live_result = candidate_result;
   record.live = std::move(outcome.converted);
+  record.texts_on_disk = false;
   record.live->validation = std::move(report);
   // From now on the previous revision's files are no longer served (docs/lcm.md, "Files and blobs").
   blobs_.set_model(id, config_.output / id, record.live->files);
@@ -246,6 +251,7 @@ void Daemon::apply_converted(ConversionOutcome& outcome, ModelRecord& record) {
   // Sent now, not at the end of this turn of the loop: nothing below is needed for the
   // description, and the live simulation is rebuilt after it (on the host's own thread).
   publish_model(record);
+  release_live_texts(record);
   publisher_->drain(clock_->now());
   const auto sent = std::chrono::steady_clock::now();
   auto ms = [](auto duration) { return milliseconds(std::chrono::duration_cast<std::chrono::microseconds>(duration)); };

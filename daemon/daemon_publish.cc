@@ -56,6 +56,12 @@ std::string Daemon::channel(const std::string& model_id, const char* kind) const
 
 std::size_t Daemon::publish_model(const ModelRecord& record) {
   if (!record.live) return 0;
+  LiveTexts texts;
+  std::string why;
+  if (!live_texts(record, texts, why)) {
+    log_line("not publishing " + record.id + " revision " + std::to_string(record.revisions) + ": " + why);
+    return 0;
+  }
   // The report comes first: a description is only ever published with its verdict.
   if (record.live->validation) {
     publisher_->publish(channel(record.id, "VALIDATION"),
@@ -69,7 +75,7 @@ std::size_t Daemon::publish_model(const ModelRecord& record) {
       publisher_->publish(channel(record.id, "MANIFEST"), part);
     }
   }
-  const auto messages = make_description(record, config_.max_chunk_bytes);
+  const auto messages = make_description(record, texts, config_.max_chunk_bytes);
   for (const auto& chunk : messages.json_chunks) publisher_->publish(channel(record.id, "DESCRIPTION_CHUNK"), chunk);
   for (const auto& chunk : messages.urdf_chunks) publisher_->publish(channel(record.id, "URDF_CHUNK"), chunk);
   publisher_->publish(channel(record.id, "DESCRIPTION"), messages.description);

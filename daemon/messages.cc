@@ -52,7 +52,7 @@ std::vector<rdtf::description_chunk_t> chunks_of(const ModelRecord& record, cons
 
 }  // namespace
 
-DescriptionMessages make_description(const ModelRecord& record, std::size_t max_message_bytes) {
+DescriptionMessages make_description(const ModelRecord& record, const LiveTexts& texts, std::size_t max_message_bytes) {
   const ConvertedModel& model = *record.live;
   DescriptionMessages out;
   rdtf::description_t& message = out.description;
@@ -67,16 +67,16 @@ DescriptionMessages make_description(const ModelRecord& record, std::size_t max_
   message.num_joints = static_cast<std::int32_t>(model.robot.joints.size());
   message.validated = model.validation.has_value();
   message.validation_passed = model.validation && model.validation->passed;
-  message.rdtf_json_size = static_cast<std::int64_t>(model.rdtf_json.size());
-  message.rdtf_json_sha256 = sha256_hex(model.rdtf_json);
+  message.rdtf_json_size = static_cast<std::int64_t>(texts.rdtf_json.size());
+  message.rdtf_json_sha256 = sha256_hex(texts.rdtf_json);
   message.num_chunks = 0;
   message.num_urdf_chunks = 0;
-  message.urdf_size = static_cast<std::int64_t>(model.urdf.size());
-  message.urdf_sha256 = model.urdf.empty() ? "" : sha256_hex(model.urdf);
+  message.urdf_size = static_cast<std::int64_t>(texts.urdf.size());
+  message.urdf_sha256 = texts.urdf.empty() ? "" : sha256_hex(texts.urdf);
   const std::size_t fields = static_cast<std::size_t>(message.getEncodedSize());
   const std::size_t room = max_message_bytes > fields ? max_message_bytes - fields : 0;
-  const std::size_t json = model.rdtf_json.size();
-  const std::size_t urdf = model.urdf.size();
+  const std::size_t json = texts.rdtf_json.size();
+  const std::size_t urdf = texts.urdf.size();
   // Both inline when they fit together; else the one that fits alone stays inline (the smaller
   // first) and the other goes in chunks; else both go in chunks.
   bool json_inline = json + urdf <= room;
@@ -89,15 +89,15 @@ DescriptionMessages make_description(const ModelRecord& record, std::size_t max_
     }
   }
   if (json_inline) {
-    message.rdtf_json = model.rdtf_json;
+    message.rdtf_json = texts.rdtf_json;
   } else {
-    out.json_chunks = chunks_of(record, model.rdtf_json, message.utime, max_message_bytes);
+    out.json_chunks = chunks_of(record, texts.rdtf_json, message.utime, max_message_bytes);
     message.num_chunks = static_cast<std::int32_t>(out.json_chunks.size());
   }
   if (urdf_inline) {
-    message.urdf = model.urdf;
+    message.urdf = texts.urdf;
   } else {
-    out.urdf_chunks = chunks_of(record, model.urdf, message.utime, max_message_bytes);
+    out.urdf_chunks = chunks_of(record, texts.urdf, message.utime, max_message_bytes);
     message.num_urdf_chunks = static_cast<std::int32_t>(out.urdf_chunks.size());
   }
   return out;

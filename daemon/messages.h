@@ -28,7 +28,7 @@ struct DescriptionMessages {
   std::vector<rdtf::description_chunk_t> urdf_chunks;  // <prefix>/<model_id>/URDF_CHUNK
   rdtf::description_t description;
 };
-DescriptionMessages make_description(const ModelRecord& record, std::size_t max_message_bytes);
+DescriptionMessages make_description(const ModelRecord& record, const LiveTexts& texts, std::size_t max_message_bytes);
 
 // The inertia table of the live revision: one message, or several with consecutive links when
 // one would not fit in max_message_bytes (together they hold every link once, in order).

@@ -1,6 +1,8 @@
 #include "registry.h"
 
 #include <algorithm>
+#include <fstream>
+#include <iterator>
 
 namespace rdtf::daemon {
 
@@ -89,6 +91,66 @@ std::vector<std::filesystem::path> Registry::dependents(const std::filesystem::p
     }
   }
   return result;
+}
+
+namespace {
+
+// The manifest's entry of the file that has `role` ("rdtf", "urdf"); none when not written.
+const OutputFile* file_of_role(const ConvertedModel& model, const char* role) {
+  for (const OutputFile& file : model.files) {
+    if (file.role == role) return &file;
+  }
+  return nullptr;
+}
+
+bool read_checked(const std::filesystem::path& path, const OutputFile& expected, std::string& text, std::string& why) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) {
+    why = "cannot read " + path.string();
+    return false;
+  }
+  text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  if (static_cast<std::int64_t>(text.size()) != expected.size || sha256_hex(text) != expected.sha256) {
+    why = path.string() + " is no longer the file rdtfd wrote (" + std::to_string(text.size()) + " bytes, " +
+          std::to_string(expected.size) + " written)";
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+void release_live_texts(ModelRecord& record) {
+  if (!record.live || record.texts_on_disk) return;
+  ConvertedModel& model = *record.live;
+  // Only what the manifest describes can be checked when read back; anything else stays.
+  const bool json_on_disk = model.rdtf_json.empty() || file_of_role(model, "rdtf") != nullptr;
+  const bool urdf_on_disk = model.urdf.empty() || file_of_role(model, "urdf") != nullptr;
+  if (!model.written || !json_on_disk || !urdf_on_disk) return;
+  std::string().swap(model.rdtf_json);
+  std::string().swap(model.urdf);
+  record.texts_on_disk = true;
+}
+
+bool live_texts(const ModelRecord& record, LiveTexts& texts, std::string& why) {
+  texts = LiveTexts{};
+  if (!record.live) {
+    why = "no live revision";
+    return false;
+  }
+  const ConvertedModel& model = *record.live;
+  if (!record.texts_on_disk) {
+    texts.rdtf_json = model.rdtf_json;
+    texts.urdf = model.urdf;
+    return true;
+  }
+  if (const OutputFile* file = file_of_role(model, "rdtf")) {
+    if (!read_checked(model.output_path, *file, texts.rdtf_json, why)) return false;
+  }
+  if (const OutputFile* file = file_of_role(model, "urdf")) {
+    if (!read_checked(model.urdf_path, *file, texts.urdf, why)) return false;
+  }
+  return true;
 }
 
 }  // namespace rdtf::daemon

@@ -31,7 +31,26 @@ struct ModelRecord {
   // result keeps its number, another one is diffed against it.
   std::optional<StoredRevision> restored;
   std::string live_result;  // result_digest() of `live`, computed once.
+  // `live`'s rdtf_json and urdf were released after its first publication (release_live_texts):
+  // live_texts() reads them from its output files.
+  bool texts_on_disk = false;
 };
+
+// The live revision's two primary texts, as its DESCRIPTION carries them.
+struct LiveTexts {
+  std::string rdtf_json;
+  std::string urdf;
+};
+
+// A record holds its live revision's .rdtf.gltf document and URDF only until they are first
+// published: with 10,000 models they were a quarter of rdtfd's heap (docs/benchmarks.md). Later
+// publications read them back from the output files, which rdtfd wrote and the manifest (`files`)
+// describes by size and SHA-256.
+void release_live_texts(ModelRecord& record);
+// The texts of the live revision: from memory before release_live_texts, else from its output
+// files. False, with why, when a file can no longer be read or no longer is what the manifest
+// says (changed or removed behind rdtfd's back): no description must then be published from it.
+bool live_texts(const ModelRecord& record, LiveTexts& texts, std::string& why);
 
 // Model ids: the model's path below its watched folder ("arm3.gltf", "sub/robot.glb"), prefixed
 // by that folder's name when several folders are watched ("<name>_<position>" when two share a

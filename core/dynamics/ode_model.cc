@@ -397,6 +397,15 @@ std::unique_ptr<Simulation::Model> build_model(const Robot& robot, const Simulat
   model->robot = robot;
   model->options = options;
   model->world = dWorldCreate();
+  // ODE reserves at least 64 KiB for each of a world's two step arenas (dWORLDSTEP_RESERVESIZE_
+  // DEFAULT) whatever the world holds: 1.3 GB of address space for 10,000 live one-link models,
+  // and glibc's heaps fragmented around them. Reserve what the world needs (ODE grows the arenas
+  // when bodies or joints are added), with ODE's own margin.
+  dWorldStepReserveInfo reserve{};
+  reserve.struct_size = sizeof(reserve);
+  reserve.reserve_factor = dWORLDSTEP_RESERVEFACTOR_DEFAULT;
+  reserve.reserve_minimum = 0;
+  dWorldSetStepMemoryReservationPolicy(model->world, &reserve);
   model->threading = dThreadingAllocateSelfThreadedImplementation();
   dWorldSetStepThreadingImplementation(model->world, dThreadingImplementationGetFunctions(model->threading),
                                        model->threading);

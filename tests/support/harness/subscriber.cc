@@ -1,14 +1,31 @@
 #include "support/harness/subscriber.h"
 
 #include <algorithm>
+#include <cstdlib>
 
 #include "message_json.h"
 
 namespace rdtf::itest {
 
+namespace {
+
+// LCM's default URL (or LCM_DEFAULT_URL's) with a 4 MiB socket receive buffer, as docs/lcm.md
+// tells subscribers of large descriptions: the kernel's default (208 KiB) holds three 60 KB
+// chunks, and a test's thread that records each message as JSON may fall that far behind a burst
+// on a loaded machine. Tests of small buffers pass their own URL.
+std::string with_large_receive_buffer(const std::string& url) {
+  if (!url.empty()) return url;
+  const char* env = std::getenv("LCM_DEFAULT_URL");
+  const std::string base = env && *env ? env : "udpm://239.255.76.67:7667?ttl=0";
+  if (base.rfind("udpm://", 0) != 0 || base.find("recv_buf_size=") != std::string::npos) return base;
+  return base + (base.find('?') == std::string::npos ? "?" : "&") + "recv_buf_size=4194304";
+}
+
+}  // namespace
+
 Subscriber::Subscriber(const std::string& channels, const std::string& url)
     : listener_(std::make_unique<LcmListener>(
-          channels, url, 100000,
+          channels, with_large_receive_buffer(url), 100000,
           [this](const std::string& channel, const lcm::ReceiveBuffer& buffer, Clock::time_point received) {
             record(channel, buffer, received);
           })) {}

@@ -34,6 +34,7 @@ struct Message {
 
 class Subscriber {
  public:
+  // `url` "" is LCM's default with a large receive buffer (subscriber.cc).
   explicit Subscriber(const std::string& channels = std::string(kPrefix) + "/.*", const std::string& url = "");
   Subscriber(const Subscriber&) = delete;
   Subscriber& operator=(const Subscriber&) = delete;

@@ -11,12 +11,11 @@
 namespace rdtf::daemon {
 namespace {
 
-bool same_result(const ConvertedModel& live, const ConvertedModel& candidate) {
+bool same_result(const ModelRecord& record, const ConvertedModel& candidate) {
+  const ConvertedModel& live = *record.live;
   return live.content_hash == candidate.content_hash && live.written == candidate.written &&
-         // The manifests hold the SHA-256 of both texts (the live one's texts may be on disk only).
          live.output_path == candidate.output_path && live.urdf_path == candidate.urdf_path &&
-         live.rdtf_json.empty() == candidate.rdtf_json.empty() && live.urdf.empty() == candidate.urdf.empty() &&
-         live.files == candidate.files &&
+         live.files == candidate.files && same_live_texts(record, candidate) &&
          live.validation.has_value() == candidate.validation.has_value() &&
          (!live.validation || live.validation->passed == candidate.validation->passed);
 }
@@ -184,7 +183,7 @@ void Daemon::apply_converted(ConversionOutcome& outcome, ModelRecord& record) {
   const bool failed = candidate.validation && !candidate.validation->passed;
   record.last_hash = outcome.content_hash;
   record.dependencies = outcome.dependencies;
-  if (record.live && same_result(*record.live, candidate)) {
+  if (record.live && same_result(record, candidate)) {
     // A reload changed settings this model's result does not depend on.
     ++counters_.skipped_unchanged;
     log_line("unchanged " + id + " in " + milliseconds(outcome.duration) + ": still revision " +

@@ -132,6 +132,14 @@ void release_live_texts(ModelRecord& record) {
   record.texts_on_disk = true;
 }
 
+bool same_live_texts(const ModelRecord& record, const ConvertedModel& candidate) {
+  const ConvertedModel& live = *record.live;
+  if (!record.texts_on_disk) return live.rdtf_json == candidate.rdtf_json && live.urdf == candidate.urdf;
+  // Released: each text was empty or has its entry in the manifest, which equals the candidate's.
+  return (file_of_role(live, "rdtf") != nullptr || candidate.rdtf_json.empty()) &&
+         (file_of_role(live, "urdf") != nullptr || candidate.urdf.empty());
+}
+
 bool live_texts(const ModelRecord& record, LiveTexts& texts, std::string& why) {
   texts = LiveTexts{};
   if (!record.live) {

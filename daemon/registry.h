@@ -51,6 +51,10 @@ void release_live_texts(ModelRecord& record);
 // files. False, with why, when a file can no longer be read or no longer is what the manifest
 // says (changed or removed behind rdtfd's back): no description must then be published from it.
 bool live_texts(const ModelRecord& record, LiveTexts& texts, std::string& why);
+// Whether `candidate`'s texts are the live revision's, given that their manifests (`files`) are
+// equal: compared as they are while in memory; once released, by the manifest, whose entries hold
+// each text's size and SHA-256 (a text is only released when the manifest describes it).
+bool same_live_texts(const ModelRecord& record, const ConvertedModel& candidate);
 
 // Model ids: the model's path below its watched folder ("arm3.gltf", "sub/robot.glb"), prefixed
 // by that folder's name when several folders are watched ("<name>_<position>" when two share a

@@ -15,14 +15,16 @@ using namespace std::chrono_literals;
 class DaemonLiveTexts : public DaemonLoop {
  protected:
   // The full pipeline (the gate, the URDF), as rdtfd runs by default; no live simulation.
-  void start_full() {
+  void start_full(ConfigLoader reload = {}) {
     rdtf::testing::write_file(watch_ / "arm3.glb", fixture("arm3.glb"));
     rdtf::testing::write_file(watch_ / "two_cylinder.gltf", fixture("two_cylinder.gltf"));
     rdtf::testing::write_file(watch_ / "two_cylinder.bin", fixture("two_cylinder.bin"));
-    start([](DaemonConfig& config) {
-      config.validate = true;
-      config.urdf = true;
-    });
+    start(
+        [](DaemonConfig& config) {
+          config.validate = true;
+          config.urdf = true;
+        },
+        std::move(reload));
     advance(50ms);  // The settle of the initial scan.
     convert();
   }
@@ -131,6 +133,31 @@ TEST_F(DaemonLiveTexts, ANewRevisionIsPublishedWithItsOwnTextsAndThenReleasesThe
   clear_bus();
   request("two_cylinder.gltf");
   EXPECT_EQ(revision_messages("two_cylinder.gltf"), published);
+}
+
+// A reload that changes a setting every result depends on in general, but not these models'
+// results, converts them again and finds the same result: no new revision, though the live
+// revision's texts are on disk only (the manifests, with both texts' SHA-256, are compared).
+TEST_F(DaemonLiveTexts, AReloadThatGivesTheSameResultKeepsTheRevisionOfTextsOnDisk) {
+  start_full([this](std::string&) -> std::optional<DaemonConfig> {
+    DaemonConfig fresh = config_;
+    fresh.convert.limits.max_file_bytes = config_.convert.limits.max_file_bytes / 2;  // Still far above the fixtures.
+    return fresh;
+  });
+  ASSERT_TRUE(record("arm3.glb").texts_on_disk);
+  const auto converted = daemon_->counters().conversions;
+  clear_bus();
+  daemon_->reload_config();
+  for (int i = 0; i < 5; ++i) {
+    advance(50ms);
+    convert();
+  }
+  EXPECT_EQ(daemon_->counters().skipped_unchanged, 2);
+  EXPECT_EQ(daemon_->counters().conversions, converted);
+  EXPECT_TRUE(events("arm3.glb").empty()) << ::testing::PrintToString(events("arm3.glb"));
+  EXPECT_TRUE(events("two_cylinder.gltf").empty()) << ::testing::PrintToString(events("two_cylinder.gltf"));
+  EXPECT_EQ(record("arm3.glb").revisions, 1);
+  EXPECT_EQ(record("two_cylinder.gltf").revisions, 1);
 }
 
 }  // namespace

@@ -140,8 +140,11 @@ TEST(DaemonLife, LogsOneLinePerEventWithTimings) {
   const std::string stages = "; stages: read " + ms + ", convert " + ms + ", check " + ms + ", write " + ms +
                              ", cache " + ms + ", picked up " + ms + ", state saved " + ms + ", sent " + ms;
   for (const char* id : {"a", "b"}) {
-    EXPECT_EQ(log_lines(daemon.log(), std::string("converted ") + id + R"(\.gltf revision 1 \(1 links, 0 joints\) in )" + ms + stages).size(), 1u)
-        << daemon.log();
+    // The line is written after the description is sent (its last stage is the sending), so a
+    // subscriber can hold the revision a moment before the log has the line: wait for it.
+    const std::string line = std::string("converted ") + id + R"(\.gltf revision 1 \(1 links, 0 joints\) in )" + ms + stages;
+    EXPECT_TRUE(wait_until([&] { return !log_lines(daemon.log(), line).empty(); }, 5s)) << daemon.log();
+    EXPECT_EQ(log_lines(daemon.log(), line).size(), 1u) << daemon.log();
   }
   // Periodic republication: one line per period for both models, never one per model.
   const std::string periodic = R"(republished 2 models \(every 300 ms\), queued in )" + ms;

@@ -76,59 +76,85 @@ else
   say "apt: done"
 fi
 
-# --- liblcm, patched ----------------------------------------------------------------------------
-# liblcm 1.3.1's UDP receive path writes out of bounds on a crafted fragment (docs/security.md).
-# rdtfd and the clients link a static liblcm built by CMake from Debian's source of the installed
-# version with scripts/lcm/*.patch applied, kept in $RDTF_LCM_SRC (default /opt/rdtf/lcm-src;
-# CMake's RDTF_LCM_SOURCE_DIR). Done again only when the patches or the installed version change.
-lcm_root=${RDTF_LCM_SRC:-/opt/rdtf/lcm-src}
-lcm_version=$(dpkg-query -W -f='${Version}' liblcm-dev)
-lcm_want=$( (echo "$lcm_version"; cat scripts/lcm/*.patch) | sha256sum | cut -d' ' -f1)
-if [[ -f $lcm_root/.rdtf-patched && $(cat "$lcm_root/.rdtf-patched") == "$lcm_want" ]]; then
-  say "lcm: patched source in $lcm_root matches, nothing to do"
-else
+# --- liblcm and libdraco, patched ----------------------------------------------------------------
+# Two Debian libraries are built from Debian's source of the installed version with rdtf's patches
+# (scripts/<name>/*.patch), by CMake, with the build's sanitizer and fuzzer instrumentation:
+# - liblcm 1.3.1's UDP receive path writes out of bounds on a crafted fragment (docs/security.md);
+#   rdtfd and the clients link it statically. Kept in $RDTF_LCM_SRC (default /opt/rdtf/lcm-src;
+#   CMake's RDTF_LCM_SOURCE_DIR).
+# - libdraco 1.5.5's texture-coordinate decoders size a table and a loop from a count in the stream
+#   (up to 256 MB and 2^31 steps from a few hundred bytes: docs/format.md, "Draco"); librdtf holds
+#   the decoder's objects. Kept in $RDTF_DRACO_SRC (default /opt/rdtf/draco-src; CMake's
+#   RDTF_DRACO_SOURCE_DIR): its src/ and LICENSE only.
+# Each is done again only when its patches or the installed version change; the stamp
+# .rdtf-patched is what CMake checks (cmake/PatchedSource.cmake).
+
+# patched_source NAME SOURCE_PACKAGE INSTALLED_PACKAGE ROOT KEEP...: Debian's source of
+# SOURCE_PACKAGE at INSTALLED_PACKAGE's version, scripts/NAME/*.patch applied, its paths KEEP (all
+# when none are named) in ROOT.
+patched_source() {
+  local name=$1 source_package=$2 installed_package=$3 root=$4
+  shift 4
+  local version want work src_list keep
+  version=$(dpkg-query -W -f='${Version}' "$installed_package")
+  want=$( (echo "$version"; cat scripts/"$name"/*.patch) | sha256sum | cut -d' ' -f1)
+  if [[ -f $root/.rdtf-patched && $(cat "$root/.rdtf-patched") == "$want" ]]; then
+    say "$name: patched source in $root matches, nothing to do"
+    return 0
+  fi
   # `apt-get source` needs a deb-src entry: one for bookworm's main, added once.
   src_list=/etc/apt/sources.list.d/rdtf-deb-src.sources
   if ! grep -rqsE '^(Types:.*deb-src|deb-src )' /etc/apt/sources.list /etc/apt/sources.list.d/; then
-    say "lcm: adding $src_list (deb-src for bookworm main)"
-    printf '%s\n' '# Added by rdtf scripts/install-deps.sh: sources of Debian packages rdtf patches (liblcm).' \
+    say "$name: adding $src_list (deb-src for bookworm main)"
+    printf '%s\n' '# Added by rdtf scripts/install-deps.sh: sources of Debian packages rdtf patches (liblcm, libdraco).' \
       'Types: deb-src' 'URIs: http://deb.debian.org/debian' 'Suites: bookworm' 'Components: main' \
       'Signed-By: /usr/share/keyrings/debian-archive-keyring.gpg' | "${SUDO[@]}" tee "$src_list" >/dev/null
   fi
-  say "lcm: apt-get source lcm=$lcm_version"
+  say "$name: apt-get source $source_package=$version"
   apt_get update -q >/dev/null
   work=$(mktemp -d)
   # Root downloads into a folder _apt cannot enter: apt says so and downloads unsandboxed.
-  if ! (cd "$work" && apt_get source -q --download-only "lcm=$lcm_version" >/dev/null 2>"$work/apt.log"); then
-    # Some mirrors serve the .orig tarball but not the .debian.tar.xz (seen here: 404). The build
-    # then lacks debian/patches, which could not be checked for changes to lcm/*.c (the
-    # installed changelog's entries, 1.3.1+repack1-2.1 to -3, name none; older ones are cut):
-    # docs/security.md. apt has checked whatever it did download against the signed index.
-    say "lcm: apt-get source incomplete ($(grep -m1 '^E:' "$work/apt.log" || echo 'see apt'))"
+  if ! (cd "$work" && apt_get source -q --download-only "$source_package=$version" >/dev/null 2>"$work/apt.log"); then
+    # Some mirrors serve the .orig tarball but not the .debian.tar.xz (seen here for lcm: 404).
+    # The build then lacks debian/patches, which could not be checked for changes to lcm/*.c
+    # (the installed changelog's entries, 1.3.1+repack1-2.1 to -3, name none; older ones are
+    # cut): docs/security.md. apt has checked whatever it did download against the signed index.
+    say "$name: apt-get source incomplete ($(grep -m1 '^E:' "$work/apt.log" || echo 'see apt'))"
   fi
   if compgen -G "$work/*.debian.tar.*" >/dev/null; then
     (cd "$work" && dpkg-source -q -x ./*.dsc src >/dev/null)
   elif compgen -G "$work/*.orig.tar.*" >/dev/null; then
-    say "lcm: using the .orig tarball alone (without Debian's patches: see docs/security.md)"
+    say "$name: using the .orig tarball alone (without Debian's patches: see docs/security.md)"
     mkdir "$work/src" && tar -xf "$work"/*.orig.tar.* -C "$work/src" --strip-components=1
   else
-    say "lcm: could not fetch Debian's source of lcm $lcm_version" >&2
+    say "$name: could not fetch Debian's source of $source_package $version" >&2
     cat "$work/apt.log" >&2
     exit 1
   fi
-  for p in scripts/lcm/*.patch; do
-    say "lcm: applying $p"
+  for p in scripts/"$name"/*.patch; do
+    say "$name: applying $p"
     patch -s -p1 -d "$work/src" <"$p"
   done
-  "${SUDO[@]}" mkdir -p "$(dirname "$lcm_root")"
-  "${SUDO[@]}" rm -rf "$lcm_root.new"
-  "${SUDO[@]}" cp -r "$work/src" "$lcm_root.new"
-  echo "$lcm_want" | "${SUDO[@]}" tee "$lcm_root.new/.rdtf-patched" >/dev/null
-  "${SUDO[@]}" rm -rf "$lcm_root"
-  "${SUDO[@]}" mv "$lcm_root.new" "$lcm_root"
+  mkdir "$work/keep"
+  if (($# == 0)); then
+    rmdir "$work/keep" && mv "$work/src" "$work/keep"
+  else
+    for keep in "$@"; do
+      mkdir -p "$work/keep/$(dirname "$keep")" && mv "$work/src/$keep" "$work/keep/$keep"
+    done
+  fi
+  "${SUDO[@]}" mkdir -p "$(dirname "$root")"
+  "${SUDO[@]}" rm -rf "$root.new"
+  "${SUDO[@]}" cp -r "$work/keep" "$root.new"
+  echo "$want" | "${SUDO[@]}" tee "$root.new/.rdtf-patched" >/dev/null
+  "${SUDO[@]}" rm -rf "$root"
+  "${SUDO[@]}" mv "$root.new" "$root"
   rm -rf "$work"
-  say "lcm: patched source of lcm $lcm_version in $lcm_root"
-fi
+  say "$name: patched source of $source_package $version in $root"
+}
+
+patched_source lcm lcm liblcm-dev "${RDTF_LCM_SRC:-/opt/rdtf/lcm-src}"
+patched_source draco draco libdraco-dev "${RDTF_DRACO_SRC:-/opt/rdtf/draco-src}" src LICENSE
 
 # --- npm packages: tools/gltf-validator, tools/encoders (the encoders whose outputs
 # tests/data/encoded/ holds: tests/data/encoded/make.sh rebuilds them), rdtf-view's three.js

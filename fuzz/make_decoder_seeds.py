@@ -67,3 +67,19 @@ vertex_stream = stream(positions)
 # The index stream refers to vertices of all three meshes: the whole vertex stream with it.
 header = struct.pack("<HHBH", positions["count"], triangles["count"], flags, len(vertex_stream))
 write("meshopt", "arm_meshopt", header + vertex_stream + stream(triangles))
+
+# The unit cube with texture coordinates (22 points: the coordinates' seams split vertices; 36
+# indices; POSITION is Draco attribute 0): a seed, and as regression inputs of scripts/draco's patch
+# the cube as it is and with its count of texture-coordinate orientations (an int32 at byte 117 of
+# the stream, found by printing the decoder's position there; 12 as encoded) set to 2^30, over the
+# mesh's 36 corners. Unpatched libdraco 1.5.5 takes seconds and 130 MB over it, then decodes it.
+cube = open(os.path.join(ENCODED, "cube_texcoords.drc"), "rb").read()
+header = struct.pack("<HHBB", 22, 36, 0, 0)
+write("draco", "cube_texcoords", header + cube)
+ORIENTATIONS_AT = 117
+assert struct.unpack_from("<i", cube, ORIENTATIONS_AT)[0] == 12
+crafted = bytearray(cube)
+struct.pack_into("<i", crafted, ORIENTATIONS_AT, 1 << 30)
+regressions = "tests/data/fuzz-regressions/draco"
+open(os.path.join(regressions, "cube_texcoords"), "wb").write(header + cube)
+open(os.path.join(regressions, "texcoord_orientations_over_corners"), "wb").write(header + bytes(crafted))

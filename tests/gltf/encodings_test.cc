@@ -275,6 +275,34 @@ TEST(CompressedData, DracoVersionsNotReadAreRefused) {
   EXPECT_NE(d.message.find("version 2.3 is not read"), std::string::npos) << d.message;
 }
 
+// A unit cube with texture coordinates as draco_encoder writes it (tests/data/encoded/make.sh,
+// fuzz/make_decoder_seeds.py): 1000 kg at the default 1000 kg/m^3, exactly, since 11-bit
+// quantization keeps the corners 0 and 1. The same stream declaring 2^30 texture-coordinate
+// orientations for its 36 corners is refused: libdraco 1.5.5 as shipped allocates 130 MB and loops
+// for seconds over that count, then decodes the cube (scripts/draco's patch bounds it).
+TEST(CompressedData, DracoTextureCoordinateOrientationsBeyondTheCornersAreRefused) {
+  const auto cube = fuzz::read_bytes(testing::data_dir() / "fuzz-regressions/draco/cube_texcoords");
+  const auto glb = fuzz::draco_model(cube);
+  ASSERT_TRUE(glb);
+  Diagnostics diag;
+  auto asset = load_gltf_from_memory(*glb, "model.glb", "", LoadLimits{}, diag);
+  ASSERT_TRUE(asset) << diag.all().size();
+  const auto conversion = convert(std::move(*asset), ConvertOptions{}, diag);
+  ASSERT_TRUE(conversion);
+  ASSERT_EQ(conversion->robot.links.size(), 1u);
+  const MassProperties& cube_mass = conversion->robot.links[0].inertial;
+  EXPECT_NEAR(cube_mass.mass, 1000.0, kExact * 1000.0);
+  EXPECT_TRUE(cube_mass.center_of_mass.isApprox(Eigen::Vector3d(0.5, 0.5, 0.5), kExact)) << cube_mass.center_of_mass;
+  EXPECT_TRUE(cube_mass.inertia.isApprox(Eigen::Matrix3d::Identity() * (1000.0 / 6.0), kExact)) << cube_mass.inertia;
+
+  const auto crafted = fuzz::read_bytes(testing::data_dir() / "fuzz-regressions/draco/texcoord_orientations_over_corners");
+  ASSERT_EQ(crafted.size(), cube.size());
+  const Diagnostic d = refusal(fuzz::draco_model(crafted));
+  EXPECT_EQ(d.code, "DRACO_INVALID");
+  EXPECT_EQ(d.pointer, "/meshes/0/primitives/0/extensions/KHR_draco_mesh_compression");
+  EXPECT_NE(d.message.find("libdraco could not decode the mesh"), std::string::npos) << d.message;
+}
+
 TEST(CompressedData, MeshoptBytesThatDoNotDecodeAreRefused) {
   // 8 vertices of 12 bytes from a stream of 5 bytes that is no meshopt vertex stream.
   const Diagnostic d = refusal(fuzz::meshopt_model({8, 0, 36, 0, 0, 5, 0, 1, 2, 3, 4, 5, 9, 9}));

@@ -35,3 +35,7 @@ PY
 "$bin/gltf-pipeline" -i arm_source.gltf -o arm_draco.gltf -d
 # draco_transcoder (Debian draco), default quantization (11 bits for positions); it drops extras.
 draco_transcoder -i arm_source.gltf -o arm_draco_transcoder.gltf
+# A unit cube with texture coordinates as a bare Draco stream (Debian draco's draco_encoder,
+# defaults: edgebreaker, the portable texture-coordinate prediction); fuzz/make_decoder_seeds.py
+# makes the draco fuzz seed and the regression inputs of the orientation bound from it.
+draco_encoder -i cube_texcoords.obj -o cube_texcoords.drc >/dev/null

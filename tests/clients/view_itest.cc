@@ -105,6 +105,11 @@ TEST(View, DrawsEveryLinkWhereLinkStatePutsItWithItsInertiaBox) {
   }
   page.eval("window.rdtfView.show({inertia: true})");
   page.screenshot("arm3_live_with_inertia_boxes.png");
+  // Headless chromium rasterizes with SwiftShader, on the CPU: the page leaves multisampling off
+  // there (docs/view.md, "Multisampling").
+  const Json renderer = page.state()["renderer"];
+  EXPECT_EQ(renderer["software"], true) << renderer.dump();
+  EXPECT_EQ(renderer["antialias"], false) << renderer.dump();
 
   // Z up turns the drawing, not the scene frame the hook reports in.
   page.eval("window.rdtfView.setUp('z')");

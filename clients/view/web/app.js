@@ -18,7 +18,22 @@ function invalidate() { dirty = true; }
 const notices = [];
 
 // --- three.js scene ---------------------------------------------------------------------------
-const renderer = new THREE.WebGLRenderer({ antialias: true, preserveDrawingBuffer: true });
+// Multisampling is nearly free on a GPU, but a software rasterizer (SwiftShader or llvmpipe: a
+// machine or VM without a GPU, a remote desktop) shades every sample on the CPU, and its raster
+// is then most of save -> pixels (docs/view.md, "Timing"). So it is off there, unless the URL
+// asks: ?msaa=on|off.
+function softwareRenderer() {
+  const gl = document.createElement('canvas').getContext('webgl2');
+  if (!gl) return { name: 'none', software: false };
+  const info = gl.getExtension('WEBGL_debug_renderer_info');
+  const name = String(gl.getParameter(info ? info.UNMASKED_RENDERER_WEBGL : gl.RENDERER));
+  gl.getExtension('WEBGL_lose_context')?.loseContext();
+  return { name, software: /SwiftShader|llvmpipe|softpipe|software/i.test(name) };
+}
+const gpu = softwareRenderer();
+const msaaAsked = new URLSearchParams(location.search).get('msaa');
+const antialias = msaaAsked === 'on' ? true : msaaAsked === 'off' ? false : !gpu.software;
+const renderer = new THREE.WebGLRenderer({ antialias, preserveDrawingBuffer: true });
 renderer.setPixelRatio(window.devicePixelRatio);
 $('view').appendChild(renderer.domElement);
 const scene = new THREE.Scene();
@@ -349,6 +364,7 @@ window.rdtfView = {
     return {
       frame,
       selected,
+      renderer: { name: gpu.name, software: gpu.software, antialias },
       models: [...models.values()].map((m) => ({
         id: m.info.id,
         revision: m.view ? m.view.revision : null,

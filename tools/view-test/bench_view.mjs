@@ -8,7 +8,7 @@
 //   fps:     frames rendered in 10 s with the 1M-triangle model drawn (--big);
 //   memory:  rdtf-view's VmRSS with 100 models live (copies of arm3 under 100 names).
 // Prints one JSON line per result.
-// Usage: node bench_view.mjs BUILD REPO [--saves N] [--big] [--models N] [--no-validate]
+// Usage: node bench_view.mjs BUILD REPO [--saves N] [--big] [--models N] [--no-validate] [--msaa on|off]
 // (--no-validate: rdtfd's ODE check off, so the latency is conversion, bus and drawing alone)
 import puppeteer from 'puppeteer-core';
 import { spawn } from 'node:child_process';
@@ -26,6 +26,10 @@ const saves = flag('--saves', 50);
 const big = flag('--big', false);
 const modelCount = flag('--models', 100);
 const validate = !process.argv.includes('--no-validate');
+// --msaa on|off: the page's multisampling as asked in its URL (default: the page's own choice,
+// off under a software rasterizer such as this benchmark's SwiftShader).
+const msaaAt = process.argv.indexOf('--msaa');
+const msaa = msaaAt < 0 ? null : process.argv[msaaAt + 1];
 const now = () => performance.timeOrigin + performance.now();
 const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
 
@@ -65,7 +69,8 @@ const browser = await puppeteer.launch({
 const page = await browser.newPage();
 page.on('pageerror', (e) => console.error(`page error: ${e.message}`));
 page.on('console', (m) => { if (m.type() === 'error') console.error(`page console: ${m.text()} ${m.location()?.url ?? ''}`); });
-await page.goto('http://127.0.0.1:8765/', { waitUntil: 'load' });
+await page.goto(`http://127.0.0.1:8765/${msaa ? `?msaa=${msaa}` : ''}`, { waitUntil: 'load' });
+console.log(JSON.stringify({ renderer: await page.evaluate(() => window.rdtfView.state().renderer) }));
 const model = (id) => page.evaluate((i) => window.rdtfView.state().models.find((m) => m.id === i) || null, id);
 // rdtfd's content_hash of a model file and the files it refers to (docs/lcm.md): SHA-256 over
 // each file's length (8 bytes, little endian) and bytes.

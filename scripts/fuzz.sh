@@ -119,12 +119,7 @@ run_target() {
   else
     limit=(-max_total_time="$seconds")
   fi
-  # libdraco 1.5.5 sizes a vector<bool> from an int32 in the texture-coordinate prediction data
-  # and loops over it however short the data (docs/format.md, "Draco"): up to 2^31 iterations,
-  # measured 13.7 s and 341 MB for 1.1e9 under ASan, so about 27 s at 2^31 on an idle core, twice
-  # that with the second fuzzer beside it. That input is slow, not hung: it gets 90 s.
   local timeout=25
-  [[ $name == draco ]] && timeout=90
   mkdir -p "$work"
   t0=$(date +%s)
   local dict

@@ -135,9 +135,8 @@ patched_source() {
     say "$name: applying $p"
     patch -s -p1 -d "$work/src" <"$p"
   done
-  mkdir "$work/keep"
   if (($# == 0)); then
-    rmdir "$work/keep" && mv "$work/src" "$work/keep"
+    mv "$work/src" "$work/keep"
   else
     for keep in "$@"; do
       mkdir -p "$work/keep/$(dirname "$keep")" && mv "$work/src/$keep" "$work/keep/$keep"

@@ -22,7 +22,7 @@ const notices = [];
 // machine or VM without a GPU, a remote desktop) shades every sample on the CPU, and its raster
 // is then most of save -> pixels (docs/view.md, "Timing"). So it is off there, unless the URL
 // asks: ?msaa=on|off.
-function softwareRenderer() {
+function probeRenderer() {
   const gl = document.createElement('canvas').getContext('webgl2');
   if (!gl) return { name: 'none', software: false };
   const info = gl.getExtension('WEBGL_debug_renderer_info');
@@ -30,7 +30,7 @@ function softwareRenderer() {
   gl.getExtension('WEBGL_lose_context')?.loseContext();
   return { name, software: /SwiftShader|llvmpipe|softpipe|software/i.test(name) };
 }
-const gpu = softwareRenderer();
+const gpu = probeRenderer();
 const msaaAsked = new URLSearchParams(location.search).get('msaa');
 const antialias = msaaAsked === 'on' ? true : msaaAsked === 'off' ? false : !gpu.software;
 const renderer = new THREE.WebGLRenderer({ antialias, preserveDrawingBuffer: true });

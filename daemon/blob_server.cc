@@ -107,7 +107,7 @@ void BlobIndex::set_model(const std::string& model_id, const std::filesystem::pa
   remove_model(model_id);
   auto& hashes = hashes_of_model_[model_id];
   for (const OutputFile& file : files) {
-    by_hash_[file.sha256].push_back({model_id, folder, file.path, file.size});
+    by_hash_[file.sha256].push_back({model_id, folder.native(), file.path, file.size});
     hashes.push_back(file.sha256);
   }
 }

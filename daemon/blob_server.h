@@ -35,7 +35,9 @@ namespace rdtf::daemon {
 // A file of a live revision: <folder>/<path>, `size` bytes.
 struct BlobSource {
   std::string model_id;
-  std::filesystem::path folder;  // The model's output folder (<output>/<model_id>).
+  // The model's output folder (<output>/<model_id>). A string, not a path: libstdc++'s path keeps
+  // a list of its components on the heap, and the index holds this for every file of every model.
+  std::string folder;
   std::string path;              // Relative, as in the manifest.
   std::int64_t size = 0;
 };

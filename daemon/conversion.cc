@@ -167,8 +167,8 @@ bool write_outputs(const ConversionJob& job, const Conversion& conversion, Conve
     return false;
   }
   const std::filesystem::path name = job.source.stem().string() + ".rdtf.gltf";
-  converted.output_path = job.output_dir / name;
-  Diagnostics write_diag(converted.output_path.string());
+  converted.output_path = (job.output_dir / name).native();
+  Diagnostics write_diag(converted.output_path);
   // Every content-addressed file's hash, taken from the bytes as they are written (the manifest).
   DigestLog written;
   WriteOptions write_options;
@@ -182,11 +182,11 @@ bool write_outputs(const ConversionJob& job, const Conversion& conversion, Conve
   std::vector<std::filesystem::path> primaries{name};
   if (job.urdf) {
     // URDF is a second output: a model URDF cannot express (a ball joint) still converts.
-    Diagnostics urdf_diag(converted.output_path.string());
+    Diagnostics urdf_diag(converted.output_path);
     UrdfOptions urdf_options = *job.urdf;
     urdf_options.mesh_digest = written.digest();
     if (write_urdf(conversion, stage->folder() / "urdf", urdf_options, urdf_diag, &converted.urdf)) {
-      converted.urdf_path = job.output_dir / "urdf" / "robot.urdf";
+      converted.urdf_path = (job.output_dir / "urdf" / "robot.urdf").native();
       primaries.emplace_back("urdf/robot.urdf");
       diagnostics.append(urdf_diag);  // Its warnings (URDF_NAME_CHANGED, ...).
     } else if (has_code(urdf_diag, codes::WRITE_FAILED)) {
@@ -276,8 +276,8 @@ bool from_cache(const ConversionJob& job, ConversionOutcome& outcome) {
   }
   converted.content_hash = outcome.content_hash;
   converted.written = cached.written;
-  if (cached.written) converted.output_path = job.output_dir / cached.output_name;
-  if (cached.has_urdf) converted.urdf_path = job.output_dir / "urdf" / "robot.urdf";
+  if (cached.written) converted.output_path = (job.output_dir / cached.output_name).native();
+  if (cached.has_urdf) converted.urdf_path = (job.output_dir / "urdf" / "robot.urdf").native();
   converted.validation = std::move(cached.validation);
   converted.facts = std::move(cached.facts);
   converted.files = std::move(cached.files);
@@ -298,7 +298,7 @@ void store_in_cache(const ConversionJob& job, ConversionOutcome& outcome) {
   entry.content_hash = outcome.content_hash;
   entry.written = m.written;
   if (m.written) {
-    entry.output_name = m.output_path.filename().string();
+    entry.output_name = std::filesystem::path(m.output_path).filename().string();
     entry.rdtf_sha256 = sha256_hex(m.rdtf_json);
   }
   entry.has_urdf = !m.urdf_path.empty();
@@ -423,7 +423,10 @@ ConversionOutcome run_conversion(const ConversionJob& job) {
   if (job.validation) {
     LinkBounds bounds = link_geometry_bounds(conversion->asset, conversion->robot);
     const std::string file = job.source.string();
-    if (job.verdict && verdict_applies(*job.verdict, file, job.cache_key, conversion->robot, bounds)) {
+    // No settings key, nothing says what a verdict was computed under: none is kept or reused.
+    const bool memo = !job.cache_key.empty();
+    const CheckDigest digest = memo ? check_digest(file, job.cache_key, conversion->robot, bounds) : CheckDigest{};
+    if (memo && job.verdict && job.verdict->digest == digest) {
       // Exactly the check that gave this verdict (verdict_memo.h): running it again would too.
       validation = job.verdict->verdict;
       outcome.verdict_reused = true;
@@ -444,14 +447,8 @@ ConversionOutcome run_conversion(const ConversionJob& job) {
       summary.summary_line = validation_summary_line(report);
       summary.diagnostics = std::move(report.diagnostics);
       // A verdict the machine's load decided (the check ran out of its CPU budget) is not kept.
-      if (!job.cache_key.empty() && !summary.diagnostics.contains(codes::SIM_BUDGET_EXCEEDED)) {
-        auto memo = std::make_shared<VerdictMemo>();
-        memo->source = file;
-        memo->settings_key = job.cache_key;
-        memo->robot = conversion->robot;
-        memo->bounds = std::move(bounds);
-        memo->verdict = summary;
-        outcome.verdict = std::move(memo);
+      if (memo && !summary.diagnostics.contains(codes::SIM_BUDGET_EXCEEDED)) {
+        outcome.verdict = std::make_shared<const VerdictMemo>(VerdictMemo{digest, summary});
       }
       validation = std::move(summary);
     }

@@ -91,9 +91,13 @@ struct ValidationSummary {
 };
 
 // What a good conversion leaves behind: all a publisher needs, no reference to the document.
+//
+// The output paths are strings, not std::filesystem::path: libstdc++'s path keeps a heap list of
+// its components, about 450 bytes for each of these two, and rdtfd keeps one ConvertedModel for
+// every live model (docs/benchmarks.md, "Memory at 10,000 models").
 struct ConvertedModel {
   std::string content_hash;
-  std::filesystem::path output_path;
+  std::string output_path;
   std::string rdtf_json;
   Robot robot;
   RobotTotals totals;
@@ -101,7 +105,7 @@ struct ConvertedModel {
   // False for a revision that failed the dynamics check and was not written (output_path,
   // rdtf_json, urdf_path and urdf are then empty).
   bool written = false;
-  std::filesystem::path urdf_path;  // Empty when no URDF was written.
+  std::string urdf_path;  // Empty when no URDF was written.
   std::string urdf;
   RobotFacts facts;  // What a DELTA compares (rdtf/diff.h), with the URDF names and geometry digests.
   // Every file the revision's output folder holds (the manifest); empty when not written.

@@ -1,11 +1,13 @@
 #include "daemon.h"
 
 #include <fcntl.h>
+#include <malloc.h>
 #include <poll.h>
 #include <sys/stat.h>
 #include <sys/signalfd.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <csignal>
 #include <cstring>
@@ -297,6 +299,22 @@ void Daemon::step(std::chrono::milliseconds max_wait) {
   periodic(now);
   blobs_.pump(*publisher_, config_.channel_prefix);
   publisher_->drain(clock_->now());
+  trim_after_burst();
+}
+
+void Daemon::trim_after_burst() {
+  constexpr std::size_t kTrimAfterQueuedBytes = 8u << 20;
+  const std::size_t queued = publisher_->queued_bytes();
+  burst_queued_bytes_ = std::max(burst_queued_bytes_, queued);
+  if (queued > 0 || burst_queued_bytes_ < kTrimAfterQueuedBytes) return;
+#if defined(__GLIBC__)
+  const auto start = std::chrono::steady_clock::now();
+  malloc_trim(0);
+  log_line("memory freed after " + std::to_string(burst_queued_bytes_ >> 20) +
+           " MiB of messages were sent returned to the system in " +
+           milliseconds(std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::steady_clock::now() - start)));
+#endif
+  burst_queued_bytes_ = 0;
 }
 
 void Daemon::periodic(Clock::time_point now) {

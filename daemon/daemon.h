@@ -108,6 +108,11 @@ class Daemon {
   void handle_signals();
   void start_simulation_host();
   void periodic(Clock::time_point now);
+  // Once the send queue is empty after holding at least kTrimAfterQueuedBytes, the memory freed
+  // meanwhile goes back to the system (malloc_trim). A restart over thousands of cached models
+  // queues tens of MB of encoded messages within seconds, and glibc kept most of it once sent.
+  void trim_after_burst();
+  std::size_t burst_queued_bytes_ = 0;  // The most the send queue held since the last trim.
   std::string since(Clock::time_point start) const;
 
   DaemonConfig config_;
@@ -140,8 +145,6 @@ class Daemon {
   std::shared_ptr<ReadBudget> read_budget_;  // Shared with the workers.
   std::shared_ptr<ResultCache> cache_;       // Shared with the workers; null when off.
   std::string cache_key_;                    // settings_key(config_).
-  // The gate's last verdict on each model (verdict_memo.h), handed to its next conversion.
-  std::map<std::filesystem::path, std::shared_ptr<const VerdictMemo>> verdicts_;
   void open_result_cache();
   bool take_clean_stop_mark();   // The last run left the mark (now removed): nothing to clean.
   void leave_clean_stop_mark();  // At the end of a clean stop.

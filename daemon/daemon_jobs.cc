@@ -81,7 +81,6 @@ void Daemon::drop_model(const std::filesystem::path& source, std::chrono::micros
            milliseconds(checked + std::chrono::duration_cast<std::chrono::microseconds>(clock_->now() - start)) +
            (record->live ? " (revision " + std::to_string(record->revisions) + " was live)" : ""));
   unfile_timer(*record);
-  verdicts_.erase(source);
   registry_.erase(source);
 }
 
@@ -107,7 +106,7 @@ void Daemon::start_job(ModelRecord& record) {
   if (config_.validate) {
     job.validation = validation_options(config_);
     job.validation->cancel = &cancel_validations_;
-    if (const auto memo = verdicts_.find(record.source); memo != verdicts_.end()) job.verdict = memo->second;
+    job.verdict = record.verdict;
   }
   if (config_.urdf) {
     UrdfOptions urdf;
@@ -126,8 +125,7 @@ void Daemon::apply(ConversionOutcome outcome) {
   ModelRecord* record = registry_.find(outcome.source);
   if (record == nullptr) return;
   const std::string id = record->id;
-  // Kept whatever the outcome: a verdict depends only on what it was computed from.
-  if (outcome.verdict) verdicts_[outcome.source] = outcome.verdict;
+  if (outcome.verdict) record->verdict = outcome.verdict;
   if (!outcome.cache_note.empty()) {
     if (outcome.cache_note.rfind("result not cached", 0) != 0) ++counters_.cache_refused;
     log_line(id + ": " + outcome.cache_note);

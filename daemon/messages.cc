@@ -61,8 +61,8 @@ DescriptionMessages make_description(const ModelRecord& record, const LiveTexts&
   message.source_path = record.source.string();
   message.revision = record.revisions;
   message.content_hash = model.content_hash;
-  message.output_path = model.output_path.string();
-  message.urdf_path = model.urdf_path.string();
+  message.output_path = model.output_path;
+  message.urdf_path = model.urdf_path;
   message.num_links = static_cast<std::int32_t>(model.robot.links.size());
   message.num_joints = static_cast<std::int32_t>(model.robot.joints.size());
   message.validated = model.validation.has_value();

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <map>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -34,6 +35,9 @@ struct ModelRecord {
   // `live`'s rdtf_json and urdf were released after its first publication (release_live_texts):
   // live_texts() reads them from its output files.
   bool texts_on_disk = false;
+  // The gate's last verdict on this model (verdict_memo.h), handed to its next conversion. Kept
+  // whatever became of the revision it judged: a verdict depends only on what it was computed from.
+  std::shared_ptr<const VerdictMemo> verdict;
 };
 
 // The live revision's two primary texts, as its DESCRIPTION carries them.

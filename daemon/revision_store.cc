@@ -144,7 +144,7 @@ std::string result_digest(const ConvertedModel& m) {
   // Each part with its length first, as the content hash does, so that no two results collide by
   // moving bytes from one part to the next.
   std::string all;
-  for (const std::string& part : {flags, m.output_path.string(), m.rdtf_json, m.urdf_path.string(), m.urdf}) {
+  for (const std::string& part : {flags, m.output_path, m.rdtf_json, m.urdf_path, m.urdf}) {
     all += std::to_string(part.size()) + ":" + part;
   }
   return sha256_hex(all);

@@ -1,86 +1,134 @@
 #include "verdict_memo.h"
 
-#include <algorithm>
-#include <cstring>
+#include <openssl/evp.h>
+
+#include <cstdint>
 
 namespace rdtf::daemon {
 namespace {
 
-// A field added to these types must be compared below, or a robot that differs in it would
-// reuse a verdict computed for another robot: the sizes catch the addition (on the platform CI
-// builds on; elsewhere the sizes may differ and the check is left out).
+// A field added to these types must be hashed below, or a robot that differs in it would reuse a
+// verdict computed for another robot: the sizes catch the addition (on the platform CI builds on;
+// elsewhere the sizes may differ and the check is left out).
 #if defined(__x86_64__) && defined(__GLIBCXX__)
-static_assert(sizeof(LinkMesh) == 24, "a field was added to LinkMesh: compare it in same_robot");
-static_assert(sizeof(MassProperties) == 112, "a field was added to MassProperties: compare it in same_robot");
-static_assert(sizeof(Link) == 336, "a field was added to Link: compare it in same_robot");
-static_assert(sizeof(JointLimits) == 32, "a field was added to JointLimits: compare it in same_robot");
-static_assert(sizeof(Joint) == 288, "a field was added to Joint: compare it in same_robot");
-static_assert(sizeof(Robot) == 104, "a field was added to Robot: compare it in same_robot");
+static_assert(sizeof(LinkMesh) == 24, "a field was added to LinkMesh: hash it in check_digest");
+static_assert(sizeof(MassProperties) == 112, "a field was added to MassProperties: hash it in check_digest");
+static_assert(sizeof(Link) == 336, "a field was added to Link: hash it in check_digest");
+static_assert(sizeof(JointLimits) == 32, "a field was added to JointLimits: hash it in check_digest");
+static_assert(sizeof(Joint) == 288, "a field was added to Joint: hash it in check_digest");
+static_assert(sizeof(Robot) == 104, "a field was added to Robot: hash it in check_digest");
 #endif
 
-// Bit for bit: the check's arithmetic on two doubles of the same bits is the same.
-bool same_bits(const double* a, const double* b, std::size_t count) {
-  return std::memcmp(a, b, count * sizeof(double)) == 0;
-}
-bool same(double a, double b) { return same_bits(&a, &b, 1); }
-template <typename Matrix>
-bool same(const Matrix& a, const Matrix& b) {
-  return same_bits(a.data(), b.data(), static_cast<std::size_t>(a.size()));
+// Feeds values to SHA-256 as their bytes: the check's arithmetic on two doubles of the same bits
+// is the same.
+class Hasher {
+ public:
+  Hasher() : context_(EVP_MD_CTX_new()) { EVP_DigestInit_ex(context_, EVP_sha256(), nullptr); }
+  ~Hasher() { EVP_MD_CTX_free(context_); }
+  Hasher(const Hasher&) = delete;
+  Hasher& operator=(const Hasher&) = delete;
+
+  void bytes(const void* data, std::size_t size) { EVP_DigestUpdate(context_, data, size); }
+  void count(std::size_t n) {
+    const std::uint64_t n64 = n;
+    bytes(&n64, sizeof(n64));
+  }
+  void add(double v) { bytes(&v, sizeof(v)); }
+  void add(int v) { bytes(&v, sizeof(v)); }
+  void add(bool v) { add(v ? 1 : 0); }
+  void add(const std::string& s) {
+    count(s.size());
+    bytes(s.data(), s.size());
+  }
+  void add(const std::vector<int>& v) {
+    count(v.size());
+    bytes(v.data(), v.size() * sizeof(int));
+  }
+  template <typename Matrix>
+  void matrix(const Matrix& m) {
+    bytes(m.data(), static_cast<std::size_t>(m.size()) * sizeof(double));
+  }
+
+  CheckDigest finish() {
+    CheckDigest out{};
+    unsigned int length = 0;
+    EVP_DigestFinal_ex(context_, out.data(), &length);
+    return out;
+  }
+
+ private:
+  EVP_MD_CTX* context_;
+};
+
+void add(Hasher& h, const MassProperties& m) {
+  h.add(m.volume);
+  h.add(m.mass);
+  h.matrix(m.center_of_mass);
+  h.matrix(m.inertia);
 }
 
-bool same(const MassProperties& a, const MassProperties& b) {
-  return same(a.volume, b.volume) && same(a.mass, b.mass) && same(a.center_of_mass, b.center_of_mass) &&
-         same(a.inertia, b.inertia);
+void add(Hasher& h, const Link& l) {
+  h.add(l.name);
+  h.add(l.node);
+  h.add(l.parent_joint);
+  h.add(l.child_joints);
+  h.matrix(l.X_SL.matrix());
+  h.count(l.meshes.size());
+  for (const LinkMesh& m : l.meshes) {
+    h.add(m.node);
+    h.add(m.volume);
+    h.add(m.density);
+  }
+  add(h, l.inertial);
+  h.add(static_cast<int>(l.inertial_source));
+  h.add(l.inertial_node);
 }
 
-bool same(const LinkMesh& a, const LinkMesh& b) {
-  return a.node == b.node && same(a.volume, b.volume) && same(a.density, b.density);
-}
-
-bool same(const Link& a, const Link& b) {
-  return a.name == b.name && a.node == b.node && a.parent_joint == b.parent_joint &&
-         a.child_joints == b.child_joints && same(a.X_SL.matrix(), b.X_SL.matrix()) &&
-         std::equal(a.meshes.begin(), a.meshes.end(), b.meshes.begin(), b.meshes.end(),
-                    [](const LinkMesh& x, const LinkMesh& y) { return same(x, y); }) &&
-         same(a.inertial, b.inertial) && a.inertial_source == b.inertial_source && a.inertial_node == b.inertial_node;
-}
-
-bool same(const std::optional<JointLimits>& a, const std::optional<JointLimits>& b) {
-  if (a.has_value() != b.has_value()) return false;
-  return !a || (same(a->lower, b->lower) && same(a->upper, b->upper) && same(a->effort, b->effort) &&
-                same(a->velocity, b->velocity));
-}
-
-bool same(const Joint& a, const Joint& b) {
-  return a.name == b.name && a.node == b.node && a.frame_node == b.frame_node && a.source_node == b.source_node &&
-         a.source_is_entry == b.source_is_entry && a.parent_link == b.parent_link && a.child_link == b.child_link &&
-         a.kind == b.kind && same(a.X_PJ.matrix(), b.X_PJ.matrix()) && same(a.axis, b.axis) &&
-         same(a.limits, b.limits) && same(a.damping, b.damping) && same(a.friction, b.friction) &&
-         same(a.spring_stiffness, b.spring_stiffness);
+void add(Hasher& h, const Joint& j) {
+  h.add(j.name);
+  h.add(j.node);
+  h.add(j.frame_node);
+  h.add(j.source_node);
+  h.add(j.source_is_entry);
+  h.add(j.parent_link);
+  h.add(j.child_link);
+  h.add(static_cast<int>(j.kind));
+  h.matrix(j.X_PJ.matrix());
+  h.matrix(j.axis);
+  h.add(j.limits.has_value());
+  if (j.limits) {
+    h.add(j.limits->lower);
+    h.add(j.limits->upper);
+    h.add(j.limits->effort);
+    h.add(j.limits->velocity);
+  }
+  h.add(j.damping);
+  h.add(j.friction);
+  h.add(j.spring_stiffness);
 }
 
 }  // namespace
 
-bool same_robot(const Robot& a, const Robot& b) {
-  return a.name == b.name && a.root_links == b.root_links &&
-         std::equal(a.links.begin(), a.links.end(), b.links.begin(), b.links.end(),
-                    [](const Link& x, const Link& y) { return same(x, y); }) &&
-         std::equal(a.joints.begin(), a.joints.end(), b.joints.begin(), b.joints.end(),
-                    [](const Joint& x, const Joint& y) { return same(x, y); });
-}
-
-bool same_bounds(const LinkBounds& a, const LinkBounds& b) {
-  return std::equal(a.begin(), a.end(), b.begin(), b.end(),
-                    [](const std::optional<Eigen::AlignedBox3d>& x, const std::optional<Eigen::AlignedBox3d>& y) {
-                      if (x.has_value() != y.has_value()) return false;
-                      return !x || (same(x->min(), y->min()) && same(x->max(), y->max()));
-                    });
-}
-
-bool verdict_applies(const VerdictMemo& memo, const std::string& source, const std::string& settings_key,
-                     const Robot& robot, const LinkBounds& bounds) {
-  return !memo.settings_key.empty() && memo.settings_key == settings_key && memo.source == source &&
-         same_robot(memo.robot, robot) && same_bounds(memo.bounds, bounds);
+CheckDigest check_digest(const std::string& source, const std::string& settings_key, const Robot& robot,
+                         const LinkBounds& bounds) {
+  Hasher h;
+  h.add(source);
+  h.add(settings_key);
+  h.add(robot.name);
+  h.add(robot.root_links);
+  h.count(robot.links.size());
+  for (const Link& l : robot.links) add(h, l);
+  h.count(robot.joints.size());
+  for (const Joint& j : robot.joints) add(h, j);
+  h.count(bounds.size());
+  for (const auto& box : bounds) {
+    h.add(box.has_value());
+    if (box) {
+      h.matrix(box->min());
+      h.matrix(box->max());
+    }
+  }
+  return h.finish();
 }
 
 }  // namespace rdtf::daemon

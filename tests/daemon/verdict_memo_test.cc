@@ -99,7 +99,7 @@ TEST(DaemonVerdictMemo, AnIdenticalRobotReusesTheVerdictAndAnyChangeRunsTheCheck
   ASSERT_TRUE(changed.converted && changed.converted->validation);
   EXPECT_FALSE(changed.verdict_reused);
   ASSERT_TRUE(changed.verdict);
-  EXPECT_FALSE(same_robot(changed.verdict->robot, first.verdict->robot));
+  EXPECT_NE(changed.verdict->digest, first.verdict->digest);
   EXPECT_GT(changed.converted->validation->steps, 0u);
 
   // The same robot and file under other settings (another settings_key): the check runs.
@@ -179,7 +179,16 @@ TEST(DaemonVerdictMemo, AFailedVerdictIsNeverReplacedByThePassOfAnotherRobot) {
   EXPECT_TRUE(back.converted->validation->passed);
 }
 
-TEST(DaemonVerdictMemo, RobotsAndBoundsCompareBitForBit) {
+// The digest tells apart robots, bounds, files and settings that differ in any field by any bit.
+bool same_robot(const Robot& a, const Robot& b) {
+  return check_digest("m.gltf", "k", a, {}) == check_digest("m.gltf", "k", b, {});
+}
+bool same_bounds(const LinkBounds& a, const LinkBounds& b) {
+  const Robot robot;
+  return check_digest("m.gltf", "k", robot, a) == check_digest("m.gltf", "k", robot, b);
+}
+
+TEST(DaemonVerdictMemo, TheDigestTellsApartAnyBitOfWhatTheCheckReads) {
   Robot a;
   a.name = "r";
   a.links.resize(2);
@@ -208,6 +217,25 @@ TEST(DaemonVerdictMemo, RobotsAndBoundsCompareBitForBit) {
   b = a;
   b.links.pop_back();
   EXPECT_FALSE(same_robot(a, b));
+  b = a;
+  b.links[1].inertial_source = InertialSource::kAuthored;
+  EXPECT_FALSE(same_robot(a, b));
+  b = a;
+  b.joints[0].kind = JointKind::kRevolute;
+  EXPECT_FALSE(same_robot(a, b));
+  // Characters moved between two names: each name is hashed after its length.
+  a.links[0].name = "ab";
+  a.links[1].name = "c";
+  b = a;
+  b.links[0].name = "a";
+  b.links[1].name = "bc";
+  EXPECT_FALSE(same_robot(a, b));
+  // An index moved between two lists.
+  b = a;
+  a.links[0].child_joints = {1, 2};
+  b.links[0].child_joints = {1};
+  b.links[1].child_joints = {2};
+  EXPECT_FALSE(same_robot(a, b));
 
   const LinkBounds box{Eigen::AlignedBox3d(Eigen::Vector3d(-1, -1, -1), Eigen::Vector3d(1, 1, 1)), std::nullopt};
   LinkBounds other = box;
@@ -220,6 +248,12 @@ TEST(DaemonVerdictMemo, RobotsAndBoundsCompareBitForBit) {
   other = box;
   other.pop_back();
   EXPECT_FALSE(same_bounds(box, other));
+
+  // The file and the settings, and where one ends and the other begins.
+  EXPECT_NE(check_digest("a.gltf", "k", a, box), check_digest("b.gltf", "k", a, box));
+  EXPECT_NE(check_digest("a.gltf", "k", a, box), check_digest("a.gltf", "k2", a, box));
+  EXPECT_NE(check_digest("a.gltfk", "", a, box), check_digest("a.gltf", "k", a, box));
+  EXPECT_EQ(check_digest("a.gltf", "k", a, box), check_digest("a.gltf", "k", Robot(a), LinkBounds(box)));
 }
 
 // The loop keeps each model's last verdict and hands it to the model's next conversion; nothing a

@@ -173,6 +173,7 @@ bool write_outputs(const ConversionJob& job, const Conversion& conversion, Conve
   DigestLog written;
   WriteOptions write_options;
   write_options.content_digest = written.digest();
+  write_options.staged_for = job.output_dir;
   if (!write_rdtf(conversion.asset, stage->folder() / name, write_options, write_diag, &converted.rdtf_json)) {
     diagnostics.append(write_diag);
     if (has_code(write_diag, codes::WRITE_FAILED)) write_failed(job.output_dir, diagnostics, retry);
@@ -185,6 +186,7 @@ bool write_outputs(const ConversionJob& job, const Conversion& conversion, Conve
     Diagnostics urdf_diag(converted.output_path);
     UrdfOptions urdf_options = *job.urdf;
     urdf_options.mesh_digest = written.digest();
+    urdf_options.staged_for = job.output_dir / "urdf";
     if (write_urdf(conversion, stage->folder() / "urdf", urdf_options, urdf_diag, &converted.urdf)) {
       converted.urdf_path = (job.output_dir / "urdf" / "robot.urdf").native();
       primaries.emplace_back("urdf/robot.urdf");

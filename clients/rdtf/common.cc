@@ -246,8 +246,10 @@ bool write_staged(const Conversion& conversion, const fs::path& target, bool glb
     return false;
   }
   Diagnostics staged(target.string());
-  const bool written = write_rdtf(conversion.asset, stage->folder() / target.filename(),
-                                  glb ? OutputFormat::kGlb : OutputFormat::kGltf, staged);
+  WriteOptions options;
+  options.format = glb ? OutputFormat::kGlb : OutputFormat::kGltf;
+  options.staged_for = folder;
+  const bool written = write_rdtf(conversion.asset, stage->folder() / target.filename(), options, staged);
   for (const Diagnostic& d : staged.all()) {
     diag.add(d.severity, d.code, d.pointer, unstaged(d.message, stage->folder().string(), folder.string()));
   }

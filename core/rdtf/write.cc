@@ -33,12 +33,23 @@ bool same_file(const std::filesystem::path& a, const std::filesystem::path& b) {
   return std::filesystem::equivalent(a, b, error) && !error;
 }
 
+// Atomically and durably, or into a stage that its commit makes durable (WriteOptions::staged_for).
+bool put_file(const std::filesystem::path& path, std::span<const std::span<const std::uint8_t>> pieces,
+              const WriteOptions& options, std::string& why) {
+  return options.staged_for.empty() ? write_file_atomically(path, pieces, why) : write_staged_file(path, pieces, why);
+}
+
+bool put_file(const std::filesystem::path& path, std::string_view text, const WriteOptions& options, std::string& why) {
+  const std::span<const std::uint8_t> bytes(reinterpret_cast<const std::uint8_t*>(text.data()), text.size());
+  return put_file(path, std::span<const std::span<const std::uint8_t>>(&bytes, 1), options, why);
+}
+
 bool write_bytes(const std::filesystem::path& path, std::span<const std::uint8_t> bytes,
-                 const std::string& pointer, Diagnostics& diag) {
+                 const std::string& pointer, const WriteOptions& options, Diagnostics& diag) {
   std::error_code error;
   std::filesystem::create_directories(path.parent_path(), error);
   std::string why;
-  if (!write_file_atomically(path, bytes, why)) {
+  if (!put_file(path, std::span<const std::span<const std::uint8_t>>(&bytes, 1), options, why)) {
     diag.error(codes::WRITE_FAILED, pointer, "cannot write " + path.string() + ": " + why);
     return false;
   }
@@ -142,14 +153,19 @@ void external_images(const GltfAsset& asset, Json& document, const WriteOptions&
 
 // Writes each resource into `folder`; `created` receives those that were not there before.
 bool write_resources(const std::vector<Resource>& resources, const std::filesystem::path& folder,
-                     Diagnostics& diag, std::vector<std::filesystem::path>& created) {
+                     const WriteOptions& options, Diagnostics& diag, std::vector<std::filesystem::path>& created) {
   bool ok = true;
   for (const Resource& resource : resources) {
     const auto target = folder / resource.name;
     if (!resource.source.empty() && same_file(resource.source, target)) continue;
+    // Already where the stage's commit would put it, byte for byte: nothing to write, sync or move.
+    if (!options.staged_for.empty() &&
+        file_holds(options.staged_for / resource.name, std::span<const std::span<const std::uint8_t>>(&resource.bytes, 1))) {
+      continue;
+    }
     std::error_code error;
     const bool existed = std::filesystem::exists(target, error);
-    if (!write_bytes(target, resource.bytes, resource.pointer, diag)) {
+    if (!write_bytes(target, resource.bytes, resource.pointer, options, diag)) {
       ok = false;
     } else if (!existed) {
       created.push_back(target);
@@ -192,7 +208,7 @@ bool write_gltf(const GltfAsset& asset, const std::filesystem::path& output, con
   external_buffers(asset, document, output, options, resources);
   external_images(asset, document, options, images, resources, diag);
   std::vector<std::filesystem::path> created;
-  bool ok = write_resources(resources, folder, diag, created);
+  bool ok = write_resources(resources, folder, options, diag, created);
   const bool addressed = static_cast<bool>(options.content_digest);
   // Read before the JSON is replaced: its files stay for a reader that has just opened it.
   const auto previous = addressed ? names_referenced_by(output) : std::set<std::string>{};
@@ -200,7 +216,7 @@ bool write_gltf(const GltfAsset& asset, const std::filesystem::path& output, con
   const std::string text = document_text(document);
   if (written_json != nullptr) *written_json = text;
   std::string why;
-  if (ok && !write_file_atomically(output, text, why)) {
+  if (ok && !put_file(output, text, options, why)) {
     diag.error(codes::WRITE_FAILED, "", "cannot write " + output.string() + ": " + why);
     ok = false;
   }
@@ -267,7 +283,7 @@ std::vector<std::uint8_t> glb_head(std::string_view json, std::size_t bin_size) 
   return head;
 }
 
-bool write_glb(const GltfAsset& asset, const std::filesystem::path& output, Diagnostics& diag,
+bool write_glb(const GltfAsset& asset, const std::filesystem::path& output, const WriteOptions& options, Diagnostics& diag,
                std::string* written_json) {
   Json document = asset.document;
   BinChunk bin;
@@ -315,7 +331,7 @@ bool write_glb(const GltfAsset& asset, const std::filesystem::path& output, Diag
   std::vector<std::span<const std::uint8_t>> pieces{head};
   pieces.insert(pieces.end(), bin.pieces().begin(), bin.pieces().end());
   std::string why;
-  if (!write_file_atomically(output, pieces, why)) {
+  if (!put_file(output, pieces, options, why)) {
     diag.error(codes::WRITE_FAILED, "", "cannot write " + output.string() + ": " + why);
     return false;
   }
@@ -329,7 +345,7 @@ std::string document_text(const Json& document) { return document.dump(2) + "\n"
 bool write_rdtf(const GltfAsset& asset, const std::filesystem::path& output, const WriteOptions& options,
                 Diagnostics& diag, std::string* written_json) {
   diag.set_file(output.string());
-  return options.format == OutputFormat::kGlb ? write_glb(asset, output, diag, written_json)
+  return options.format == OutputFormat::kGlb ? write_glb(asset, output, options, diag, written_json)
                                               : write_gltf(asset, output, options, diag, written_json);
 }
 

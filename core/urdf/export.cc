@@ -137,14 +137,27 @@ std::set<std::string> mesh_names_referenced_by(const std::filesystem::path& path
 }
 
 // Writes the meshes into `dir`; `created` receives those that were not there before.
-bool write_meshes(const UrdfExport& exported, const std::filesystem::path& dir, Diagnostics& diag,
-                  std::vector<std::filesystem::path>& created) {
+// Atomically and durably, or into a stage that its commit makes durable (UrdfOptions::staged_for).
+bool put_file(const std::filesystem::path& path, std::span<const std::uint8_t> bytes, const UrdfOptions& options,
+              std::string& why) {
+  const std::span<const std::span<const std::uint8_t>> pieces(&bytes, 1);
+  return options.staged_for.empty() ? write_file_atomically(path, pieces, why) : write_staged_file(path, pieces, why);
+}
+
+bool write_meshes(const UrdfExport& exported, const std::filesystem::path& dir, const UrdfOptions& options,
+                  Diagnostics& diag, std::vector<std::filesystem::path>& created) {
   std::string why;
   for (const UrdfMeshFile& mesh : exported.meshes) {
     const auto target = dir / mesh.path;
+    const std::span<const std::uint8_t> bytes(mesh.bytes);
+    // Already where the stage's commit would put it, byte for byte: nothing to write, sync or move.
+    if (!options.staged_for.empty() &&
+        file_holds(options.staged_for / mesh.path, std::span<const std::span<const std::uint8_t>>(&bytes, 1))) {
+      continue;
+    }
     std::error_code error;
     const bool existed = std::filesystem::exists(target, error);
-    if (!write_file_atomically(target, mesh.bytes, why)) {
+    if (!put_file(target, bytes, options, why)) {
       diag.error(codes::WRITE_FAILED, "", "cannot write " + target.string() + ": " + why);
       return false;
     }
@@ -410,11 +423,13 @@ bool write_urdf(const Conversion& conversion, const std::filesystem::path& dir,
   const auto urdf = dir / "robot.urdf";
   std::vector<std::filesystem::path> created;
   // Meshes first: the URDF refers to them.
-  bool ok = write_meshes(*exported, dir, diag, created);
+  bool ok = write_meshes(*exported, dir, options, diag, created);
   // Read before the URDF is replaced: its meshes stay for a reader that has just opened it.
   const auto previous = addressed ? mesh_names_referenced_by(urdf) : std::set<std::string>{};
   std::string why;
-  if (ok && !write_file_atomically(urdf, exported->text, why)) {
+  const std::span<const std::uint8_t> urdf_bytes(reinterpret_cast<const std::uint8_t*>(exported->text.data()),
+                                                 exported->text.size());
+  if (ok && !put_file(urdf, urdf_bytes, options, why)) {
     diag.error(codes::WRITE_FAILED, "", "cannot write " + urdf.string() + ": " + why);
     ok = false;
   }

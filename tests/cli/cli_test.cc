@@ -141,12 +141,12 @@ TEST(Cli, ConvertCreatesTheOutputFolder) {
   EXPECT_TRUE(std::filesystem::is_regular_file(folder / "other/dir/x.bin"));
 }
 
-// A write that fails takes back what it made: here the folder it created for the output. (A
-// name of 245 characters is a valid file name, but the temporary file written first, named
-// ".<name>.<pid>-<random>.tmp", is over the 255 the file system allows.)
+// A write that fails takes back what it made: here the folder it created for the output, and the
+// buffer it wrote first. (The buffer's name, 251 characters and ".bin", is within the 255 the
+// file system allows; the output's, 251 and ".gltf", is one over.)
 TEST(Cli, FailedWriteLeavesNothingBehind) {
   testing::TempDir folder;
-  const std::filesystem::path output = folder / "new" / (std::string(245, 'a') + ".gltf");
+  const std::filesystem::path output = folder / "new" / (std::string(251, 'a') + ".gltf");
   const auto run = testing::run_command(cli() + " convert " + fixture("arm3.gltf") + " -o '" + output.string() + "'");
   EXPECT_EQ(run.exit_code, 1) << run.err;
   EXPECT_NE(run.err.find("error WRITE_FAILED: cannot write " + (folder / "new").string() + "/aaaa"), std::string::npos)

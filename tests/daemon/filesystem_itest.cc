@@ -282,8 +282,8 @@ TEST(DaemonFilesystem, AModelNamingOneHugeSparseFileManyTimesIsRefusedBeforeRead
 
 TEST(DaemonFilesystem, NamesTooLongForTheOutputFileSystemAreRefusedNotRetried) {
   Session s;
-  // 240 bytes: a name the watched folder takes, but not "<name>.rdtf.gltf" nor its temporary.
-  const std::string stem(240, 'n');
+  // "<250 bytes>.gltf" is a name the watched folder takes (255 bytes), but "<250 bytes>.rdtf.gltf" is not.
+  const std::string stem(250, 'n');
   const auto model = box_model("long_base", 0.1);
   write_in_place(s.watch / (stem + ".gltf"), model.gltf);
   s.start();

@@ -30,6 +30,18 @@ bool write_file_atomically(const std::filesystem::path& path, std::string_view t
 bool write_file_atomically(const std::filesystem::path& path,
                            std::span<const std::span<const std::uint8_t>> pieces, std::string& why);
 
+// A file written into a StagedOutput's folder, to be moved into place by its commit: created or
+// truncated and written whole, without a temporary and without an fsync. The stage is a temporary
+// itself (no reader looks into it, and a start after a crash removes it), so a temporary inside it
+// buys nothing, and commit makes durable what it moves (docs/daemon.md, "Outputs").
+bool write_staged_file(const std::filesystem::path& path, std::span<const std::span<const std::uint8_t>> pieces,
+                       std::string& why);
+bool write_staged_file(const std::filesystem::path& path, std::string_view text, std::string& why);
+
+// Whether `path` is a regular file (not a symlink) whose bytes are exactly the pieces one after
+// another, compared in full (a size that matches says nothing about the bytes).
+bool file_holds(const std::filesystem::path& path, std::span<const std::span<const std::uint8_t>> pieces);
+
 // A digest of bytes in lowercase hex, at least 16 digits (the daemon passes SHA-256). librdtf
 // links no cryptography library, so whoever wants content-addressed names brings the digest.
 using ContentDigest = std::function<std::string(std::span<const std::uint8_t>)>;
@@ -71,9 +83,10 @@ class StagedOutput {
 
   // Moves every file below the stage to the same place below `target` (folders made as needed),
   // each by one rename: first every file not in `last`, then the files of `last` (paths relative
-  // to the stage) in that order, so that the primary files, renamed last, commit the rest. Then
-  // fsyncs the folders written to. False with `why` when a rename fails (the files already moved
-  // stay: they are whole).
+  // to the stage) in that order, so that the primary files, renamed last, commit the rest. Every
+  // file is fsynced before the first rename (write_staged_file does not sync), and the folders
+  // written to after the last. False with `why` when a sync or a rename fails (the files already
+  // moved stay: they are whole).
   // `keep_identical`: a file whose destination already holds the same bytes is not moved (the
   // destination, perhaps the model's own .bin, stays the very same file).
   bool commit(const std::filesystem::path& target, const std::vector<std::filesystem::path>& last,

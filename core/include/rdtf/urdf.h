@@ -37,6 +37,10 @@ struct UrdfOptions {
   // robot.urdf refers to (a reader that opened the previous URDF a moment ago still finds its
   // meshes). DIR is taken to hold this one URDF.
   ContentDigest mesh_digest;
+  // Set when DIR is a StagedOutput's folder whose commit will move it into this folder (rdtfd):
+  // files are written with write_staged_file (commit syncs what it moves), and a mesh this folder
+  // already holds with the very same bytes is not written again. robot.urdf is always written.
+  std::filesystem::path staged_for;
 };
 
 struct UrdfMeshFile {

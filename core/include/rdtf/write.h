@@ -24,6 +24,12 @@ struct WriteOptions {
   // it replaced refers to is removed: a reader that opened the previous JSON a moment ago still
   // finds its files. The folder is taken to hold this one output (the daemon's per-model folder).
   ContentDigest content_digest;
+  // Set when `output` lies in a StagedOutput's folder whose commit will move it into this folder
+  // (rdtfd, `rdtf convert`): every file is written with write_staged_file (commit syncs what it
+  // moves), and a file beside the JSON that this folder already holds with the very same bytes is
+  // not written at all, so a save that changed a colour does not write, sync and rename the
+  // model's unchanged buffers again. The JSON (or .glb) is always written: its rename commits.
+  std::filesystem::path staged_for;
 };
 
 // .gltf: the JSON, and every external buffer and image copied beside it (named as

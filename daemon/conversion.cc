@@ -45,6 +45,45 @@ std::string file_text(const std::filesystem::path& path) {
   return std::string(bytes.begin(), bytes.end());
 }
 
+// The file names a revision's outputs keep: those directly in the model's output folder
+// (`in_folder`) and in urdf/meshes (`meshes`).
+struct KeptNames {
+  std::set<std::string> in_folder;
+  std::set<std::string> meshes;
+
+  // Every file of a manifest: no text to parse again.
+  void add(const std::vector<OutputFile>& files) {
+    for (const OutputFile& file : files) {
+      const auto slash = file.path.rfind('/');
+      if (slash == std::string::npos) {
+        in_folder.insert(file.path);
+      } else if (file.path.compare(0, slash + 1, "urdf/meshes/") == 0) {
+        meshes.insert(file.path.substr(slash + 1));
+      }
+    }
+  }
+  void add(const std::string& rdtf_json, const std::string& urdf, const std::filesystem::path& output_dir) {
+    in_folder.merge(names_in_gltf(rdtf_json, output_dir));
+    meshes.merge(names_in_urdf(urdf));
+  }
+  // The primary files on disk now (after a restart, or an earlier attempt committed halfway, they
+  // may be newer than the live revision): what they refer to, unless they are the live revision's
+  // own, byte for byte (its files are kept already).
+  void add_on_disk(const std::filesystem::path& output_dir, const std::string& gltf_name,
+                   const std::vector<OutputFile>& live_files) {
+    auto is_live = [&](const std::string& path, const std::string& text) {
+      for (const OutputFile& file : live_files) {
+        if (file.path == path) return file.size == static_cast<std::int64_t>(text.size()) && file.sha256 == sha256_hex(text);
+      }
+      return false;
+    };
+    const std::string json = file_text(output_dir / gltf_name);
+    if (!is_live(gltf_name, json)) in_folder.merge(names_in_gltf(json, output_dir));
+    const std::string urdf = file_text(output_dir / "urdf" / "robot.urdf");
+    if (!is_live("urdf/robot.urdf", urdf)) meshes.merge(names_in_urdf(urdf));
+  }
+};
+
 // Holds a share of the read budget for the life of a conversion.
 class HeldBytes {
  public:
@@ -200,23 +239,27 @@ bool write_outputs(const ConversionJob& job, const Conversion& conversion, Conve
       for (const Diagnostic& d : urdf_diag.all()) diagnostics.warning(codes::URDF_NOT_WRITTEN, d.pointer, d.message);
     }
   }
+  std::string manifest_why;
+  converted.files = output_files(name.string(), converted.rdtf_json, converted.urdf, written, manifest_why);
   // Kept: the files of the new revision, of the outputs it replaces on disk, and of the live
-  // revision (the disk's may be newer after a restart or a half-committed earlier attempt).
-  std::set<std::string> keep_gltf = names_in_gltf(converted.rdtf_json, job.output_dir);
-  keep_gltf.merge(names_in_gltf(file_text(converted.output_path), job.output_dir));
-  keep_gltf.merge(names_in_gltf(job.live_rdtf_json, job.output_dir));
-  std::set<std::string> keep_meshes = names_in_urdf(converted.urdf);
-  keep_meshes.merge(names_in_urdf(file_text(job.output_dir / "urdf" / "robot.urdf")));
-  keep_meshes.merge(names_in_urdf(job.live_urdf));
+  // revision (the disk's may be newer after a restart or a half-committed earlier attempt). Taken
+  // from the manifests where there are any: parsing the texts again cost 2.2 ms of a 13 ms save.
+  KeptNames keep;
+  if (manifest_why.empty()) {
+    keep.add(converted.files);
+  } else {
+    keep.add(converted.rdtf_json, converted.urdf, job.output_dir);
+  }
+  keep.add_on_disk(job.output_dir, name.string(), job.live_files);
+  keep.add(job.live_files);
+  keep.add(job.live_rdtf_json, job.live_urdf, job.output_dir);
   if (!stage->commit(job.output_dir, primaries, why)) {
     diagnostics.error(codes::WRITE_FAILED, "", "cannot move the outputs into place: " + why);
     write_failed(job.output_dir, diagnostics, retry);
     return false;
   }
-  remove_unreferenced(job.output_dir, keep_gltf);
-  if (job.urdf) remove_unreferenced(job.output_dir / "urdf" / "meshes", keep_meshes);
-  std::string manifest_why;
-  converted.files = output_files(name.string(), converted.rdtf_json, converted.urdf, written, manifest_why);
+  remove_unreferenced(job.output_dir, keep.in_folder);
+  if (job.urdf) remove_unreferenced(job.output_dir / "urdf" / "meshes", keep.meshes);
   if (!manifest_why.empty()) {
     diagnostics.warning(codes::MANIFEST_INCOMPLETE, "", "no manifest for this revision, so its files are not served "
                         "as blobs: " + manifest_why);

@@ -60,7 +60,9 @@ struct ConversionJob {
   // written too. Otherwise such a revision writes nothing: the live revision's files stay.
   bool write_failed = false;
   // The live revision's outputs (what LCM advertises): their files stay until a newer revision
-  // has been committed whole, whatever happens to this one.
+  // has been committed whole, whatever happens to this one. Its manifest when it has one (then
+  // the texts are not read back for this), else its texts.
+  std::vector<OutputFile> live_files;
   std::string live_rdtf_json;
   std::string live_urdf;
   // What one conversion may read, the model and every file it names (each time it is named).

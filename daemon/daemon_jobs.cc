@@ -91,7 +91,9 @@ void Daemon::start_job(ModelRecord& record) {
   job.source = record.source;
   LiveTexts live;
   std::string why;
-  if (record.live && live_texts(record, live, why)) {
+  if (record.live && !record.live->files.empty()) {
+    job.live_files = record.live->files;
+  } else if (record.live && live_texts(record, live, why)) {
     job.live_rdtf_json = std::move(live.rdtf_json);
     job.live_urdf = std::move(live.urdf);
   }

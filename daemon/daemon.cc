@@ -12,10 +12,12 @@
 #include <csignal>
 #include <cstring>
 #include <ctime>
+#include <fstream>
 #include <iostream>
 #include <limits>
 #include <optional>
 
+#include "../core/gltf/confined_files.h"
 #include "daemon_internal.h"
 #include "rdtf/atomic_file.h"
 #include "revision_store.h"
@@ -127,7 +129,9 @@ bool Daemon::start(std::string& error) {
     }
   }
   const auto cleaning = clock_->now();
-  if (take_clean_stop_mark()) {
+  const bool clean = take_clean_stop_mark();
+  secure_revision_numbers(clean);
+  if (clean) {
     log_line("the last run stopped cleanly: no leftovers to look for in " + config_.output.string());
   } else {
     remove_stale_temporaries();
@@ -163,11 +167,64 @@ bool Daemon::take_clean_stop_mark() {
   return synced;
 }
 
+namespace {
+
+// This boot of the machine ("" when it cannot be told).
+std::string boot_id() {
+  std::ifstream in("/proc/sys/kernel/random/boot_id");
+  std::string id;
+  std::getline(in, id);
+  return id;
+}
+
+}  // namespace
+
+void Daemon::secure_revision_numbers(bool stopped_cleanly) {
+  const auto folder = RevisionStore::folder_for(config_.output);
+  const auto file = folder / "boot-id";
+  const std::string now = boot_id();
+  std::vector<std::uint8_t> bytes;
+  std::string why;
+  const bool same_boot = !now.empty() && internal::read_regular_file(file, 4096, bytes, why) &&
+                         std::string(bytes.begin(), bytes.end()) == now + "\n";
+  if (same_boot) return;
+  if (!stopped_cleanly) {
+    int raised = 0;
+    const auto start = clock_->now();
+    if (!RevisionStore::number_from_reserves(config_.output, raised, why)) {
+      // The boot is not recorded: the next start tries again.
+      log_line("could not number on from the reserved revision numbers in " + folder.string() + ": " + why);
+      return;
+    }
+    if (raised > 0) {
+      log_line("the last run did not stop cleanly and the machine has restarted since: " + std::to_string(raised) +
+               " models number on from the end of their reserved block of revision numbers, in case a power loss "
+               "took back their last saves (" + since(start) + ")");
+    }
+  }
+  std::error_code ec;
+  std::filesystem::create_directories(folder, ec);
+  if (ec || !write_file_atomically(file, std::string_view(now + "\n"), why)) {
+    log_line("could not record this boot in " + file.string() + " (the next start numbers as after a power loss): " +
+             (ec ? ec.message() : why));
+  }
+}
+
 void Daemon::leave_clean_stop_mark() {
   std::string why;
   const auto folder = RevisionStore::folder_for(config_.output);
   std::error_code ec;
   std::filesystem::create_directories(folder, ec);
+  // Revision states are saved without an fsync between the blocks they reserve: the mark says
+  // that every save is on disk, so they are synced first (one syncfs for the whole file system).
+  const int fd = ec ? -1 : ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  const bool synced = fd >= 0 && ::syncfs(fd) == 0;
+  if (!synced) why = std::string("syncfs: ") + std::strerror(errno);
+  if (fd >= 0) ::close(fd);
+  if (!synced && !ec) {
+    log_line("could not mark the stop as clean (the next start looks for leftovers): " + why);
+    return;
+  }
   if (ec || !write_file_atomically(folder / "clean-stop", std::string_view("rdtfd stopped cleanly\n"), why)) {
     log_line("could not mark the stop as clean (the next start looks for leftovers): " + (ec ? ec.message() : why));
   }

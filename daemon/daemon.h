@@ -148,6 +148,12 @@ class Daemon {
   void open_result_cache();
   bool take_clean_stop_mark();   // The last run left the mark (now removed): nothing to clean.
   void leave_clean_stop_mark();  // At the end of a clean stop.
+  // Revision states are saved without an fsync between the blocks of numbers they reserve. Unless
+  // the last run stopped cleanly (its stop synced them) or the machine has not restarted since it
+  // ran (the kernel still has every save), a power loss may have taken saves back: then every
+  // state numbers on from its reserve (RevisionStore::number_from_reserves). Then records this
+  // boot's id for the next start.
+  void secure_revision_numbers(bool stopped_cleanly);
   // Set on shutdown: a dynamics check in progress stops (SIM_CANCELLED) instead of being waited for.
   std::atomic<bool> cancel_validations_{false};
 };

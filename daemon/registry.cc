@@ -178,6 +178,7 @@ std::string restore_revisions(const std::filesystem::path& output_root, ModelRec
     case RevisionStore::LoadResult::kLoaded:
       break;
   }
+  record.reserved = std::max(record.reserved, state.reserved);
   record.numbered = std::max(record.numbered, state.numbered);
   // Another file under the same id (ids that sanitise alike are numbered in the order they are
   // found) keeps the id's numbers but not the other file's revision.
@@ -195,15 +196,19 @@ std::optional<StoredRevision> stored_live(const ModelRecord& record) {
   return stored;
 }
 
-std::string save_revisions(const std::filesystem::path& output_root, const ModelRecord& record,
+std::string save_revisions(const std::filesystem::path& output_root, ModelRecord& record,
                            const std::optional<StoredRevision>& live) {
   ModelState state;
   state.model_id = record.id;
   state.source = record.source.string();
   state.numbered = record.numbered;
+  const bool durable = record.numbered > record.reserved;
+  state.reserved = durable ? record.numbered + kReservedRevisions - 1 : record.reserved;
   state.live = live;
   std::string why;
-  return RevisionStore::save(output_root, state, why) ? "" : why;
+  if (!RevisionStore::save(output_root, state, durable, why)) return why;
+  record.reserved = state.reserved;
+  return "";
 }
 
 }  // namespace rdtf::daemon

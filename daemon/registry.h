@@ -23,6 +23,9 @@ struct ModelRecord {
   // Revision numbers handed out: accepted revisions and revisions the dynamics check rejected
   // (their VALIDATION carries the number), so that one number never means two contents.
   std::int64_t numbered = 0;
+  // Numbers up to this are reserved by a durable save of the state file (ModelState::reserved):
+  // handing one out needs no fsync.
+  std::int64_t reserved = 0;
   std::optional<ConvertedModel> live;      // The revision served (number: `revisions`).
   std::string last_hash;                   // Content last converted, good or bad.
   std::vector<std::filesystem::path> dependencies;
@@ -96,14 +99,17 @@ namespace rdtf::daemon {
 // revision of the earlier run (ModelRecord::restored, when the model file is the same). A state
 // file that cannot be trusted is ignored, and the record numbers from revision_floor_now(), above
 // any number it can have handed out. Returns a line for the log when it was refused, else "".
+// The file's `numbered` is trusted: after a possible power loss the start raised every file's
+// `numbered` to its `reserved` first (RevisionStore::number_from_reserves).
 std::string restore_revisions(const std::filesystem::path& output_root, ModelRecord& record);
 
 // The revision a record serves in its stored form: the live one, else the one of the earlier run.
 std::optional<StoredRevision> stored_live(const ModelRecord& record);
 
-// Writes the record's state: its id, source and `numbered`, and `live` as the live revision. ""
-// or why it failed.
-std::string save_revisions(const std::filesystem::path& output_root, const ModelRecord& record,
+// Writes the record's state: its id, source and `numbered`, and `live` as the live revision;
+// durably, reserving the next kReservedRevisions numbers, when `numbered` is above the record's
+// reserve. "" or why it failed.
+std::string save_revisions(const std::filesystem::path& output_root, ModelRecord& record,
                            const std::optional<StoredRevision>& live);
 
 }  // namespace rdtf::daemon

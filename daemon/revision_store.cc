@@ -4,13 +4,16 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <random>
 
 #include <nlohmann/json.hpp>
 
+#include "../core/gltf/confined_files.h"
 #include "rdtf/atomic_file.h"
 
 namespace rdtf::daemon {
@@ -151,7 +154,11 @@ std::string result_digest(const ConvertedModel& m) {
 }
 
 std::string state_to_json(const ModelState& state) {
-  Json j = {{"format", kFormat}, {"model_id", state.model_id}, {"source", state.source}, {"numbered", state.numbered}};
+  Json j = {{"format", kFormat},
+            {"model_id", state.model_id},
+            {"source", state.source},
+            {"numbered", state.numbered},
+            {"reserved", std::max(state.reserved, state.numbered)}};
   if (state.live) {
     Json links = Json::array();
     for (const LinkFacts& l : state.live->facts.links) links.push_back(to_json(l));
@@ -176,6 +183,10 @@ std::optional<ModelState> state_from_json(std::string_view text_in, std::string&
     state.model_id = text(j, "model_id", "/");
     state.source = text(j, "source", "/");
     state.numbered = revision_number(j, "numbered", 0, "/");
+    state.reserved = j.contains("reserved") ? revision_number(j, "reserved", 0, "/") : state.numbered;
+    if (state.reserved < state.numbered) {
+      throw Refused{"/reserved " + std::to_string(state.reserved) + " is below /numbered " + std::to_string(state.numbered)};
+    }
     if (!j.contains("live")) throw Refused{"/: no 'live'"};
     const Json& live = j["live"];
     if (!live.is_null()) {
@@ -278,7 +289,40 @@ RevisionStore::LoadResult RevisionStore::load(const std::filesystem::path& outpu
   return LoadResult::kLoaded;
 }
 
-bool RevisionStore::save(const std::filesystem::path& output_root, const ModelState& state, std::string& why) {
+bool RevisionStore::number_from_reserves(const std::filesystem::path& output_root, int& raised, std::string& why) {
+  raised = 0;
+  const auto folder = folder_for(output_root);
+  std::error_code error;
+  if (!std::filesystem::is_directory(folder, error)) return true;  // Nothing numbered yet.
+  for (std::filesystem::directory_iterator it(folder, error), end; !error && it != end; it.increment(error)) {
+    const std::string name = it->path().filename().string();
+    std::error_code type_error;
+    if (name.rfind("m-", 0) != 0 || it->path().extension() != ".json" ||
+        !std::filesystem::is_regular_file(it->symlink_status(type_error))) {
+      continue;
+    }
+    std::vector<std::uint8_t> bytes;
+    std::string read_why;
+    if (!internal::read_regular_file(it->path(), kMaxStateBytes, bytes, read_why)) continue;
+    auto state = state_from_json(std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()), read_why);
+    if (!state || file_for(output_root, state->model_id) != it->path() || state->numbered >= state->reserved) continue;
+    state->numbered = state->reserved;
+    if (!save(output_root, *state, /*durable=*/false, why)) return false;
+    ++raised;
+  }
+  if (error) {
+    why = "cannot list " + folder.string() + ": " + error.message();
+    return false;
+  }
+  const int fd = ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  const bool synced = fd >= 0 && ::syncfs(fd) == 0;
+  if (!synced) why = "cannot sync " + folder.string() + ": " + std::strerror(errno);
+  if (fd >= 0) ::close(fd);
+  return synced;
+}
+
+bool RevisionStore::save(const std::filesystem::path& output_root, const ModelState& state, bool durable,
+                         std::string& why) {
   const auto folder = folder_for(output_root);
   std::error_code ec;
   std::filesystem::create_directories(folder, ec);
@@ -286,7 +330,21 @@ bool RevisionStore::save(const std::filesystem::path& output_root, const ModelSt
     why = "cannot make " + folder.string() + ": " + ec.message();
     return false;
   }
-  return write_file_atomically(file_for(output_root, state.model_id), state_to_json(state), why);
+  const auto file = file_for(output_root, state.model_id);
+  const std::string text = state_to_json(state);
+  if (durable) return write_file_atomically(file, text, why);
+  // A temporary of write_file_atomically's form (a start removes one whose writer is gone), renamed
+  // over the file: whole or not there, but not synced.
+  std::random_device random;
+  const auto temporary = folder / ("." + file.filename().string() + "." + std::to_string(::getpid()) + "-" +
+                                   std::to_string(random()) + ".tmp");
+  if (!write_staged_file(temporary, text, why)) return false;
+  if (::rename(temporary.c_str(), file.c_str()) != 0) {
+    why = "rename to " + file.string() + ": " + std::strerror(errno);
+    ::unlink(temporary.c_str());
+    return false;
+  }
+  return true;
 }
 
 }  // namespace rdtf::daemon

@@ -1,9 +1,11 @@
 // Revision numbers that last across restarts of rdtfd (docs/lcm.md, "Revision numbers"): for each
 // model one small file, <output>/.rdtfd-state/m-<32 hex digits of SHA-256(model id)>.json, with the
 // highest number handed out and the live revision (number, content hash, a digest of the result
-// and the facts a DELTA compares). Written atomically (temporary file, fsync, rename) before a
-// number is published; read defensively: anything but a whole, well-formed file for that model
-// is refused with the reason, and the caller numbers from a floor no earlier number can reach.
+// and the facts a DELTA compares). Replaced atomically (temporary file, rename) before a number is
+// published, and made durable (fsync) only when the number is above the block reserved so far:
+// then the file reserves the next kReservedRevisions numbers at once (docs/daemon.md, "Revision
+// state"). Read defensively: anything but a whole, well-formed file for that model is refused with
+// the reason, and the caller numbers from a floor no earlier number can reach.
 #pragma once
 
 #include <cstdint>
@@ -28,10 +30,17 @@ struct StoredRevision {
   RobotFacts facts;
 };
 
+// How many numbers one durable save reserves: a model is fsynced once per this many revisions.
+inline constexpr std::int64_t kReservedRevisions = 100;
+
 struct ModelState {
   std::string model_id;
   std::string source;           // The model file's path when it was saved.
   std::int64_t numbered = 0;    // Highest revision number handed out (accepted or rejected).
+  // No number above this was handed out. Only a durable save raises it, so after a power loss
+  // (which can take back the saves since) it still bounds every number the bus has seen. At least
+  // `numbered`; a file of an earlier version without it reads as `numbered`.
+  std::int64_t reserved = 0;
   std::optional<StoredRevision> live;
 };
 
@@ -69,8 +78,15 @@ class RevisionStore {
   // not a regular file, larger than 64 MiB, torn, malformed or about another model.
   static LoadResult load(const std::filesystem::path& output_root, const std::string& model_id, ModelState& state,
                          std::string& why);
-  // Writes it atomically (folder made as needed). False with `why` when that failed.
-  static bool save(const std::filesystem::path& output_root, const ModelState& state, std::string& why);
+  // After a power loss may have taken back saves made without an fsync: every state file's
+  // `numbered` raised to its `reserved` (no number above it was handed out), then the file system
+  // synced, so that numbering from `numbered` never hands a number out twice. Files that are
+  // refused are left (a start refuses them again). Returns how many were raised; false with `why`
+  // when a file could not be rewritten or the sync failed.
+  static bool number_from_reserves(const std::filesystem::path& output_root, int& raised, std::string& why);
+  // Replaces it atomically (folder made as needed), and with `durable` also fsyncs the file and its
+  // folder before returning. False with `why` when that failed.
+  static bool save(const std::filesystem::path& output_root, const ModelState& state, bool durable, std::string& why);
 };
 
 }  // namespace rdtf::daemon

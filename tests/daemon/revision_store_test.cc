@@ -54,6 +54,7 @@ TEST(RevisionStore, StateComesBackExactly) {
   EXPECT_EQ(back->model_id, state.model_id);
   EXPECT_EQ(back->source, state.source);
   EXPECT_EQ(back->numbered, 7);
+  EXPECT_EQ(back->reserved, 7);  // Never below `numbered`, even when the state says less.
   ASSERT_TRUE(back->live);
   EXPECT_EQ(back->live->revision, 5);
   EXPECT_EQ(back->live->content_hash, "abc");
@@ -85,6 +86,9 @@ TEST(RevisionStore, AnythingElseIsRefusedWithItsReason) {
   EXPECT_EQ(edited([](auto& j) { j["numbered"] = 9007199254740993ull; }),
             "/: 'numbered' 9007199254740993 is out of range");
   EXPECT_EQ(edited([](auto& j) { j["numbered"] = 4; }), "/live/revision 5 is above /numbered 4");
+  EXPECT_EQ(edited([](auto& j) { j["reserved"] = 6; }), "/reserved 6 is below /numbered 7");
+  EXPECT_EQ(edited([](auto& j) { j["reserved"] = -1; }), "/: 'reserved' -1 is out of range");
+  EXPECT_EQ(edited([](auto& j) { j["reserved"] = "many"; }), "/: 'reserved' has the wrong type");
   EXPECT_EQ(edited([](auto& j) { j["live"]["revision"] = 0; }), "/live: 'revision' 0 is out of range");
   EXPECT_EQ(edited([](auto& j) { j["live"]["links"][0]["inertia"] = {1, 2}; }),
             "/live/links/0: 'inertia' needs 6 numbers");
@@ -93,6 +97,22 @@ TEST(RevisionStore, AnythingElseIsRefusedWithItsReason) {
   EXPECT_EQ(edited([](auto& j) { j["live"]["joints"][0]["axis"][2] = nullptr; }),
             "/live/joints/0/axis is not a number");
   EXPECT_EQ(edited([](auto& j) { j["live"]["joints"][0].erase("child"); }), "/live/joints/0: no 'child'");
+}
+
+TEST(RevisionStore, TheReserveComesBackAndAFileWithoutOneReadsAsNumbered) {
+  ModelState state = sample();
+  state.reserved = 106;
+  std::string why;
+  const auto back = state_from_json(state_to_json(state), why);
+  ASSERT_TRUE(back) << why;
+  EXPECT_EQ(back->reserved, 106);
+  // The files of versions before the reserve: no number above `numbered` was handed out.
+  auto j = nlohmann::json::parse(state_to_json(state));
+  j.erase("reserved");
+  const auto earlier = state_from_json(j.dump(), why);
+  ASSERT_TRUE(earlier) << why;
+  EXPECT_EQ(earlier->numbered, 7);
+  EXPECT_EQ(earlier->reserved, 7);
 }
 
 TEST(RevisionStore, TheFloorIsTheClockInMicroseconds) {

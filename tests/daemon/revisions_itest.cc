@@ -184,6 +184,47 @@ TEST(Revisions, SurviveARestartUnchangedKeepTheirNumberChangedGetTheNext) {
   }
 }
 
+// Revision states are synced once per block of numbers they reserve (docs/daemon.md, "Revision
+// state"). A power loss can take back the saves since: here the state file is put back as the
+// durable save of revision 1 left it, and the machine has booted again. The next number is above
+// the block that save reserved, never 2 again.
+TEST(Revisions, AfterAPowerLossNumbersGoOnAboveTheReservedBlock) {
+  Session s;
+  const std::string id = "b.gltf";
+  const auto b1 = chain(1.0);
+  const auto b2 = chain(1.5);
+  const auto b3 = chain(2.0);
+  write_model(s.watch, id, b1);
+  auto& daemon = s.start();
+  ASSERT_TRUE(s.wait_revision(id, 1, content_hash(b1)));
+  const fs::path state = state_file_of(s.output);
+  const std::string durable = read(state);
+  write_in_place(s.watch / id, b2.gltf);
+  ASSERT_TRUE(s.wait_revision(id, 2, content_hash(b2)));
+  daemon.signal(SIGKILL);
+  ASSERT_EQ(daemon.wait_exit(5s), 128 + SIGKILL);
+  testing::write_file(state, durable);
+  testing::write_file(s.output / ".rdtfd-state" / "boot-id", "an earlier boot\n");
+
+  write_in_place(s.watch / id, b3.gltf);
+  const std::size_t from = s.subscriber.size();
+  daemon.restart();
+  const auto after = description_since(s, from, id);
+  ASSERT_TRUE(after) << daemon.log();
+  EXPECT_EQ(after->revision, 101) << daemon.log();
+  EXPECT_EQ(after->content_hash, content_hash(b3));
+
+  // The same after a clean stop: the start trusts the file, which says 101.
+  ASSERT_EQ(daemon.stop(), std::optional<int>(0));
+  const auto b4 = chain(2.5);
+  write_in_place(s.watch / id, b4.gltf);
+  const std::size_t again = s.subscriber.size();
+  daemon.restart();
+  const auto next = description_since(s, again, id);
+  ASSERT_TRUE(next) << daemon.log();
+  EXPECT_EQ(next->revision, 102) << daemon.log();
+}
+
 TEST(Revisions, NumbersOfRejectedContentsAreNotHandedOutAgainAfterARestart) {
   Session s;
   const std::string id = "m.gltf";

@@ -9,7 +9,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
-#include <random>
 
 #include <nlohmann/json.hpp>
 
@@ -332,19 +331,7 @@ bool RevisionStore::save(const std::filesystem::path& output_root, const ModelSt
   }
   const auto file = file_for(output_root, state.model_id);
   const std::string text = state_to_json(state);
-  if (durable) return write_file_atomically(file, text, why);
-  // A temporary of write_file_atomically's form (a start removes one whose writer is gone), renamed
-  // over the file: whole or not there, but not synced.
-  std::random_device random;
-  const auto temporary = folder / ("." + file.filename().string() + "." + std::to_string(::getpid()) + "-" +
-                                   std::to_string(random()) + ".tmp");
-  if (!write_staged_file(temporary, text, why)) return false;
-  if (::rename(temporary.c_str(), file.c_str()) != 0) {
-    why = "rename to " + file.string() + ": " + std::strerror(errno);
-    ::unlink(temporary.c_str());
-    return false;
-  }
-  return true;
+  return write_file_atomically(file, text, why, durable ? Durability::kDurable : Durability::kAtomic);
 }
 
 }  // namespace rdtf::daemon

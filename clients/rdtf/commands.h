@@ -8,6 +8,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "rdtf/atomic_file.h"
 #include "rdtf/convert.h"
 #include "rdtf/diagnostics.h"
 
@@ -61,9 +62,13 @@ class OutputFiles {
 // Writes a conversion's RDTF to `target` (.glb when `glb`), prints the diagnostics of the
 // conversion and of the write, and a one-line summary. Creates the target's folder; checks that
 // every file of the output can be written first (exit 2 when one cannot, nothing written); takes
-// back what it created when a write fails (exit 1). Returns the process exit code.
+// back what it created when a write fails (exit 1). Returns the process exit code. `durability`:
+// whether the output is fsynced before the command returns (--sync), or only renamed into place.
 int write_conversion(const Conversion& conversion, const std::filesystem::path& target, bool glb,
-                     const Diagnostics& diag, bool verbose);
+                     const Diagnostics& diag, bool verbose, Durability durability);
+
+// Adds --sync: the output made durable (fsynced) before the command returns.
+void add_sync_flag(CLI::App& command, bool& sync);
 
 // Converts `input`, printing diagnostics and a one-line verdict on failure.
 std::optional<Conversion> convert_or_report(const std::string& input, const ConvertOptions& options,

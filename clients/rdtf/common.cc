@@ -237,7 +237,8 @@ std::string unstaged(std::string text, const std::string& stage, const std::stri
 
 // The output and every file beside it written into a stage folder next to the target first, then
 // moved into place (the .gltf last): a disk that fills up midway leaves the previous output whole.
-bool write_staged(const Conversion& conversion, const fs::path& target, bool glb, Diagnostics& diag) {
+bool write_staged(const Conversion& conversion, const fs::path& target, bool glb, Durability durability,
+                  Diagnostics& diag) {
   const fs::path folder = target.has_parent_path() ? target.parent_path() : fs::path(".");
   std::string why;
   auto stage = StagedOutput::create(folder, "rdtf-stage", why);
@@ -254,7 +255,7 @@ bool write_staged(const Conversion& conversion, const fs::path& target, bool glb
     diag.add(d.severity, d.code, d.pointer, unstaged(d.message, stage->folder().string(), folder.string()));
   }
   if (!written) return false;
-  if (!stage->commit(folder, {target.filename()}, why, /*keep_identical=*/true)) {
+  if (!stage->commit(folder, {target.filename()}, why, /*keep_identical=*/true, durability)) {
     diag.error(codes::WRITE_FAILED, "", "cannot move the output into place: " + why);
     return false;
   }
@@ -263,8 +264,14 @@ bool write_staged(const Conversion& conversion, const fs::path& target, bool glb
 
 }  // namespace
 
+void add_sync_flag(CLI::App& command, bool& sync) {
+  command.add_flag("--sync", sync,
+                   "Make the output durable before exiting (fsync): it then survives a power loss. Without "
+                   "it the output is moved into place whole but not synced, as most tools' outputs are");
+}
+
 int write_conversion(const Conversion& conversion, const fs::path& target, bool glb,
-                     const Diagnostics& diag, bool verbose) {
+                     const Diagnostics& diag, bool verbose, Durability durability) {
   Diagnostics write_diag(target.string());
   // Every file of the output checked before the first is written: a folder where the .bin goes
   // would otherwise fail after the .bin beside it was written.
@@ -294,7 +301,7 @@ int write_conversion(const Conversion& conversion, const fs::path& target, bool 
     output.will_write(file);
   }
   output.will_write(target);
-  written = written && write_staged(conversion, target, glb, write_diag);
+  written = written && write_staged(conversion, target, glb, durability, write_diag);
   // No partial output: what this write created goes when any of it failed.
   if (!written) output.roll_back();
   print_diagnostics(write_diag, verbose || !written);

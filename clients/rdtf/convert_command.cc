@@ -9,6 +9,7 @@ struct ConvertArguments {
   std::string output;
   bool glb = false;
   bool verbose = false;
+  bool sync = false;
 };
 
 std::filesystem::path default_output(const std::filesystem::path& input, bool glb) {
@@ -32,7 +33,8 @@ int run_convert(ConvertArguments& args) {
   Diagnostics diag(args.input);
   auto conversion = convert_or_report(args.input, args.options, diag);
   if (!conversion) return kExitInvalidInput;
-  return write_conversion(*conversion, target, glb, diag, args.verbose);
+  return write_conversion(*conversion, target, glb, diag, args.verbose,
+                          args.sync ? Durability::kDurable : Durability::kAtomic);
 }
 
 }  // namespace
@@ -46,6 +48,7 @@ void add_convert_command(CLI::App& app, int& exit_code) {
                       ".glb name implies --glb; its folder is created when missing");
   command->add_flag("--glb", args->glb, "Write a binary .glb with every buffer and image embedded");
   command->add_flag("-v,--verbose", args->verbose, "Also print info diagnostics");
+  add_sync_flag(*command, args->sync);
   command->add_flag("--no-khr-physics{false}", args->options.khr_physics,
                     "Do not write KHR_physics_rigid_bodies (motion and joints) beside extras.RDTF");
   add_conversion_options(*command, args->options);

@@ -10,6 +10,7 @@ struct ImportArguments {
   std::string output;
   bool glb = false;
   bool verbose = false;
+  bool sync = false;
 };
 
 int run_import(ImportArguments& args) {
@@ -27,7 +28,8 @@ int run_import(ImportArguments& args) {
     report_failure(args.input, "imported", diag);
     return kExitInvalidInput;
   }
-  return write_conversion(*conversion, target, glb, diag, args.verbose);
+  return write_conversion(*conversion, target, glb, diag, args.verbose,
+                          args.sync ? Durability::kDurable : Durability::kAtomic);
 }
 
 }  // namespace
@@ -43,6 +45,7 @@ void add_import_command(CLI::App& app, int& exit_code) {
   command->add_flag("--z-up", args->options.z_up,
                     "Keep URDF's Z-up axes (default: turn them to glTF's Y up, (x,y,z) -> (x,z,-y))");
   command->add_flag("-v,--verbose", args->verbose, "Also print info diagnostics");
+  add_sync_flag(*command, args->sync);
   add_conversion_options(*command, args->options.convert);
   command->callback([args, &exit_code] { exit_code = run_import(*args); });
 }

@@ -15,6 +15,7 @@ struct UrdfArguments {
   std::string output;
   bool no_mujoco = false;
   bool verbose = false;
+  bool sync = false;
 };
 
 int run_urdf(UrdfArguments& args) {
@@ -50,8 +51,9 @@ int run_urdf(UrdfArguments& args) {
       const std::filesystem::path path = dir / (urdf ? std::string("robot.urdf") : exported->meshes[i].path);
       output.will_write(path);
       std::string why;
-      written = urdf ? write_file_atomically(path, exported->text, why)
-                     : write_file_atomically(path, exported->meshes[i].bytes, why);
+      const Durability durability = args.sync ? Durability::kDurable : Durability::kAtomic;
+      written = urdf ? write_file_atomically(path, exported->text, why, durability)
+                     : write_file_atomically(path, exported->meshes[i].bytes, why, durability);
       if (!written) write_diag.error(codes::WRITE_FAILED, "", "cannot write " + path.string() + ": " + why);
     }
     if (!written) output.roll_back();
@@ -87,6 +89,7 @@ void add_urdf_command(CLI::App& app, int& exit_code) {
   command->add_flag("--no-mujoco", args->no_mujoco,
                     "Leave out the <mujoco><compiler meshdir=.../></mujoco> element");
   command->add_flag("-v,--verbose", args->verbose, "Also print info diagnostics");
+  add_sync_flag(*command, args->sync);
   add_conversion_options(*command, args->options);
   command->callback([args, &exit_code] { exit_code = run_urdf(*args); });
 }

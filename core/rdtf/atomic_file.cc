@@ -49,12 +49,14 @@ bool ends_with_name_digits(std::string_view text) {
 }  // namespace
 
 bool write_file_atomically(const std::filesystem::path& path, std::span<const std::uint8_t> bytes,
-                           std::string& why) {
-  return write_file_atomically(path, std::span<const std::span<const std::uint8_t>>(&bytes, 1), why);
+                           std::string& why, Durability durability) {
+  return write_file_atomically(path, std::span<const std::span<const std::uint8_t>>(&bytes, 1), why, durability);
 }
 
 bool write_file_atomically(const std::filesystem::path& path,
-                           std::span<const std::span<const std::uint8_t>> pieces, std::string& why) {
+                           std::span<const std::span<const std::uint8_t>> pieces, std::string& why,
+                           Durability durability) {
+  const bool durable = durability == Durability::kDurable;
   const std::filesystem::path folder = path.has_parent_path() ? path.parent_path() : ".";
   std::random_device random;
   // A leading dot and a .tmp suffix: watchers (ours included) ignore such names.
@@ -71,7 +73,7 @@ bool write_file_atomically(const std::filesystem::path& path,
     ok = write_all(fd, piece.data(), piece.size(), why);
     if (!ok) break;
   }
-  if (ok && ::fsync(fd) != 0) {
+  if (ok && durable && ::fsync(fd) != 0) {
     why = errno_text("fsync");
     ok = false;
   }
@@ -87,6 +89,7 @@ bool write_file_atomically(const std::filesystem::path& path,
     ::unlink(temporary.c_str());
     return false;
   }
+  if (!durable) return true;
   const int dir = ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
   if (dir >= 0) {
     ::fsync(dir);  // Makes the rename durable; a failure here loses nothing already visible.
@@ -143,10 +146,10 @@ bool file_holds(const std::filesystem::path& path, std::span<const std::span<con
 }
 
 bool write_file_atomically(const std::filesystem::path& path, std::string_view text,
-                           std::string& why) {
+                           std::string& why, Durability durability) {
   return write_file_atomically(
       path, std::span<const std::uint8_t>(reinterpret_cast<const std::uint8_t*>(text.data()), text.size()),
-      why);
+      why, durability);
 }
 
 std::string content_addressed_name(std::string_view stem, std::string_view extension,
@@ -263,7 +266,8 @@ bool sync_files(const std::filesystem::path& folder, const std::vector<std::file
 }  // namespace
 
 bool StagedOutput::commit(const std::filesystem::path& target, const std::vector<std::filesystem::path>& last,
-                          std::string& why, bool keep_identical) {
+                          std::string& why, bool keep_identical, Durability durability) {
+  const bool durable = durability == Durability::kDurable;
   std::vector<std::filesystem::path> files;
   std::error_code error;
   for (std::filesystem::recursive_directory_iterator it(folder_, error), end; !error && it != end; it.increment(error)) {
@@ -283,7 +287,7 @@ bool StagedOutput::commit(const std::filesystem::path& target, const std::vector
   if (keep_identical) {
     std::erase_if(files, [&](const std::filesystem::path& file) { return same_bytes(folder_ / file, target / file); });
   }
-  if (!sync_files(folder_, files, why)) return false;
+  if (durable && !sync_files(folder_, files, why)) return false;
   std::set<std::filesystem::path> folders;
   for (const auto& file : files) {
     const auto destination = target / file;
@@ -298,6 +302,7 @@ bool StagedOutput::commit(const std::filesystem::path& target, const std::vector
     }
     folders.insert(destination.parent_path());
   }
+  if (!durable) return true;
   for (const auto& folder : folders) {
     const int dir = ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
     if (dir >= 0) {

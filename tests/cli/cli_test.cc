@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <sstream>
 
 #include <nlohmann/json.hpp>
 
@@ -152,6 +153,39 @@ TEST(Cli, FailedWriteLeavesNothingBehind) {
   EXPECT_NE(run.err.find("error WRITE_FAILED: cannot write " + (folder / "new").string() + "/aaaa"), std::string::npos)
       << run.err;
   EXPECT_TRUE(contents(folder.path()).empty());
+}
+
+// The system calls that make data durable, as strace logged them (one line each).
+int sync_calls(const std::filesystem::path& log) {
+  std::istringstream lines(testing::read_file(log));
+  int count = 0;
+  for (std::string line; std::getline(lines, line);) {
+    for (const char* call : {"fsync(", "fdatasync(", "syncfs(", "sync_file_range("}) {
+      if (line.find(call) != std::string::npos) ++count;
+    }
+  }
+  return count;
+}
+
+// Without --sync an output is moved into place whole and nothing is fsynced (as cp or a compiler
+// writes); with it, the GLB and then its folder are, before rdtf exits: two fsyncs. Both write
+// the same bytes.
+TEST(Cli, ConvertSyncsOnlyWhenAsked) {
+  testing::TempDir folder;
+  const auto plain = folder / "plain.glb", synced = folder / "synced.glb";
+  const auto log = folder / "strace.log";
+  const std::string strace = "strace -f -qq -e trace=fsync,fdatasync,syncfs,sync_file_range -o '" + log.string() + "' ";
+  auto run = testing::run_command(strace + cli() + " convert " + fixture("arm3.gltf") + " -o '" + plain.string() + "'");
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_EQ(sync_calls(log), 0) << testing::read_file(log);
+  run = testing::run_command(strace + cli() + " convert " + fixture("arm3.gltf") + " --sync -o '" + synced.string() + "'");
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const std::string calls = testing::read_file(log);
+  EXPECT_EQ(std::count(calls.begin(), calls.end(), '\n'), 3) << calls;  // sync_file_range, fsync file, fsync folder
+  EXPECT_EQ(sync_calls(log), 3) << calls;
+  EXPECT_EQ(testing::read_file(plain), testing::read_file(synced));
+  // The stage is gone either way: the folder holds the two outputs and the log.
+  EXPECT_EQ(contents(folder.path()).size(), 3u);
 }
 
 }  // namespace

@@ -20,15 +20,25 @@
 
 namespace rdtf {
 
+// How far a write goes before it returns. Either way readers, and a writer that crashes or is
+// killed, find the old file or the whole new one, never a part (the temporary, then a rename).
+// - kDurable: the file and then its folder are fsynced, so the new file also survives a power loss
+//   or a kernel crash. rdtfd writes so: it publishes a revision only once its files are durable.
+// - kAtomic: no fsync. A power loss soon after may take back the new file (the old one, or none,
+//   or on some file systems an empty one, can be found after it), as with the outputs of most
+//   tools (cp, compilers, Blender); `rdtf convert` writes so unless given --sync.
+enum class Durability { kDurable, kAtomic };
+
 // False, with `why`, when any step fails; the temporary file is then removed.
 bool write_file_atomically(const std::filesystem::path& path, std::span<const std::uint8_t> bytes,
-                           std::string& why);
+                           std::string& why, Durability durability = Durability::kDurable);
 bool write_file_atomically(const std::filesystem::path& path, std::string_view text,
-                           std::string& why);
+                           std::string& why, Durability durability = Durability::kDurable);
 // The file's bytes are the pieces one after another: a large output is written from where its
 // parts already lie, without assembling a copy of it first.
 bool write_file_atomically(const std::filesystem::path& path,
-                           std::span<const std::span<const std::uint8_t>> pieces, std::string& why);
+                           std::span<const std::span<const std::uint8_t>> pieces, std::string& why,
+                           Durability durability = Durability::kDurable);
 
 // A file written into a StagedOutput's folder, to be moved into place by its commit: created or
 // truncated and written whole, without a temporary and without an fsync. The stage is a temporary
@@ -85,12 +95,12 @@ class StagedOutput {
   // each by one rename: first every file not in `last`, then the files of `last` (paths relative
   // to the stage) in that order, so that the primary files, renamed last, commit the rest. Every
   // file is fsynced before the first rename (write_staged_file does not sync), and the folders
-  // written to after the last. False with `why` when a sync or a rename fails (the files already
-  // moved stay: they are whole).
+  // written to after the last (with kAtomic, neither). False with `why` when a sync or a rename
+  // fails (the files already moved stay: they are whole).
   // `keep_identical`: a file whose destination already holds the same bytes is not moved (the
   // destination, perhaps the model's own .bin, stays the very same file).
   bool commit(const std::filesystem::path& target, const std::vector<std::filesystem::path>& last,
-              std::string& why, bool keep_identical = false);
+              std::string& why, bool keep_identical = false, Durability durability = Durability::kDurable);
 
  private:
   explicit StagedOutput(std::filesystem::path folder) : folder_(std::move(folder)) {}

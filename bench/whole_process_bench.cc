@@ -121,6 +121,10 @@ struct Side {
   std::string name;
   std::vector<std::string> command;
   std::vector<Sample> samples;
+  // The file the command writes, removed before each run (not timed): every run writes a fresh
+  // output, as a first convert does. (Over an output with the very same bytes, `rdtf convert`
+  // leaves the file as it is, unsynced and not renamed, which the peer's write cannot.)
+  std::filesystem::path output;
   std::vector<double> values(double (*field)(const Sample&)) const {
     std::vector<double> out;
     for (const auto& s : samples) out.push_back(field(s));
@@ -285,22 +289,23 @@ int main(int argc, char** argv) {
 
   std::vector<Comparison> comparisons = {
       {"convert (write GLB)", 1.2,
-       {"rdtf convert --glb", {rdtf, "convert", model, "-o", (folder / "rdtf_out.glb").string()}, {}},
-       {"tinygltf load + write GLB", {peer, "write", model, (folder / "peer_out.glb").string()}, {}},
+       {"rdtf convert --glb", {rdtf, "convert", model, "-o", (folder / "rdtf_out.glb").string()}, {}, folder / "rdtf_out.glb"},
+       {"tinygltf load + write GLB", {peer, "write", model, (folder / "peer_out.glb").string()}, {}, folder / "peer_out.glb"},
        {}},
       {"inspect", 1.3,
-       {"rdtf inspect", {rdtf, "inspect", model}, {}},
-       {"tinygltf load", {peer, "load", model}, {}},
+       {"rdtf inspect", {rdtf, "inspect", model}, {}, {}},
+       {"tinygltf load", {peer, "load", model}, {}, {}},
        {}},
   };
   if (!baseline.empty()) {
     comparisons.push_back({"convert, new / old rdtf", 0,
-                           {"rdtf convert --glb", comparisons[0].rdtf.command, {}},
-                           {"old rdtf convert --glb", {baseline, "convert", model, "-o", (folder / "old_out.glb").string()}, {}},
+                           {"rdtf convert --glb", comparisons[0].rdtf.command, {}, comparisons[0].rdtf.output},
+                           {"old rdtf convert --glb", {baseline, "convert", model, "-o", (folder / "old_out.glb").string()}, {},
+                            folder / "old_out.glb"},
                            {}});
     comparisons.push_back({"inspect, new / old rdtf", 0,
-                           {"rdtf inspect", comparisons[1].rdtf.command, {}},
-                           {"old rdtf inspect", {baseline, "inspect", model}, {}},
+                           {"rdtf inspect", comparisons[1].rdtf.command, {}, {}},
+                           {"old rdtf inspect", {baseline, "inspect", model}, {}, {}},
                            {}});
   }
   const auto started = std::chrono::steady_clock::now();
@@ -310,6 +315,9 @@ int main(int argc, char** argv) {
         const bool rdtf_first = round % 2 == 0;
         Side& first = rdtf_first ? comparison.rdtf : comparison.peer;
         Side& second = rdtf_first ? comparison.peer : comparison.rdtf;
+        std::error_code ignored;
+        if (!first.output.empty()) std::filesystem::remove(first.output, ignored);
+        if (!second.output.empty()) std::filesystem::remove(second.output, ignored);
         const CpuTicks before = cpu_ticks();
         const Sample a = run(first.command);
         const Sample b = run(second.command);

@@ -1,5 +1,6 @@
 // Writing a file so that readers see either the old content or the whole new one, never a part:
-// write a temporary file in the same folder, fsync it, rename it over the target, fsync the folder.
+// write a temporary file in the same folder, fsync it (unless Durability::kAtomic), rename it over
+// the target, fsync the folder (likewise).
 //
 // An output made of several files (a .rdtf.gltf and its .bin, a robot.urdf and its meshes) needs
 // more: a reader must never find a new .bin beside an old JSON. With content-addressed names each

@@ -46,12 +46,12 @@ int run_urdf(UrdfArguments& args) {
     OutputFiles output;
     Diagnostics write_diag(dir.string());
     written = output.make_folder(dir / "meshes", write_diag);
+    const Durability durability = args.sync ? Durability::kDurable : Durability::kAtomic;
     for (std::size_t i = 0; written && i <= exported->meshes.size(); ++i) {
       const bool urdf = i == exported->meshes.size();
       const std::filesystem::path path = dir / (urdf ? std::string("robot.urdf") : exported->meshes[i].path);
       output.will_write(path);
       std::string why;
-      const Durability durability = args.sync ? Durability::kDurable : Durability::kAtomic;
       written = urdf ? write_file_atomically(path, exported->text, why, durability)
                      : write_file_atomically(path, exported->meshes[i].bytes, why, durability);
       if (!written) write_diag.error(codes::WRITE_FAILED, "", "cannot write " + path.string() + ": " + why);

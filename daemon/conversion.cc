@@ -20,6 +20,9 @@
 #include "verdict_memo.h"
 
 namespace rdtf::daemon {
+
+void log_line(const std::string& text);  // daemon.cc: one line to stderr, whole.
+
 namespace {
 
 // The content-addressed files a primary output's text refers to (file names in its folder).
@@ -335,26 +338,32 @@ bool from_cache(const ConversionJob& job, ConversionOutcome& outcome) {
   return true;
 }
 
-void store_in_cache(const ConversionJob& job, ConversionOutcome& outcome) {
+// Storing this outcome in the cache, as work for after the hand-over: the entry is a copy taken
+// now, the SHA-256 of the texts and the write happen then. Two saves of one model are at least
+// a settle period apart, so a later revision's entry is not overwritten by this one in practice;
+// if it were, the entry would name the older content and only miss (it is keyed by content hash).
+std::function<void()> cache_after_handover(const ConversionJob& job, const ConversionOutcome& outcome) {
   const ConvertedModel& m = *outcome.converted;
   CachedResult entry;
   entry.key = job.cache_key;
   entry.source = job.source.string();
   entry.content_hash = outcome.content_hash;
   entry.written = m.written;
-  if (m.written) {
-    entry.output_name = std::filesystem::path(m.output_path).filename().string();
-    entry.rdtf_sha256 = sha256_hex(m.rdtf_json);
-  }
-  entry.has_urdf = !m.urdf_path.empty();
-  if (entry.has_urdf) entry.urdf_sha256 = sha256_hex(m.urdf);
+  if (m.written) entry.output_name = std::filesystem::path(m.output_path).filename().string();
+  const bool has_urdf = !m.urdf_path.empty();
+  entry.has_urdf = has_urdf;
   entry.files = m.files;
   entry.validation = m.validation;
   entry.diagnostics = outcome.diagnostics;
   entry.robot = m.robot;
   entry.facts = m.facts;
-  std::string why;
-  if (!job.cache->store(entry, why)) outcome.cache_note = "result not cached: " + why;
+  return [cache = job.cache, entry = std::move(entry), rdtf_json = m.written ? m.rdtf_json : std::string(),
+          urdf = has_urdf ? m.urdf : std::string(), model_id = outcome.model_id]() mutable {
+    if (entry.written) entry.rdtf_sha256 = sha256_hex(rdtf_json);
+    if (entry.has_urdf) entry.urdf_sha256 = sha256_hex(urdf);
+    std::string why;
+    if (!cache->store(entry, why)) log_line(model_id + ": result not cached: " + why);
+  };
 }
 
 }  // namespace
@@ -521,7 +530,7 @@ ConversionOutcome run_conversion(const ConversionJob& job) {
   const bool manifest_whole = !outcome.converted->written || !outcome.converted->files.empty();
   const bool load_decided = outcome.converted->validation &&
                             outcome.converted->validation->diagnostics.contains(codes::SIM_BUDGET_EXCEEDED);
-  if (job.cache && manifest_whole && !load_decided) store_in_cache(job, outcome);
+  if (job.cache && manifest_whole && !load_decided) outcome.after_handover = cache_after_handover(job, outcome);
   lap(outcome.stages.cache);
   return finish();
 }

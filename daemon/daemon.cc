@@ -76,8 +76,11 @@ void log_line(const std::string& text) {
   char full[40];
   std::snprintf(full, sizeof(full), "%s.%03lldZ", stamp, static_cast<long long>(millis));
   // One event, one line: a file name (or any other text from outside) with a newline or a
-  // terminal escape in it cannot forge a line or rewrite the terminal.
-  std::cerr << full << " " << escape_for_log(text) << std::endl;
+  // terminal escape in it cannot forge a line or rewrite the terminal. The line goes out in one
+  // write, so that a worker's line (a result not cached) never interleaves with the loop's.
+  const std::string line = std::string(full) + " " + escape_for_log(text) + "\n";
+  std::cerr.write(line.data(), static_cast<std::streamsize>(line.size()));
+  std::cerr.flush();
 }
 
 Daemon::Daemon(DaemonConfig config, ConfigLoader reload, DaemonPorts ports)

@@ -129,7 +129,7 @@ void Daemon::apply(ConversionOutcome outcome) {
   const std::string id = record->id;
   if (outcome.verdict) record->verdict = outcome.verdict;
   if (!outcome.cache_note.empty()) {
-    if (outcome.cache_note.rfind("result not cached", 0) != 0) ++counters_.cache_refused;
+    ++counters_.cache_refused;
     log_line(id + ": " + outcome.cache_note);
   }
   JobResult result = JobResult::kDone;

@@ -27,6 +27,20 @@ ConversionOutcome run_job(const ConversionJob& job) {
   }
 }
 
+void run_after_handover(const std::function<void()>& after) noexcept {
+  if (!after) return;
+  try {
+    after();
+  } catch (const std::exception& error) {
+    // Only an optimisation failed (the result cache): the revision stands; say so and go on.
+    try {
+      log_line(std::string("work after a conversion failed: ") + error.what());
+    } catch (...) {
+    }
+  } catch (...) {
+  }
+}
+
 ThreadJobRunner::ThreadJobRunner(int workers) : wake_fd_(::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC)) {
   for (int i = 0; i < workers; ++i) workers_.emplace_back([this] { worker_loop(); });
 }
@@ -88,11 +102,15 @@ void ThreadJobRunner::worker_loop() {
       jobs_.pop_front();
     }
     ConversionOutcome outcome = run_job(job);
+    std::function<void()> after = std::move(outcome.after_handover);
+    outcome.after_handover = nullptr;
     {
       std::lock_guard lock(mutex_);
       outcomes_.push_back(std::move(outcome));
     }
     wake();
+    // The loop publishes the revision meanwhile (the other processor, on a machine of two).
+    run_after_handover(after);
   }
 }
 

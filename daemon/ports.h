@@ -78,6 +78,8 @@ class ThreadJobRunner final : public JobRunner {
 
 // A conversion that threw: a rejection with its reason (no exception crosses a thread).
 ConversionOutcome run_job(const ConversionJob& job);
+// An outcome's after_handover, if any; what it throws is logged, not passed on.
+void run_after_handover(const std::function<void()>& after) noexcept;
 
 // Raw datagrams of the channels the daemon listens to (decoded by BusInput after its schema check).
 struct BusHandlers {

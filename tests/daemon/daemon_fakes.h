@@ -97,8 +97,14 @@ class FakeRunner final : public JobRunner {
     running_.push_back(std::move(outcome));
   }
   // Hands the outcomes of the jobs started back: the daemon applies them at its next step.
+  // Each one's after_handover (the cache entry) runs right after, as a worker runs it.
   void finish() {
-    for (auto& outcome : running_) outcomes_.push_back(std::move(outcome));
+    for (auto& outcome : running_) {
+      std::function<void()> after = std::move(outcome.after_handover);
+      outcome.after_handover = nullptr;
+      outcomes_.push_back(std::move(outcome));
+      run_after_handover(after);
+    }
     running_.clear();
   }
   void run_next(bool disk_full = false) {

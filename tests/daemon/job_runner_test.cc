@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include "ports.h"
+#include "result_cache.h"
 #include "support/test_support.h"
 
 namespace rdtf::daemon {
@@ -61,6 +62,37 @@ TEST_F(JobRunnerTest, EveryJobComesBackConvertedAndWakesTheLoop) {
     ids.insert(outcome.model_id);
   }
   EXPECT_EQ(ids, (std::set<std::string>{"a.glb", "b.glb", "c.glb"}));
+}
+
+// The cache entry is work for after the hand-over: the outcome reaches the loop without it, and
+// the worker writes it (every one of them by the time stop() returns).
+TEST_F(JobRunnerTest, TheWorkerStoresTheResultInTheCacheAfterHandingTheOutcomeOver) {
+  auto cache = std::make_shared<ResultCache>(ResultCache::folder_for(tmp_.path() / "out"), 10);
+  ThreadJobRunner runner(2);
+  for (const char* name : {"a.glb", "b.glb", "c.glb"}) {
+    ConversionJob with_cache = job(name);
+    with_cache.cache = cache;
+    with_cache.cache_key = "key";
+    runner.submit(std::move(with_cache));
+  }
+  const auto outcomes = collect(runner, 3);
+  ASSERT_EQ(outcomes.size(), 3u);
+  for (const auto& outcome : outcomes) {
+    EXPECT_EQ(outcome.kind, ConversionOutcome::Kind::kConverted) << outcome.model_id;
+    EXPECT_FALSE(static_cast<bool>(outcome.after_handover)) << outcome.model_id;
+  }
+  runner.stop();
+  EXPECT_EQ(cache->entries(), 3u);
+  // What was stored is what a second conversion of the same content finds.
+  ThreadJobRunner again(1);
+  ConversionJob second = job("a.glb");
+  second.cache = cache;
+  second.cache_key = "key";
+  again.submit(std::move(second));
+  const auto hit = collect(again, 1);
+  ASSERT_EQ(hit.size(), 1u);
+  EXPECT_TRUE(hit[0].from_cache);
+  EXPECT_EQ(hit[0].cache_note, "");
 }
 
 TEST_F(JobRunnerTest, StopDropsTheJobsNotStartedAndWaitsForTheRunningOnes) {

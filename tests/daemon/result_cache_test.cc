@@ -37,6 +37,10 @@ std::unique_ptr<Converted> convert_arm3() {
   c->job.cache = std::make_shared<ResultCache>(ResultCache::folder_for(c->tmp / "out"), 10);
   c->job.cache_key = "key";
   c->outcome = run_conversion(c->job);
+  // The entry is written after the hand-over (what a worker does once the loop has the outcome).
+  EXPECT_EQ(c->job.cache->entries(), 0u);
+  EXPECT_TRUE(static_cast<bool>(c->outcome.after_handover));
+  if (c->outcome.after_handover) c->outcome.after_handover();
   return c;
 }
 

@@ -228,6 +228,35 @@ TEST(View, SetJointMovesTheJointInTheLiveSimulation) {
   page.screenshot("arm3_shoulder_set_to_0.5.png");
 }
 
+// A model at rest (no gravity, started at rest) streams the very same poses: the page draws no
+// frame for them, each of which would cost a software rasterizer what the next revision needs,
+// and still follows the simulation's time.
+TEST(View, DrawsNoFrameForStatesThatMoveNothing) {
+  Session s;
+  copy_fixture(s.watch, "arm3");
+  s.start(simulating().with("gravity", Json::array({0.0, 0.0, 0.0})));
+  ViewProcess view(s.root.path());
+  Page page(view.url(), s.root / "page.log");
+  const Json m = wait_drawn(page, kArm, 1);
+  ASSERT_FALSE(m.is_null()) << page.state().dump() << "\n" << page.driver_log() << view.log();
+  // The frames of the model's arrival (camera fitted, panel) are drawn first: 10 steps later at 50 Hz.
+  auto later_than = [&](double sim_time, Json& out) {
+    return page.wait_state([&](const Json& st) {
+      out = st;
+      const Json now = model_in(st, kArm);
+      return !now.is_null() && now["sim_time"].is_number() && now["sim_time"].get<double>() > sim_time;
+    }, 10s);
+  };
+  Json st;
+  ASSERT_TRUE(later_than(m["sim_time"].get<double>() + 0.2, st)) << st.dump();
+  const auto frame = st["frame"].get<std::int64_t>();
+  const double from = model_in(st, kArm)["sim_time"].get<double>();
+  ASSERT_TRUE(later_than(from + 0.5, st)) << st.dump();  // 25 more states at 50 Hz
+  EXPECT_EQ(st["frame"].get<std::int64_t>(), frame) << "frames drawn for " << (model_in(st, kArm)["sim_time"].get<double>() - from)
+                                                    << " s of states that moved nothing";
+  expect_links_where_link_state_puts_them(s, page, model_in(st, kArm), kArm);
+}
+
 TEST(View, ShowsTwoModelsAndOneRemoved) {
   Session s;
   copy_fixture(s.watch, "arm3");

@@ -207,10 +207,10 @@ function retainDrawn() {
   retain(keep);
 }
 
+// A frame only when a link moved: joint positions and the time are shown in the panel, not drawn.
 function applyState(m, state) {
-  invalidate();
   if (!m.view) return;
-  if (state.links && state.links.revision === m.view.revision) m.view.setLinkState(state.links);
+  if (state.links && state.links.revision === m.view.revision && m.view.setLinkState(state.links)) invalidate();
   if (state.joints && state.joints.revision === m.view.revision) m.view.setJointState(state.joints);
 }
 

@@ -173,17 +173,25 @@ export class ModelView {
   }
 
   // LINK_STATE of this revision (the hub's "links" part): every link's X_SF.
+  // Whether any link moved. A model at rest streams the very same poses (100 a second by
+  // default), and a frame for each would cost a software rasterizer what the next revision needs.
   setLinkState(links) {
     const byName = new Map(this.links.map((l) => [l.name, l]));
+    let moved = false;
     links.names.forEach((name, i) => {
       const link = byName.get(name);
       if (!link) return;
+      const pose = [...links.position[i], ...links.orientation[i]];
+      if (link.pose && pose.length === link.pose.length && pose.every((v, k) => v === link.pose[k])) return;
+      link.pose = pose;
+      moved = true;
       const [x, y, z] = links.position[i];
       const [w, qx, qy, qz] = links.orientation[i];
       link.X_SF.compose(new THREE.Vector3(x, y, z), new THREE.Quaternion(qx, qy, qz, w), new THREE.Vector3(1, 1, 1));
     });
     this.simTime = links.sim_time;
-    this.applyPose();
+    if (moved) this.applyPose();
+    return moved;
   }
 
   setJointState(joints) {

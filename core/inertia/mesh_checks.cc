@@ -2,11 +2,15 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cstdint>
 #include <cstring>
+#include <exception>
 #include <limits>
 #include <span>
 #include <stdexcept>
+#include <system_error>
+#include <thread>
 #include <vector>
 
 #include "../geometry/big_arrays.h"
@@ -16,6 +20,39 @@ namespace rdtf {
 namespace {
 
 using internal::BigArray;
+
+// Runs share(0) .. share(n - 1) at once: share 0 on this thread, each other on a thread of its own
+// (where none can be had, on this one after share 0: the shares of one call are independent of
+// each other). The first exception of a share is thrown here, once every share is done.
+template <typename F>
+void run_shares(unsigned n, const F& share) {
+  std::vector<std::exception_ptr> errors(n);
+  const auto guarded = [&](unsigned i) {
+    try {
+      share(i);
+    } catch (...) {
+      errors[i] = std::current_exception();
+    }
+  };
+  std::vector<std::thread> threads;
+  std::vector<unsigned> here;
+  for (unsigned i = 1; i < n; ++i) {
+    try {
+      threads.emplace_back(guarded, i);
+    } catch (const std::system_error&) {
+      here.push_back(i);
+    }
+  }
+  guarded(0);
+  for (unsigned i : here) guarded(i);
+  for (std::thread& thread : threads) thread.join();
+  for (const std::exception_ptr& error : errors) {
+    if (error) std::rethrow_exception(error);
+  }
+}
+
+// The part [n * share / shares, n * (share + 1) / shares) of n things.
+std::size_t share_begin(std::size_t n, unsigned share, unsigned shares) { return n * share / shares; }
 
 // A position as the bits of its three coordinates as doubles (floats convert exactly), -0.0 and
 // +0.0 made one: two vertices weld exactly when these are equal, whatever their storage.
@@ -99,34 +136,57 @@ class Welder {
   // `slots`: capacity_for(vertices) entries of memory, all zero (empty).
   Welder(std::uint64_t* slots, std::size_t vertices) : slots_(slots), mask_(capacity_for(vertices) - 1) {}
 
-  // rep[i] = the representative of vertex i of `view` (global vertex number first + i).
-  template <typename View>
-  void weld(const View& view, std::size_t first, const Pieces& pieces, std::uint32_t* rep) {
+  // rep[i] = the representative of vertex i of `view` (global vertex number first + i), for i in
+  // [begin, end). kShared: other threads weld other vertices into the same table meanwhile.
+  template <bool kShared, typename View>
+  void weld(const View& view, std::size_t first, std::size_t begin, std::size_t end, const Pieces& pieces,
+            std::uint32_t* rep) {
     constexpr std::size_t kBlock = 32;
     std::array<PositionBits, kBlock> bits;
     std::array<std::uint64_t, kBlock> hash;
-    for (std::size_t start = 0; start < view.vertex_count; start += kBlock) {
-      const std::size_t n = std::min(kBlock, view.vertex_count - start);
+    for (std::size_t start = begin; start < end; start += kBlock) {
+      const std::size_t n = std::min(kBlock, end - start);
       for (std::size_t k = 0; k < n; ++k) {
         bits[k] = position_bits(view, static_cast<std::uint32_t>(start + k));
         hash[k] = hash_of(bits[k]);
         __builtin_prefetch(slots_ + (hash[k] & mask_));
       }
       for (std::size_t k = 0; k < n; ++k) {
-        rep[start + k] = representative(bits[k], hash[k], static_cast<std::uint32_t>(first + start + k), pieces);
+        rep[start + k] =
+            representative<kShared>(bits[k], hash[k], static_cast<std::uint32_t>(first + start + k), pieces);
       }
     }
   }
 
  private:
+  // Shared, a slot is claimed by compare-and-swap: of two threads welding the same position at
+  // once, one claims the slot and the other finds it there, as it would have a moment later, so
+  // every vertex of a position gets the one that claimed it (which one depends on the timing,
+  // the counts of analyze_surface do not). The slot holds nothing but the number: the positions
+  // compared are the input's, which nobody writes.
+  template <bool kShared>
   std::uint32_t representative(const PositionBits& p, std::uint64_t hash, std::uint32_t global,
                                const Pieces& pieces) {
     const std::uint64_t tag = hash & 0xffffffff00000000ull;
     for (std::size_t slot = hash & mask_;; slot = (slot + 1) & mask_) {
-      const std::uint64_t entry = slots_[slot];
+      std::uint64_t entry;
+      if constexpr (kShared) {
+        entry = std::atomic_ref<std::uint64_t>(slots_[slot]).load(std::memory_order_relaxed);
+      } else {
+        entry = slots_[slot];
+      }
       if (entry == kEmpty) {
-        slots_[slot] = tag | (std::uint64_t{global} + 1);
-        return global;
+        const std::uint64_t mine = tag | (std::uint64_t{global} + 1);
+        if constexpr (kShared) {
+          if (std::atomic_ref<std::uint64_t>(slots_[slot]).compare_exchange_strong(entry, mine,
+                                                                                   std::memory_order_relaxed)) {
+            return global;
+          }
+          // Taken meanwhile: `entry` is now the vertex that took it, checked as any other.
+        } else {
+          slots_[slot] = mine;
+          return global;
+        }
       }
       if ((entry & 0xffffffff00000000ull) != tag) continue;
       const auto found = static_cast<std::uint32_t>(entry) - 1;
@@ -208,14 +268,16 @@ void sort_row(T* e, std::size_t n) {
   }
 }
 
-// Calls f(v0, v1, v2) with the welded corners of every triangle whose corners differ.
+// Calls f(v0, v1, v2) with the welded corners of every triangle whose corners differ, of share
+// `share` of `shares` of each piece's triangles.
 // Two halves of each piece's triangles go through the loop side by side: consecutive triangles
 // share vertices, so their updates of the same row counter form a chain of dependent memory
 // operations, and a second, independent chain beside it took the two passes over a
 // million-triangle sphere from 5.2 to 3.8 ms. (Four chains were slower.) Only the order of the
 // calls changes, which nothing depends on.
 template <typename F>
-void for_each_proper_triangle(const Pieces& pieces, const std::uint32_t* welded, F&& f) {
+void for_each_proper_triangle(const Pieces& pieces, const std::uint32_t* welded, unsigned share, unsigned shares,
+                              F&& f) {
   for (std::size_t p = 0; p < pieces.views.size(); ++p) {
     const std::uint32_t* ids = welded + pieces.offset[p];
     internal::with_typed_view(pieces.views[p], [&](const auto& view) {
@@ -224,12 +286,14 @@ void for_each_proper_triangle(const Pieces& pieces, const std::uint32_t* welded,
                             v2 = ids[view.index(3 * t + 2)];
         if (v0 != v1 && v1 != v2 && v0 != v2) [[likely]] f(v0, v1, v2);
       };
-      const std::size_t half = view.triangle_count / 2;
-      for (std::size_t t = 0; t < half; ++t) {
+      const std::size_t begin = share_begin(view.triangle_count, share, shares);
+      const std::size_t end = share_begin(view.triangle_count, share + 1, shares);
+      const std::size_t half = (end - begin) / 2;
+      for (std::size_t t = begin; t < begin + half; ++t) {
         triangle(t);
         triangle(half + t);
       }
-      if (view.triangle_count % 2 != 0) triangle(view.triangle_count - 1);
+      if ((end - begin) % 2 != 0) triangle(end - 1);
     });
   }
 }
@@ -245,8 +309,14 @@ void for_each_proper_triangle(const Pieces& pieces, const std::uint32_t* welded,
 // table first, then the row counts and the edges in the same bytes. Every fresh megabyte costs
 // time here (zeroed by the kernel on first touch), and this saves 10 MB of the 26 MB that
 // separate arrays needed for a million triangles.
+//
+// Shared by `shares` threads (analyze_surface's `threads`), each phase is split: the weld by
+// vertices (one table, slots claimed atomically), the counting and the filing by triangles (each
+// share counts its triangles' edges in a row count array of its own, and files them into a
+// segment of each row of their own: share 0's first, then share 1's, ...), the rows by vertex.
+// No two threads write the same memory, and every count comes out as with one.
 template <typename Edge>
-void classify_surface(const Pieces& pieces, SurfaceTopology& topology) {
+void classify_surface(const Pieces& pieces, unsigned shares, SurfaceTopology& topology) {
   const std::size_t vertices = pieces.vertices();
   const std::size_t slots = Welder::capacity_for(vertices);
   const std::size_t rep_words = (vertices + 1) / 2;  // uint32 representatives, in 64-bit words.
@@ -256,60 +326,100 @@ void classify_surface(const Pieces& pieces, SurfaceTopology& topology) {
   auto* const rep = reinterpret_cast<std::uint32_t*>(scratch.data());
   {
     Welder welder(scratch.data() + rep_words, vertices);
-    for (std::size_t p = 0; p < pieces.views.size(); ++p) {
-      internal::with_typed_view(pieces.views[p], [&](const auto& view) {
-        welder.weld(view, pieces.offset[p], pieces, rep + pieces.offset[p]);
-      });
+    run_shares(shares, [&](unsigned share) {
+      for (std::size_t p = 0; p < pieces.views.size(); ++p) {
+        internal::with_typed_view(pieces.views[p], [&](const auto& view) {
+          const std::size_t begin = share_begin(view.vertex_count, share, shares);
+          const std::size_t end = share_begin(view.vertex_count, share + 1, shares);
+          if (shares > 1) {
+            welder.weld<true>(view, pieces.offset[p], begin, end, pieces, rep + pieces.offset[p]);
+          } else {
+            welder.weld<false>(view, pieces.offset[p], begin, end, pieces, rep + pieces.offset[p]);
+          }
+        });
+      }
+    });
+  }
+  // The table is done with: its bytes become share 0's row counts and the rows; the other shares'
+  // counts come zeroed in a block of their own.
+  BigArray<std::uint32_t> other_counts((shares - 1) * (vertices + 1), internal::ZeroFilled{});
+  const auto count_of = [&](unsigned share) {
+    return share == 0 ? reinterpret_cast<std::uint32_t*>(scratch.data() + rep_words)
+                      : other_counts.data() + (share - 1) * (vertices + 1);
+  };
+  auto* const out = reinterpret_cast<Edge*>(scratch.data() + rep_words + count_words);
+  run_shares(shares, [&](unsigned share) {
+    std::uint32_t* const count = count_of(share);
+    if (share == 0) std::fill_n(count, vertices + 1, 0u);
+    for_each_proper_triangle(pieces, rep, share, shares, [&](std::uint32_t v0, std::uint32_t v1, std::uint32_t v2) {
+      ++count[std::min(v0, v1)];
+      ++count[std::min(v1, v2)];
+      ++count[std::min(v2, v0)];
+    });
+  });
+  // Counts to end offsets, each share's segment of a row after the ones before it; placing each
+  // edge then decrements its share's offset, so share 0's ends at the row's start.
+  std::size_t total = 0;
+  for (std::size_t v = 0; v <= vertices; ++v) {
+    for (unsigned share = 0; share < shares; ++share) {
+      std::uint32_t& count = count_of(share)[v];
+      count = static_cast<std::uint32_t>(total += count);
     }
   }
-  // The table is done with: its bytes become the rows.
-  auto* const count = reinterpret_cast<std::uint32_t*>(scratch.data() + rep_words);
-  auto* const out = reinterpret_cast<Edge*>(scratch.data() + rep_words + count_words);
-  std::fill_n(count, vertices + 1, 0u);
-  for_each_proper_triangle(pieces, rep, [&](std::uint32_t v0, std::uint32_t v1, std::uint32_t v2) {
-    ++count[std::min(v0, v1)];
-    ++count[std::min(v1, v2)];
-    ++count[std::min(v2, v0)];
-  });
-  // Counts to end offsets; placing each edge then decrements its row's offset to its start.
-  std::size_t total = 0;
-  for (std::size_t v = 0; v <= vertices; ++v) count[v] = static_cast<std::uint32_t>(total += count[v]);
   topology.degenerate_triangles = topology.triangles - total / 3;
-  const auto file = [&](std::uint32_t from, std::uint32_t to) {
-    // Without a branch on the direction, which is as good as random.
-    const std::uint32_t lo = std::min(from, to), hi = std::max(from, to);
-    out[--count[lo]] = static_cast<Edge>(Edge{hi} << 1 | Edge{from > to});
-  };
-  for_each_proper_triangle(pieces, rep, [&](std::uint32_t v0, std::uint32_t v1, std::uint32_t v2) {
-    file(v0, v1);
-    file(v1, v2);
-    file(v2, v0);
+  run_shares(shares, [&](unsigned share) {
+    std::uint32_t* const count = count_of(share);
+    const auto file = [&](std::uint32_t from, std::uint32_t to) {
+      // Without a branch on the direction, which is as good as random.
+      const std::uint32_t lo = std::min(from, to), hi = std::max(from, to);
+      out[--count[lo]] = static_cast<Edge>(Edge{hi} << 1 | Edge{from > to});
+    };
+    for_each_proper_triangle(pieces, rep, share, shares, [&](std::uint32_t v0, std::uint32_t v1, std::uint32_t v2) {
+      file(v0, v1);
+      file(v1, v2);
+      file(v2, v0);
+    });
   });
-  for (std::size_t v = 0; v < vertices; ++v) {
-    Edge* row = out + count[v];
-    const std::size_t n = count[v + 1] - count[v];
-    sort_row(row, n);
-    // A closed, consistently wound surface's rows are pairs (w << 1, w << 1 | 1) of distinct w:
-    // each edge used once each way, which changes no count. Checked without branches first.
-    // (Rows of vertices that are not representatives are empty.)
-    if (n % 2 == 0) {
-      Edge odd = 0;
-      for (std::size_t i = 0; i < n; i += 2) odd |= (row[i] & 1) | (row[i + 1] ^ (row[i] + 1));
-      if (odd == 0) continue;
+  const std::uint32_t* const row_start = count_of(0);
+  std::vector<SurfaceTopology> found(shares);
+  run_shares(shares, [&](unsigned share) {
+    SurfaceTopology mine;  // Counted here, not in `found`: its neighbours share a cache line.
+    const std::size_t last = share_begin(vertices, share + 1, shares);
+    for (std::size_t v = share_begin(vertices, share, shares); v < last; ++v) {
+      Edge* row = out + row_start[v];
+      const std::size_t n = row_start[v + 1] - row_start[v];
+      sort_row(row, n);
+      // A closed, consistently wound surface's rows are pairs (w << 1, w << 1 | 1) of distinct w:
+      // each edge used once each way, which changes no count. Checked without branches first.
+      // (Rows of vertices that are not representatives are empty.)
+      if (n % 2 == 0) {
+        Edge odd = 0;
+        for (std::size_t i = 0; i < n; i += 2) odd |= (row[i] & 1) | (row[i + 1] ^ (row[i] + 1));
+        if (odd == 0) continue;
+      }
+      Edge* const end = row + n;
+      while (row < end) {
+        const Edge w = *row >> 1;
+        std::size_t forward = 0, backward = 0;
+        for (; row < end && (*row >> 1) == w; ++row) ++((*row & 1) != 0 ? backward : forward);
+        classify(forward, backward, mine);
+      }
     }
-    Edge* const end = row + n;
-    while (row < end) {
-      const Edge w = *row >> 1;
-      std::size_t forward = 0, backward = 0;
-      for (; row < end && (*row >> 1) == w; ++row) ++((*row & 1) != 0 ? backward : forward);
-      classify(forward, backward, topology);
-    }
+    found[share] = mine;
+  });
+  for (const SurfaceTopology& part : found) {
+    topology.boundary_edges += part.boundary_edges;
+    topology.nonmanifold_edges += part.nonmanifold_edges;
+    topology.misoriented_edges += part.misoriented_edges;
   }
 }
 
 }  // namespace
 
-SurfaceTopology analyze_surface(std::span<const TriangleMeshView> views) {
+SurfaceTopology analyze_surface(std::span<const TriangleMeshView> views) { return analyze_surface(views, 1); }
+
+SurfaceTopology analyze_surface(std::span<const TriangleMeshView> views, unsigned threads) {
+  const unsigned shares = std::max(threads, 1u);
   SurfaceTopology topology;
   const Pieces pieces(views);
   for (const TriangleMeshView& view : views) topology.triangles += view.triangle_count;
@@ -322,9 +432,9 @@ SurfaceTopology analyze_surface(std::span<const TriangleMeshView> views) {
   }
   // An edge is filed as its far end's number shifted left once: 32 bits hold that below 2^31.
   if (pieces.vertices() <= (std::size_t{1} << 31)) {
-    classify_surface<std::uint32_t>(pieces, topology);
+    classify_surface<std::uint32_t>(pieces, shares, topology);
   } else {
-    classify_surface<std::uint64_t>(pieces, topology);
+    classify_surface<std::uint64_t>(pieces, shares, topology);
   }
   return topology;
 }

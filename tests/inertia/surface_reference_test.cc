@@ -190,6 +190,9 @@ void check_all_forms(const TriangleMesh& mesh, std::mt19937& random, int parts, 
   std::vector<TriangleMeshView> views;
   for (const Stored& s : stored) views.push_back(s.view);
   expect_equal(analyze_surface(views), want);
+  // Shared by threads (the weld's slots claimed atomically, the rows in segments per thread):
+  // the same counts, down to meshes with fewer vertices or triangles than threads.
+  for (unsigned threads : {2u, 3u, 7u}) expect_equal(analyze_surface(views, threads), want);
   seen.triangles += want.triangles;
   seen.degenerate_triangles += want.degenerate_triangles;
   seen.boundary_edges += want.boundary_edges;

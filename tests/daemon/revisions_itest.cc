@@ -67,6 +67,16 @@ std::optional<rdtf::description_t> description_since(Session& s, std::size_t fro
   return found;
 }
 
+// Whether the result cache holds an entry of this content (rdtfd writes it once the revision is
+// handed to its loop, beside the publication: docs/daemon.md, "Result cache").
+bool cached(const fs::path& output, const std::string& content_hash) {
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(output / ".rdtfd-state" / "results", ec)) {
+    if (entry.path().extension() == ".json" && read(entry.path()).find(content_hash) != std::string::npos) return true;
+  }
+  return false;
+}
+
 fs::path state_file_of(const fs::path& output) {
   std::vector<fs::path> files;
   // The revision states ("m-<hex>.json"); the folder also holds the result cache and the clean-stop mark.
@@ -134,6 +144,8 @@ TEST(Revisions, SurviveARestartUnchangedKeepTheirNumberChangedGetTheNext) {
   write_in_place(s.watch / "b.gltf", b2.gltf);
   ASSERT_TRUE(s.wait_revision("b.gltf", 2, content_hash(b2)));
   ASSERT_TRUE(s.wait_for([&](const auto& all) { return has_delta(all, "b.gltf", 2); }));
+  ASSERT_TRUE(wait_until([&] { return cached(s.output, content_hash(a)) && cached(s.output, content_hash(b2)); }, 10s))
+      << daemon.log();
 
   // Killed, not stopped: the state was saved before the numbers were published.
   daemon.signal(SIGKILL);

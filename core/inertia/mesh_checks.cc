@@ -34,12 +34,16 @@ void run_shares(unsigned n, const F& share) {
       errors[i] = std::current_exception();
     }
   };
+  // Room first, so that nothing below allocates once a thread runs: a std::thread destroyed
+  // joinable (an exception past it) would end the process, with shares still reading this frame.
   std::vector<std::thread> threads;
   std::vector<unsigned> here;
+  threads.reserve(n);
+  here.reserve(n);
   for (unsigned i = 1; i < n; ++i) {
     try {
       threads.emplace_back(guarded, i);
-    } catch (const std::system_error&) {
+    } catch (...) {  // std::system_error, or std::bad_alloc for the thread's own state.
       here.push_back(i);
     }
   }
@@ -419,7 +423,9 @@ void classify_surface(const Pieces& pieces, unsigned shares, SurfaceTopology& to
 SurfaceTopology analyze_surface(std::span<const TriangleMeshView> views) { return analyze_surface(views, 1); }
 
 SurfaceTopology analyze_surface(std::span<const TriangleMeshView> views, unsigned threads) {
-  const unsigned shares = std::max(threads, 1u);
+  // Each share beyond the first costs a thread and a row count array of 4 bytes a vertex.
+  constexpr unsigned kMaxShares = 64;
+  const unsigned shares = std::clamp(threads, 1u, kMaxShares);
   SurfaceTopology topology;
   const Pieces pieces(views);
   for (const TriangleMeshView& view : views) topology.triangles += view.triangle_count;

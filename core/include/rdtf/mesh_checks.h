@@ -27,8 +27,9 @@ SurfaceTopology analyze_surface(std::span<const TriangleMesh> pieces);
 // The same on meshes read in place (the same result for the same positions and triangles).
 SurfaceTopology analyze_surface(std::span<const TriangleMeshView> pieces);
 
-// The same, its work shared by `threads` threads (this one and threads - 1 more; 1 or 0: this one
-// alone). The result does not depend on it. Where no thread can be had, the shares run here.
+// The same, its work shared by `threads` threads (this one and threads - 1 more, at most 64 in
+// all; 1 or 0: this one alone). The result does not depend on it. Where no thread can be had,
+// the shares run here.
 SurfaceTopology analyze_surface(std::span<const TriangleMeshView> pieces, unsigned threads);
 
 }  // namespace rdtf

@@ -25,6 +25,8 @@ struct DaemonConfig {
   std::string channel_prefix = "RDTF";
   std::chrono::milliseconds settle{50};      // Quiet time after the last event of a model.
   std::chrono::milliseconds max_open_wait{5000};  // Longest wait for a writer to close a file.
+  // Convert a model whose files are closed during its settle period, publish at its end.
+  bool convert_while_settling = true;
   std::chrono::milliseconds republish_period{5000};  // Descriptions again, for late subscribers.
   std::chrono::milliseconds status_period{1000};
   int workers = 2;                           // Conversion threads.

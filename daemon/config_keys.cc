@@ -226,6 +226,13 @@ std::vector<ConfigKey> make_registry() {
       key<Millis>({.name = "max_open_wait_ms", .unit = "ms", .min = 0, .max = 600000,
                    .doc = "longest wait for a writer that modified a file to close it"},
                   RDTF_FIELD(max_open_wait)),
+      plain({.name = "convert_while_settling", .flag = "--no-convert-while-settling",
+             .flag_help = "Convert a save only once it has settled, not during the settle period", .flag_sets = false,
+             .doc = "once a settling model's files are closed, convert it and stage its outputs during the settle "
+                    "period, and publish them at its end unless a file changed meanwhile (then they are dropped: "
+                    "\"Converting while settling\"); false: convert only after it, which spends less CPU on "
+                    "bursts of saves"},
+            RDTF_FIELD(convert_while_settling)),
       key<Millis>({.name = "republish_period_ms", .unit = "ms", .min = 0, .max = 86400000,
                    .range_text = "0 (off) or 10 .. 86400000", .flag = "--republish-ms",
                    .flag_help = "Period of republishing every description; 0 disables (default 5000)",

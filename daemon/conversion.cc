@@ -189,24 +189,38 @@ void write_failed(const std::filesystem::path& output_dir, Diagnostics& diagnost
   retry = true;
 }
 
+}  // namespace
+
+// A revision's outputs in their stage folder: what the commit moves into place and what it keeps.
+struct StagedOutputs {
+  StagedOutput stage;
+  std::filesystem::path output_dir;
+  std::vector<std::filesystem::path> primaries;  // Relative to the stage: renamed last.
+  KeptNames keep;
+  bool urdf = false;
+};
+
+namespace {
+
 // Every file of the new revision is written into a stage folder first and moved into place only
-// when all of them are whole (the primary files last), and the previous generation's files go
-// only after that: a disk that fills up between two files leaves the live revision untouched.
-bool write_outputs(const ConversionJob& job, const Conversion& conversion, ConvertedModel& converted,
-                   Diagnostics& diagnostics, bool& retry) {
+// when all of them are whole (the primary files last, commit_outputs), and the previous
+// generation's files go only after that: a disk that fills up between two files leaves the live
+// revision untouched. Null when the stage could not be written (diagnostics say why).
+std::unique_ptr<StagedOutputs> stage_outputs(const ConversionJob& job, const Conversion& conversion,
+                                             ConvertedModel& converted, Diagnostics& diagnostics, bool& retry) {
   std::error_code ec;
   std::filesystem::create_directories(job.output_dir, ec);
   if (ec) {
     diagnostics.error(codes::WRITE_FAILED, "", "cannot create " + job.output_dir.string() + ": " + ec.message());
     write_failed(job.output_dir, diagnostics, retry);
-    return false;
+    return nullptr;
   }
   std::string why;
   auto stage = StagedOutput::create(job.output_dir, "stage", why);
   if (!stage) {
     diagnostics.error(codes::WRITE_FAILED, "", "cannot write: " + why);
     write_failed(job.output_dir, diagnostics, retry);
-    return false;
+    return nullptr;
   }
   const std::filesystem::path name = job.source.stem().string() + ".rdtf.gltf";
   converted.output_path = (job.output_dir / name).native();
@@ -219,7 +233,7 @@ bool write_outputs(const ConversionJob& job, const Conversion& conversion, Conve
   if (!write_rdtf(conversion.asset, stage->folder() / name, write_options, write_diag, &converted.rdtf_json)) {
     diagnostics.append(write_diag);
     if (has_code(write_diag, codes::WRITE_FAILED)) write_failed(job.output_dir, diagnostics, retry);
-    return false;
+    return nullptr;
   }
   diagnostics.append(write_diag);
   std::vector<std::filesystem::path> primaries{name};
@@ -237,7 +251,7 @@ bool write_outputs(const ConversionJob& job, const Conversion& conversion, Conve
       // The disk, not the model: fail the revision and try again; nothing was moved into place.
       diagnostics.append(urdf_diag);
       write_failed(job.output_dir, diagnostics, retry);
-      return false;
+      return nullptr;
     } else {
       for (const Diagnostic& d : urdf_diag.all()) diagnostics.warning(codes::URDF_NOT_WRITTEN, d.pointer, d.message);
     }
@@ -256,17 +270,25 @@ bool write_outputs(const ConversionJob& job, const Conversion& conversion, Conve
   keep.add_on_disk(job.output_dir, name.string(), job.live_files);
   keep.add(job.live_files);
   keep.add(job.live_rdtf_json, job.live_urdf, job.output_dir);
-  if (!stage->commit(job.output_dir, primaries, why)) {
-    diagnostics.error(codes::WRITE_FAILED, "", "cannot move the outputs into place: " + why);
-    write_failed(job.output_dir, diagnostics, retry);
-    return false;
-  }
-  remove_unreferenced(job.output_dir, keep.in_folder);
-  if (job.urdf) remove_unreferenced(job.output_dir / "urdf" / "meshes", keep.meshes);
   if (!manifest_why.empty()) {
     diagnostics.warning(codes::MANIFEST_INCOMPLETE, "", "no manifest for this revision, so its files are not served "
                         "as blobs: " + manifest_why);
   }
+  return std::make_unique<StagedOutputs>(
+      StagedOutputs{std::move(*stage), job.output_dir, std::move(primaries), std::move(keep), job.urdf.has_value()});
+}
+
+// Moves a staged revision into place (made durable before it returns), then removes the files
+// that neither it nor the live revision refers to.
+bool commit_outputs(StagedOutputs& staged, Diagnostics& diagnostics, bool& retry) {
+  std::string why;
+  if (!staged.stage.commit(staged.output_dir, staged.primaries, why)) {
+    diagnostics.error(codes::WRITE_FAILED, "", "cannot move the outputs into place: " + why);
+    write_failed(staged.output_dir, diagnostics, retry);
+    return false;
+  }
+  remove_unreferenced(staged.output_dir, staged.keep.in_folder);
+  if (staged.urdf) remove_unreferenced(staged.output_dir / "urdf" / "meshes", staged.keep.meshes);
   return true;
 }
 
@@ -395,11 +417,52 @@ std::uint64_t ReadBudget::held() const {
   return held_;
 }
 
+namespace {
+
+// Not cached: a written result whose manifest is incomplete (a hit could not check its files),
+// and a verdict the machine's load decided (the check ran out of its CPU budget).
+bool cacheable(const ConversionJob& job, const ConversionOutcome& outcome) {
+  const bool manifest_whole = !outcome.converted->written || !outcome.converted->files.empty();
+  const bool load_decided = outcome.converted->validation &&
+                            outcome.converted->validation->diagnostics.contains(codes::SIM_BUDGET_EXCEEDED);
+  return job.cache && manifest_whole && !load_decided;
+}
+
+// The second half of a prepared conversion, at the deadline: its staged outputs moved into place.
+ConversionOutcome commit_prepared(const ConversionJob& job) {
+  const auto start = std::chrono::steady_clock::now();
+  ConversionOutcome outcome = std::move(*job.commit);
+  outcome.prepared = false;
+  outcome.while_settling = true;
+  const std::shared_ptr<StagedOutputs> staged = std::move(outcome.staged);
+  outcome.staged.reset();
+  if (staged && outcome.converted) {
+    if (commit_outputs(*staged, outcome.diagnostics, outcome.retry)) {
+      outcome.converted->written = true;
+    } else {
+      outcome.kind = ConversionOutcome::Kind::kRejected;
+      outcome.converted.reset();
+    }
+  }
+  outcome.finished = std::chrono::steady_clock::now();
+  const auto took = std::chrono::duration_cast<std::chrono::microseconds>(outcome.finished - start);
+  outcome.stages.write += took;
+  outcome.duration += took;
+  if (outcome.kind == ConversionOutcome::Kind::kConverted && !outcome.from_cache && cacheable(job, outcome)) {
+    outcome.after_handover = cache_after_handover(job, outcome);
+  }
+  return outcome;
+}
+
+}  // namespace
+
 ConversionOutcome run_conversion(const ConversionJob& job) {
+  if (job.commit) return commit_prepared(job);
   const auto start = std::chrono::steady_clock::now();
   ConversionOutcome outcome;
   outcome.model_id = job.model_id;
   outcome.source = job.source;
+  outcome.prepared = job.prepare;
   outcome.diagnostics.set_file(job.source.string());
   // Each stage's time: from the end of the one before to now.
   auto lap_start = start;
@@ -513,8 +576,14 @@ ConversionOutcome run_conversion(const ConversionJob& job) {
   converted.content_hash = outcome.content_hash;
   converted.validation = std::move(validation);
   if (write) {
-    if (!write_outputs(job, *conversion, converted, outcome.diagnostics, outcome.retry)) return finish();
-    converted.written = true;
+    auto staged = stage_outputs(job, *conversion, converted, outcome.diagnostics, outcome.retry);
+    if (!staged) return finish();
+    if (job.prepare) {
+      outcome.staged = std::move(staged);  // Committed at the deadline (commit_prepared), or dropped.
+    } else {
+      if (!commit_outputs(*staged, outcome.diagnostics, outcome.retry)) return finish();
+      converted.written = true;
+    }
   }
   lap(outcome.stages.write);
   const UrdfNames names = urdf_names(conversion->robot);
@@ -525,12 +594,8 @@ ConversionOutcome run_conversion(const ConversionJob& job) {
   lap(outcome.stages.convert);
   outcome.converted = std::move(converted);
   outcome.kind = ConversionOutcome::Kind::kConverted;
-  // Not cached: a written result whose manifest is incomplete (a hit could not check its files),
-  // and a verdict the machine's load decided (the check ran out of its CPU budget).
-  const bool manifest_whole = !outcome.converted->written || !outcome.converted->files.empty();
-  const bool load_decided = outcome.converted->validation &&
-                            outcome.converted->validation->diagnostics.contains(codes::SIM_BUDGET_EXCEEDED);
-  if (job.cache && manifest_whole && !load_decided) outcome.after_handover = cache_after_handover(job, outcome);
+  // Staged outputs are cached once committed: an entry names outputs on disk.
+  if (!outcome.staged && cacheable(job, outcome)) outcome.after_handover = cache_after_handover(job, outcome);
   lap(outcome.stages.cache);
   return finish();
 }

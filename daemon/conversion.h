@@ -29,6 +29,10 @@ namespace rdtf::daemon {
 
 class ResultCache;
 struct VerdictMemo;
+struct ConversionOutcome;
+// A prepared conversion's outputs, written into a stage folder and not yet moved into place
+// (conversion.cc).
+struct StagedOutputs;
 
 // The bytes conversions may read at once, across every worker: a conversion holds what it will
 // read (the model and every file it names) from before its first read to its end.
@@ -79,6 +83,13 @@ struct ConversionJob {
   // The gate's last verdict on this model (verdict_memo.h): reused when the robot, its geometry's
   // bounds, the file and cache_key are exactly those it was computed for. None: the check runs.
   std::shared_ptr<const VerdictMemo> verdict;
+  // Converting while settling (docs/daemon.md, "Converting while settling"): the outputs are
+  // written into a stage folder and left there (ConversionOutcome::staged); the daemon commits them
+  // at the deadline with a job whose `commit` is that outcome, or drops them when the model
+  // changed meanwhile.
+  bool prepare = false;
+  // This job only moves a prepared outcome's staged outputs into place and hands it on.
+  std::shared_ptr<ConversionOutcome> commit;
 };
 
 // The dynamics check of a revision, without the ODE world.
@@ -159,6 +170,13 @@ struct ConversionOutcome {
   // way to the loop (ThreadJobRunner: right after handing it over, on the worker's thread); it
   // touches nothing the outcome holds and logs its own failure. Empty when there is none.
   std::function<void()> after_handover;
+  // From a job with `prepare` (its result waits for the deadline, or is dropped).
+  bool prepared = false;
+  // A prepared result's outputs, staged and not committed (their stage folder goes with the last
+  // owner); null once committed, and for results that write nothing.
+  std::shared_ptr<StagedOutputs> staged;
+  // Converted ahead of the deadline, while the model settled: the log says so.
+  bool while_settling = false;
 };
 
 ConversionOutcome run_conversion(const ConversionJob& job);

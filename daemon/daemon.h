@@ -84,7 +84,15 @@ class Daemon {
   void file_timer(ModelRecord& record);
   void unfile_timer(ModelRecord& record);
   void fire_timers(Clock::time_point now);
+  ConversionJob make_job(const ModelRecord& record) const;
   void start_job(ModelRecord& record);
+  // Converting while settling: what a file event's or a prepared job's transition asks for, and
+  // a prepared job started when the model may have one.
+  void on_settling(ModelRecord& record, const ModelActions& actions);
+  void use_prepared(ModelRecord& record, ConversionOutcome outcome);
+  void apply_prepared(ConversionOutcome outcome);
+  void start_prepared_jobs(Clock::time_point now);
+  std::vector<std::filesystem::path> to_prepare_;  // Models that may prepare once this turn's events are in.
   bool waiting_for_writer(const ModelRecord& record, Clock::time_point now) const;
   void handle_outcomes(std::size_t max_outcomes);
   void apply(ConversionOutcome outcome);

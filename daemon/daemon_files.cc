@@ -174,7 +174,9 @@ void Daemon::note_change(const std::filesystem::path& path, FileChange change) {
   const auto now = clock_->now();
   auto touch = [&](const std::filesystem::path& model) {
     if (ModelRecord* record = registry_.find(model)) {
-      transition(*record, [&](ModelSchedule& schedule) { return schedule.file_changed(now, change); });
+      const ModelActions actions =
+          transition(*record, [&](ModelSchedule& schedule) { return schedule.file_changed(now, change); });
+      on_settling(*record, actions);
     }
   };
   if (is_model_file(path)) {
@@ -237,9 +239,12 @@ void Daemon::rescan(const char* why) {
   // Known models that are no longer there get converted too: the conversion finds them gone.
   const auto now = clock_->now();
   for (auto& [source, record] : registry_.all()) {
-    transition(record, [&](ModelSchedule& schedule) { return schedule.file_changed(now, FileChange::kTouched); });
+    const ModelActions actions =
+        transition(record, [&](ModelSchedule& schedule) { return schedule.file_changed(now, FileChange::kTouched); });
+    on_settling(record, actions);
   }
   for (const auto& file : files) note_change(file, FileChange::kClosed);
+  start_prepared_jobs(now);
   log_line(std::string("rescan (") + why + "): " + std::to_string(files.size()) + " files, " +
            std::to_string(watcher_->watch_count()) + " folders watched");
 }
@@ -279,6 +284,7 @@ void Daemon::process_file_events(std::size_t max_events) {
         break;
     }
   }
+  start_prepared_jobs(clock_->now());
 }
 
 }  // namespace rdtf::daemon

@@ -58,8 +58,35 @@ void Daemon::fire_timers(Clock::time_point now) {
     const bool writer_open = waiting_for_writer(*record, now);
     const ModelActions actions =
         transition(*record, [&](ModelSchedule& schedule) { return schedule.timer(now, settle_policy(), writer_open); });
+    if (actions.discard_prepared) record->prepared.reset();
+    if (actions.use_prepared && record->prepared) {
+      ConversionOutcome prepared = std::move(*record->prepared);
+      record->prepared.reset();
+      use_prepared(*record, std::move(prepared));
+    }
     if (actions.start_job) start_job(*record);
   }
+}
+
+void Daemon::on_settling(ModelRecord& record, const ModelActions& actions) {
+  if (actions.discard_prepared) record.prepared.reset();  // Its stage folder goes with it.
+  if (config_.convert_while_settling && record.schedule.can_prepare()) to_prepare_.push_back(record.source);
+}
+
+void Daemon::start_prepared_jobs(Clock::time_point now) {
+  // Taken once the events that came together are all handled: a .gltf and its .bin written one
+  // after the other give one prepared job, not one the second event makes stale at once.
+  std::sort(to_prepare_.begin(), to_prepare_.end());
+  to_prepare_.erase(std::unique(to_prepare_.begin(), to_prepare_.end()), to_prepare_.end());
+  for (const auto& source : to_prepare_) {
+    ModelRecord* record = registry_.find(source);
+    if (record == nullptr || !record->schedule.can_prepare() || waiting_for_writer(*record, now)) continue;
+    record->schedule.begin_prepare();
+    ConversionJob job = make_job(*record);
+    job.prepare = true;
+    runner_->submit(std::move(job));
+  }
+  to_prepare_.clear();
 }
 
 bool Daemon::waiting_for_writer(const ModelRecord& record, Clock::time_point now) const {
@@ -84,7 +111,9 @@ void Daemon::drop_model(const std::filesystem::path& source, std::chrono::micros
   registry_.erase(source);
 }
 
-void Daemon::start_job(ModelRecord& record) {
+void Daemon::start_job(ModelRecord& record) { runner_->submit(make_job(record)); }
+
+ConversionJob Daemon::make_job(const ModelRecord& record) const {
   ConversionJob job;
   job.model_id = record.id;
   job.root = root_of(record.source);
@@ -115,7 +144,43 @@ void Daemon::start_job(ModelRecord& record) {
     urdf.y_up = config_.urdf_y_up;
     job.urdf = urdf;
   }
-  runner_->submit(std::move(job));
+  return job;
+}
+
+void Daemon::use_prepared(ModelRecord& record, ConversionOutcome outcome) {
+  if (outcome.staged) {
+    // Its outputs are staged: a worker moves them into place (fsyncs) and hands it back.
+    ConversionJob job = make_job(record);
+    job.commit = std::make_shared<ConversionOutcome>(std::move(outcome));
+    runner_->submit(std::move(job));
+    return;
+  }
+  // Nothing to move into place (rejected, unchanged, from the cache, failed unwritten): as a job's.
+  outcome.prepared = false;
+  outcome.while_settling = true;
+  apply(std::move(outcome));
+}
+
+// A job started while the model settled ended: its result waits for the deadline, serves now
+// (the deadline came while it ran), or is dropped (a file changed after it read them).
+void Daemon::apply_prepared(ConversionOutcome outcome) {
+  ModelRecord* record = registry_.find(outcome.source);
+  if (record == nullptr) return;
+  // A verdict depends only on what it was computed from: kept whatever becomes of this result.
+  if (outcome.verdict) record->verdict = outcome.verdict;
+  const bool usable = !outcome.cancelled && !outcome.retry && outcome.kind != ConversionOutcome::Kind::kVanished;
+  const auto now = clock_->now();
+  const ModelActions actions =
+      transition(*record, [&](ModelSchedule& schedule) { return schedule.prepare_finished(now, usable); });
+  if (actions.use_prepared) {
+    use_prepared(*record, std::move(outcome));
+  } else if (record->schedule.holds_prepared()) {
+    record->prepared = std::move(outcome);
+  }
+  if (actions.start_job) start_job(*record);
+  // Dropped as stale: the files may have settled into something to prepare again.
+  on_settling(*record, {});
+  start_prepared_jobs(now);
 }
 
 void Daemon::handle_outcomes(std::size_t max_outcomes) {
@@ -124,6 +189,10 @@ void Daemon::handle_outcomes(std::size_t max_outcomes) {
 }
 
 void Daemon::apply(ConversionOutcome outcome) {
+  if (outcome.prepared) {
+    apply_prepared(std::move(outcome));
+    return;
+  }
   ModelRecord* record = registry_.find(outcome.source);
   if (record == nullptr) return;
   const std::string id = record->id;
@@ -259,7 +328,8 @@ void Daemon::apply_converted(ConversionOutcome& outcome, ModelRecord& record) {
            std::to_string(record.live->robot.links.size()) + " links, " +
            std::to_string(record.live->robot.joints.size()) + " joints" +
            (record.live->validation ? std::string(", dynamics ") + (failed ? "FAILED" : "passed") : "") +
-           (outcome.verdict_reused ? ", verdict reused" : "") + ") in " + milliseconds(outcome.duration) + (outcome.from_cache ? " from the result cache" : "") + (kept ? " (the result the earlier run served: its number kept)" : "") +
+           (outcome.verdict_reused ? ", verdict reused" : "") + ") in " + milliseconds(outcome.duration) +
+           (outcome.from_cache ? " from the result cache" : "") + (outcome.while_settling ? " while settling" : "") + (kept ? " (the result the earlier run served: its number kept)" : "") +
            "; stages: read " + milliseconds(stages.read) + ", convert " + milliseconds(stages.convert) + ", check " +
            milliseconds(stages.check) + ", write " + milliseconds(stages.write) + ", cache " + milliseconds(stages.cache) +
            ", picked up " + ms(picked_up - outcome.finished) + ", state saved " + ms(saved - picked_up) + ", sent " +

@@ -57,6 +57,9 @@ ModelActions ModelSchedule::file_changed(Clock::time_point now, FileChange chang
     case ModelPhase::kConvertAgain:
       break;
   }
+  ModelActions actions;
+  // While converting, a prepared job adopted at the deadline converts settled content: it stays.
+  if (phase_ == ModelPhase::kSettling) prepared_superseded(actions);
   if (!window_) {
     window_ = SettleWindow::opened(now, still_open);
   } else if (change == FileChange::kClosed) {
@@ -64,7 +67,67 @@ ModelActions ModelSchedule::file_changed(Clock::time_point now, FileChange chang
   } else {
     window_->touch(now, still_open);
   }
-  return {};
+  return actions;
+}
+
+void ModelSchedule::prepared_superseded(ModelActions& actions) {
+  switch (prepare_) {
+    case Prepare::kRunning: prepare_ = Prepare::kStale; break;
+    case Prepare::kHeld:
+      prepare_ = Prepare::kNone;
+      actions.discard_prepared = true;
+      break;
+    case Prepare::kDeclined: prepare_ = Prepare::kNone; break;
+    case Prepare::kNone:
+    case Prepare::kStale: break;
+  }
+}
+
+bool ModelSchedule::can_prepare() const {
+  // Not during a back-off: the disk refused the outputs, and the back-off paces the attempts.
+  return phase_ == ModelPhase::kSettling && prepare_ == Prepare::kNone && attempts_ == 0 && window_ &&
+         !window_->open_for_writing;
+}
+
+void ModelSchedule::begin_prepare() { prepare_ = Prepare::kRunning; }
+
+ModelActions ModelSchedule::prepare_finished(Clock::time_point now, bool usable) {
+  const Prepare was = prepare_;
+  if (was != Prepare::kRunning && was != Prepare::kStale) return {};
+  // Its result stands for the content only if no event came after the job read it.
+  const bool fresh = was == Prepare::kRunning && usable;
+  prepare_ = Prepare::kNone;
+  ModelActions actions;
+  switch (phase_) {
+    case ModelPhase::kSettling:
+    case ModelPhase::kWaitingForWriter:
+      if (fresh) {
+        prepare_ = Prepare::kHeld;
+      } else if (was == Prepare::kRunning) {
+        prepare_ = Prepare::kDeclined;  // Not again before the next event: it would end the same.
+      }
+      break;
+    case ModelPhase::kConverting:
+      // Adopted at the deadline: it was the model's conversion. A stale or unusable one is
+      // replaced by a conversion of the content as it is now (it has settled).
+      if (fresh) {
+        actions.use_prepared = true;
+      } else {
+        actions.start_job = true;
+      }
+      break;
+    case ModelPhase::kChangedWhileConverting:
+    case ModelPhase::kConvertAgain:
+      if (fresh) {
+        actions.use_prepared = true;  // The settled content's result, as any job's; then settles on.
+      } else {
+        settle_after_job(now);
+      }
+      break;
+    default:
+      break;
+  }
+  return actions;
 }
 
 ModelActions ModelSchedule::timer(Clock::time_point now, const SettlePolicy& policy, bool writer_open) {
@@ -75,19 +138,30 @@ ModelActions ModelSchedule::timer(Clock::time_point now, const SettlePolicy& pol
     window_ = SettleWindow::opened(now, false);
     return {};
   }
+  ModelActions actions;
   if (writer_open) {
-    // Look again a settle period later (the writer's close is an event that comes sooner).
+    // Look again a settle period later (the writer's close is an event that comes sooner). What
+    // a prepared job read may be half written.
     window_ = SettleWindow::opened(now, false);
-    if (phase_ == ModelPhase::kSettling) phase_ = ModelPhase::kWaitingForWriter;
-    return {};
+    if (phase_ == ModelPhase::kSettling || phase_ == ModelPhase::kWaitingForWriter) {
+      phase_ = ModelPhase::kWaitingForWriter;
+      prepared_superseded(actions);
+    }
+    return actions;
   }
   window_.reset();
-  ModelActions actions;
   switch (phase_) {
     case ModelPhase::kSettling:
     case ModelPhase::kWaitingForWriter:
       phase_ = ModelPhase::kConverting;
-      actions.start_job = true;
+      if (prepare_ == Prepare::kHeld) {
+        prepare_ = Prepare::kNone;
+        actions.use_prepared = true;
+      } else if (prepare_ == Prepare::kNone || prepare_ == Prepare::kDeclined) {
+        prepare_ = Prepare::kNone;
+        actions.start_job = true;
+      }
+      // Running (fresh or stale): that job is the conversion now; prepare_finished() decides.
       break;
     case ModelPhase::kChangedWhileConverting:
     case ModelPhase::kConvertAgain:
@@ -164,6 +238,8 @@ ModelActions ModelSchedule::request() const {
 ModelActions ModelSchedule::removed() {
   ModelActions actions;
   actions.remove = phase_ != ModelPhase::kRemoved;
+  actions.discard_prepared = prepare_ == Prepare::kHeld;
+  prepare_ = Prepare::kNone;
   phase_ = ModelPhase::kRemoved;
   window_.reset();
   return actions;

@@ -46,6 +46,10 @@ struct ModelActions {
   bool publish_error = false;  // The job's diagnostics on the model's ERROR.
   bool publish_live = false;   // The live revision again (a request).
   bool remove = false;         // Announce REMOVED (when a revision was live) and forget the model.
+  // Use the result of the job begin_prepare() announced, held or just finished: commit its staged
+  // outputs (or apply it when it wrote none), as a job started now would have.
+  bool use_prepared = false;
+  bool discard_prepared = false;  // The held prepared result is stale: drop it (and its stage).
   std::optional<Clock::duration> retry_in;  // A back-off was scheduled: attempt `attempts()` failed.
 };
 
@@ -72,7 +76,29 @@ class ModelSchedule {
   ModelActions request() const;
   ModelActions removed();  // Its folder is no longer watched.
 
+  // Converting while settling (`convert_while_settling`): once a settling model's files are
+  // closed, a job may convert it and stage its outputs ahead of the deadline; the deadline then
+  // commits them, unless an event came after the job started (the result is dropped and the model
+  // settles on). Whether such a job may start now: settling, the window's files closed, no
+  // prepared job running or held, none declined since the last event.
+  bool can_prepare() const;
+  void begin_prepare();  // The daemon started one (can_prepare() was true).
+  // The prepared job ended. `usable`: its result can stand for a conversion of the content (not
+  // cancelled, the model not gone, its outputs not refused by the disk).
+  ModelActions prepare_finished(Clock::time_point now, bool usable);
+  bool holds_prepared() const { return prepare_ == Prepare::kHeld; }
+
  private:
+  enum class Prepare {
+    kNone,      // No prepared job.
+    kRunning,   // Running, and no event since it started.
+    kStale,     // Running, and an event came since it started: its result will be dropped.
+    kHeld,      // Done, no event since it started: its result waits for the deadline.
+    kDeclined,  // Ended unusable: no other until the next event.
+  };
+  // A file event while settling: a prepared result no longer shows the files.
+  void prepared_superseded(ModelActions& actions);
+
   // Where a job's end leads when the files changed meanwhile: settle again.
   void settle_after_job(Clock::time_point now);
 
@@ -84,6 +110,9 @@ class ModelSchedule {
   Clock::duration retry_delay_{};
   int attempts_ = 0;
   bool live_ = false;
+  // The prepared job, while settling; while converting, kRunning or kStale say that the job
+  // converting is the prepared one (adopted at the deadline).
+  Prepare prepare_ = Prepare::kNone;
 };
 
 }  // namespace rdtf::daemon

@@ -21,6 +21,7 @@ ConversionOutcome run_job(const ConversionJob& job) {
     outcome.model_id = job.model_id;
     outcome.source = job.source;
     outcome.kind = ConversionOutcome::Kind::kRejected;
+    outcome.prepared = job.prepare;  // The model's schedule waits for a prepared job's end as such.
     outcome.diagnostics.set_file(job.source.string());
     outcome.diagnostics.error(codes::INTERNAL_ERROR, "", error.what());
     return outcome;
@@ -53,7 +54,14 @@ ThreadJobRunner::~ThreadJobRunner() {
 void ThreadJobRunner::submit(ConversionJob job) {
   {
     std::lock_guard lock(mutex_);
-    jobs_.push_back(std::move(job));
+    // A commit is all a settled save still waits for: it goes before the conversions queued (in a
+    // first scan of thousands of models, nothing would be published until every one was converted,
+    // and their results would wait in memory).
+    if (job.commit) {
+      jobs_.push_front(std::move(job));
+    } else {
+      jobs_.push_back(std::move(job));
+    }
   }
   work_ready_.notify_one();
 }

@@ -41,6 +41,9 @@ struct ModelRecord {
   // The gate's last verdict on this model (verdict_memo.h), handed to its next conversion. Kept
   // whatever became of the revision it judged: a verdict depends only on what it was computed from.
   std::shared_ptr<const VerdictMemo> verdict;
+  // A conversion made while the model settled, waiting for its deadline (model_schedule.h,
+  // holds_prepared()): its outputs are staged, not yet in place.
+  std::optional<ConversionOutcome> prepared;
 };
 
 // The live revision's two primary texts, as its DESCRIPTION carries them.

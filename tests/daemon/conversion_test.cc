@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <map>
 
+#include "result_cache.h"
 #include "support/test_support.h"
 
 namespace rdtf::daemon {
@@ -128,6 +129,91 @@ TEST(ConversionReads, AFileThatCannotBeReadIsHashedAsNoBytes) {
   const ConversionOutcome outcome = run_conversion(job_for(folders, "arm.gltf"));
   EXPECT_EQ(outcome.kind, ConversionOutcome::Kind::kRejected);
   EXPECT_EQ(outcome.content_hash, length_prefixed_sha256({model, ""}));
+}
+
+}  // namespace
+}  // namespace rdtf::daemon
+
+namespace rdtf::daemon {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::vector<std::string> entries(const fs::path& folder) {
+  std::vector<std::string> names;
+  for (const auto& entry : fs::directory_iterator(folder)) names.push_back(entry.path().filename().string());
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+// Converting while settling: a prepared job stages its outputs and leaves the folder's files as
+// they were; the commit job moves them into place (the same bytes) and stores the result in the
+// cache; a prepared result dropped takes its stage with it.
+TEST(ConversionPrepared, StagesThenCommitsTheSameOutputsAndDroppingOneLeavesNothing) {
+  Folders folders;
+  testing::write_file(folders.root / "arm3.gltf", testing::read_file(testing::data_dir() / "blender" / "arm3.gltf"));
+  testing::write_file(folders.root / "arm3.bin", testing::read_file(testing::data_dir() / "blender" / "arm3.bin"));
+  testing::TempDir cache_dir;
+  ConversionJob job = job_for(folders, "arm3.gltf");
+  job.urdf = UrdfOptions{};
+  job.cache = std::make_shared<ResultCache>(cache_dir.path() / "results", 10);
+  job.cache_key = "test-settings";
+  job.prepare = true;
+
+  ConversionOutcome prepared = run_conversion(job);
+  ASSERT_EQ(prepared.kind, ConversionOutcome::Kind::kConverted) << messages(prepared.diagnostics);
+  EXPECT_TRUE(prepared.prepared);
+  ASSERT_TRUE(prepared.staged);
+  ASSERT_TRUE(prepared.converted);
+  EXPECT_FALSE(prepared.converted->written);
+  EXPECT_FALSE(prepared.after_handover) << "a cache entry for outputs not in place";
+  // Only the stage folder: no output in place.
+  const auto staged = entries(folders.out.path());
+  ASSERT_EQ(staged.size(), 1u);
+  EXPECT_EQ(staged[0].rfind(".stage.", 0), 0u) << staged[0];
+
+  // Dropped: the stage goes with its last owner, not with a copy of the outcome.
+  {
+    const ConversionOutcome copy = prepared;
+  }
+  EXPECT_EQ(entries(folders.out.path()), staged);
+  {
+    ConversionOutcome dropped = run_conversion(job);
+    ASSERT_TRUE(dropped.staged);
+    EXPECT_EQ(entries(folders.out.path()).size(), 2u);
+  }
+  EXPECT_EQ(entries(folders.out.path()), staged);
+
+  // Committed: the manifest's files are in place, byte for byte, and nothing else.
+  ConversionJob commit = job_for(folders, "arm3.gltf");
+  commit.urdf = job.urdf;
+  commit.cache = job.cache;
+  commit.cache_key = job.cache_key;
+  const std::vector<OutputFile> manifest = prepared.converted->files;
+  const std::string rdtf_json = prepared.converted->rdtf_json;
+  commit.commit = std::make_shared<ConversionOutcome>(std::move(prepared));
+  ConversionOutcome done = run_conversion(commit);
+  ASSERT_EQ(done.kind, ConversionOutcome::Kind::kConverted) << messages(done.diagnostics);
+  EXPECT_FALSE(done.prepared);
+  EXPECT_TRUE(done.while_settling);
+  EXPECT_FALSE(done.staged);
+  ASSERT_TRUE(done.converted);
+  EXPECT_TRUE(done.converted->written);
+  EXPECT_EQ(testing::read_file(folders.out / "arm3.rdtf.gltf"), rdtf_json);
+  ASSERT_FALSE(manifest.empty());
+  for (const OutputFile& file : manifest) {
+    EXPECT_EQ(static_cast<std::int64_t>(fs::file_size(folders.out / file.path)), file.size) << file.path;
+  }
+  for (const auto& name : entries(folders.out.path())) EXPECT_NE(name.rfind(".stage.", 0), 0u) << name;
+  // The cache entry, written after the hand-over: a conversion of the same content is a hit.
+  ASSERT_TRUE(done.after_handover);
+  done.after_handover();
+  ConversionJob again = job_for(folders, "arm3.gltf");
+  again.urdf = job.urdf;
+  again.cache = job.cache;
+  again.cache_key = job.cache_key;
+  const ConversionOutcome hit = run_conversion(again);
+  EXPECT_TRUE(hit.from_cache) << hit.cache_note;
 }
 
 }  // namespace

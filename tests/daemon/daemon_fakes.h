@@ -92,6 +92,7 @@ class FakeRunner final : public JobRunner {
     outcome.source = job.source;
     outcome.kind = ConversionOutcome::Kind::kRejected;
     outcome.retry = true;
+    outcome.prepared = job.prepare;
     outcome.diagnostics.set_file(job.source.string());
     outcome.diagnostics.error(codes::WRITE_FAILED, "", "No space left on device");
     running_.push_back(std::move(outcome));

@@ -39,6 +39,8 @@ class DaemonLoop : public ::testing::Test {
     config.republish_period = std::chrono::milliseconds(0);
     config.settle = std::chrono::milliseconds(50);
     config.max_open_wait = std::chrono::seconds(5);
+    // Jobs start at the deadline, as the scheduling tests count them; DaemonPrepared turns it on.
+    config.convert_while_settling = false;
     config.status_period = std::chrono::milliseconds(1000);
     if (tweak) tweak(config);
     DaemonPorts ports;

@@ -2,6 +2,8 @@
 // conversions; the loop is woken through the runner's descriptor, outcomes come back whole.
 #include <poll.h>
 
+#include <atomic>
+#include <future>
 #include <set>
 
 #include <gtest/gtest.h>
@@ -104,6 +106,53 @@ TEST_F(JobRunnerTest, StopDropsTheJobsNotStartedAndWaitsForTheRunningOnes) {
   EXPECT_FALSE(more);
   EXPECT_LE(outcomes.size(), 3u);
   for (const auto& outcome : outcomes) EXPECT_EQ(outcome.kind, ConversionOutcome::Kind::kConverted) << outcome.model_id;
+}
+
+TEST_F(JobRunnerTest, ACommitRunsBeforeTheConversionsQueuedAheadOfIt) {
+  // A prepared conversion (converting while settling), its outputs staged.
+  ConversionJob prepare = job("c.glb");
+  prepare.prepare = true;
+  ConversionOutcome prepared = run_conversion(prepare);
+  ASSERT_TRUE(prepared.staged);
+
+  // The only worker is held inside a conversion that reads a .bin, until the test lets it go.
+  rdtf::testing::write_file(root_ / "held.gltf", rdtf::testing::read_file(rdtf::testing::data_dir() / "blender" / "arm3.gltf"));
+  rdtf::testing::write_file(root_ / "arm3.bin", rdtf::testing::read_file(rdtf::testing::data_dir() / "blender" / "arm3.bin"));
+  ConversionJob held;
+  held.model_id = "held.gltf";
+  held.root = root_;
+  held.source = root_ / "held.gltf";
+  held.output_dir = tmp_.path() / "out" / "held.gltf";
+  std::promise<void> entered;
+  std::atomic<bool> once{false};
+  std::promise<void> release;
+  std::shared_future<void> released = release.get_future().share();
+  held.read_file = [&entered, &once, released](const fs::path& root, const fs::path& path, std::uint64_t limit,
+                                        std::vector<std::uint8_t>& out, std::string& why) -> std::optional<std::uint64_t> {
+    if (!once.exchange(true)) entered.set_value();
+    released.wait();
+    const std::string bytes = rdtf::testing::read_file(path);
+    (void)root, (void)limit, (void)why;
+    out.assign(bytes.begin(), bytes.end());
+    return bytes.size();
+  };
+  ThreadJobRunner runner(1);
+  runner.submit(std::move(held));
+  entered.get_future().wait();
+  runner.submit(job("n.glb"));  // Queued first...
+  ConversionJob commit = job("c.glb");
+  commit.commit = std::make_shared<ConversionOutcome>(std::move(prepared));
+  runner.submit(std::move(commit));  // ...but the commit goes first.
+  release.set_value();
+  const auto outcomes = collect(runner, 3);
+  ASSERT_EQ(outcomes.size(), 3u);
+  std::vector<std::string> order;
+  for (const auto& outcome : outcomes) order.push_back(outcome.model_id);
+  EXPECT_EQ(order, (std::vector<std::string>{"held.gltf", "c.glb", "n.glb"}));
+  EXPECT_TRUE(outcomes[1].while_settling);
+  ASSERT_TRUE(outcomes[1].converted);
+  EXPECT_TRUE(outcomes[1].converted->written);
+  EXPECT_TRUE(fs::exists(tmp_.path() / "out" / "c.glb" / "c.rdtf.gltf"));
 }
 
 TEST_F(JobRunnerTest, AModelGoneBeforeItsJobRunsComesBackVanished) {

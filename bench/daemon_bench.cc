@@ -7,7 +7,8 @@
 //   counters also give the latency minus the settle period, rdtfd's stages from its log and its
 //   CPU time per save. What each save changes (the third argument, arm3 only): the generator
 //   string (metadata), a material's colour (visuals), or a joint's damping (the robot itself, so
-//   that the dynamics check must run again).
+//   that the dynamics check must run again). The fourth: converted while settling (rdtfd's
+//   default, convert_while_settling) or only after the settle period, side by side in one run.
 // - BM_InitialScan: rdtfd started on a tree of N small models; models per second from spawning the
 //   daemon until the subscriber has a DESCRIPTION of every model, and VmRSS / VmHWM of rdtfd then.
 // - BM_Restart: the same tree scanned once, rdtfd stopped and started again: the second start's
@@ -40,8 +41,9 @@ using namespace std::chrono_literals;
 
 constexpr int kSettleMs = 50;  // rdtfd's default settle_ms.
 
-Json pipeline_config(bool full_pipeline) {
-  Json config = {{"settle_ms", kSettleMs}};
+// `while_settling`: convert_while_settling (the default) or conversions only after the settle.
+Json pipeline_config(bool full_pipeline, bool while_settling = true) {
+  Json config = {{"settle_ms", kSettleMs}, {"convert_while_settling", while_settling}};
   if (!full_pipeline) config.update({{"validate", false}, {"simulate", false}, {"urdf", false}});
   return config;
 }
@@ -171,6 +173,7 @@ void BM_SaveToPublish(benchmark::State& state) {
   const bool big = state.range(0) == 1;
   const bool full_pipeline = state.range(1) == 1;
   const auto edit = static_cast<Edit>(state.range(2));
+  const bool while_settling = state.range(3) == 1;
   TempFolder root;
   const fs::path watch = root / "models", output = root / "out";
   fs::create_directories(watch);
@@ -183,7 +186,7 @@ void BM_SaveToPublish(benchmark::State& state) {
   });
   int saves = 1;
   write_in_place(watch / model.file_name, model.revision_bytes(saves));
-  Daemon daemon(watch, output, pipeline_config(full_pipeline));
+  Daemon daemon(watch, output, pipeline_config(full_pipeline, while_settling));
   if (!subscriber.wait([&] { return arrivals.complete.count(1) > 0; }, timeout)) {
     state.SkipWithError(("no first revision; rdtfd log:\n" + daemon.log()).c_str());
     return;
@@ -208,7 +211,8 @@ void BM_SaveToPublish(benchmark::State& state) {
   // Everything rdtfd did meanwhile, the live simulation of the model (with the defaults) included.
   state.counters["cpu_per_save_ms"] = (process_cpu_ms(daemon.pid()) - cpu_before) / static_cast<double>(to_description.size());
   state.SetLabel(std::string(big ? "1M-triangle GLB" : std::string("arm3, ") + edit_name(edit) + " changed") +
-                 (full_pipeline ? ", defaults" : ", convert only"));
+                 (full_pipeline ? ", defaults" : ", convert only") +
+                 (while_settling ? "" : ", converted after the settle"));
   state.counters["settle_ms"] = kSettleMs;
   state.counters["p50_ms"] = quantile(to_description, 0.5);
   state.counters["p99_ms"] = quantile(to_description, 0.99);
@@ -226,12 +230,18 @@ void BM_SaveToPublish(benchmark::State& state) {
   }
   daemon.stop();
 }
-BENCHMARK(BM_SaveToPublish)->Args({0, 1, 0})->Iterations(200)->UseManualTime()->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_SaveToPublish)->Args({0, 1, 1})->Iterations(200)->UseManualTime()->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_SaveToPublish)->Args({0, 1, 2})->Iterations(200)->UseManualTime()->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_SaveToPublish)->Args({0, 0, 0})->Iterations(200)->UseManualTime()->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_SaveToPublish)->Args({1, 1, 0})->Iterations(20)->UseManualTime()->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_SaveToPublish)->Args({1, 0, 0})->Iterations(20)->UseManualTime()->Unit(benchmark::kMillisecond);
+// Arguments: big, defaults (else convert only), what each save changes, converted while settling
+// (the default; 0: only after the settle, as before convert_while_settling).
+BENCHMARK(BM_SaveToPublish)->Args({0, 1, 0, 1})->Iterations(200)->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_SaveToPublish)->Args({0, 1, 0, 0})->Iterations(200)->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_SaveToPublish)->Args({0, 1, 1, 1})->Iterations(200)->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_SaveToPublish)->Args({0, 1, 2, 1})->Iterations(200)->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_SaveToPublish)->Args({0, 1, 2, 0})->Iterations(200)->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_SaveToPublish)->Args({0, 0, 0, 1})->Iterations(200)->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_SaveToPublish)->Args({0, 0, 0, 0})->Iterations(200)->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_SaveToPublish)->Args({1, 1, 0, 1})->Iterations(20)->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_SaveToPublish)->Args({1, 1, 0, 0})->Iterations(20)->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_SaveToPublish)->Args({1, 0, 0, 1})->Iterations(20)->UseManualTime()->Unit(benchmark::kMillisecond);
 
 // ------------------------------------------------------------------------------------------------
 // Initial scan
@@ -247,10 +257,12 @@ void write_model_tree(const fs::path& watch, int count) {
   }
 }
 
-// range(0): number of models; range(1): 1 rdtfd's defaults, 0 validate, simulate and urdf off.
+// range(0): number of models; range(1): 1 rdtfd's defaults, 0 validate, simulate and urdf off;
+// range(2): 1 converted while settling (the default), 0 only after the settle.
 void BM_InitialScan(benchmark::State& state) {
   const int count = static_cast<int>(state.range(0));
   const bool full_pipeline = state.range(1) == 1;
+  const bool while_settling = state.range(2) == 1;
   TempFolder root;
   const fs::path watch = root / "models", output = root / "out";
   write_model_tree(watch, count);
@@ -262,7 +274,7 @@ void BM_InitialScan(benchmark::State& state) {
   });
   for (auto _ : state) {
     const Clock::time_point started = Clock::now();
-    Daemon daemon(watch, output, pipeline_config(full_pipeline));
+    Daemon daemon(watch, output, pipeline_config(full_pipeline, while_settling));
     const bool all = subscriber.wait([&] { return static_cast<int>(published.size()) == count; }, 150s);
     const Memory memory = process_memory(daemon.pid());
     double seconds = 0;
@@ -278,9 +290,10 @@ void BM_InitialScan(benchmark::State& state) {
     state.counters["published"] = static_cast<double>(published.size());
     daemon.stop();
   }
-  state.SetLabel(std::to_string(count) + " models, " + (full_pipeline ? "defaults" : "validate/simulate/urdf off"));
+  state.SetLabel(std::to_string(count) + " models, " + (full_pipeline ? "defaults" : "validate/simulate/urdf off") +
+                (while_settling ? "" : ", converted after the settle"));
 }
-BENCHMARK(BM_InitialScan)->Args({1000, 0})->Args({10000, 0})->Args({1000, 1})
+BENCHMARK(BM_InitialScan)->Args({1000, 0, 1})->Args({10000, 0, 1})->Args({1000, 1, 1})->Args({1000, 1, 0})
     ->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
 
 // What a subscriber of a restart sees: the first DESCRIPTION of each model and when it came, and
@@ -433,7 +446,7 @@ int main(int argc, char** argv) {
   run_in_own_network_namespace(argc, argv);
   if (take_flag(argc, argv, "--with-10k-defaults")) {
     benchmark::RegisterBenchmark("BM_InitialScan", BM_InitialScan)
-        ->Args({10000, 1})->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
+        ->Args({10000, 1, 1})->Args({10000, 1, 0})->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
     benchmark::RegisterBenchmark("BM_Restart", BM_Restart)
         ->Args({10000, 1})->Iterations(1)->UseManualTime()->Unit(benchmark::kSecond);
   }

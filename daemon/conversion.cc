@@ -274,6 +274,13 @@ std::unique_ptr<StagedOutputs> stage_outputs(const ConversionJob& job, const Con
     diagnostics.warning(codes::MANIFEST_INCOMPLETE, "", "no manifest for this revision, so its files are not served "
                         "as blobs: " + manifest_why);
   }
+  // A prepared revision is committed at the settle period's end: its files are made durable now,
+  // and the commit has only its renames and their folders to sync.
+  if (job.prepare && !stage->sync(why)) {
+    diagnostics.error(codes::WRITE_FAILED, "", "cannot write: " + why);
+    write_failed(job.output_dir, diagnostics, retry);
+    return nullptr;
+  }
   return std::make_unique<StagedOutputs>(
       StagedOutputs{std::move(*stage), job.output_dir, std::move(primaries), std::move(keep), job.urdf.has_value()});
 }

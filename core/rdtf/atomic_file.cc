@@ -265,21 +265,40 @@ bool sync_files(const std::filesystem::path& folder, const std::vector<std::file
 
 }  // namespace
 
+namespace {
+
+// Every regular file below `folder`, relative to it, those of `last` left out.
+bool staged_files(const std::filesystem::path& folder, const std::vector<std::filesystem::path>& last,
+                  std::vector<std::filesystem::path>& files, std::string& why) {
+  std::error_code error;
+  for (std::filesystem::recursive_directory_iterator it(folder, error), end; !error && it != end; it.increment(error)) {
+    std::error_code type_error;
+    if (!it->is_regular_file(type_error)) continue;
+    const auto relative = it->path().lexically_relative(folder);
+    if (std::find(last.begin(), last.end(), relative) == last.end()) files.push_back(relative);
+  }
+  if (error) {
+    why = "cannot list " + folder.string() + ": " + error.message();
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+bool StagedOutput::sync(std::string& why) {
+  std::vector<std::filesystem::path> files;
+  if (!staged_files(folder_, {}, files, why) || !sync_files(folder_, files, why)) return false;
+  synced_ = true;
+  return true;
+}
+
 bool StagedOutput::commit(const std::filesystem::path& target, const std::vector<std::filesystem::path>& last,
                           std::string& why, bool keep_identical, Durability durability) {
   const bool durable = durability == Durability::kDurable;
   std::vector<std::filesystem::path> files;
+  if (!staged_files(folder_, last, files, why)) return false;
   std::error_code error;
-  for (std::filesystem::recursive_directory_iterator it(folder_, error), end; !error && it != end; it.increment(error)) {
-    std::error_code type_error;
-    if (!it->is_regular_file(type_error)) continue;
-    const auto relative = it->path().lexically_relative(folder_);
-    if (std::find(last.begin(), last.end(), relative) == last.end()) files.push_back(relative);
-  }
-  if (error) {
-    why = "cannot list " + folder_.string() + ": " + error.message();
-    return false;
-  }
   for (const auto& file : last) {
     std::error_code exists_error;
     if (std::filesystem::exists(folder_ / file, exists_error)) files.push_back(file);
@@ -287,7 +306,7 @@ bool StagedOutput::commit(const std::filesystem::path& target, const std::vector
   if (keep_identical) {
     std::erase_if(files, [&](const std::filesystem::path& file) { return same_bytes(folder_ / file, target / file); });
   }
-  if (durable && !sync_files(folder_, files, why)) return false;
+  if (durable && !synced_ && !sync_files(folder_, files, why)) return false;
   std::set<std::filesystem::path> folders;
   for (const auto& file : files) {
     const auto destination = target / file;

@@ -83,6 +83,38 @@ TEST(StagedOutput, CommitMovesStagedFilesIntoPlaceAndLeavesNoStage) {
   EXPECT_EQ(testing::read_file(out / "urdf" / "meshes" / "a.0123456789abcdef.stl"), "stl");
 }
 
+// rdtfd stages a revision while its save settles and commits it later: sync() makes the files
+// durable first (commit() then syncs only the folders it renamed into), and a moved stage keeps
+// that, as the outcome that holds it is moved from the worker to the event loop and back.
+TEST(StagedOutput, SyncedAheadThenMovedItCommitsTheSameFiles) {
+  testing::TempDir out;
+  std::string why;
+  auto stage = StagedOutput::create(out.path(), "stage", why);
+  ASSERT_TRUE(stage) << why;
+  std::filesystem::create_directories(stage->folder() / "urdf");
+  ASSERT_TRUE(write_staged_file(stage->folder() / "m.rdtf.gltf", std::string_view("{}"), why)) << why;
+  ASSERT_TRUE(write_staged_file(stage->folder() / "urdf" / "robot.urdf", std::string_view("<robot/>"), why)) << why;
+  ASSERT_TRUE(stage->sync(why)) << why;
+  StagedOutput moved(std::move(*stage));
+  stage.reset();  // The moved-from stage owns nothing: the folder stays.
+  ASSERT_TRUE(std::filesystem::exists(moved.folder()));
+  ASSERT_TRUE(moved.commit(out.path(), {"urdf/robot.urdf", "m.rdtf.gltf"}, why)) << why;
+  EXPECT_EQ(files_below(out.path()), (std::set<std::string>{"m.rdtf.gltf", "urdf/robot.urdf"}));
+  EXPECT_EQ(testing::read_file(out / "urdf" / "robot.urdf"), "<robot/>");
+}
+
+TEST(StagedOutput, SyncRefusesALinkInTheStageAndNamesIt) {
+  testing::TempDir out;
+  std::string why;
+  auto stage = StagedOutput::create(out.path(), "stage", why);
+  ASSERT_TRUE(stage) << why;
+  std::filesystem::create_symlink("/etc/hostname", stage->folder() / "m.rdtf.gltf");
+  ASSERT_TRUE(write_staged_file(stage->folder() / "a.bin", std::string_view("bytes"), why)) << why;
+  // Nothing outside the stage is opened through it: the sync fails and says which file.
+  EXPECT_FALSE(stage->sync(why));
+  EXPECT_NE(why.find("m.rdtf.gltf"), std::string::npos) << why;
+}
+
 TEST(StagedOutput, AStagedFileIsNotWrittenThroughALink) {
   testing::TempDir out;
   testing::TempDir elsewhere;

@@ -85,7 +85,9 @@ class StagedOutput {
   // A fresh folder in `folder` (which must exist); nothing and `why` when it cannot be made.
   static std::optional<StagedOutput> create(const std::filesystem::path& folder, std::string_view name,
                                             std::string& why);
-  StagedOutput(StagedOutput&& other) noexcept : folder_(std::move(other.folder_)) { other.folder_.clear(); }
+  StagedOutput(StagedOutput&& other) noexcept : folder_(std::move(other.folder_)), synced_(other.synced_) {
+    other.folder_.clear();
+  }
   StagedOutput& operator=(StagedOutput&&) = delete;
   StagedOutput(const StagedOutput&) = delete;
   ~StagedOutput();
@@ -102,10 +104,16 @@ class StagedOutput {
   // destination, perhaps the model's own .bin, stays the very same file).
   bool commit(const std::filesystem::path& target, const std::vector<std::filesystem::path>& last,
               std::string& why, bool keep_identical = false, Durability durability = Durability::kDurable);
+  // Makes every file staged so far durable now (fsync), so that commit() has only its renames and
+  // their folders to sync: for a stage written well before it is committed (rdtfd converts while a
+  // save settles and commits at the settle period's end). Files staged after this are not synced
+  // by it, so stage everything first. False with `why` when a sync fails.
+  bool sync(std::string& why);
 
  private:
   explicit StagedOutput(std::filesystem::path folder) : folder_(std::move(folder)) {}
   std::filesystem::path folder_;
+  bool synced_ = false;  // sync() made the staged files durable: commit() does not sync them again.
 };
 
 // Whether a name has the form of write_file_atomically's and StagedOutput's temporaries

@@ -516,6 +516,12 @@ TEST(DaemonBlobs, LargeBlobIsServedWithABoundedSendQueue) {
   const auto fetched = collector.fetch({sha});
   ASSERT_EQ(fetched.count(sha), 1u);
   EXPECT_TRUE(fetched.at(sha) == model.bin);
+  // The heartbeat that counts the last chunk may come after the collector has it all (statuses go
+  // every 100 ms): wait for it rather than read the one heard last.
+  EXPECT_TRUE(wait_until([&] {
+    const auto heard = statuses(s.messages());
+    return !heard.empty() && heard.back().blob_bytes_sent >= static_cast<std::int64_t>(model.bin.size());
+  }, 5s));
   const auto all = statuses(s.messages());
   ASSERT_GT(all.size(), statuses_before + 3);
   std::int64_t most = 0;

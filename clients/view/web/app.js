@@ -33,7 +33,10 @@ function probeRenderer() {
 const gpu = probeRenderer();
 const msaaAsked = new URLSearchParams(location.search).get('msaa');
 const antialias = msaaAsked === 'on' ? true : msaaAsked === 'off' ? false : !gpu.software;
-const renderer = new THREE.WebGLRenderer({ antialias, preserveDrawingBuffer: true });
+// The drawing buffer is not preserved (a copy of the whole frame each frame otherwise, on the CPU
+// under a software rasterizer: the one-pixel read that stamps a revision's frame, renderFrame(),
+// runs in the same task as its render), and the canvas is opaque (the scene has a background).
+const renderer = new THREE.WebGLRenderer({ antialias, alpha: false });
 renderer.setPixelRatio(window.devicePixelRatio);
 $('view').appendChild(renderer.domElement);
 const scene = new THREE.Scene();

@@ -10,7 +10,7 @@
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { equivalentBox } from './inertia.js';
-import { loadRevisionFiles } from './files.js';
+import { glbOf, loadRevisionFiles } from './files.js';
 
 const now = () => performance.timeOrigin + performance.now();
 
@@ -55,7 +55,8 @@ export class ModelView {
   async load() {
     const files = await loadRevisionFiles(this.info);
     this.timing.fetched_at = now();
-    const gltf = await new GLTFLoader().parseAsync(JSON.stringify(files.json), files.resourcePath);
+    const source = files.bin ? glbOf(files.json, files.bin) : JSON.stringify(files.json);
+    const gltf = await new GLTFLoader().parseAsync(source, files.resourcePath);
     this.timing.parsed_at = now();
     const json = gltf.parser.json;
     const nodeObjects = [];

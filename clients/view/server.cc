@@ -332,7 +332,13 @@ void Server::Impl::accept() {
   // The handler holds the Impl: the acceptor's pending accept never outlives it.
   acceptor.async_accept([impl = self.lock()](beast::error_code ec, tcp::socket socket) {
     if (impl->stopped) return;
-    if (!ec) std::make_shared<HttpSession>(std::move(socket), impl)->read();
+    if (!ec) {
+      // Without TCP_NODELAY a small message (a state, a revision) sent while an earlier one is
+      // unacknowledged waits for the browser's delayed ACK: 40 ms on Linux (Nagle's algorithm).
+      beast::error_code ignored;
+      socket.set_option(tcp::no_delay(true), ignored);
+      std::make_shared<HttpSession>(std::move(socket), impl)->read();
+    }
     impl->accept();
   });
 }

@@ -89,11 +89,30 @@ function renderFrame() {
 // Frames are rendered when something changed (a state, the camera, a toggle, a new revision),
 // not 60 times a second: under SwiftShader every frame costs CPU that rdtfd, the bus and the
 // next revision need, and frames queued in the GPU process delay the pixels of the next one.
+// And a frame waits until the GPU process has rastered the one before it (a fence, polled at each
+// animation frame): a software rasterizer takes longer than a refresh interval to raster one, and
+// the frames queued behind it would hold up the first frame of the next revision.
+let lastFrameFence = null;
+function gpuCaughtUp() {
+  if (!lastFrameFence) return true;
+  const gl = renderer.getContext();
+  const status = gl.getSyncParameter(lastFrameFence, gl.SYNC_STATUS);  // null once the context is lost
+  if (status !== null && status !== gl.SIGNALED) return false;
+  gl.deleteSync(lastFrameFence);
+  lastFrameFence = null;
+  return true;
+}
 function render() {
   requestAnimationFrame(render);
   if (!dirty && !everyFrame) return;
+  if (!everyFrame && !gpuCaughtUp()) return;  // still dirty: drawn at a later animation frame
   dirty = false;
   renderFrame();
+  const gl = renderer.getContext();
+  if (!lastFrameFence) {
+    lastFrameFence = gl.fenceSync(gl.SYNC_GPU_COMMANDS_COMPLETE, 0);
+    gl.flush();
+  }
 }
 requestAnimationFrame(render);
 

@@ -386,7 +386,7 @@ window.rdtfView = {
     return {
       frame,
       selected,
-      renderer: { name: gpu.name, software: gpu.software, antialias },
+      renderer: { name: gpu.name, software: gpu.software, antialias, draw_calls: renderer.info.render.calls, triangles: renderer.info.render.triangles },
       models: [...models.values()].map((m) => ({
         id: m.info.id,
         revision: m.view ? m.view.revision : null,

@@ -210,9 +210,11 @@ async function onModel(info) {
     if (m.lastState) applyState(m, m.lastState);
     if (!cameraFitted && info.id === selected) fitCamera(view);
     if (m.view) m.view.highlight(diagnosticsOf(m.info));
-    refreshPanel();
-    // Drawn now, not at the next animation frame (up to a refresh interval later).
+    view.root.visible = info.id === selected;
+    // Drawn now, not at the next animation frame (up to a refresh interval later); the panel
+    // after it, so that its layout and paint do not come first.
     renderFrame();
+    refreshPanel();
     if (old) old.dispose();
     retainDrawn();
     return;

@@ -283,6 +283,49 @@ TEST(View, ShowsTwoModelsAndOneRemoved) {
   page.screenshot("two_models_cylinder_removed.png");
 }
 
+// The encodings Blender and glTF tools write besides arm3's one buffer: a base colour texture (a
+// PNG beside the model, served as its own blob) and a model whose accessors read from two
+// buffers. Both are drawn with every link where LINK_STATE puts it, the texture with its image.
+TEST(View, DrawsATexturedModelAndOneWithTwoBuffers) {
+  Session s;
+  copy_fixture(s.watch, "arm3", "textured");
+  copy_fixture(s.watch, "arm3", "two_buffers");
+  // A 2x2 RGBA checker.
+  const std::string png(
+      "\x89\x50\x4e\x47\x0d\x0a\x1a\x0a\x00\x00\x00\x0d\x49\x48\x44\x52\x00\x00\x00\x02\x00\x00\x00\x02\x08\x06"
+      "\x00\x00\x00\x72\xb6\x0d\x24\x00\x00\x00\x12\x49\x44\x41\x54\x78\x9c\x63\xf8\xcf\xc0\xf0\x1f\x04\xa0\x24"
+      "\xc3\x7f\x00\x6b\xa6\x0b\xf5\xc4\xb7\x3b\xa8\x00\x00\x00\x00\x49\x45\x4e\x44\xae\x42\x60\x82",
+      75);
+  write_in_place(s.watch / "checker.png", png);
+  Json textured = Json::parse(read(s.watch / "textured.gltf"));
+  textured["images"] = Json::array({Json{{"uri", "checker.png"}}});
+  textured["textures"] = Json::array({Json{{"source", 0}}});
+  textured["materials"] = Json::array({Json{{"name", "checker"}, {"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}}}}}}});
+  for (auto& mesh : textured["meshes"]) {
+    for (auto& primitive : mesh["primitives"]) primitive["material"] = 0;
+  }
+  write_in_place(s.watch / "textured.gltf", textured.dump());
+  // The same bytes twice, as two buffers: every other buffer view reads from the second.
+  fs::copy_file(s.watch / "arm3.bin", s.watch / "second.bin");  // copy_fixture keeps the .bin's name
+  Json two = Json::parse(read(s.watch / "two_buffers.gltf"));
+  two["buffers"].push_back(Json{{"uri", "second.bin"}, {"byteLength", two["buffers"][0]["byteLength"]}});
+  for (std::size_t i = 1; i < two["bufferViews"].size(); i += 2) two["bufferViews"][i]["buffer"] = 1;
+  write_in_place(s.watch / "two_buffers.gltf", two.dump());
+  s.start(simulating());
+  ViewProcess view(s.root.path());
+  Page page(view.url(), s.root / "page.log");
+  for (const char* name : {"textured.gltf", "two_buffers.gltf"}) {
+    const std::string id = name;
+    const Json m = wait_drawn(page, id, 1);
+    ASSERT_FALSE(m.is_null()) << id << ": " << page.state().dump() << page.driver_log();
+    EXPECT_EQ(m["links"].size(), 3u) << id;
+    EXPECT_EQ(m["textures"], id == "textured.gltf" ? 1 : 0) << id;
+    expect_links_where_link_state_puts_them(s, page, m, id);
+  }
+  page.eval("window.rdtfView.select('textured.gltf')");
+  page.screenshot("arm3_textured.png");
+}
+
 // Hostile pages: every message refused with a reason, none reaches the bus; a message over
 // 4 KiB is refused with its size and one over 1 MiB closes that socket; a flood is answered 20 times a second and counted; clients that
 // vanish mid-request or mid-frame, or come from another origin, leave the viewer serving.

@@ -58,6 +58,13 @@ export class ModelView {
     const source = files.bin ? glbOf(files.json, files.bin) : JSON.stringify(files.json);
     const gltf = await new GLTFLoader().parseAsync(source, files.resourcePath);
     this.timing.parsed_at = now();
+    // Textures drawn with their image (GLTFLoader draws a material whose image did not load
+    // without it, and says so only on the console).
+    const maps = new Set();
+    gltf.scene.traverse((o) => {
+      for (const m of o.material ? [o.material].flat() : []) if (m.map && m.map.image && m.map.image.width > 0) maps.add(m.map);
+    });
+    this.texturesDrawn = maps.size;
     const json = gltf.parser.json;
     const nodeObjects = [];
     for (const [object, where] of gltf.parser.associations) {
@@ -271,6 +278,7 @@ export class ModelView {
       com: this.totalComPosition.toArray(),
       sim_time: this.simTime,
       highlighted: this.highlighted,
+      textures: this.texturesDrawn,
     };
   }
 

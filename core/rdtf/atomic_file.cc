@@ -289,7 +289,7 @@ bool staged_files(const std::filesystem::path& folder, const std::vector<std::fi
 bool StagedOutput::sync(std::string& why) {
   std::vector<std::filesystem::path> files;
   if (!staged_files(folder_, {}, files, why) || !sync_files(folder_, files, why)) return false;
-  synced_ = true;
+  synced_.insert(files.begin(), files.end());
   return true;
 }
 
@@ -306,7 +306,13 @@ bool StagedOutput::commit(const std::filesystem::path& target, const std::vector
   if (keep_identical) {
     std::erase_if(files, [&](const std::filesystem::path& file) { return same_bytes(folder_ / file, target / file); });
   }
-  if (durable && !synced_ && !sync_files(folder_, files, why)) return false;
+  if (durable) {
+    std::vector<std::filesystem::path> unsynced;
+    for (const auto& file : files) {
+      if (!synced_.contains(file)) unsynced.push_back(file);
+    }
+    if (!sync_files(folder_, unsynced, why)) return false;
+  }
   std::set<std::filesystem::path> folders;
   for (const auto& file : files) {
     const auto destination = target / file;

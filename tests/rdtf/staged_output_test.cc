@@ -84,8 +84,10 @@ TEST(StagedOutput, CommitMovesStagedFilesIntoPlaceAndLeavesNoStage) {
 }
 
 // rdtfd stages a revision while its save settles and commits it later: sync() makes the files
-// durable first (commit() then syncs only the folders it renamed into), and a moved stage keeps
-// that, as the outcome that holds it is moved from the worker to the event loop and back.
+// durable first (commit() then syncs only what was staged after it, and the folders it renamed
+// into), and a moved stage commits the same files, as the outcome that holds it is moved from the
+// worker to the event loop and back. (Whether an fsync ran is not visible here: what is, is that
+// every file arrives whole, one staged after the sync included.)
 TEST(StagedOutput, SyncedAheadThenMovedItCommitsTheSameFiles) {
   testing::TempDir out;
   std::string why;
@@ -98,8 +100,10 @@ TEST(StagedOutput, SyncedAheadThenMovedItCommitsTheSameFiles) {
   StagedOutput moved(std::move(*stage));
   stage.reset();  // The moved-from stage owns nothing: the folder stays.
   ASSERT_TRUE(std::filesystem::exists(moved.folder()));
+  ASSERT_TRUE(write_staged_file(moved.folder() / "late.bin", std::string_view("late"), why)) << why;
   ASSERT_TRUE(moved.commit(out.path(), {"urdf/robot.urdf", "m.rdtf.gltf"}, why)) << why;
-  EXPECT_EQ(files_below(out.path()), (std::set<std::string>{"m.rdtf.gltf", "urdf/robot.urdf"}));
+  EXPECT_EQ(files_below(out.path()), (std::set<std::string>{"late.bin", "m.rdtf.gltf", "urdf/robot.urdf"}));
+  EXPECT_EQ(testing::read_file(out / "late.bin"), "late");
   EXPECT_EQ(testing::read_file(out / "urdf" / "robot.urdf"), "<robot/>");
 }
 

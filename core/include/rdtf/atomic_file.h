@@ -85,7 +85,7 @@ class StagedOutput {
   // A fresh folder in `folder` (which must exist); nothing and `why` when it cannot be made.
   static std::optional<StagedOutput> create(const std::filesystem::path& folder, std::string_view name,
                                             std::string& why);
-  StagedOutput(StagedOutput&& other) noexcept : folder_(std::move(other.folder_)), synced_(other.synced_) {
+  StagedOutput(StagedOutput&& other) noexcept : folder_(std::move(other.folder_)), synced_(std::move(other.synced_)) {
     other.folder_.clear();
   }
   StagedOutput& operator=(StagedOutput&&) = delete;
@@ -107,13 +107,13 @@ class StagedOutput {
   // Makes every file staged so far durable now (fsync), so that commit() has only its renames and
   // their folders to sync: for a stage written well before it is committed (rdtfd converts while a
   // save settles and commits at the settle period's end). Files staged after this are not synced
-  // by it, so stage everything first. False with `why` when a sync fails.
+  // by it (commit() syncs those). False with `why` when a sync fails.
   bool sync(std::string& why);
 
  private:
   explicit StagedOutput(std::filesystem::path folder) : folder_(std::move(folder)) {}
   std::filesystem::path folder_;
-  bool synced_ = false;  // sync() made the staged files durable: commit() does not sync them again.
+  std::set<std::filesystem::path> synced_;  // made durable by sync(), relative: commit() skips them
 };
 
 // Whether a name has the form of write_file_atomically's and StagedOutput's temporaries

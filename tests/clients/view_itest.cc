@@ -305,15 +305,21 @@ TEST(View, DrawsATexturedModelAndOneWithTwoBuffers) {
     for (auto& primitive : mesh["primitives"]) primitive["material"] = 0;
   }
   write_in_place(s.watch / "textured.gltf", textured.dump());
-  // The same bytes twice, as two buffers: every other buffer view reads from the second.
-  fs::copy_file(s.watch / "arm3.bin", s.watch / "second.bin");  // copy_fixture keeps the .bin's name
+  // Two buffers: the second holds arm3's bytes after 16 of its own, and every other buffer view
+  // reads from it (at offsets 16 further on), so a view read from the wrong buffer is garbage.
+  const std::string bin = read(s.watch / "arm3.bin");  // copy_fixture keeps the .bin's name
+  write_in_place(s.watch / "second.bin", std::string(16, '\xee') + bin);
   Json two = Json::parse(read(s.watch / "two_buffers.gltf"));
-  two["buffers"].push_back(Json{{"uri", "second.bin"}, {"byteLength", two["buffers"][0]["byteLength"]}});
-  for (std::size_t i = 1; i < two["bufferViews"].size(); i += 2) two["bufferViews"][i]["buffer"] = 1;
+  two["buffers"].push_back(Json{{"uri", "second.bin"}, {"byteLength", bin.size() + 16}});
+  for (std::size_t i = 1; i < two["bufferViews"].size(); i += 2) {
+    two["bufferViews"][i]["buffer"] = 1;
+    two["bufferViews"][i]["byteOffset"] = two["bufferViews"][i].value("byteOffset", 0) + 16;
+  }
   write_in_place(s.watch / "two_buffers.gltf", two.dump());
   s.start(simulating());
   ViewProcess view(s.root.path());
   Page page(view.url(), s.root / "page.log");
+  std::map<std::string, Json> drawn;
   for (const char* name : {"textured.gltf", "two_buffers.gltf"}) {
     const std::string id = name;
     const Json m = wait_drawn(page, id, 1);
@@ -321,6 +327,23 @@ TEST(View, DrawsATexturedModelAndOneWithTwoBuffers) {
     EXPECT_EQ(m["links"].size(), 3u) << id;
     EXPECT_EQ(m["textures"], id == "textured.gltf" ? 1 : 0) << id;
     expect_links_where_link_state_puts_them(s, page, m, id);
+    drawn[id] = m;
+  }
+  // rdtfd kept the two buffers, and the page drew from each what arm3 draws from its one.
+  const Json written = Json::parse(read(s.output / "two_buffers.gltf" / "two_buffers.rdtf.gltf"));
+  EXPECT_EQ(written["buffers"].size(), 2u) << written["buffers"].dump();
+  for (const auto& link : drawn["textured.gltf"]["links"]) {
+    const auto other = std::find_if(drawn["two_buffers.gltf"]["links"].begin(), drawn["two_buffers.gltf"]["links"].end(),
+                                    [&](const Json& l) { return l["name"] == link["name"]; });
+    ASSERT_NE(other, drawn["two_buffers.gltf"]["links"].end()) << link["name"];
+    ASSERT_TRUE(link["bounds"].is_array()) << link.dump();
+    ASSERT_TRUE((*other)["bounds"].is_array()) << other->dump();
+    for (int corner = 0; corner < 2; ++corner) {
+      for (int k = 0; k < 3; ++k) {
+        EXPECT_NEAR((*other)["bounds"][corner][k].get<double>(), link["bounds"][corner][k].get<double>(), 1e-9)
+            << link["name"] << " corner " << corner;
+      }
+    }
   }
   page.eval("window.rdtfView.select('textured.gltf')");
   page.screenshot("arm3_textured.png");

@@ -1,35 +1,30 @@
 // The files of a revision (its RDTF glTF, buffers, images), fetched once per content: a file
 // whose SHA-256 an earlier revision already brought (a save that changed the glTF's JSON but not
 // its 18 MB buffer) is not fetched again. Each distinct content is held in the page: the glTF's
-// text as a string, a buffer's bytes as an ArrayBuffer, an image as a Blob with an object URL.
-// A revision with one buffer goes to GLTFLoader as a GLB made in memory (glbOf), so that drawing
-// it reads nothing back through a URL: reading a Blob, or fetching its object URL, is a round trip
-// to the browser process, several ms of a save's latency each. Contents no drawn or loading
-// revision uses are dropped by retain().
-const held = new Map();  // sha256 -> {promise (-> string | ArrayBuffer | Blob), url}
+// text as a string, a buffer's bytes as an ArrayBuffer, an image as a Blob. A revision with one
+// buffer goes to GLTFLoader as a GLB made in memory (glbOf), so that drawing it reads nothing
+// back through a URL: reading a Blob, or fetching its object URL, is a round trip to the browser
+// process, several ms of a save's latency each. Images and further buffers get object URLs made
+// for one load and revoked after it (loadRevisionFiles). Contents no drawn or loading revision
+// uses are dropped by retain().
+const held = new Map();  // sha256 -> promise of its content (string | ArrayBuffer | Blob)
 
 function fetchOnce(file) {
-  let entry = held.get(file.sha256);
-  if (entry) return entry;
+  let promise = held.get(file.sha256);
+  if (promise) return promise;
   if (typeof file.text === 'string') {
-    // The glTF's text came in the model message: nothing to fetch.
-    entry = { url: null, promise: Promise.resolve(file.text) };
+    promise = Promise.resolve(file.text);  // The glTF's text came in the model message.
   } else {
-    entry = { url: null };
-    entry.promise = fetch(file.url).then(async (response) => {
+    promise = fetch(file.url).then((response) => {
       if (!response.ok) throw new Error(`${file.path}: HTTP ${response.status}`);
       if (file.role === 'rdtf') return response.text();
-      if (file.role === 'image') {
-        const blob = await response.blob();  // Decoded by the browser from its object URL.
-        entry.url = URL.createObjectURL(blob);
-        return blob;
-      }
+      if (file.role === 'image') return response.blob();  // Decoded by the browser from a URL.
       return response.arrayBuffer();
     });
-    entry.promise.catch(() => { if (held.get(file.sha256) === entry) held.delete(file.sha256); });
+    promise.catch(() => { if (held.get(file.sha256) === promise) held.delete(file.sha256); });
   }
-  held.set(file.sha256, entry);
-  return entry;
+  held.set(file.sha256, promise);
+  return promise;
 }
 
 // The decoded path of a URL (relative ones resolved against `base`), to match a glTF's URI to a
@@ -38,40 +33,45 @@ function pathKey(url, base) {
   try { return decodeURIComponent(new URL(url, base).pathname); } catch { return null; }
 }
 
-// Fetches a revision's glTF and every file it refers to; returns its JSON, with each image URI
-// that names a manifest file replaced by that content's object URL, and `bin`: the bytes of its
-// buffer when it has exactly one and it is a manifest file (its URI is then dropped: the buffer is
-// the GLB's BIN chunk, glbOf). Other buffers get an object URL. URIs that name no manifest file (a
-// data: URI) are left as they are.
+// Fetches a revision's glTF and every file it refers to; returns its JSON and `bin`: the bytes of
+// its buffer when it has exactly one and that is a manifest file (its URI is then dropped: the
+// buffer is the GLB's BIN chunk, glbOf). Every other buffer or image URI that names a manifest
+// file is replaced by an object URL of that content, listed in `urls`: the caller revokes them
+// once GLTFLoader is done. URIs that name no manifest file (a data: URI) are left as they are.
+// (The same content may be held as another type, when one file serves as two roles.)
 export async function loadRevisionFiles(info) {
   const files = info.files || [];
   const gltf = files.find((f) => f.role === 'rdtf');
   if (!gltf) throw new Error('the manifest lists no RDTF glTF');
-  const entries = new Map(files.filter((f) => f.role === 'rdtf' || f.role === 'buffer' || f.role === 'image')
-    .map((f) => [f, fetchOnce(f)]));
-  const contents = new Map(await Promise.all([...entries].map(async ([f, e]) => [f, await e.promise])));
-  const json = JSON.parse(contents.get(gltf));
+  const wanted = files.filter((f) => f.role === 'rdtf' || f.role === 'buffer' || f.role === 'image');
+  const contents = new Map(await Promise.all(wanted.map(async (f) => [f, await fetchOnce(f)])));
+  const text = contents.get(gltf);
+  const json = JSON.parse(typeof text === 'string' ? text : await new Blob([text]).text());
   const base = new URL(gltf.url, location.href).href;
-  const byPath = new Map([...entries].map(([f, e]) => [pathKey(f.url, location.href), { entry: e, content: contents.get(f) }]));
+  const byPath = new Map(wanted.map((f) => [pathKey(f.url, location.href), contents.get(f)]));
   const named = (item) => (typeof item.uri === 'string' && !item.uri.startsWith('data:') ? byPath.get(pathKey(item.uri, base)) : undefined);
+  const urls = [];
+  const urlOf = (content) => {
+    urls.push(URL.createObjectURL(content instanceof Blob ? content : new Blob([content])));
+    return urls[urls.length - 1];
+  };
   for (const image of json.images || []) {
-    const found = named(image);
-    if (found && found.entry.url) image.uri = found.entry.url;
+    const content = named(image);
+    if (content !== undefined) image.uri = urlOf(content);
   }
   let bin = null;
   const buffers = json.buffers || [];
-  buffers.forEach((buffer, i) => {
-    const found = named(buffer);
-    if (!found || !(found.content instanceof ArrayBuffer)) return;
+  for (const [i, buffer] of buffers.entries()) {
+    const content = named(buffer);
+    if (content === undefined) continue;
     if (buffers.length === 1 && i === 0) {
-      bin = found.content;
+      bin = content instanceof ArrayBuffer ? content : await new Blob([content]).arrayBuffer();
       delete buffer.uri;
-      return;
+    } else {
+      buffer.uri = urlOf(content);
     }
-    if (!found.entry.url) found.entry.url = URL.createObjectURL(new Blob([found.content]));
-    buffer.uri = found.entry.url;
-  });
-  return { json, bin, resourcePath: base.slice(0, base.lastIndexOf('/') + 1) };
+  }
+  return { json, bin, urls, resourcePath: base.slice(0, base.lastIndexOf('/') + 1) };
 }
 
 // A GLB of `json` with `bin` as its BIN chunk (glTF 2.0, "Binary glTF Layout"): chunks padded to
@@ -99,11 +99,7 @@ export function glbOf(json, bin) {
 
 // Drops every held content whose hash is not in `keep`.
 export function retain(keep) {
-  for (const [sha, entry] of held) {
-    if (keep.has(sha)) continue;
-    if (entry.url) URL.revokeObjectURL(entry.url);
-    held.delete(sha);
-  }
+  for (const sha of [...held.keys()]) if (!keep.has(sha)) held.delete(sha);
 }
 
 export function heldCount() { return held.size; }

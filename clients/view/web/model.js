@@ -56,7 +56,12 @@ export class ModelView {
     const files = await loadRevisionFiles(this.info);
     this.timing.fetched_at = now();
     const source = files.bin ? glbOf(files.json, files.bin) : JSON.stringify(files.json);
-    const gltf = await new GLTFLoader().parseAsync(source, files.resourcePath);
+    let gltf;
+    try {
+      gltf = await new GLTFLoader().parseAsync(source, files.resourcePath);
+    } finally {
+      files.urls.forEach((url) => URL.revokeObjectURL(url));  // the images are decoded by now
+    }
     this.timing.parsed_at = now();
     // Textures drawn with their image (GLTFLoader draws a material whose image did not load
     // without it, and says so only on the console).
@@ -113,6 +118,13 @@ export class ModelView {
         link.meshes.push(o);
         box.expandByObject(o);
       });
+      // The link's geometry in its own node's frame, whatever the pose (the test hook's bounds).
+      const X_LW = link.object.matrixWorld.clone().invert();
+      link.bounds = new THREE.Box3();
+      for (const mesh of link.meshes) {
+        if (!mesh.geometry.boundingBox) mesh.geometry.computeBoundingBox();
+        link.bounds.union(mesh.geometry.boundingBox.clone().applyMatrix4(X_LW.clone().multiply(mesh.matrixWorld)));
+      }
     }
     this.size = box.isEmpty() ? 1 : box.getSize(new THREE.Vector3()).length();
     this.buildOverlays();
@@ -269,7 +281,8 @@ export class ModelView {
     return {
       links: this.links.map((l) => {
         const p = new THREE.Vector3().setFromMatrixPosition(l.X_SF);
-        return { name: l.name, position: [p.x, p.y, p.z], box: l.box ? l.box.sides : null };
+        return { name: l.name, position: [p.x, p.y, p.z], box: l.box ? l.box.sides : null,
+          bounds: l.bounds.isEmpty() ? null : [l.bounds.min.toArray(), l.bounds.max.toArray()] };
       }),
       joints: this.joints.map((j) => ({ name: j.name, type: j.type, lower: j.lower, upper: j.upper,
         position: this.jointPositions.has(j.name) ? this.jointPositions.get(j.name) : null,
@@ -285,7 +298,15 @@ export class ModelView {
   dispose() {
     this.root.traverse((o) => {
       if (o.geometry) o.geometry.dispose();
-      if (o.material) (Array.isArray(o.material) ? o.material : [o.material]).forEach((m) => m.dispose());
+      for (const m of o.material ? [o.material].flat() : []) {
+        // A texture's GPU copy and its ImageBitmap are freed only when asked (the links' tinted
+        // copies of a material share its texture: disposing it twice is harmless).
+        if (m.map) {
+          m.map.dispose();
+          if (m.map.image && typeof m.map.image.close === 'function') m.map.image.close();
+        }
+        m.dispose();
+      }
     });
   }
 }

@@ -263,10 +263,6 @@ bool sync_files(const std::filesystem::path& folder, const std::vector<std::file
   return ok;
 }
 
-}  // namespace
-
-namespace {
-
 // Every regular file below `folder`, relative to it, those of `last` left out.
 bool staged_files(const std::filesystem::path& folder, const std::vector<std::filesystem::path>& last,
                   std::vector<std::filesystem::path>& files, std::string& why) {

@@ -7,6 +7,7 @@
 #include <sys/socket.h>
 
 #include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
 
 #include <rdtf/joint_command_t.hpp>
 #include <rdtf/link_state_t.hpp>
@@ -41,7 +42,10 @@ std::optional<rdtf::link_state_t> link_state_at(const std::vector<Message>& all,
 // rdtf-view) and this test's subscriber receive the same datagrams on two sockets, and UDP may drop
 // one on either: when the subscriber never gets the step the page shows, a later step the page
 // draws is compared instead, up to five steps; the comparison itself is never relaxed.
-void expect_links_where_link_state_puts_them(Session& s, Page& page, Json m, const std::string& id) {
+// With `inertia` (the revision's INERTIA table), each link's centre-of-mass sphere is checked too:
+// drawn at X_SF c_F, c_F the table's centre of mass in the link frame F.
+void expect_links_where_link_state_puts_them(Session& s, Page& page, Json m, const std::string& id,
+                                             const rdtf::inertia_table_t* inertia = nullptr) {
   const auto revision = m["revision"].get<std::int64_t>();
   std::optional<rdtf::link_state_t> state;
   std::vector<double> missed;
@@ -69,6 +73,12 @@ void expect_links_where_link_state_puts_them(Session& s, Page& page, Json m, con
     ASSERT_NE(at, state->name.end()) << link["name"];
     const auto i = static_cast<std::size_t>(at - state->name.begin());
     for (int k = 0; k < 3; ++k) EXPECT_NEAR(link["position"][k].get<double>(), state->position[i][k], 1e-6) << link["name"];
+    if (inertia == nullptr) continue;
+    const auto row = std::find_if(inertia->links.begin(), inertia->links.end(), [&](const auto& l) { return l.name == link["name"]; });
+    ASSERT_NE(row, inertia->links.end()) << link["name"];
+    const Eigen::Quaterniond q_SF(state->orientation[i][0], state->orientation[i][1], state->orientation[i][2], state->orientation[i][3]);
+    const Eigen::Vector3d c_S = Eigen::Vector3d(state->position[i].data()) + q_SF * Eigen::Vector3d(row->center_of_mass);
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(link["com_drawn"][k].get<double>(), c_S[k], 1e-6) << link["name"];
   }
 }
 
@@ -81,12 +91,12 @@ TEST(View, DrawsEveryLinkWhereLinkStatePutsItWithItsInertiaBox) {
   const Json m = wait_drawn(page, kArm, 1);
   ASSERT_FALSE(m.is_null()) << page.state().dump() << "\n" << page.driver_log() << view.log();
   EXPECT_EQ(m["status"], "live");
-  expect_links_where_link_state_puts_them(s, page, m, kArm);
+  const auto table = last_inertia(s.messages(), kArm);
+  ASSERT_TRUE(table);
+  expect_links_where_link_state_puts_them(s, page, m, kArm, &*table);
 
   // Mass and the equivalent-inertia boxes, against Eigen's eigenvalues of the INERTIA table's
   // tensors: sides sqrt(6 (Ij + Ik - Ii) / m).
-  const auto table = last_inertia(s.messages(), kArm);
-  ASSERT_TRUE(table);
   EXPECT_NEAR(m["total_mass"].get<double>(), table->total_mass, 1e-12 * table->total_mass);
   for (const auto& l : table->links) {
     Eigen::Matrix3d I;
@@ -103,7 +113,15 @@ TEST(View, DrawsEveryLinkWhereLinkStatePutsItWithItsInertiaBox) {
     std::sort(drawn.begin(), drawn.end());
     for (int k = 0; k < 3; ++k) EXPECT_NEAR(drawn[k], expected[k], 1e-9 * expected[2]) << l.name;
   }
-  page.eval("window.rdtfView.show({inertia: true})");
+  // Every overlay of every link in four draw calls (docs/view.md, "Overlays in four draw calls"):
+  // with all shown, a frame draws the links' meshes, the grid and those four.
+  const auto frame = page.state()["frame"].get<std::int64_t>();
+  page.eval("window.rdtfView.show({frames: true, com: true, inertia: true})");
+  std::int64_t meshes = 0;
+  for (const auto& link : m["links"]) meshes += link["meshes"].get<std::int64_t>();
+  Json drawn_all;
+  ASSERT_TRUE(page.wait_state([&](const Json& st) { drawn_all = st; return st["frame"].get<std::int64_t>() > frame; }, 10s));
+  EXPECT_EQ(drawn_all["renderer"]["draw_calls"].get<std::int64_t>(), meshes + 1 + 4) << drawn_all["renderer"].dump();
   page.screenshot("arm3_live_with_inertia_boxes.png");
   // Headless chromium rasterizes with SwiftShader, on the CPU: the page leaves multisampling off
   // there (docs/view.md, "Multisampling").

@@ -10,6 +10,7 @@
 import * as THREE from 'three';
 import { GLTFLoader } from 'three/addons/loaders/GLTFLoader.js';
 import { equivalentBox } from './inertia.js';
+import { Overlays } from './overlays.js';
 import { glbOf, loadRevisionFiles } from './files.js';
 
 const now = () => performance.timeOrigin + performance.now();
@@ -41,8 +42,8 @@ export class ModelView {
     this.revision = info.revision;
     this.root = new THREE.Group();
     this.root.name = `model ${info.id} r${info.revision}`;
-    this.links = [];  // {name, gltf_name, node, object, X_FL, X_SF, color, meshes, overlays}
-    this.joints = [];  // {name, type, lower, upper, axis, link, arrow}
+    this.links = [];  // {name, gltf_name, node, object, X_FL, X_SF, color, meshes, box, X_FB}
+    this.joints = [];  // {name, type, lower, upper, axis, link, highlighted}
     this.jointPositions = new Map();
     this.simTime = null;
     this.highlighted = { links: [], joints: [] };
@@ -127,45 +128,22 @@ export class ModelView {
       }
     }
     this.size = box.isEmpty() ? 1 : box.getSize(new THREE.Vector3()).length();
-    this.buildOverlays();
+    this.buildBoxes();
     this.buildJoints();
+    this.overlays = new Overlays(this.size, this.links, this.joints);
+    this.root.add(this.overlays.frames, this.overlays.coms, this.overlays.boxes);
     this.applyPose();
     this.timing.built_at = now();
   }
 
-  buildOverlays() {
-    const s = this.size;
-    this.frames = new THREE.Group();
-    this.coms = new THREE.Group();
-    this.boxes = new THREE.Group();
-    this.root.add(this.frames, this.coms, this.boxes);
-    const comGeometry = new THREE.SphereGeometry(0.012 * s, 12, 8);
+  // Each link's equivalent-inertia box (inertia.js) and its pose X_FB in the link's frame F.
+  buildBoxes() {
     for (const link of this.links) {
-      link.axes = new THREE.AxesHelper(0.08 * s);
-      link.axes.matrixAutoUpdate = false;
-      link.axes.material.depthTest = false;  // frames inside a solid link still show
-      link.axes.renderOrder = 2;
-      this.frames.add(link.axes);
-      link.comMesh = new THREE.Mesh(comGeometry, new THREE.MeshBasicMaterial({ color: 0xffff00, depthTest: false }));
-      link.comMesh.renderOrder = 2;
-      link.comMesh.matrixAutoUpdate = false;
-      this.coms.add(link.comMesh);
-      const eq = equivalentBox(link.mass, link.inertia);
-      link.box = eq;
-      if (eq) {
-        const geometry = new THREE.BoxGeometry(...eq.sides.map((x) => Math.max(x, 1e-6)));
-        link.boxMesh = new THREE.Mesh(geometry, new THREE.MeshBasicMaterial({
-          color: link.color, wireframe: true }));
-        link.boxMesh.matrixAutoUpdate = false;
-        const [u, v, w] = eq.axes.map((a) => new THREE.Vector3(...a));
-        link.X_FB = new THREE.Matrix4().makeBasis(u, v, w).setPosition(...link.comLocal);
-        this.boxes.add(link.boxMesh);
-      }
+      link.box = equivalentBox(link.mass, link.inertia);
+      if (!link.box) continue;
+      const [u, v, w] = link.box.axes.map((a) => new THREE.Vector3(...a));
+      link.X_FB = new THREE.Matrix4().makeBasis(u, v, w).setPosition(...link.comLocal);
     }
-    this.totalCom = new THREE.Mesh(new THREE.SphereGeometry(0.025 * s, 16, 12),
-      new THREE.MeshBasicMaterial({ color: 0xff00ff, depthTest: false }));
-    this.totalCom.renderOrder = 3;
-    this.coms.add(this.totalCom);
   }
 
   buildJoints() {
@@ -177,18 +155,8 @@ export class ModelView {
       // turned back from ROS's Z up (docs/urdf.md, "Frames": glTF (x, y, z) is URDF (x, -z, y)).
       const entry = [link.node, ...link.chain].map((n) => this.rdtfNodes.get(n)).find((e) => e && e.joint && e.joint.axis);
       const axis = entry ? entry.joint.axis : [j.axis[0], j.axis[2], -j.axis[1]];
-      const arrow = new THREE.ArrowHelper(new THREE.Vector3(...axis).normalize(), new THREE.Vector3(),
-        0.15 * this.size, 0x00e0ff, 0.04 * this.size, 0.02 * this.size);
-      for (const part of [arrow.line, arrow.cone]) part.material.depthTest = false;
-      arrow.renderOrder = 2;
-      arrow.line.renderOrder = 2;
-      arrow.cone.renderOrder = 2;
-      const holder = new THREE.Group();
-      holder.matrixAutoUpdate = false;
-      holder.add(arrow);
-      if (j.type === 'fixed') holder.visible = false;
-      this.frames.add(holder);
-      this.joints.push({ ...j, link, arrow, holder, gltf_names: link.chain.map((n) => this.nodeNames[n]) });
+      this.joints.push({ ...j, link, axis: new THREE.Vector3(...axis).normalize(), highlighted: false,
+        gltf_names: link.chain.map((n) => this.nodeNames[n]) });
     }
   }
 
@@ -220,30 +188,25 @@ export class ModelView {
 
   applyPose() {
     let mass = 0;
-    const com = new THREE.Vector3();
+    const com = new THREE.Vector3(), c = new THREE.Vector3();
     for (const link of this.links) {
       link.object.matrix.multiplyMatrices(link.X_SF, link.X_FL);
       link.object.matrixWorldNeedsUpdate = true;
-      link.axes.matrix.copy(link.X_SF);
-      const c = new THREE.Vector3(...link.comLocal).applyMatrix4(link.X_SF);
-      link.comMesh.matrix.makeTranslation(c.x, c.y, c.z);
-      if (link.boxMesh) link.boxMesh.matrix.multiplyMatrices(link.X_SF, link.X_FB);
+      c.fromArray(link.comLocal).applyMatrix4(link.X_SF);
       mass += link.mass;
       com.addScaledVector(c, link.mass);
     }
-    for (const j of this.joints) j.holder.matrix.copy(j.link.X_SF);
     if (mass > 0) com.divideScalar(mass);
     this.totalMass = mass;
     this.totalComPosition = com;
-    this.totalCom.matrix = new THREE.Matrix4().makeTranslation(com.x, com.y, com.z);
-    this.totalCom.matrixAutoUpdate = false;
+    this.overlays.update(com);
   }
 
   // Diagnostics to red (errors and warnings; infos are no fault): each names a link or joint by the names quoted in its message, else by
   // the node of its JSON pointer (/nodes/N: a link node, or a joint node between two links).
   highlight(diagnostics) {
     for (const link of this.links) for (const m of link.meshes) m.material.color.copy(link.color);
-    for (const j of this.joints) j.arrow.setColor(0x00e0ff);
+    for (const j of this.joints) j.highlighted = false;
     const links = new Set(), joints = new Set();
     for (const d of (diagnostics || []).filter((x) => x.severity !== 'info')) {
       const names = [...(d.message || '').matchAll(/'([^']+)'/g)].map((m) => m[1]);
@@ -263,18 +226,18 @@ export class ModelView {
       }
     }
     for (const j of joints) {
-      j.arrow.setColor(RED);
-      j.holder.visible = true;
+      j.highlighted = true;  // its arrow red, and shown if fixed
       links.add(j.link);  // the part the joint moves, so that it shows in red too
     }
     for (const link of links) for (const m of link.meshes) m.material.color.copy(RED);
     this.highlighted = { links: [...links].map((l) => l.name), joints: [...joints].map((j) => j.name) };
+    this.overlays.update(this.totalComPosition);
   }
 
   setVisible(parts) {
-    this.frames.visible = parts.frames;
-    this.coms.visible = parts.com;
-    this.boxes.visible = parts.inertia;
+    this.overlays.frames.visible = parts.frames;
+    this.overlays.coms.visible = parts.com;
+    this.overlays.boxes.visible = parts.inertia;
   }
 
   state() {
@@ -282,6 +245,7 @@ export class ModelView {
       links: this.links.map((l) => {
         const p = new THREE.Vector3().setFromMatrixPosition(l.X_SF);
         return { name: l.name, position: [p.x, p.y, p.z], box: l.box ? l.box.sides : null,
+          com_drawn: this.overlays.comDrawn(l.index), meshes: l.meshes.length,
           bounds: l.bounds.isEmpty() ? null : [l.bounds.min.toArray(), l.bounds.max.toArray()] };
       }),
       joints: this.joints.map((j) => ({ name: j.name, type: j.type, lower: j.lower, upper: j.upper,
@@ -297,6 +261,7 @@ export class ModelView {
 
   dispose() {
     this.root.traverse((o) => {
+      if (o.isInstancedMesh) o.dispose();  // its instance buffers
       if (o.geometry) o.geometry.dispose();
       for (const m of o.material ? [o.material].flat() : []) {
         // A texture's GPU copy and its ImageBitmap are freed only when asked (the links' tinted

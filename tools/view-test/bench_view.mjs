@@ -8,10 +8,14 @@
 //   fps:     frames rendered in 10 s with the 1M-triangle model drawn (--big);
 //   memory:  rdtf-view's VmRSS with 100 models live (copies of arm3 under 100 names).
 // Prints one JSON line per result.
+//   robot:   with --robot NAME, tests/data/robots/NAME.urdf imported (`rdtf import`) and drawn:
+//            frames rendered in 10 s (every frame, all overlays shown) and draw calls a frame.
+// --web-dir DIR serves the page from DIR (another version of clients/view/web, side by side).
 // Usage: node bench_view.mjs BUILD REPO [--saves N] [--big] [--models N] [--no-validate] [--msaa on|off] [--after-settle]
+//                                       [--robot NAME] [--web-dir DIR]
 // (--no-validate: rdtfd's ODE check off, so the latency is conversion, bus and drawing alone)
 import puppeteer from 'puppeteer-core';
-import { spawn } from 'node:child_process';
+import { spawn, spawnSync } from 'node:child_process';
 import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
@@ -31,6 +35,9 @@ const validate = !process.argv.includes('--no-validate');
 const afterSettle = process.argv.includes('--after-settle');
 // --msaa on|off: the page's multisampling as asked in its URL (default: the page's own choice,
 // off under a software rasterizer such as this benchmark's SwiftShader).
+const option = (name) => { const i = process.argv.indexOf(name); return i < 0 ? null : process.argv[i + 1]; };
+const robot = option('--robot');
+const webDir = option('--web-dir');
 const msaaAt = process.argv.indexOf('--msaa');
 const msaa = msaaAt < 0 ? null : process.argv[msaaAt + 1];
 const now = () => performance.timeOrigin + performance.now();
@@ -61,7 +68,7 @@ process.on('exit', () => {
   fs.rmSync(root, { recursive: true, force: true });
 });
 run(path.join(build, 'daemon/rdtfd'), ['--config', path.join(root, 'rdtfd.json'), '--watch', watch, '--output', path.join(root, 'out'), '--settle-ms', '50'], 'rdtfd.log');
-const view = run(path.join(build, 'clients/view/rdtf-view'), ['--port', '8765'], 'view.log');
+const view = run(path.join(build, 'clients/view/rdtf-view'), ['--port', '8765', ...(webDir ? ['--web-dir', webDir] : [])], 'view.log');
 await sleep(500);
 const rss = () => Number(/VmRSS:\s+(\d+)/.exec(fs.readFileSync(`/proc/${view.pid}/status`, 'utf8'))[1]);
 
@@ -73,7 +80,16 @@ const browser = await puppeteer.launch({
 const page = await browser.newPage();
 page.on('pageerror', (e) => console.error(`page error: ${e.message}`));
 page.on('console', (m) => { if (m.type() === 'error') console.error(`page console: ${m.text()} ${m.location()?.url ?? ''}`); });
-await page.goto(`http://127.0.0.1:8765/${msaa ? `?msaa=${msaa}` : ''}`, { waitUntil: 'load' });
+// rdtf-view may still be starting (a cold start on a busy machine): try again for up to 10 s.
+for (let tries = 0; ; ++tries) {
+  try {
+    await page.goto(`http://127.0.0.1:8765/${msaa ? `?msaa=${msaa}` : ''}`, { waitUntil: 'load' });
+    break;
+  } catch (e) {
+    if (tries >= 20 || !/ERR_CONNECTION_REFUSED/.test(e.message)) throw e;
+    await sleep(500);
+  }
+}
 console.log(JSON.stringify({ renderer: await page.evaluate(() => window.rdtfView.state().renderer) }));
 const model = (id) => page.evaluate((i) => window.rdtfView.state().models.find((m) => m.id === i) || null, id);
 // rdtfd's content_hash of a model file and the files it refers to (docs/lcm.md): SHA-256 over
@@ -207,6 +223,25 @@ if (big) {
   report({ bench: 'fps_swiftshader', model: 'big', fps: (f1 - f0) / ((now() - t0) / 1000) });
   await page.evaluate(() => window.rdtfView.renderEveryFrame(false));
   fs.rmSync(path.join(watch, 'big.gltf'));
+}
+
+if (robot) {
+  // A published robot as users bring it (many links): how fast the page draws it, everything shown.
+  const id = `${robot}.gltf`;
+  const imported = spawnSync(path.join(build, 'clients/rdtf/rdtf'), ['import', path.join(repo, 'tests/data/robots', `${robot}.urdf`), '-o', path.join(watch, id)], { encoding: 'utf8' });
+  if (imported.status !== 0) throw new Error(`rdtf import ${robot}: ${imported.stderr}`);
+  const m = await waitRevision(id, 0);
+  await page.evaluate((i) => { window.rdtfView.select(i); window.rdtfView.show({ frames: true, com: true, inertia: true }); window.rdtfView.renderEveryFrame(true); }, id);
+  await sleep(1000);
+  const f0 = (await page.evaluate(() => window.rdtfView.state().frame));
+  const t0 = now();
+  await sleep(10000);
+  const f1 = (await page.evaluate(() => window.rdtfView.state().frame));
+  const { draw_calls, triangles } = await page.evaluate(() => window.rdtfView.state().renderer);
+  report({ bench: 'fps_swiftshader', model: `${robot} (${m.links.length} links, ${m.joints.length} joints)`, fps: (f1 - f0) / ((now() - t0) / 1000),
+    draw_calls, triangles, load: os.loadavg().map((x) => Math.round(100 * x) / 100) });
+  await page.evaluate(() => window.rdtfView.renderEveryFrame(false));
+  fs.rmSync(path.join(watch, id));
 }
 
 const before = rss();

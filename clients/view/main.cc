@@ -9,6 +9,7 @@
 #include <CLI/CLI.hpp>
 
 #include <chrono>
+#include <filesystem>
 #include <functional>
 #include <iostream>
 #include <memory>
@@ -82,6 +83,19 @@ void release_free_memory() {
 #endif
 }
 
+// The page rdtf-view serves unless --web-dir says: the installed one beside the program
+// (<bindir>/../share/rdtf/view, clients/view/CMakeLists.txt) when there is one, else the source
+// tree's web/ of the build it came from.
+std::string default_web_dir() {
+  std::error_code ec;
+  const auto program = std::filesystem::read_symlink("/proc/self/exe", ec);
+  if (!ec) {
+    const auto installed = (program.parent_path() / RDTF_VIEW_INSTALLED_WEB_DIR).lexically_normal();
+    if (std::filesystem::is_regular_file(installed / "index.html", ec)) return installed.string();
+  }
+  return RDTF_VIEW_WEB_DIR;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -90,7 +104,7 @@ int main(int argc, char** argv) {
   int port = 8765;
   std::string url;
   std::string prefix = "RDTF";
-  std::string web_dir = RDTF_VIEW_WEB_DIR;
+  std::string web_dir = default_web_dir();
   rdtf::view::GainRule gains;
   double kp = -1, kd = -1;
   app.add_option("--port", port, "TCP port of the page (0: any free port)")->capture_default_str()->check(CLI::Range(0, 65535));

@@ -4,7 +4,8 @@
 # rdtf-spy and the LCM types jar, the systemd unit (naming /usr/bin/rdtfd and /etc/rdtf/rdtfd.json),
 # the config (a conffile) and librdtf with its headers and CMake package; and `rdtf --version`
 # and `rdtfd --version` run from the scratch root print what the build's own binaries print; the
-# packaged rdtf-spy finds the packaged jar.
+# packaged rdtf-spy finds the packaged jar; the packaged rdtf-view serves the packaged page, which
+# loads whole in chromium.
 # Usage: deb_test.sh BUILD_DIR
 set -euo pipefail
 
@@ -22,13 +23,14 @@ echo "--- $(basename "$deb")"
 dpkg-deb -f "$deb" Package Version Architecture Depends Recommends
 dpkg-deb -x "$deb" "$work/root"
 
-for file in usr/bin/rdtf usr/bin/rdtfd usr/bin/rdtf-echo usr/bin/rdtf-pd-controller usr/bin/rdtf-spy \
+for file in usr/bin/rdtf usr/bin/rdtfd usr/bin/rdtf-echo usr/bin/rdtf-pd-controller usr/bin/rdtf-spy usr/bin/rdtf-view \
+            usr/share/rdtf/view/index.html usr/share/rdtf/view/node_modules/three/build/three.module.js \
             usr/share/rdtf/java/rdtf_lcmtypes.jar usr/lib/systemd/system/rdtfd.service etc/rdtf/rdtfd.json \
             usr/lib/librdtf.a usr/include/rdtf/convert.h usr/include/rdtf/version.h \
             usr/lib/cmake/rdtf/rdtfConfig.cmake usr/lib/cmake/rdtf/rdtfTargets.cmake; do
   [[ -f $work/root/$file ]] || fail "the package has no /$file"
 done
-for program in rdtf rdtfd rdtf-echo rdtf-pd-controller rdtf-spy; do
+for program in rdtf rdtfd rdtf-echo rdtf-pd-controller rdtf-spy rdtf-view; do
   [[ -x $work/root/usr/bin/$program ]] || fail "/usr/bin/$program is not executable"
 done
 grep -qx 'ExecStart=/usr/bin/rdtfd --config /etc/rdtf/rdtfd.json' "$work/root/usr/lib/systemd/system/rdtfd.service" ||
@@ -53,4 +55,20 @@ done
 # starts); lcm-spy --help prints its usage and exits without opening a window.
 spy_help=$(env -u RDTF_LCM_JAR "$work/root/usr/bin/rdtf-spy" --help 2>&1 || true)
 [[ $spy_help == *"usage: lcm-spy"* ]] || fail "the packaged rdtf-spy did not start lcm-spy: $spy_help"
-echo "PASS: $(basename "$deb") holds the daemon, clients, unit, config and library; rdtf --version runs from it"
+# The packaged rdtf-view serves the packaged page, not the build's source tree: its default
+# --web-dir is the page beside it, and chromium loads that page with every module it imports
+# (tools/view-test/page_loads.mjs), rdtf-view in a network namespace of its own.
+repo=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
+view_dir=$work/root/usr/share/rdtf/view
+"$work/root/usr/bin/rdtf-view" --help | grep -qF -- "--web-dir TEXT=$view_dir" ||
+  fail "the packaged rdtf-view does not serve $view_dir: $("$work/root/usr/bin/rdtf-view" --help | grep -- --web-dir)"
+"$repo/tests/support/in_netns.sh" bash -c '
+  "$1" --port 18765 --lcm-url "udpm://239.255.76.67:7667?ttl=0" > "$2/view.log" 2>&1 &
+  view=$!
+  for _ in $(seq 100); do grep -q "http://" "$2/view.log" && break; sleep 0.1; done
+  node "$3/tools/view-test/page_loads.mjs" http://127.0.0.1:18765/
+  status=$?
+  kill "$view"; wait "$view" 2>/dev/null
+  exit "$status"' page "$work/root/usr/bin/rdtf-view" "$work" "$repo" ||
+  fail "chromium did not load the packaged page whole (rdtf-view: $(cat "$work/view.log"))"
+echo "PASS: $(basename "$deb") holds the daemon, clients, rdtf-view and its page, unit, config and library; rdtf --version runs from it"

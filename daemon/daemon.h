@@ -143,6 +143,7 @@ class Daemon {
   OpenWrites open_for_writing_;
   std::deque<FileEvent> pending_events_;  // Read from the watcher, not yet handled.
   bool rescan_pending_ = false;           // One of them asks for a rescan.
+  bool rescanning_ = false;               // note_change() calls from a rescan announce no save.
   int signal_fd_ = -1;
   std::atomic<bool> stop_{false};
   Clock::time_point started_;

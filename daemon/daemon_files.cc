@@ -10,6 +10,7 @@
 
 #include "daemon.h"
 #include "daemon_internal.h"
+#include "messages.h"
 #include "rdtf/atomic_file.h"
 #include "rdtf/diagnostic_codes.h"
 #include "rdtf/gltf.h"
@@ -174,8 +175,15 @@ void Daemon::note_change(const std::filesystem::path& path, FileChange change) {
   const auto now = clock_->now();
   auto touch = [&](const std::filesystem::path& model) {
     if (ModelRecord* record = registry_.find(model)) {
+      const bool was_quiet = !record->schedule.pending();
       const ModelActions actions =
           transition(*record, [&](ModelSchedule& schedule) { return schedule.file_changed(now, change); });
+      // A save of a live model begins: SAVING, so that a viewer can make ready for the revision
+      // that may follow (lcmtypes/rdtf_model_saving_t.lcm). A rescan touches every model and
+      // announces nothing.
+      if (was_quiet && record->schedule.pending() && record->live && !rescanning_) {
+        publisher_->publish(channel(record->id, "SAVING"), make_model_saving(*record, config_.settle));
+      }
       on_settling(*record, actions);
     }
   };
@@ -243,7 +251,9 @@ void Daemon::rescan(const char* why) {
         transition(record, [&](ModelSchedule& schedule) { return schedule.file_changed(now, FileChange::kTouched); });
     on_settling(record, actions);
   }
+  rescanning_ = true;
   for (const auto& file : files) note_change(file, FileChange::kClosed);
+  rescanning_ = false;
   start_prepared_jobs(now);
   log_line(std::string("rescan (") + why + "): " + std::to_string(files.size()) + " files, " +
            std::to_string(watcher_->watch_count()) + " folders watched");

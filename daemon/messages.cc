@@ -1,6 +1,8 @@
 #include "messages.h"
 
+#include <algorithm>
 #include <chrono>
+#include <cstdint>
 
 #include "counts.h"
 #include "diagnostic_message.h"
@@ -191,6 +193,15 @@ rdtf::model_error_t make_model_error(const ModelRecord& record, const std::strin
   message.diagnostics = to_messages(diagnostics);
   set_counts(message);
   fit_diagnostics(message, max_message_bytes);
+  return message;
+}
+
+rdtf::model_saving_t make_model_saving(const ModelRecord& record, std::chrono::milliseconds settle) {
+  rdtf::model_saving_t message;
+  message.utime = now_utime();
+  message.model_id = record.id;
+  message.live_revision = record.revisions;
+  message.settle_ms = static_cast<std::int32_t>(std::min<std::int64_t>(settle.count(), INT32_MAX));
   return message;
 }
 

@@ -11,6 +11,7 @@
 #include <rdtf/inertia_table_t.hpp>
 #include <rdtf/model_error_t.hpp>
 #include <rdtf/model_removed_t.hpp>
+#include <rdtf/model_saving_t.hpp>
 #include <rdtf/status_t.hpp>
 #include <rdtf/validation_report_t.hpp>
 
@@ -40,6 +41,7 @@ rdtf::model_error_t make_model_error(const ModelRecord& record, const std::strin
                                      const Diagnostics& diagnostics, std::size_t max_message_bytes);
 
 rdtf::model_removed_t make_model_removed(const ModelRecord& record);
+rdtf::model_saving_t make_model_saving(const ModelRecord& record, std::chrono::milliseconds settle);
 
 rdtf::validation_report_t make_validation_report(const std::string& model_id, std::int64_t revision,
                                                  const std::string& content_hash,

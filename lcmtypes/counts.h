@@ -28,6 +28,7 @@
 #include <rdtf/manifest_t.hpp>
 #include <rdtf/model_error_t.hpp>
 #include <rdtf/model_removed_t.hpp>
+#include <rdtf/model_saving_t.hpp>
 #include <rdtf/request_t.hpp>
 #include <rdtf/status_t.hpp>
 #include <rdtf/validation_report_t.hpp>
@@ -55,6 +56,7 @@ inline void set_counts(link_state_t& m) { m.num_links = count_of(m.name); }
 inline void set_counts(manifest_t& m) { m.num_files = count_of(m.files); }
 inline void set_counts(model_error_t& m) { m.num_diagnostics = count_of(m.diagnostics); }
 inline void set_counts(model_removed_t&) {}  // No arrays.
+inline void set_counts(model_saving_t&) {}   // No arrays.
 inline void set_counts(request_t&) {}        // No arrays.
 inline void set_counts(status_t& m) { m.num_model_ids = count_of(m.model_ids); }
 inline void set_counts(validation_report_t& m) { m.num_diagnostics = count_of(m.diagnostics); }

@@ -16,6 +16,7 @@
 #include <rdtf/manifest_t.hpp>
 #include <rdtf/model_error_t.hpp>
 #include <rdtf/model_removed_t.hpp>
+#include <rdtf/model_saving_t.hpp>
 #include <rdtf/request_t.hpp>
 #include <rdtf/status_t.hpp>
 #include <rdtf/validation_report_t.hpp>
@@ -138,6 +139,12 @@ Json to_json(const rdtf::model_removed_t& m) {
   return j;
 }
 
+Json to_json(const rdtf::model_saving_t& m) {
+  Json j = header("rdtf.model_saving_t", m.utime, m.model_id);
+  j.update({{"live_revision", m.live_revision}, {"settle_ms", m.settle_ms}});
+  return j;
+}
+
 Json to_json(const rdtf::request_t& m) {
   Json j = header("rdtf.request_t", m.utime, m.model_id);
   j["requester"] = m.requester;
@@ -219,7 +226,7 @@ std::optional<nlohmann::ordered_json> message_to_json(const void* data, std::uin
       decoder<rdtf::joint_command_t>(),  decoder<rdtf::validation_report_t>(),
       decoder<rdtf::manifest_t>(),       decoder<rdtf::blob_request_t>(),
       decoder<rdtf::blob_chunk_t>(),     decoder<rdtf::blob_unavailable_t>(),
-      decoder<rdtf::delta_t>()};
+      decoder<rdtf::delta_t>(),          decoder<rdtf::model_saving_t>()};
   if (size < 8) return std::nullopt;
   const auto* bytes = static_cast<const std::uint8_t*>(data);
   std::uint64_t hash = 0;

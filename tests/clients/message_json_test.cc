@@ -25,6 +25,7 @@
 #include <rdtf/link_state_t.hpp>
 #include <rdtf/model_error_t.hpp>
 #include <rdtf/model_removed_t.hpp>
+#include <rdtf/model_saving_t.hpp>
 #include <rdtf/request_t.hpp>
 #include <rdtf/status_t.hpp>
 #include <rdtf/validation_report_t.hpp>
@@ -64,6 +65,7 @@ TEST(MessageJson, EveryTypeTheSchemaCheckAcceptsHasADecoderAndNestedStructsAreNo
       {"manifest_t", encoded_empty<rdtf::manifest_t>},
       {"model_error_t", encoded_empty<rdtf::model_error_t>},
       {"model_removed_t", encoded_empty<rdtf::model_removed_t>},
+      {"model_saving_t", encoded_empty<rdtf::model_saving_t>},
       {"request_t", encoded_empty<rdtf::request_t>},
       {"status_t", encoded_empty<rdtf::status_t>},
       {"validation_report_t", encoded_empty<rdtf::validation_report_t>}};
@@ -86,7 +88,7 @@ TEST(MessageJson, EveryTypeTheSchemaCheckAcceptsHasADecoderAndNestedStructsAreNo
       EXPECT_FALSE(json.has_value()) << name;
     }
   }
-  EXPECT_EQ(messages, 16u);
+  EXPECT_EQ(messages, 17u);
   // Empty arrays with constant inner dimensions (link_state_t's position[num_links][3]) pass.
   const auto links = encoded_empty<rdtf::link_state_t>();
   EXPECT_EQ(lcm_safe::check_known(links.data(), links.size()), "");

@@ -10,6 +10,8 @@
 #include <algorithm>
 #include <set>
 
+#include <rdtf/model_saving_t.hpp>
+
 #include "daemon/harness.h"
 
 namespace rdtf::itest {
@@ -304,6 +306,41 @@ TEST(DaemonWatch, SavingIdenticalContentIsSkipped) {
   EXPECT_EQ(model_events(s.messages()),
             concat({revision_events("arm.gltf", 1, content_hash(v1)), revision_events("arm.gltf", 2, hash2)}));
   EXPECT_NEAR(last_inertia(s.messages(), "arm.gltf")->total_mass, v1.link_mass, 1e-6);
+}
+
+// SAVING (lcmtypes/rdtf_model_saving_t.lcm): once per save of a live model, before the revision
+// it gives, naming the live revision and the settle period; never for the start's scan, nor for
+// the first conversion of a model (nothing is live to be replaced).
+TEST(DaemonWatch, ASaveOfALiveModelIsAnnouncedOnceBeforeItsRevision) {
+  Session s;
+  const auto v1 = box_model("v1_base", 0.05, 1, "arm.bin");
+  const auto path = write_model(s.watch, "arm.gltf", v1);
+  s.start(DaemonOptions().with_settle(120));
+  ASSERT_TRUE(s.wait_revision("arm.gltf", 1, content_hash(v1)));
+  ASSERT_TRUE(s.wait_idle());
+  EXPECT_TRUE(decoded<rdtf::model_saving_t>(s.messages(), "SAVING", "arm.gltf").empty());
+
+  // Three writes within the settle period: one save, one SAVING.
+  const auto v2 = box_model("v2_base", 0.05, 1, "arm.bin");
+  write_in_place(path, v2.gltf);
+  write_in_place(path, v2.gltf);
+  write_in_place(path, v2.gltf);
+  ASSERT_TRUE(s.wait_revision("arm.gltf", 2, content_hash(v2)));
+  ASSERT_TRUE(s.wait_idle());
+  const auto all = s.messages();
+  const auto savings = decoded<rdtf::model_saving_t>(all, "SAVING", "arm.gltf");
+  ASSERT_EQ(savings.size(), 1u);
+  EXPECT_EQ(savings[0].model_id, "arm.gltf");
+  EXPECT_EQ(savings[0].live_revision, 1);
+  EXPECT_EQ(savings[0].settle_ms, 120);
+  // In order: revision 1's DESCRIPTION, the SAVING, revision 2's DESCRIPTION.
+  std::vector<std::string> order;
+  for (const auto& m : all) {
+    if (m.model_id() != "arm.gltf") continue;
+    if (m.kind() == "SAVING") order.push_back("SAVING");
+    if (m.kind() == "DESCRIPTION") order.push_back("r" + std::to_string(m.as<rdtf::description_t>().revision));
+  }
+  EXPECT_EQ(order, (std::vector<std::string>{"r1", "SAVING", "r2"}));
 }
 
 TEST(DaemonWatch, BrokenSaveKeepsTheGoodRevisionAndPublishesTheError) {

@@ -7,6 +7,7 @@
 #include <rdtf/description_chunk_t.hpp>
 #include <rdtf/model_error_t.hpp>
 #include <rdtf/model_removed_t.hpp>
+#include <rdtf/model_saving_t.hpp>
 #include <rdtf/validation_report_t.hpp>
 
 #include "support/harness/hashes.h"
@@ -50,6 +51,9 @@ std::string describe(const Message& m) {
     return head + " r" + std::to_string(v.revision) + " " + short_hash(v.content_hash) +
            (v.passed ? " passed" : " failed");
   }
+  if (kind == "SAVING") {
+    return head + " live=" + std::to_string(m.as<rdtf::model_saving_t>().live_revision);
+  }
   if (kind == "REMOVED") {
     return head + " last=" + std::to_string(m.as<rdtf::model_removed_t>().last_revision);
   }
@@ -59,7 +63,7 @@ std::string describe(const Message& m) {
 std::vector<std::string> model_events(const std::vector<Message>& all, const std::string& model_id) {
   std::vector<std::string> out;
   for (const auto& m : all) {
-    if (m.model_id().empty() || m.kind() == "MANIFEST" || m.kind() == "DELTA") continue;
+    if (m.model_id().empty() || m.kind() == "MANIFEST" || m.kind() == "DELTA" || m.kind() == "SAVING") continue;
     if (model_id != "*" && m.model_id() != model_id) continue;
     out.push_back(describe(m));
   }

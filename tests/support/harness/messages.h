@@ -31,8 +31,9 @@ std::vector<rdtf::status_t> statuses(const std::vector<Message>& all);
 //   "arm.gltf REMOVED last=2", "big.gltf DESCRIPTION_CHUNK r1 0/3", "big.gltf URDF_CHUNK r1 0/2"
 std::string describe(const Message& m);
 
-// Left out: the MANIFEST that precedes every DESCRIPTION (blobs_itest.cc checks it and its place)
-// and the DELTA that follows each new revision's INERTIA, never a republication (revisions_itest.cc).
+// Left out: the MANIFEST that precedes every DESCRIPTION (blobs_itest.cc checks it and its place),
+// the DELTA that follows each new revision's INERTIA, never a republication (revisions_itest.cc),
+// and the SAVING that announces a save of a live model (watch_itest.cc).
 std::vector<std::string> model_events(const std::vector<Message>& all, const std::string& model_id = "*");
 
 // What one accepted revision looks like to a subscriber (small models: no chunks).

@@ -261,6 +261,12 @@ struct Client::State {
       }
       return;
     }
+    if (kind == "SAVING") {
+      if (auto saving = decode_for<rdtf::model_saving_t>(channel, model_id, data, size); saving && callbacks.on_saving) {
+        callbacks.on_saving(*saving);
+      }
+      return;
+    }
     if (kind == "REMOVED") {
       if (auto r = decode_for<rdtf::model_removed_t>(channel, model_id, data, size)) {
         forget(model_id);
@@ -549,7 +555,7 @@ std::vector<std::string> Client::channels() const {
   const Options& o = state_->options;
   const std::string prefix = regex_escape(o.prefix);
   const std::string models = !o.model.empty() ? regex_escape(o.model) : !o.pattern.empty() ? "(" + o.pattern + ")" : ".+";
-  std::string kinds = "DESCRIPTION|DESCRIPTION_CHUNK|URDF_CHUNK|INERTIA|MANIFEST|VALIDATION|ERROR|REMOVED";
+  std::string kinds = "DESCRIPTION|DESCRIPTION_CHUNK|URDF_CHUNK|INERTIA|MANIFEST|VALIDATION|ERROR|REMOVED|SAVING";
   if (o.states) kinds += "|JOINT_STATE|LINK_STATE";
   std::vector<std::string> out = {prefix + "/" + models + "/(" + kinds + ")", prefix + "/STATUS"};
   if (o.blobs != Blobs::kNone) {

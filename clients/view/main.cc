@@ -186,6 +186,7 @@ int main(int argc, char** argv) {
     trim_due = true;
   };
   callbacks.on_error = [&](const rdtf::model_error_t& e) { hub.on_error(e); };
+  callbacks.on_saving = [&](const rdtf::model_saving_t& saving) { hub.on_saving(saving); };
   callbacks.on_removed = [&](const rdtf::model_removed_t& r) {
     hub.on_removed(r);
     trim_due = true;

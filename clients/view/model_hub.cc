@@ -170,6 +170,12 @@ void ModelHub::on_removed(const rdtf::model_removed_t& removed) {
   broadcast_(model_message(removed.model_id, m));
 }
 
+void ModelHub::on_saving(const rdtf::model_saving_t& saving) {
+  if (!models_.count(saving.model_id)) return;
+  broadcast_(to_text({{"type", "saving"}, {"id", saving.model_id}, {"live_revision", saving.live_revision},
+                      {"settle_ms", saving.settle_ms}}));
+}
+
 void ModelHub::on_models_seen(const std::set<std::string>& ids) {
   for (const auto& id : ids) {
     if (models_.count(id)) continue;

@@ -11,6 +11,7 @@
 
 #include <rdtf/joint_command_t.hpp>
 #include <rdtf/link_state_t.hpp>
+#include <rdtf/model_saving_t.hpp>
 
 #include "clients/live_arm.h"
 #include "clients/view_page.h"
@@ -154,6 +155,12 @@ TEST(View, ShowsASavedRevisionInPlaceWithoutReloadingThePage) {
   const Json m = wait_drawn(page, kArm, 2);
   ASSERT_FALSE(m.is_null()) << page.state().dump();
   EXPECT_EQ(page.eval("window.sameDocument"), "yes") << "the page was reloaded";
+  // rdtfd announced the save (SAVING) and the page, rasterizing on the CPU, held its motion frames
+  // until revision 2 was drawn (docs/view.md, "Live motion"): one save heard, nothing held now.
+  EXPECT_EQ(decoded<rdtf::model_saving_t>(s.messages(), "SAVING", kArm).size(), 1u);
+  const Json hold = page.state()["motion_hold"];
+  EXPECT_EQ(hold["saves_heard"], 1) << hold.dump();
+  EXPECT_TRUE(hold["model"].is_null()) << hold.dump();
   expect_links_where_link_state_puts_them(s, page, m, kArm);
   for (const auto& link : m["links"]) {
     if (link["name"] == "base_link") {

@@ -174,13 +174,15 @@ async function latency(id, write, count, files) {
   const frames_per_save = (await frame() - frame0) / count;
   // What the last frame drew (three.js's renderer.info): draw calls and triangles.
   const { draw_calls, triangles } = await page.evaluate(() => window.rdtfView.state().renderer);
+  // SAVINGs the page heard for the drawn model (each held its motion frames, docs/view.md).
+  const saves_heard = await page.evaluate(() => window.rdtfView.state().motion_hold.saves_heard);
   const log = conversions();
   const stages = runs.map((r) => stagesOf(r.t0, log.get(`${id}#${r.revision}`), r.timing || {})).filter(Boolean);
   const stage_median_ms = Object.fromEntries(STAGES.map((s) => [s, Math.round(10 * median(stages.map((x) => x[s]))) / 10]));
   const stage_p99_ms = Object.fromEntries(STAGES.map((s) => [s, Math.round(10 * percentile(stages.map((x) => x[s]), 99)) / 10]));
   return { p50: percentile(ms, 50), p99: percentile(ms, 99), max: Math.max(...ms), n: ms.length,
     load: os.loadavg().map((x) => Math.round(100 * x) / 100), broken_down: stages.length, stage_median_ms, stage_p99_ms,
-    frames_per_save, draw_calls, triangles, rss_kib };
+    frames_per_save, saves_heard, draw_calls, triangles, rss_kib };
 }
 
 report({ bench: 'save_to_pixels_ms', validate, while_settling: !afterSettle, model: 'arm3 (3 links)', ...(await latency('arm3.gltf', (i) => writeArm('arm3.gltf', 1.1 + 0.001 * i), saves, [path.join(watch, 'arm3.gltf'), path.join(watch, 'arm3.bin')])) });

@@ -102,10 +102,30 @@ function gpuCaughtUp() {
   lastFrameFence = null;
   return true;
 }
+// And while a save of the drawn model settles in rdtfd (its SAVING), a software rasterizer draws
+// no frames for motion: the one in flight when the new revision came held up that revision's
+// first frame (save -> pixels p99 115-127 ms with them, docs/benchmarks.md "Motion held while a
+// save settles"). The model stands still from the save until its new revision is drawn, about
+// the settle period; the hold ends then, or with an ERROR, or at the latest a second after the
+// settle period (a save that changed nothing gives no revision). A GPU draws a frame in a
+// fraction of a millisecond: nothing is held there.
+const HOLD_AFTER_SETTLE_MS = 1000;
+const motionHold = { id: null, until: 0, count: 0 };
+function holdMotion(id, settleMs) {
+  if (!gpu.software || id !== selected) return;
+  Object.assign(motionHold, { id, until: performance.now() + settleMs + HOLD_AFTER_SETTLE_MS });
+  ++motionHold.count;
+}
+function releaseMotion(id) {
+  if (motionHold.id === id) Object.assign(motionHold, { id: null, until: 0 });
+}
+function motionHeld() {
+  return motionHold.id !== null && performance.now() < motionHold.until;
+}
 function render() {
   requestAnimationFrame(render);
   if (!dirty && !everyFrame) return;
-  if (!everyFrame && !gpuCaughtUp()) return;  // still dirty: drawn at a later animation frame
+  if (!everyFrame && (motionHeld() || !gpuCaughtUp())) return;  // still dirty: drawn at a later animation frame
   dirty = false;
   renderFrame();
   if (everyFrame) return;  // the frame-rate benchmark draws at every animation frame regardless
@@ -174,6 +194,7 @@ function diagnosticsOf(info) {
 async function onModel(info) {
   const m = entry(info.id);
   m.info = info;
+  if (info.status === 'error' || info.status === 'removed') releaseMotion(info.id);  // no revision follows
   if (selected === null && info.status !== 'removed') selected = info.id;
   if (info.status === 'removed' || !info.gltf) {
     if (info.status === 'removed' && m.view) {
@@ -190,6 +211,7 @@ async function onModel(info) {
     } catch (e) {
       console.error(`rdtf-view: ${info.id} revision ${info.revision}:`, e);
       notices.push(`${info.id} revision ${info.revision} could not be drawn: ${e.message}`);
+      releaseMotion(info.id);
       if (m.loading === view) m.loading = null;
       refreshPanel();
       return;
@@ -213,6 +235,7 @@ async function onModel(info) {
     // Drawn now, not at the next animation frame (up to a refresh interval later); the panel
     // after it, so that its layout and paint do not come first.
     renderFrame();
+    releaseMotion(info.id);
     refreshPanel();
     if (old) old.dispose();
     retainDrawn();
@@ -241,7 +264,7 @@ function onState(state) {
   const m = entry(state.id);
   m.lastState = state;
   applyState(m, state);
-  if (state.id === selected) refreshSliderValues();
+  if (state.id === selected) scheduleReadouts();
 }
 
 // --- panel ------------------------------------------------------------------------------------
@@ -330,9 +353,21 @@ function refreshSliderValues() {
     const name = input.dataset.joint;
     const q = m.view.jointPositions.get(name);
     const target = m.targets[name];
-    input.previousSibling.textContent = `${name}: ${q === undefined ? '-' : q.toFixed(3)}` +
+    const text = `${name}: ${q === undefined ? '-' : q.toFixed(3)}` +
       `${target === undefined ? '' : ` (target ${target.toFixed(3)})`}${input.dataset.gains}`;
+    if (input.previousSibling.textContent !== text) input.previousSibling.textContent = text;
   }
+}
+// The joint readouts follow the states at most READOUT_HZ times a second. Each change of the
+// panel's text is a layout, a paint and a frame of the browser's compositor; under a software
+// rasterizer, 50 of them a second (one per state) made the first frame of a new revision wait
+// for the compositor: save -> pixels 101-110 ms at the median against 87-88 ms without them
+// (docs/benchmarks.md, "The panel's readouts").
+const READOUT_HZ = 10;
+let readoutsDue = null;
+function scheduleReadouts() {
+  if (readoutsDue !== null) return;
+  readoutsDue = setTimeout(() => { readoutsDue = null; refreshSliderValues(); }, 1000 / READOUT_HZ);
 }
 
 // --- socket -----------------------------------------------------------------------------------
@@ -350,6 +385,7 @@ function connect() {
     if (message.type === 'model' && message.timing) message.timing.received_at = received;
     switch (message.type) {
       case 'model': onModel(message); break;
+      case 'saving': holdMotion(message.id, message.settle_ms); break;
       case 'state': onState(message); break;
       case 'targets':
         entry(message.id).targets = message.targets;
@@ -404,6 +440,7 @@ window.rdtfView = {
         ...(m.view ? m.view.state() : {}),
       })),
       refusals: refusals.slice(),
+      motion_hold: { model: motionHeld() ? motionHold.id : null, saves_heard: motionHold.count },
     };
   },
   // What the slider does; resolves to "" when rdtf-view took it, else the reason it refused.

@@ -44,6 +44,7 @@
 #include <rdtf/link_state_t.hpp>
 #include <rdtf/model_error_t.hpp>
 #include <rdtf/model_removed_t.hpp>
+#include <rdtf/model_saving_t.hpp>
 #include <rdtf/validation_report_t.hpp>
 
 namespace lcm {
@@ -126,6 +127,8 @@ struct Callbacks {
   std::function<void(const rdtf::model_error_t&)> on_error;
   // REMOVED: the model is gone (its snapshot is forgotten).
   std::function<void(const rdtf::model_removed_t&)> on_removed;
+  // SAVING: a save of a live model is settling; a new revision or an ERROR may follow.
+  std::function<void(const rdtf::model_saving_t&)> on_saving;
   // States stamped with the current snapshot's revision and content hash (others are not handed over).
   std::function<void(const Snapshot&, const rdtf::joint_state_t&)> on_joint_state;
   std::function<void(const Snapshot&, const rdtf::link_state_t&)> on_link_state;

@@ -1,11 +1,12 @@
 // A model's overlays - each link's joint frame (axes), each joint's axis (an arrow), the centres
 // of mass and the equivalent-inertia boxes - in four draw calls, whatever the number of links.
 //
-// Why not a helper object each (AxesHelper, ArrowHelper, a sphere, a box per link): under a
-// software rasterizer every draw call costs about 0.6 ms of raster plus its share of three.js's
-// submit (docs/benchmarks.md, "Overlays in four draw calls"), and helpers made a 3-link arm 17 draw
-// calls and a 100-link model over 500. Here the lines' few vertices are placed on the CPU at each
-// pose, in the scene frame S (the model's `root`), and the arrow heads and spheres are instances.
+// Why not a helper object each (AxesHelper, ArrowHelper, a sphere, a box per link): each is a
+// draw call and three.js's work on the main thread at every frame, and helpers made a 3-link arm
+// 17 draw calls, a 23-link quadruped 114 and a 100-link model over 500 (arm3's submit is 1-2 ms a
+// frame shorter without them: docs/benchmarks.md, "Overlays in four draw calls"). Here the lines'
+// few vertices are placed on the CPU at each pose, in the scene frame S (the model's `root`), and
+// the arrow heads and spheres are instances.
 import * as THREE from 'three';
 
 const AXIS_COLORS = [new THREE.Color(1, 0, 0), new THREE.Color(0, 1, 0), new THREE.Color(0, 0, 1)];

@@ -8,6 +8,8 @@
 #include <cmath>
 #include <numbers>
 
+#include <nlohmann/json.hpp>
+
 #include "http_paths.h"
 #include "model_hub.h"
 #include "page_protocol.h"
@@ -222,6 +224,32 @@ TEST(ViewJointGains, FollowTheInertiaEachJointMoves) {
   const Gains f = fixed.of(by_name["elbow"]);
   EXPECT_EQ(f.kp, 200);
   EXPECT_NEAR(f.kd, 2 * 0.4125 * w, 1e-12 * f.kd);
+}
+
+// SAVING reaches the pages for a model they know, with rdtfd's settle period; one of an unknown
+// model, or with a settle period rdtfd cannot have (a page would hold its motion for that long),
+// does not.
+TEST(ViewHub, ASavingOfAKnownModelIsToldToThePagesAndOthersAreNot) {
+  std::vector<nlohmann::json> sent;
+  ModelHub hub(GainRule{}, [&](std::shared_ptr<const std::string> json) { sent.push_back(nlohmann::json::parse(*json)); },
+               [](const std::string&, rdtf::joint_command_t&) {});
+  hub.on_models_seen({"arm3.gltf"});
+  sent.clear();
+  rdtf::model_saving_t saving;
+  saving.model_id = "arm3.gltf";
+  saving.live_revision = 4;
+  saving.settle_ms = 50;
+  hub.on_saving(saving);
+  ASSERT_EQ(sent.size(), 1u);
+  EXPECT_EQ(sent[0], nlohmann::json::parse(R"({"type": "saving", "id": "arm3.gltf", "live_revision": 4, "settle_ms": 50})"));
+  for (const int settle_ms : {-1, 60001, 2147483647}) {
+    saving.settle_ms = settle_ms;
+    hub.on_saving(saving);
+  }
+  saving.settle_ms = 50;
+  saving.model_id = "other.gltf";
+  hub.on_saving(saving);
+  EXPECT_EQ(sent.size(), 1u);
 }
 
 }  // namespace

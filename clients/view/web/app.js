@@ -113,14 +113,14 @@ const HOLD_AFTER_SETTLE_MS = 1000;
 const motionHold = { id: null, until: 0, count: 0 };
 function holdMotion(id, settleMs) {
   if (!gpu.software || id !== selected) return;
-  Object.assign(motionHold, { id, until: performance.now() + settleMs + HOLD_AFTER_SETTLE_MS });
+  Object.assign(motionHold, { id, until: performance.now() + Math.min(settleMs, 60000) + HOLD_AFTER_SETTLE_MS });
   ++motionHold.count;
 }
 function releaseMotion(id) {
   if (motionHold.id === id) Object.assign(motionHold, { id: null, until: 0 });
 }
 function motionHeld() {
-  return motionHold.id !== null && performance.now() < motionHold.until;
+  return motionHold.id !== null && motionHold.id === selected && performance.now() < motionHold.until;
 }
 function render() {
   requestAnimationFrame(render);

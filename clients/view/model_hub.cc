@@ -171,9 +171,15 @@ void ModelHub::on_removed(const rdtf::model_removed_t& removed) {
 }
 
 void ModelHub::on_saving(const rdtf::model_saving_t& saving) {
-  // rdtfd's settle_ms is 1 .. 60000 (docs/daemon.md); another value did not come from it, and a
-  // page would hold its motion frames for as long.
-  if (!models_.count(saving.model_id) || saving.settle_ms < 0 || saving.settle_ms > 60000) return;
+  // Only a save of the revision the pages draw: a page holds that model's motion frames until
+  // the next one is drawn. rdtfd's settle_ms is 1 .. 60000 (docs/daemon.md); another value did
+  // not come from it, and a page would hold them for as long.
+  const auto model = models_.find(saving.model_id);
+  if (model == models_.end() || model->second.recent.empty() ||
+      model->second.recent.front()->revision() != saving.live_revision || saving.settle_ms < 0 ||
+      saving.settle_ms > 60000) {
+    return;
+  }
   broadcast_(to_text({{"type", "saving"}, {"id", saving.model_id}, {"live_revision", saving.live_revision},
                       {"settle_ms", saving.settle_ms}}));
 }

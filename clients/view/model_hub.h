@@ -62,7 +62,7 @@ class ModelHub {
   void on_revision(std::shared_ptr<const rdtf::client::Snapshot> snapshot);
   void on_error(const rdtf::model_error_t& error);
   void on_removed(const rdtf::model_removed_t& removed);
-  // SAVING: told to the pages as it is (`saving`), for a model they know.
+  // SAVING: told to the pages as it is (`saving`) when it names the revision they draw.
   void on_saving(const rdtf::model_saving_t& saving);
   void on_joint_state(const rdtf::client::Snapshot& snapshot, const rdtf::joint_state_t& state);
   void on_link_state(const rdtf::client::Snapshot& snapshot, const rdtf::link_state_t& state);

@@ -226,14 +226,19 @@ TEST(ViewJointGains, FollowTheInertiaEachJointMoves) {
   EXPECT_NEAR(f.kd, 2 * 0.4125 * w, 1e-12 * f.kd);
 }
 
-// SAVING reaches the pages for a model they know, with rdtfd's settle period; one of an unknown
-// model, or with a settle period rdtfd cannot have (a page would hold its motion for that long),
-// does not.
-TEST(ViewHub, ASavingOfAKnownModelIsToldToThePagesAndOthersAreNot) {
+// SAVING reaches the pages when it names the revision they draw, with rdtfd's settle period; one
+// of an unknown model, of another revision, or with a settle period rdtfd cannot have (a page
+// would hold its motion for that long), does not.
+TEST(ViewHub, ASavingOfTheDrawnRevisionIsToldToThePagesAndOthersAreNot) {
   std::vector<nlohmann::json> sent;
   ModelHub hub(GainRule{}, [&](std::shared_ptr<const std::string> json) { sent.push_back(nlohmann::json::parse(*json)); },
                [](const std::string&, rdtf::joint_command_t&) {});
-  hub.on_models_seen({"arm3.gltf"});
+  hub.on_models_seen({"pending.gltf"});
+  auto snapshot = std::make_shared<rdtf::client::Snapshot>();
+  snapshot->description.model_id = "arm3.gltf";
+  snapshot->description.revision = 4;
+  snapshot->description.urdf = R"(<robot name="arm"><link name="base"/></robot>)";
+  hub.on_revision(snapshot);
   sent.clear();
   rdtf::model_saving_t saving;
   saving.model_id = "arm3.gltf";
@@ -247,6 +252,11 @@ TEST(ViewHub, ASavingOfAKnownModelIsToldToThePagesAndOthersAreNot) {
     hub.on_saving(saving);
   }
   saving.settle_ms = 50;
+  saving.live_revision = 3;
+  hub.on_saving(saving);
+  saving.model_id = "pending.gltf";  // known, nothing drawn
+  saving.live_revision = 0;
+  hub.on_saving(saving);
   saving.model_id = "other.gltf";
   hub.on_saving(saving);
   EXPECT_EQ(sent.size(), 1u);

@@ -13,6 +13,7 @@ let socket = null;
 let frame = 0;
 const refusals = [];
 let dirty = true;        // a frame is due (render(), below)
+let moved = false;       // a LINK_STATE moved a link since the last frame (a frame for motion)
 let everyFrame = false;  // the frame-rate benchmark's hook
 function invalidate() { dirty = true; }
 const notices = [];
@@ -103,16 +104,17 @@ function gpuCaughtUp() {
   return true;
 }
 // And while a save of the drawn model settles in rdtfd (its SAVING), a software rasterizer draws
-// no frames for motion: the one in flight when the new revision came held up that revision's
-// first frame (save -> pixels p99 115-127 ms with them, docs/benchmarks.md "Motion held while a
-// save settles"). The model stands still from the save until its new revision is drawn, about
-// the settle period; the hold ends then, or with an ERROR, or at the latest a second after the
-// settle period (a save that changed nothing gives no revision). A GPU draws a frame in a
-// fraction of a millisecond: nothing is held there.
+// no frames for motion alone: the one in flight when the new revision came held up that
+// revision's first frame (save -> pixels p99 115-127 ms with them, docs/benchmarks.md "Motion
+// held while a save settles"). The model stands still from the save until its new revision is
+// drawn, about the settle period; the hold ends then, or with an ERROR, or at the latest a second
+// after the settle period (a save that changed nothing gives no revision). A hold running is not
+// extended by another SAVING. Frames for anything else (the camera, a toggle) are drawn, with
+// the newest poses. A GPU draws a frame in a fraction of a millisecond: nothing is held there.
 const HOLD_AFTER_SETTLE_MS = 1000;
 const motionHold = { id: null, until: 0, count: 0 };
 function holdMotion(id, settleMs) {
-  if (!gpu.software || id !== selected) return;
+  if (!gpu.software || id !== selected || motionHeld()) return;
   Object.assign(motionHold, { id, until: performance.now() + Math.min(settleMs, 60000) + HOLD_AFTER_SETTLE_MS });
   ++motionHold.count;
 }
@@ -124,9 +126,11 @@ function motionHeld() {
 }
 function render() {
   requestAnimationFrame(render);
-  if (!dirty && !everyFrame) return;
-  if (!everyFrame && (motionHeld() || !gpuCaughtUp())) return;  // still dirty: drawn at a later animation frame
+  const due = dirty || (moved && !motionHeld());
+  if (!due && !everyFrame) return;
+  if (!everyFrame && !gpuCaughtUp()) return;  // still due: drawn at a later animation frame
   dirty = false;
+  moved = false;
   renderFrame();
   if (everyFrame) return;  // the frame-rate benchmark draws at every animation frame regardless
   const gl = renderer.getContext();
@@ -256,7 +260,7 @@ function retainDrawn() {
 // A frame only when a link moved: joint positions and the time are shown in the panel, not drawn.
 function applyState(m, state) {
   if (!m.view) return;
-  if (state.links && state.links.revision === m.view.revision && m.view.setLinkState(state.links)) invalidate();
+  if (state.links && state.links.revision === m.view.revision && m.view.setLinkState(state.links)) moved = true;
   if (state.joints && state.joints.revision === m.view.revision) m.view.setJointState(state.joints);
 }
 

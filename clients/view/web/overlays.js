@@ -48,7 +48,17 @@ class LineWriter {
     geometry.setDrawRange(0, this.n);
     this.position.needsUpdate = true;
     this.color.needsUpdate = true;
-    geometry.boundingBox = null;  // recomputed when asked (fitting the camera, picking)
+    // three.js bounds a geometry by its whole buffer, whatever the draw range: the slots not drawn
+    // repeat the first vertex, so that the bounds (fitting the camera, picking, culling) are those
+    // of what is drawn; with nothing drawn they are empty.
+    if (this.n === 0) {
+      geometry.boundingBox = new THREE.Box3();
+      geometry.boundingSphere = new THREE.Sphere(new THREE.Vector3(), -1);
+      return;
+    }
+    const [x, y, z] = [this.position.getX(0), this.position.getY(0), this.position.getZ(0)];
+    for (let i = this.n; i < this.position.count; ++i) this.position.setXYZ(i, x, y, z);
+    geometry.boundingBox = null;  // recomputed when asked
     geometry.boundingSphere = null;
   }
 }

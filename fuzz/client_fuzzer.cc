@@ -7,7 +7,8 @@
 // Besides a crash, leak, sanitizer report or hang, a target stops on a broken contract: a
 // snapshot handed over whose documents, inertia table or blobs do not match what its description
 // and manifest announce, a manifest path that is not a plain relative path, a state of another
-// revision than its snapshot's, or a message the client sends that fails the schema check.
+// revision than its snapshot's, a SAVING of another model than its channel's, or a message the
+// client sends that fails the schema check.
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -29,6 +30,7 @@ const char* const kChannels[] = {
     "RDTF/m.gltf/MANIFEST",    "RDTF/m.gltf/VALIDATION",        "RDTF/m.gltf/ERROR",      "RDTF/m.gltf/REMOVED",
     "RDTF/m.gltf/JOINT_STATE", "RDTF/m.gltf/LINK_STATE",        "RDTF/BLOB",              "RDTF/BLOB_UNAVAILABLE",
     "RDTF/STATUS",             "RDTF/n/m.glb/DESCRIPTION",      "RDTF/n/m.glb/INERTIA",   "RDTF/n/m.glb/MANIFEST",
+    "RDTF/m.gltf/SAVING",
 };
 constexpr std::size_t kChannelCount = sizeof(kChannels) / sizeof(kChannels[0]);
 
@@ -76,6 +78,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   };
   callbacks.on_link_state = [](const rdtf::client::Snapshot& s, const rdtf::link_state_t& state) {
     require(state.revision == s.revision() && state.content_hash == s.content_hash(), "a link state of another revision");
+  };
+  callbacks.on_saving = [](const rdtf::model_saving_t& saving) {
+    require(saving.model_id == "m.gltf", "a SAVING of another model than its channel's");
   };
   callbacks.on_drop = [](const std::string&, const std::string&) {};
   callbacks.on_problem = [](const std::string&, const std::string&) {};

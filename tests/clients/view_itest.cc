@@ -116,8 +116,10 @@ TEST(View, DrawsEveryLinkWhereLinkStatePutsItWithItsInertiaBox) {
   }
   // Every overlay of every link in four draw calls (docs/view.md, "Overlays in four draw calls"):
   // with all shown, a frame draws the links' meshes, the grid and those four.
-  const auto frame = page.state()["frame"].get<std::int64_t>();
-  page.eval("window.rdtfView.show({frames: true, com: true, inertia: true})");
+  // The frame count read in the same task as the toggle: the next frame draws everything shown.
+  const auto frame =
+      page.eval("(window.rdtfView.show({frames: true, com: true, inertia: true}), window.rdtfView.state().frame)")
+          .get<std::int64_t>();
   std::int64_t meshes = 0;
   for (const auto& link : m["links"]) meshes += link["meshes"].get<std::int64_t>();
   Json drawn_all;

@@ -59,7 +59,7 @@ spy_help=$(env -u RDTF_LCM_JAR "$work/root/usr/bin/rdtf-spy" --help 2>&1 || true
 # --web-dir is the page beside it, and chromium loads that page with every module it imports
 # (tools/view-test/page_loads.mjs), rdtf-view in a network namespace of its own.
 repo=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
-view_dir=$work/root/usr/share/rdtf/view
+view_dir=$(realpath "$work/root/usr/share/rdtf/view")  # as rdtf-view finds it from /proc/self/exe
 "$work/root/usr/bin/rdtf-view" --help | grep -qF -- "--web-dir TEXT=$view_dir" ||
   fail "the packaged rdtf-view does not serve $view_dir: $("$work/root/usr/bin/rdtf-view" --help | grep -- --web-dir)"
 "$repo/tests/support/in_netns.sh" bash -c '

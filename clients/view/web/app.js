@@ -105,12 +105,12 @@ function gpuCaughtUp() {
 }
 // And while a save of the drawn model settles in rdtfd (its SAVING), a software rasterizer draws
 // no frames for motion alone: the one in flight when the new revision came held up that
-// revision's first frame (save -> pixels p99 115-127 ms with them, docs/benchmarks.md "Motion
-// held while a save settles"). The model stands still from the save until its new revision is
-// drawn, about the settle period; the hold ends then, or with an ERROR, or at the latest a second
-// after the settle period (a save that changed nothing gives no revision). A hold running is not
-// extended by another SAVING. Frames for anything else (the camera, a toggle) are drawn, with
-// the newest poses. A GPU draws a frame in a fraction of a millisecond: nothing is held there.
+// revision's first frame (docs/benchmarks.md, "The panel's readouts, and motion held while a
+// save settles"). The model stands still from the save until its new revision is drawn, about
+// the settle period; the hold ends then, or with an ERROR, or at the latest a second after the
+// settle period (a save that changed nothing gives no revision). A hold running is not extended
+// by another SAVING. Frames for anything else (the camera, a toggle) are drawn, with the newest
+// poses. A GPU draws a frame in a fraction of a millisecond: nothing is held there.
 const HOLD_AFTER_SETTLE_MS = 1000;
 const motionHold = { id: null, until: 0, count: 0 };
 function holdMotion(id, settleMs) {
@@ -366,7 +366,7 @@ function refreshSliderValues() {
 // panel's text is a layout, a paint and a frame of the browser's compositor; under a software
 // rasterizer, 50 of them a second (one per state) made the first frame of a new revision wait
 // for the compositor: save -> pixels 101-110 ms at the median against 87-88 ms without them
-// (docs/benchmarks.md, "The panel's readouts").
+// (docs/benchmarks.md, "The panel's readouts, and motion held while a save settles").
 const READOUT_HZ = 10;
 let readoutsDue = null;
 function scheduleReadouts() {

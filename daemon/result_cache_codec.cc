@@ -14,7 +14,7 @@ namespace {
 
 using Json = nlohmann::json;
 
-constexpr std::string_view kFormat = "rdtfd-results 1";
+constexpr std::string_view kFormat = "rdtfd-results 2";  // As kCacheFormat (result_cache.cc)
 
 struct Refused {
   std::string why;
@@ -90,7 +90,7 @@ Json robot_json(const Robot& robot) {
   Json joints = Json::array();
   for (const Joint& j : robot.joints) {
     Json limits = nullptr;
-    if (j.limits) limits = {j.limits->lower, j.limits->upper, j.limits->effort, j.limits->velocity};
+    if (j.limits) limits = {j.limits->lower, j.limits->upper, j.limits->effort, j.limits->velocity, j.limits->position};
     joints.push_back({{"name", j.name}, {"node", j.node}, {"frame_node", j.frame_node}, {"source_node", j.source_node},
                       {"source_is_entry", j.source_is_entry}, {"parent_link", j.parent_link},
                       {"child_link", j.child_link}, {"kind", to_string(j.kind)}, {"x_pj", pose_json(j.X_PJ)},
@@ -155,8 +155,11 @@ Robot robot_from(const Json& j) {
     for (std::size_t i = 0; i < 3; ++i) joint.axis(static_cast<Eigen::Index>(i)) = number(axis[i]);
     const Json& limits = at(j2, "limits");
     if (!limits.is_null()) {
-      if (!limits.is_array() || limits.size() != 4) throw Refused{"limits need 4 numbers"};
-      joint.limits = JointLimits{number(limits[0]), number(limits[1]), number(limits[2]), number(limits[3])};
+      if (!limits.is_array() || limits.size() != 5 || !limits[4].is_boolean()) {
+        throw Refused{"limits need 4 numbers and whether the range was given"};
+      }
+      joint.limits = JointLimits{number(limits[0]), number(limits[1]), number(limits[2]), number(limits[3]),
+                                 limits[4].get<bool>()};
     }
     joint.damping = number(at(j2, "damping"));
     joint.friction = number(at(j2, "friction"));

@@ -14,7 +14,7 @@ namespace {
 static_assert(sizeof(LinkMesh) == 24, "a field was added to LinkMesh: hash it in check_digest");
 static_assert(sizeof(MassProperties) == 112, "a field was added to MassProperties: hash it in check_digest");
 static_assert(sizeof(Link) == 336, "a field was added to Link: hash it in check_digest");
-static_assert(sizeof(JointLimits) == 32, "a field was added to JointLimits: hash it in check_digest");
+static_assert(sizeof(JointLimits) == 40, "a field was added to JointLimits: hash it in check_digest");
 static_assert(sizeof(Joint) == 288, "a field was added to Joint: hash it in check_digest");
 static_assert(sizeof(Robot) == 104, "a field was added to Robot: hash it in check_digest");
 #endif
@@ -101,6 +101,7 @@ void add(Hasher& h, const Joint& j) {
     h.add(j.limits->upper);
     h.add(j.limits->effort);
     h.add(j.limits->velocity);
+    h.add(j.limits->position);
   }
   h.add(j.damping);
   h.add(j.friction);

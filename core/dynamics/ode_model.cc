@@ -114,7 +114,7 @@ void check_mappable(const Robot& robot, const WeldGroups& welds, Diagnostics& di
     if (one_dof(joint.kind) && (!joint.axis.allFinite() || joint.axis.norm() < 1e-12)) {
       diag.error(codes::ODE_INVALID_JOINT, where, name + "axis " + vector_text(joint.axis) + " has no direction");
     }
-    if (joint.limits && (joint.kind == JointKind::kRevolute || joint.kind == JointKind::kPrismatic) &&
+    if (position_limited(joint) &&
         !(joint.limits->lower <= joint.limits->upper && std::isfinite(joint.limits->lower) &&
           std::isfinite(joint.limits->upper))) {
       diag.error(codes::ODE_INVALID_JOINT, where,
@@ -154,7 +154,7 @@ std::vector<double> start_positions(const Robot& robot, const std::map<std::stri
   }
   for (std::size_t j = 0; j < robot.joints.size(); ++j) {
     const Joint& joint = robot.joints[j];
-    if (!joint.limits || (joint.kind != JointKind::kRevolute && joint.kind != JointKind::kPrismatic)) continue;
+    if (!position_limited(joint)) continue;
     const double clamped = std::clamp(q[j], joint.limits->lower, joint.limits->upper);
     if (clamped != q[j]) {
       diag.info(codes::SIM_INITIAL_POSITION_CLAMPED, node_pointer(joint.node),
@@ -238,7 +238,7 @@ void add_joint(Simulation::Model& model, int j, const Eigen::Isometry3d& X_SJ, D
   jm.dof = one_dof(joint.kind);
   jm.damping = joint.damping;
   jm.stiffness = joint.spring_stiffness;
-  jm.limited = joint.limits && (joint.kind == JointKind::kRevolute || joint.kind == JointKind::kPrismatic);
+  jm.limited = position_limited(joint);
   if (jm.limited) {
     jm.lower = joint.limits->lower;
     jm.upper = joint.limits->upper;

@@ -221,7 +221,7 @@ void check_joint(const Robot& robot, const Joint& joint, const WeldGroups& welds
                        "; it is normalized");
     }
   }
-  if (joint.limits && (joint.kind == JointKind::kRevolute || joint.kind == JointKind::kPrismatic)) {
+  if (position_limited(joint)) {
     const JointLimits& limits = *joint.limits;
     if (!std::isfinite(limits.lower) || !std::isfinite(limits.upper)) {
       diag.error(codes::JOINT_LIMITS_NOT_FINITE, where(joint),

@@ -16,10 +16,13 @@ Json joint_to_json(const Joint& joint) {
     out["axis"] = vector_to_json(joint.axis);
   }
   if (joint.limits) {
-    out["lower"] = joint.limits->lower;
-    out["upper"] = joint.limits->upper;
-    if (joint.limits->effort > 0) out["effort"] = joint.limits->effort;
-    if (joint.limits->velocity > 0) out["velocity"] = joint.limits->velocity;
+    if (joint.limits->position) {
+      out["lower"] = joint.limits->lower;
+      out["upper"] = joint.limits->upper;
+    }
+    // 0 is "not given"; a negative value is kept as given, for the dynamics check to refuse.
+    if (joint.limits->effort != 0) out["effort"] = joint.limits->effort;
+    if (joint.limits->velocity != 0) out["velocity"] = joint.limits->velocity;
   }
   out["friction"] = joint.friction;
   out["damping"] = joint.damping;

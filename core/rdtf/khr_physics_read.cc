@@ -12,6 +12,7 @@
 #include "rdtf/diagnostic_codes.h"
 #include "rdtf/geometry.h"
 #include "rdtf/khr_physics.h"
+#include "rdtf/rdtf_extras.h"
 
 namespace rdtf {
 namespace {
@@ -386,16 +387,39 @@ std::optional<Joint> joint_from_khr(const Json& document, const std::vector<Eige
   return out;
 }
 
-bool same_joint(const Joint& a, const Joint& b) {
-  if (a.kind != b.kind || a.limits.has_value() != b.limits.has_value()) return false;
-  const bool has_axis = a.kind != JointKind::kFixed && a.kind != JointKind::kFloating && a.kind != JointKind::kBall;
-  if (has_axis && (a.axis - b.axis).norm() > kAgree) return false;
-  if (a.limits && (!close(a.limits->lower, b.limits->lower, std::max(1.0, std::abs(b.limits->lower))) ||
-                   !close(a.limits->upper, b.limits->upper, std::max(1.0, std::abs(b.limits->upper))))) {
-    return false;
+// A revolute joint without lower and upper turns as a continuous one does, and the draft has one
+// form for both (no limit on the angular axis): the two are the same joint.
+JointKind motion_kind(const Joint& joint) {
+  return joint.kind == JointKind::kRevolute && !position_limited(joint) ? JointKind::kContinuous : joint.kind;
+}
+
+std::string limits_text(const Joint& joint) {
+  return position_limited(joint) ? "[" + value_text(joint.limits->lower) + ", " + value_text(joint.limits->upper) + "]"
+                                 : std::string("none");
+}
+
+// How the KHR joint `khr` differs from the RDTF joint `rdtf`, in words; nothing when they agree.
+std::optional<std::string> joint_difference(const Joint& khr, const Joint& rdtf) {
+  if (motion_kind(khr) != motion_kind(rdtf)) {
+    return std::string("type ") + to_string(khr.kind) + " against " + to_string(rdtf.kind);
   }
-  return close(a.damping, b.damping, std::max(1.0, b.damping)) &&
-         close(a.spring_stiffness, b.spring_stiffness, std::max(1.0, b.spring_stiffness));
+  if (position_limited(khr) != position_limited(rdtf) ||
+      (position_limited(khr) &&
+       (!close(khr.limits->lower, rdtf.limits->lower, std::max(1.0, std::abs(rdtf.limits->lower))) ||
+        !close(khr.limits->upper, rdtf.limits->upper, std::max(1.0, std::abs(rdtf.limits->upper)))))) {
+    return "limits " + limits_text(khr) + " against " + limits_text(rdtf);
+  }
+  const bool has_axis = rdtf.kind != JointKind::kFixed && rdtf.kind != JointKind::kFloating && rdtf.kind != JointKind::kBall;
+  if (has_axis && (khr.axis - rdtf.axis).norm() > kAgree) {
+    return "axis " + vector_to_json(khr.axis).dump() + " against " + vector_to_json(rdtf.axis).dump();
+  }
+  if (!close(khr.damping, rdtf.damping, std::max(1.0, rdtf.damping))) {
+    return "damping " + value_text(khr.damping) + " against " + value_text(rdtf.damping);
+  }
+  if (!close(khr.spring_stiffness, rdtf.spring_stiffness, std::max(1.0, rdtf.spring_stiffness))) {
+    return "spring stiffness " + value_text(khr.spring_stiffness) + " against " + value_text(rdtf.spring_stiffness);
+  }
+  return std::nullopt;
 }
 
 }  // namespace
@@ -498,11 +522,12 @@ void read_khr_physics(const Json& document, const std::vector<NodeType>& types, 
     if (!khr) continue;
     if (joint.source_node < 0) {
       joint = *khr;  // No RDTF properties: the KHR joint is the joint.
-    } else if (!same_joint(*khr, joint)) {
+    } else if (const auto difference = joint_difference(*khr, joint)) {
       diag.warning(codes::KHR_PHYSICS_IGNORED, json_pointer("/nodes", static_cast<std::size_t>(refs[j]->node)) + "/extensions/" + kKhrPhysics + "/joint",
                    where(document, static_cast<std::size_t>(refs[j]->node)) + ": the KHR joint (" + to_string(khr->kind) +
                        ") differs from joint '" + joint.name + "' as RDTF describes it (" + to_string(joint.kind) +
-                       ", from " + where(document, static_cast<std::size_t>(joint.source_node)) + "), which takes precedence");
+                       ", from " + where(document, static_cast<std::size_t>(joint.source_node)) + "): " + *difference +
+                       "; RDTF's takes precedence");
     }
   }
 }

@@ -46,7 +46,7 @@ Json limit(const char* axes_key, std::initializer_list<unsigned> axes, double mi
 // the frame's X (axis 0).
 Json physics_joint(const Joint& joint) {
   Json limits = Json::array();
-  const bool limited = joint.limits.has_value();
+  const bool limited = position_limited(joint);  // A continuous joint, or effort alone: free.
   switch (joint.kind) {
     case JointKind::kFixed:
       limits.push_back(limit("linearAxes", {0, 1, 2}, 0, 0));
@@ -84,7 +84,7 @@ Json physics_joint(const Joint& joint) {
                {"velocityTarget", 0.0},
                {"stiffness", joint.spring_stiffness},
                {"damping", joint.damping}};
-    if (limited && joint.limits->effort > 0) drive["maxForce"] = joint.limits->effort;
+    if (joint.limits && joint.limits->effort > 0) drive["maxForce"] = joint.limits->effort;
     out["drives"] = Json::array({std::move(drive)});
   }
   return out;

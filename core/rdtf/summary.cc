@@ -71,9 +71,13 @@ Json robot_summary(const Robot& robot, const Json& document, const Diagnostics& 
                  {"damping", joint.damping},
                  {"friction", joint.friction},
                  {"springStiffness", joint.spring_stiffness}};
-    if (joint.limits) {
-      item["limits"] = {{"lower", joint.limits->lower}, {"upper", joint.limits->upper},
-                        {"effort", joint.limits->effort}, {"velocity", joint.limits->velocity}};
+    if (joint.limits) {  // lower and upper only when given (an effort limit alone bounds no motion)
+      Json limits = {{"effort", joint.limits->effort}, {"velocity", joint.limits->velocity}};
+      if (joint.limits->position) {
+        limits["lower"] = joint.limits->lower;
+        limits["upper"] = joint.limits->upper;
+      }
+      item["limits"] = std::move(limits);
     }
     joints.push_back(std::move(item));
   }
@@ -108,9 +112,11 @@ std::string robot_table(const Robot& robot, const Diagnostics& diag) {
         << robot.links[joint.parent_link].name << " -> " << robot.links[joint.child_link].name
         << "\n    origin " << vector_text(joint.X_PJ.translation()) << " m   axis "
         << vector_text(joint.axis);
-    if (joint.limits) {
+    if (joint.limits && joint.limits->position) {
       out << "   limits [" << fixed(joint.limits->lower) << ", " << fixed(joint.limits->upper) << "]";
     }
+    if (joint.limits && joint.limits->effort != 0) out << "   effort " << fixed(joint.limits->effort);
+    if (joint.limits && joint.limits->velocity != 0) out << "   velocity " << fixed(joint.limits->velocity);
     out << "\n    damping " << fixed(joint.damping) << "  friction " << fixed(joint.friction)
         << "  spring " << fixed(joint.spring_stiffness) << "\n";
   }

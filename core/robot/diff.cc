@@ -35,7 +35,9 @@ std::uint32_t joint_aspects(const JointFacts& a, const JointFacts& b) {
   if (!same(a.origin, b.origin)) aspects |= kAspectOrigin;
   if (!same(a.axis, b.axis)) aspects |= kAspectAxis;
   if (a.type != b.type) aspects |= kAspectType;
-  if (a.has_limits != b.has_limits || (a.has_limits && !same(a.limits, b.limits))) aspects |= kAspectLimits;
+  if (a.has_limits != b.has_limits || a.has_range != b.has_range || (a.has_limits && !same(a.limits, b.limits))) {
+    aspects |= kAspectLimits;
+  }
   if (!same(a.dynamics, b.dynamics)) aspects |= kAspectDynamics;
   if (a.parent != b.parent) aspects |= kAspectParent;
   if (a.child != b.child) aspects |= kAspectChild;
@@ -201,6 +203,7 @@ RobotFacts robot_facts(const Robot& robot, const std::vector<std::string>& urdf_
       f.axis[r] = joint.axis[r];
     }
     f.has_limits = joint.limits.has_value();
+    f.has_range = joint.limits && joint.limits->position;
     if (joint.limits) {
       const double limits[4] = {joint.limits->lower, joint.limits->upper, joint.limits->effort, joint.limits->velocity};
       std::copy(limits, limits + 4, f.limits);

@@ -177,7 +177,8 @@ void read_joint_properties(const JointSource& source, const Eigen::Affine3d& X_S
     limits.upper = upper.value_or(0.0);
     limits.effort = effort.value_or(0.0);
     limits.velocity = velocity.value_or(0.0);
-    if (limits.lower > limits.upper) {
+    limits.position = lower || upper;
+    if (limits.position && limits.lower > limits.upper) {
       diag.error(codes::JOINT_LIMITS_INVERTED, source.pointer,
                  source.label + ": lower limit " + value_text(limits.lower) +
                      " is above upper limit " + value_text(limits.upper));

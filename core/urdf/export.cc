@@ -48,15 +48,15 @@ std::optional<int> urdf_joint_type(const Joint& joint, const std::string& name, 
     case JointKind::kPlanar:
       return urdf::Joint::PLANAR;
     case JointKind::kRevolute:
-      if (joint.limits) return urdf::Joint::REVOLUTE;
+      if (position_limited(joint)) return urdf::Joint::REVOLUTE;
       diag.warning(codes::URDF_REVOLUTE_WITHOUT_LIMITS, pointer,
-                   "revolute joint '" + name + "' has no limits, which URDF requires: it turns "
+                   "revolute joint '" + name + "' has no lower and upper limits, which URDF requires: it turns "
                    "without end, so it is written as a continuous joint");
       return urdf::Joint::CONTINUOUS;
     case JointKind::kPrismatic:
-      if (joint.limits) return urdf::Joint::PRISMATIC;
+      if (position_limited(joint)) return urdf::Joint::PRISMATIC;
       diag.error(codes::URDF_PRISMATIC_WITHOUT_LIMITS, pointer,
-                 "prismatic joint '" + name + "' has no limits, which URDF requires and which "
+                 "prismatic joint '" + name + "' has no lower and upper limits, which URDF requires and which "
                  "have no neutral value: set rdtf_lower and rdtf_upper (m) on it");
       return std::nullopt;
     case JointKind::kBall:
@@ -227,8 +227,13 @@ void fix_precision(TiXmlElement* robot, const urdf::ModelInterface& model,
     }
     if (TiXmlElement* axis = e->FirstChildElement("axis")) axis->SetAttribute("xyz", vector_text(joint->axis));
     if (TiXmlElement* limit = e->FirstChildElement("limit"); limit && joint->limits) {
-      limit->SetAttribute("lower", exact_number(joint->limits->lower));
-      limit->SetAttribute("upper", exact_number(joint->limits->upper));
+      if (joint->type == urdf::Joint::CONTINUOUS) {  // URDF reads no range on a continuous joint.
+        limit->RemoveAttribute("lower");
+        limit->RemoveAttribute("upper");
+      } else {
+        limit->SetAttribute("lower", exact_number(joint->limits->lower));
+        limit->SetAttribute("upper", exact_number(joint->limits->upper));
+      }
       limit->SetAttribute("effort", exact_number(joint->limits->effort));
       limit->SetAttribute("velocity", exact_number(joint->limits->velocity));
     }
@@ -302,8 +307,10 @@ std::optional<UrdfExport> export_urdf(const Conversion& conversion, const UrdfOp
     if (joint.limits && *type != urdf::Joint::FIXED && *type != urdf::Joint::FLOATING &&
         *type != urdf::Joint::PLANAR) {
       out->limits = std::make_shared<urdf::JointLimits>();
-      out->limits->lower = joint.limits->lower;
-      out->limits->upper = joint.limits->upper;
+      // A continuous joint's range is none (urdfdom reads 0 and 0 where the file has nothing).
+      const bool bounded = *type == urdf::Joint::REVOLUTE || *type == urdf::Joint::PRISMATIC;
+      out->limits->lower = bounded ? joint.limits->lower : 0.0;
+      out->limits->upper = bounded ? joint.limits->upper : 0.0;
       out->limits->effort = joint.limits->effort > 0 ? joint.limits->effort : kUnsetEffort;
       out->limits->velocity = joint.limits->velocity > 0 ? joint.limits->velocity : kUnsetVelocity;
       if (joint.limits->effort <= 0 || joint.limits->velocity <= 0) {

@@ -235,9 +235,15 @@ class Builder {
     if (joint.type != urdf::Joint::FIXED && joint.type != urdf::Joint::FLOATING) {
       out["axis"] = vector_to_json(C * to_eigen(joint.axis));
     }
-    if (joint.limits) {
-      out["lower"] = joint.limits->lower;
-      out["upper"] = joint.limits->upper;
+    // URDF reads lower and upper on revolute and prismatic joints only (a continuous joint turns
+    // freely whatever its <limit> says: a wheel's <limit effort velocity/> is no range of motion),
+    // and effort and velocity on the three that move.
+    const bool bounded = joint.type == urdf::Joint::REVOLUTE || joint.type == urdf::Joint::PRISMATIC;
+    if (joint.limits && (bounded || joint.type == urdf::Joint::CONTINUOUS)) {
+      if (bounded) {
+        out["lower"] = joint.limits->lower;
+        out["upper"] = joint.limits->upper;
+      }
       if (joint.limits->effort > 0) out["effort"] = joint.limits->effort;
       if (joint.limits->velocity > 0) out["velocity"] = joint.limits->velocity;
     }

@@ -6,6 +6,8 @@
 
 #include <cmath>
 #include <numbers>
+#include <optional>
+#include <stdexcept>
 
 #include "dynamics/dynamics_models.h"
 
@@ -132,6 +134,51 @@ TEST(JointLimits, SlideRestingOnItsStopUnderGravity) {
   EXPECT_NEAR(health.worst_limit_violation, 50 * kStandardGravity / k, 1e-6 * 50 * kStandardGravity / k);
   EXPECT_LE(health.worst_limit_ratio, 1.0);
   EXPECT_NEAR(health.limit_bound, 1e-3 + 50 * kStandardGravity / k, 1e-15);
+}
+
+// Effort and speed limits without lower and upper (a wheel's URDF <limit effort velocity/>, an
+// rdtf_effort hint alone) bound no motion: the joint turns freely, on a revolute joint as on a
+// continuous one. (They were read as the range [0, 0], which locked the joint.) A 1 kg bar 0.5 m
+// long turning about the vertical through one end, where gravity has no torque, under 1 N m for
+// 1 s: it moves exactly as the same joint with no limits at all does, bit for bit, and about as
+// far as tau t^2 / (2 I) says (ODE's first-order step overshoots by (n + 1) / n, 0.1 % in 1000
+// steps, less what its hinge's projection takes off); the same joint with the range [0, 0] given stays put.
+JointState spin_after_one_second(JointKind kind, const std::optional<JointLimits>& limits) {
+  RobotBuilder b;
+  const int root = b.root("frame", MassProperties{});
+  b.child(root, "spin", kind, Eigen::Isometry3d::Identity(), Eigen::Vector3d::UnitY(), "bar",
+          box_inertial(1.0, {0.5, 0.05, 0.05}, {0.25, 0, 0}));
+  b.joint(0).limits = limits;
+  Diagnostics diag;
+  auto sim = Simulation::create(b.robot(), {}, {}, diag);
+  if (!sim) throw std::runtime_error(all_text(diag));
+  JointCommand command;
+  command.joint = "spin";
+  command.effort = 1.0;
+  if (!sim->set_command(command)) throw std::runtime_error("command refused");
+  for (int step = 0; step < 1000; ++step) sim->step();
+  return *sim->joint_state("spin");
+}
+
+TEST(JointLimits, EffortAndSpeedLimitsAloneLeaveTheJointFree) {
+  JointLimits effort_only;
+  effort_only.effort = 20;
+  effort_only.velocity = 100;
+  effort_only.position = false;
+  const JointState free = spin_after_one_second(JointKind::kRevolute, std::nullopt);
+  const double I = (0.5 * 0.5 + 0.05 * 0.05) / 12 + 0.25 * 0.25;  // About the hinge, kg m^2.
+  const double angle = 1.0 * 1.0 / (2 * I);                          // tau t^2 / (2 I), rad
+  EXPECT_NEAR(free.position, angle, 2e-3 * angle);
+  for (const JointKind kind : {JointKind::kRevolute, JointKind::kContinuous}) {
+    SCOPED_TRACE(to_string(kind));
+    const JointState state = spin_after_one_second(kind, effort_only);
+    EXPECT_EQ(state.position, free.position);
+    EXPECT_EQ(state.velocity, free.velocity);
+  }
+  const JointState locked = spin_after_one_second(JointKind::kRevolute, JointLimits{0, 0, 20, 100});
+  EXPECT_LT(std::abs(locked.position), 0.01);
+  std::printf("turned %.6f rad free and with effort limits alone (tau t^2 / 2I: %.6f), %.3g rad with [0, 0]\n",
+              free.position, angle, locked.position);
 }
 
 }  // namespace

@@ -170,8 +170,11 @@ void expect_same_robot(const Robot& a, const Robot& b, double tolerance) {
     EXPECT_LE((x.X_PJ.matrix() - y.X_PJ.matrix()).cwiseAbs().maxCoeff(), tolerance);
     ASSERT_EQ(x.limits.has_value(), y.limits.has_value());
     if (x.limits) {
+      EXPECT_EQ(x.limits->position, y.limits->position);
       EXPECT_LE(std::abs(x.limits->lower - y.limits->lower), tolerance);
       EXPECT_LE(std::abs(x.limits->upper - y.limits->upper), tolerance);
+      EXPECT_EQ(x.limits->effort, y.limits->effort);
+      EXPECT_EQ(x.limits->velocity, y.limits->velocity);
     }
     EXPECT_LE(std::abs(x.damping - y.damping), tolerance * std::max(1.0, x.damping));
     EXPECT_LE(std::abs(x.spring_stiffness - y.spring_stiffness), tolerance * std::max(1.0, x.spring_stiffness));
@@ -219,6 +222,46 @@ TEST(KhrPhysicsWrite, MotionGivesTheExactTensorAndTheFileValidates) {
   EXPECT_FALSE(has_code(again_diag, codes::KHR_PHYSICS_IGNORED)) << all_text(again_diag);
   expect_same_robot(conversion->robot, again->robot, 0.0);
   EXPECT_EQ(again->asset.document["nodes"].size(), conversion->asset.document["nodes"].size());
+}
+
+// A joint that turns without end - continuous, or revolute with no lower and upper, with or
+// without effort and speed limits - is written with its angular axis free, and read back as the
+// same joint, without a disagreement (rdtf used to lock a continuous joint that had an effort
+// limit, and to warn about its own output for a revolute joint without a range).
+TEST(KhrPhysicsWrite, AJointWithoutARangeIsFreeAndReadsBackAsItself) {
+  const json variants[] = {
+      {{"rdtf_joint", "revolute"}, {"rdtf_axis", {1, 1, 0}}},
+      {{"rdtf_joint", "revolute"}, {"rdtf_axis", {1, 1, 0}}, {"rdtf_effort", 12.5}},
+      {{"rdtf_joint", "continuous"}, {"rdtf_axis", {1, 1, 0}}, {"rdtf_effort", 12.5}, {"rdtf_velocity", 30.0},
+       {"rdtf_damping", 0.5}},
+  };
+  for (const json& extras : variants) {
+    SCOPED_TRACE(extras.dump());
+    testing::TempDir dir;
+    json input = generated_arm();
+    input["nodes"][3]["extras"] = extras;
+    Diagnostics diag;
+    auto conversion = convert_json(dir, "arm.gltf", input, diag);
+    ASSERT_TRUE(conversion) << all_text(diag);
+    const Joint& joint = conversion->robot.joints[1];
+    EXPECT_FALSE(position_limited(joint));
+    ASSERT_TRUE(write_rdtf(conversion->asset, dir / "out.gltf", OutputFormat::kGltf, diag)) << all_text(diag);
+    const json written = json::parse(testing::read_file(dir / "out.gltf"));
+    const json& limits = written["extensions"][kKhrPhysics]["physicsJoints"][1]["limits"];
+    ASSERT_EQ(limits.size(), 2u) << limits.dump();  // linear 0-2 and angular 1-2 locked; angular 0 free
+    for (const json& limit : limits) {
+      if (limit.contains("angularAxes")) {
+        EXPECT_EQ(limit["angularAxes"], json({1, 2}));
+      }
+    }
+    const auto report = testing::khronos_report(dir / "out.gltf");
+    EXPECT_EQ(count(report, "numErrors"), 0) << report.dump(1);
+    Diagnostics again_diag;
+    auto again = convert_file(dir / "out.gltf", ConvertOptions{}, again_diag);
+    ASSERT_TRUE(again) << all_text(again_diag);
+    EXPECT_FALSE(has_code(again_diag, codes::KHR_PHYSICS_IGNORED)) << all_text(again_diag);
+    expect_same_robot(conversion->robot, again->robot, 0.0);
+  }
 }
 
 TEST(KhrPhysicsWrite, OffLeavesTheExtensionOut) {

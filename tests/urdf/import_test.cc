@@ -315,6 +315,82 @@ void round_trip(const fs::path& urdf) {
   std::printf("round trip %s: worst relative difference so far %.3g\n", urdf.filename().c_str(), worst_round_trip());
 }
 
+// A wheel as published URDFs have it - a continuous joint with <limit effort velocity/> and no
+// range - turns freely; a <limit> on a fixed joint (URDF allows it and reads nothing from it) is
+// dropped. Both used to come out wrong: the wheel locked at [0, 0] in KHR_physics_rigid_bodies and
+// in the URDF written back, the fixed joint with a range its KHR joint then disagreed with.
+TEST(UrdfImport, WheelLimitsOfEffortAndSpeedAreNoRangeAndFixedJointLimitsAreDropped) {
+  constexpr const char* kWheeled = R"(<?xml version="1.0"?>
+<robot name="cart">
+  <link name="chassis"><inertial><mass value="4"/><inertia ixx="0.05" iyy="0.06" izz="0.07" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="wheel"><inertial><mass value="0.5"/><inertia ixx="0.002" iyy="0.003" izz="0.002" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="camera"><inertial><mass value="0.05"/><inertia ixx="1e-5" iyy="1e-5" izz="1e-5" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <joint name="wheel_joint" type="continuous">
+    <parent link="chassis"/><child link="wheel"/><origin xyz="0.2 0.15 0"/><axis xyz="0 1 0"/>
+    <limit effort="10" velocity="30"/>
+  </joint>
+  <joint name="camera_joint" type="fixed">
+    <parent link="chassis"/><child link="camera"/><origin xyz="0.25 0 0.1"/>
+    <limit lower="-10" upper="10" effort="1" velocity="1"/>
+  </joint>
+</robot>
+)";
+  TempDir dir;
+  testing::write_file(dir / "cart.urdf", kWheeled);
+  Diagnostics diag;
+  const Conversion conversion = import_or_fail(dir / "cart.urdf", diag);
+  const Robot& robot = conversion.robot;
+  ASSERT_EQ(robot.joints.size(), 2u);
+  const Joint& wheel = robot.joints[0].name == "wheel_joint" ? robot.joints[0] : robot.joints[1];
+  const Joint& camera = robot.joints[0].name == "wheel_joint" ? robot.joints[1] : robot.joints[0];
+  EXPECT_EQ(wheel.kind, JointKind::kContinuous);
+  ASSERT_TRUE(wheel.limits);
+  EXPECT_FALSE(wheel.limits->position);
+  EXPECT_EQ(wheel.limits->effort, 10.0);
+  EXPECT_EQ(wheel.limits->velocity, 30.0);
+  EXPECT_EQ(camera.kind, JointKind::kFixed);
+  EXPECT_FALSE(camera.limits);
+
+  // The written glTF: the wheel's RDTF joint has no lower or upper, its KHR joint a free angular
+  // axis 0; read again, no disagreement and the same limits.
+  expect_valid_gltf(conversion, dir / "cart.gltf");
+  const Json written = Json::parse(testing::read_file(dir / "cart.gltf"));
+  for (const Json& node : written["nodes"]) {
+    if (!node.contains("extras") || !node["extras"].contains("rdtf_joint")) continue;
+    EXPECT_FALSE(node["extras"].contains("rdtf_lower")) << node.dump();
+    EXPECT_FALSE(node["extras"].contains("rdtf_upper")) << node.dump();
+  }
+  for (const Json& joint : written["extensions"]["KHR_physics_rigid_bodies"]["physicsJoints"]) {
+    for (const Json& limit : joint["limits"]) {  // Only a lock (0, 0) anywhere: no range on axis 0 either.
+      EXPECT_EQ(limit["min"], 0.0) << joint.dump();
+      EXPECT_EQ(limit["max"], 0.0) << joint.dump();
+    }
+  }
+  Diagnostics again_diag;
+  auto again = convert_file(dir / "cart.gltf", ConvertOptions{}, again_diag);
+  ASSERT_TRUE(again);
+  for (const Diagnostic& d : again_diag.all()) EXPECT_NE(d.code, "KHR_PHYSICS_IGNORED") << format(d);
+  const Joint& wheel_again = again->robot.joints[0].name == "wheel_joint" ? again->robot.joints[0] : again->robot.joints[1];
+  EXPECT_EQ(wheel_again.kind, JointKind::kContinuous);
+  ASSERT_TRUE(wheel_again.limits);
+  EXPECT_FALSE(wheel_again.limits->position);
+  EXPECT_EQ(wheel_again.limits->effort, 10.0);
+
+  // The URDF written back: the wheel's <limit> has effort and velocity, and no range.
+  const std::string text = export_to(*again, dir / "back");
+  expect_check_urdf_passes(dir / "back" / "robot.urdf");
+  const std::size_t at = text.find("<joint name=\"wheel_joint\"");
+  ASSERT_NE(at, std::string::npos) << text;
+  const std::string joint_text = text.substr(at, text.find("</joint>", at) - at);
+  EXPECT_NE(joint_text.find("effort=\"10\""), std::string::npos) << joint_text;
+  EXPECT_EQ(joint_text.find("lower="), std::string::npos) << joint_text;
+  EXPECT_EQ(joint_text.find("upper="), std::string::npos) << joint_text;
+  const auto back = parse_with_urdfdom(text);
+  ASSERT_TRUE(back->getJoint("wheel_joint")->limits);
+  EXPECT_EQ(back->getJoint("wheel_joint")->limits->velocity, 30.0);
+  EXPECT_FALSE(back->getJoint("camera_joint")->limits);
+}
+
 TEST(UrdfImport, RoundTripOfTheTutorialPhysicsRobot) { round_trip(tutorial("07-physics.urdf")); }
 
 TEST(UrdfImport, RoundTripOfEveryJointKindAndRotatedInertial) {

@@ -49,6 +49,7 @@ struct JointFacts {
   double origin[12] = {};  // X_PJ: rotation row by row, then translation
   double axis[3] = {0, 0, 0};
   bool has_limits = false;
+  bool has_range = false;             // lower and upper given (JointLimits::position)
   double limits[4] = {0, 0, 0, 0};    // lower, upper, effort, velocity
   double dynamics[3] = {0, 0, 0};     // damping, friction, spring stiffness
 };

@@ -43,10 +43,14 @@ struct Link {
 };
 
 struct JointLimits {
-  double lower = 0;     // rad or m
-  double upper = 0;     // rad or m
+  double lower = 0;     // rad or m; meaningful only when `position`
+  double upper = 0;     // rad or m; meaningful only when `position`
   double effort = 0;    // N m or N; 0: not given
   double velocity = 0;  // rad/s or m/s; 0: not given
+  // Whether lower and upper were given. Effort and speed limits come without a range of motion
+  // as often as with one: a wheel's URDF <limit effort velocity/> on a continuous joint, or an
+  // rdtf_effort hint alone. Such a joint is not locked at [0, 0]; it turns freely.
+  bool position = true;
 };
 
 struct Joint {
@@ -71,6 +75,13 @@ struct Joint {
   double friction = 0;          // N m or N
   double spring_stiffness = 0;  // N m/rad or N/m
 };
+
+// Whether the joint's position is bounded: lower and upper given on a revolute or prismatic
+// joint. (A continuous joint is unbounded whatever it carries, as in URDF.)
+inline bool position_limited(const Joint& joint) {
+  return joint.limits && joint.limits->position &&
+         (joint.kind == JointKind::kRevolute || joint.kind == JointKind::kPrismatic);
+}
 
 struct Robot {
   std::string name;

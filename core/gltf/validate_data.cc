@@ -9,6 +9,7 @@
 #include <cstring>
 #include <limits>
 #include <map>
+#include <set>
 
 #include "rdtf/validate.h"
 #include "validate_util.h"
@@ -218,6 +219,7 @@ class DataCheck {
       readable_[i] = runs && check_values(i, *runs);
     }
     check_mesh_indices();
+    check_skin_joint_indices();
   }
 
  private:
@@ -234,6 +236,7 @@ class DataCheck {
   std::optional<std::uint64_t> vertex_count(const Json& primitive);
   IndexSummary summarize_indices(const AccessorRuns& runs);
   void check_indices(std::uint64_t accessor, std::uint64_t vertices, const std::string& pointer);
+  void check_skin_joint_indices();
 
   // Calls visit(i, components, repeats) for every element, sparse substitution applied. An
   // accessor without a bufferView is zeros: all its zero elements come in one visit.
@@ -628,6 +631,56 @@ void DataCheck::check_indices(std::uint64_t accessor, std::uint64_t vertices,
                     std::to_string(static_cast<std::uint64_t>(summary.largest)) + " (element " +
                     std::to_string(summary.largest_at) + "), but the primitive has only " +
                     std::to_string(vertices) + " vertices");
+  }
+}
+
+// Every JOINTS_n value of a skinned mesh names one of its skin's joints (the Khronos validator's
+// ACCESSOR_JOINTS_INDEX_OOB): rdtf splits the mesh by the joints' weights, and wrote such an
+// index unchanged into an output the validator then refused.
+void DataCheck::check_skin_joint_indices() {
+  if (!doc_.contains("nodes") || !doc_["nodes"].is_array()) return;
+  std::set<std::pair<std::uint64_t, std::uint64_t>> checked;  // (accessor, joint count)
+  for (std::size_t n = 0; n < doc_["nodes"].size(); ++n) {
+    const Json& node = doc_["nodes"][n];
+    const Json* skin = node.is_object() ? element_at(doc_, "skins", uint_at(node, "skin")) : nullptr;
+    const Json* mesh = node.is_object() ? element_at(doc_, "meshes", uint_at(node, "mesh")) : nullptr;
+    if (skin == nullptr || mesh == nullptr || !skin->contains("joints") || !(*skin)["joints"].is_array() ||
+        !mesh->contains("primitives") || !(*mesh)["primitives"].is_array()) {
+      continue;
+    }
+    const std::uint64_t joints = (*skin)["joints"].size();
+    const std::uint64_t mesh_index = *uint_at(node, "mesh");
+    for (std::size_t p = 0; p < (*mesh)["primitives"].size(); ++p) {
+      const Json& primitive = (*mesh)["primitives"][p];
+      if (!primitive.is_object() || !primitive.contains("attributes") || !primitive["attributes"].is_object()) continue;
+      for (int set = 0;; ++set) {
+        const std::string name = "JOINTS_" + std::to_string(set);
+        const auto accessor = uint_at(primitive["attributes"], name.c_str());
+        if (!accessor) break;
+        if (*accessor >= readable_.size() || !readable_[*accessor] || !checked.emplace(*accessor, joints).second) continue;
+        const auto runs = locate_accessor(*accessor);
+        if (!runs) continue;
+        double largest = -1;
+        std::uint64_t largest_at = 0;
+        const int components = runs->base.components;
+        for_each_element(*runs, [&](std::uint64_t i, const double* value, std::uint64_t) {
+          for (int c = 0; c < components; ++c) {
+            if (value[c] > largest) {
+              largest = value[c];
+              largest_at = i;
+            }
+          }
+        });
+        if (largest < static_cast<double>(joints)) continue;
+        diag_.error(codes::ACCESSOR_JOINTS_INDEX_OOB,
+                    json_pointer(json_pointer("/meshes", mesh_index) + "/primitives", p) + "/attributes/" + name,
+                    name + " accessor " + std::to_string(*accessor) + " (" + json_pointer("/accessors", *accessor) +
+                        ") names joint " + std::to_string(static_cast<std::uint64_t>(largest)) + " (element " +
+                        std::to_string(largest_at) + "), but the skin of node " + std::to_string(n) +
+                        (node.contains("name") && node["name"].is_string() ? " '" + node["name"].get<std::string>() + "'" : "") +
+                        " has only " + counted(joints, "joint", "joints"));
+      }
+    }
   }
 }
 

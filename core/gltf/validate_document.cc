@@ -64,6 +64,9 @@ std::vector<const Json*> DocumentCheck::top_level(const char* key) {
   if (array == nullptr) return elements;
   for (std::size_t i = 0; i < array->size(); ++i) {
     elements.push_back(object_at(*array, i, json_pointer("", key)));
+    // Every glTF object's name is a string: a number there passed through into our output, which
+    // the Khronos validator then refused.
+    if (elements.back() != nullptr) read_string(*elements.back(), "name", json_pointer(json_pointer("", key), i));
   }
   return elements;
 }

@@ -5,6 +5,7 @@
 
 #include "document_check.h"
 #include "validate_util.h"
+#include "rdtf/completion.h"
 #include "rdtf/diagnostic_codes.h"
 
 namespace rdtf::internal {
@@ -24,6 +25,18 @@ bool decomposable(const std::vector<double>& m) {
     }
   }
   return true;
+}
+
+// "node 3 'elbow'" (its name when it has one): users know their nodes by name.
+std::string named(const Json& document, std::size_t i) {
+  std::string label = "node " + std::to_string(i);
+  const auto nodes = document.find("nodes");
+  if (nodes == document.end() || !nodes->is_array() || i >= nodes->size() || !(*nodes)[i].is_object()) return label;
+  const auto name = (*nodes)[i].find("name");
+  if (name != (*nodes)[i].end() && name->is_string() && !name->get_ref<const std::string&>().empty()) {
+    label += " " + value_text(*name);
+  }
+  return label;
 }
 
 }  // namespace
@@ -106,8 +119,8 @@ void DocumentCheck::check_node_graph() {
         continue;
       }
       diag_.error(codes::NODE_PARENT_OVERRIDE, json_pointer(json_pointer("/nodes", i) + "/children", k),
-                  "node " + std::to_string(child) + " is already a child of node " +
-                      std::to_string(parents_[child]) + "; a node can have only one parent");
+                  named(doc_, child) + " is already a child of " + named(doc_, parents_[child]) +
+                      "; a node can have only one parent");
     }
   }
   report_loops();
@@ -141,8 +154,7 @@ void DocumentCheck::report_loops() {
         if (!reported[it->first]) {
           reported[it->first] = 1;
           diag_.error(codes::NODE_LOOP, json_pointer("/nodes", it->first),
-                      "node " + std::to_string(it->first) +
-                          " is its own descendant: the children lists form a loop");
+                      named(doc_, it->first) + " is its own descendant: the children lists form a loop");
         }
         if (it->first == child) break;
       }
@@ -247,8 +259,8 @@ void DocumentCheck::check_scenes() {
       const auto node = as_uint((*listed)[k]);
       if (!node || *node >= parents_.size() || parents_[*node] == kNone) continue;
       diag_.error(codes::SCENE_NON_ROOT_NODE, json_pointer(pointer, k),
-                  "node " + std::to_string(*node) + " is a child of node " +
-                      std::to_string(parents_[*node]) + ", so it cannot be a root of the scene");
+                  named(doc_, *node) + " is a child of " + named(doc_, parents_[*node]) +
+                      ", so it cannot be a root of the scene");
     }
   }
   if (forest_) check_skins_in_scenes(scene_roots);

@@ -120,4 +120,26 @@ void check_units(const Json& document, const Robot& robot, Diagnostics& diag) {
   if (document.contains("nodes")) check_units_of(document, robot, diag);
 }
 
+bool check_finite_inertials(const Json& document, const Robot& robot, Diagnostics& diag) {
+  bool finite = true;
+  for (const Link& link : robot.links) {
+    const MassProperties& m = link.inertial;
+    const auto report = [&](const char* code, const std::string& what) {
+      finite = false;
+      diag.error(code, json_pointer("/nodes", link.node),
+                 "link " + node_label(document, static_cast<std::size_t>(link.node)) + ": its " + what +
+                     " is not finite: its meshes' scales or the density overflow double precision; give "
+                     "the model sizes in metres and densities in kg/m^3");
+    };
+    if (!std::isfinite(m.mass) || !std::isfinite(m.volume)) {
+      report(codes::LINK_MASS_NOT_FINITE, "mass (" + short_number(m.mass) + " kg, volume " + short_number(m.volume) + " m^3)");
+    } else if (!m.center_of_mass.allFinite()) {
+      report(codes::LINK_COM_NOT_FINITE, "centre of mass");
+    } else if (!m.inertia.allFinite()) {
+      report(codes::LINK_INERTIA_NOT_FINITE, "inertia");
+    }
+  }
+  return finite;
+}
+
 }  // namespace rdtf

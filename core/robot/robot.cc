@@ -112,6 +112,16 @@ std::optional<Eigen::Vector3d> named_axis(const std::string& text) {
   return std::nullopt;
 }
 
+// Only an axis's direction counts. One whose squared norm overflows a double ([1e300, 1e300, 0]
+// became the zero vector) or underflows it is scaled to a largest component of 1 first; any other
+// is left as it is, so that a unit axis read back from rdtf's output keeps its bits.
+void in_range(Eigen::Vector3d& v) {
+  const double squared = v.squaredNorm();
+  if (std::isfinite(squared) && squared > 1e-200) return;
+  const double largest = v.cwiseAbs().maxCoeff();
+  if (largest > 0.0) v /= largest;
+}
+
 void read_axis(const JointSource& source, const Eigen::Affine3d& X_SF, const Eigen::Isometry3d& X_SC,
                Joint& joint, Diagnostics& diag) {
   const std::string axis_key = key_for(source, "axis", "rdtf_axis");
@@ -132,17 +142,19 @@ void read_axis(const JointSource& source, const Eigen::Affine3d& X_SF, const Eig
                    ", not three finite numbers or one of \"x\", \"y\", \"z\", \"-x\", \"-y\", \"-z\"");
     return;
   }
-  if (axis->norm() == 0.0) {
+  if (axis->cwiseAbs().maxCoeff() == 0.0) {
     diag.error(codes::JOINT_AXIS_ZERO, pointer,
                source.label + ": the joint axis " + value_text(value) + " is the zero vector");
     return;
   }
+  in_range(*axis);
   if (!source.rdtf_entry) {
     // A node-extras axis is a direction in that node's frame (in Blender's axes when Blender wrote
     // the file: glTF (x, y, z) = Blender (x, z, -y)); map it into the child link frame.
     if (source.blender_axes) *axis = blender_to_gltf_axes() * *axis;
     *axis = X_SC.linear().transpose() * (X_SF.linear() * *axis);
-    if (!(axis->norm() > 0.0)) {  // The node's scale flattens it (a scale of 0).
+    if (axis->allFinite()) in_range(*axis);
+    if (!axis->allFinite() || !(axis->norm() > 0.0)) {  // The node's scale flattens it (a scale of 0).
       diag.error(codes::JOINT_AXIS_ZERO, pointer,
                  source.label + ": the joint axis " + value_text(value) +
                      " has no length in the scene: the node's scale flattens it");

@@ -127,8 +127,9 @@ class Builder {
   }
 
   // The triangles of one <visual> (or <collision>) geometry in its own frame, or nothing.
+  // `authored_mass`: the link has an <inertial>, so its mass does not come from this geometry.
   std::optional<TriangleMesh> geometry(const urdf::Geometry& g, const std::string& pointer, int row,
-                                       Eigen::Vector3d& scale) {
+                                       bool authored_mass, Eigen::Vector3d& scale) {
     auto skip = [&](const std::string& why) {
       diag.warning_at_line(codes::URDF_GEOMETRY_SKIPPED, pointer, row, why + "; this geometry is skipped");
       return std::nullopt;
@@ -161,18 +162,24 @@ class Builder {
     }
     std::string why;
     const auto path = resolve_mesh_path(mesh.filename, urdf.parent_path().empty() ? fs::path(".") : urdf.parent_path(), why);
-    if (!path) {
-      diag.error_at_line(codes::URDF_MESH_NOT_FOUND, pointer, row, why);
-      ok = false;
+    // A published robot often comes without its mesh package. Where the link's mass is its
+    // <inertial>, a missing mesh costs only its look: a warning, and the rest is imported. Where
+    // the mass would be computed from the mesh, it cannot be: an error.
+    const auto missing = [&](const std::string& message) {
+      if (authored_mass) {
+        diag.warning_at_line(codes::URDF_MESH_NOT_FOUND, pointer, row,
+                             message + "; this geometry is skipped (the link's mass is its <inertial>)");
+      } else {
+        diag.error_at_line(codes::URDF_MESH_NOT_FOUND, pointer, row,
+                           message + " (the link has no <inertial>: its mass would come from this mesh)");
+        ok = false;
+      }
       return std::nullopt;
-    }
+    };
+    if (!path) return missing(why);
     Diagnostics read_diag(path->string());
     const auto bytes = read_text(*path, options.convert.limits.max_file_bytes, read_diag);
-    if (!bytes) {
-      diag.error_at_line(codes::URDF_MESH_NOT_FOUND, pointer, row, "mesh '" + mesh.filename + "': " + read_diag.all().front().message);
-      ok = false;
-      return std::nullopt;
-    }
+    if (!bytes) return missing("mesh '" + mesh.filename + "': " + read_diag.all().front().message);
     auto triangles_read = parse_stl(std::vector<std::uint8_t>(bytes->begin(), bytes->end()), why);
     if (!triangles_read) {
       diag.error_at_line(codes::URDF_MESH_INVALID, pointer, row, "mesh '" + path->string() + "': " + why);
@@ -202,7 +209,7 @@ class Builder {
       const std::string pointer = link_pointer(link.name) + "/" + element + "[" + std::to_string(i + 1) + "]";
       if (!g) continue;
       Eigen::Vector3d scale;
-      auto mesh = geometry(*g, pointer, row, scale);
+      auto mesh = geometry(*g, pointer, row, link.inertial != nullptr, scale);
       if (!mesh) continue;
       triangles += mesh->triangles.size();
       if (triangles > options.convert.limits.max_triangles) {

@@ -99,6 +99,24 @@ std::vector<BadCase> cases() {
                  "/nodes/"});
   all.push_back({"NodeWithTwoParents",
                  edited_arm3([](Json& d) { d["nodes"][2]["children"].push_back(4); }), "/nodes/"});
+  // Every node scaled by 1e38: nested, a mesh is 1e76 across and its inertia overflows a double.
+  // It was written as JSON null with exit 0.
+  all.push_back({"InertiaBeyondDouble", edited_arm3([](Json& d) {
+                   for (Json& node : d["nodes"]) node["scale"] = {1e38, 1e38, 1e38};
+                 }),
+                 "is not finite"});
+  all.push_back({"NameNotAString", edited_arm3([](Json& d) { d["nodes"][0]["name"] = 12; }), "/nodes/0/name"});
+  // The skin loses its last joint, which JOINTS_0 still names: refused where the validator
+  // refuses it (it was converted, and the output failed the validator).
+  all.push_back({"SkinJointIndexOutOfRange",
+                 [](const std::filesystem::path& folder) {
+                   Json document = Json::parse(testing::read_file(testing::data_dir() / "blender" / "skinned_arm.gltf"));
+                   document["skins"][0]["joints"].erase(2);
+                   std::filesystem::copy_file(testing::data_dir() / "blender" / "skinned_arm.bin", folder / "skinned_arm.bin");
+                   testing::write_file(folder / "model.gltf", document.dump());
+                   return folder / "model.gltf";
+                 },
+                 "/meshes/0/primitives/0/attributes/JOINTS_0"});
   all.push_back({"IndexOutOfRange",
                  [](const std::filesystem::path& folder) {
                    // One triangle whose third index (5) is past its 3 vertices; data: URI buffer.

@@ -207,6 +207,34 @@ TEST(ValidateDocument, SceneRootsMustBeRoots) {
   EXPECT_DIAGNOSTIC(check_document(document), "UNRESOLVED_REFERENCE", "/scene");
 }
 
+// Users know their nodes by name: every node-graph error names them with their index.
+TEST(ValidateDocument, NodeGraphErrorsNameTheNodes) {
+  const auto message_of = [](const Diagnostics& diag, const std::string& code) {
+    for (const Diagnostic& d : diag.all()) {
+      if (d.code == code) return d.message;
+    }
+    return std::string("no ") + code;
+  };
+  Json document = triangle_document();
+  document["nodes"] = Json::parse(
+      R"([{"name": "base", "children": [1]}, {"name": "elbow", "children": [2]}, {"name": "hand", "children": [1]}])");
+  document["scenes"][0]["nodes"] = Json::array({0});
+  EXPECT_EQ(message_of(check_document(document), "NODE_LOOP"),
+            "node 2 'hand' is its own descendant: the children lists form a loop");
+  document["nodes"] = Json::parse(R"([{"name": "base", "children": [2]}, {"name": "tool", "children": [2]}, {"mesh": 0, "name": "hand"}])");
+  document["scenes"][0]["nodes"] = Json::array({0, 1});
+  EXPECT_EQ(message_of(check_document(document), "NODE_PARENT_OVERRIDE"),
+            "node 2 'hand' is already a child of node 0 'base'; a node can have only one parent");
+  document["nodes"] = Json::parse(R"([{"name": "base", "children": [1]}, {"mesh": 0}])");
+  document["scenes"][0]["nodes"] = Json::array({0, 1});
+  EXPECT_EQ(message_of(check_document(document), "SCENE_NON_ROOT_NODE"),
+            "node 1 is a child of node 0 'base', so it cannot be a root of the scene");
+  // A name that is not a string is invalid glTF (it was passed through into the output).
+  document["nodes"] = Json::parse(R"([{"name": 12, "mesh": 0}])");
+  document["scenes"][0]["nodes"] = Json::array({0});
+  EXPECT_DIAGNOSTIC(check_document(document), "TYPE_MISMATCH", "/nodes/0/name");
+}
+
 TEST(ValidateDocument, UnresolvedReferences) {
   Json document = triangle_document();
   document["nodes"][0]["mesh"] = 1;

@@ -243,6 +243,24 @@ TEST(BlenderModelled, NamedAxesAndTheAxesRule) {
   EXPECT_EQ(conversion->robot.joints[0].axis, Eigen::Vector3d(0, 0, 1));
 }
 
+// Only an axis's direction counts, whatever its length: one whose norm overflows a double
+// ([1e300, 1e300, 0] was turned into the zero vector) or underflows it (1e-200) is the direction
+// it points in.
+TEST(BlenderModelled, AxesOfAnyLengthKeepTheirDirection) {
+  const double r = std::sqrt(0.5);
+  for (const auto& [axis, expected] :
+       {std::pair{Json({1e300, 1e300, 0}), Eigen::Vector3d(r, r, 0)}, {Json({0, -1e-200, 0}), Eigen::Vector3d(0, -1, 0)},
+        {Json({1.7e308, 0, -1.7e308}), Eigen::Vector3d(r, 0, -r)}, {Json({0, 0, 4.9e-324}), Eigen::Vector3d(0, 0, 1)}}) {
+    SCOPED_TRACE(axis.dump());
+    Diagnostics diag;
+    GltfAsset asset;
+    asset.document = one_joint({{"rdtf_joint", "revolute"}, {"rdtf_axis", axis}});
+    const auto conversion = convert(asset, ConvertOptions{}, diag);
+    ASSERT_TRUE(conversion);
+    EXPECT_LE((conversion->robot.joints[0].axis - expected).norm(), 1e-15);
+  }
+}
+
 TEST(BlenderModelled, PivotIsTheJointEmptyNotTheChildOrigin) {
   // The forearm's node sits 0.25 above the elbow empty (Blender puts a cylinder's origin at its
   // centre): the joint and the forearm's link frame are at the empty, 1 above the base.

@@ -233,6 +233,35 @@ INSTANTIATE_TEST_SUITE_P(BadInput, UrdfImportErrors, ::testing::ValuesIn(kBadUrd
                            return name;
                          });
 
+// A published robot without its mesh package: where the link's mass is its <inertial>, the
+// missing mesh is a warning naming it, and the robot is imported with that mass (it used to stop
+// the import). Without an <inertial> it stays the error above: the mass would come from the mesh.
+TEST(UrdfImportErrors, MissingMeshOfALinkWithAnInertialIsAWarning) {
+  TempDir dir;
+  const fs::path urdf = dir / "robot.urdf";
+  testing::write_file(urdf, link_urdf(inertial("2.5") + "\n<visual><geometry><mesh filename=\"package://arm/meshes/base.STL\"/></geometry></visual>"));
+  Diagnostics diag;
+  const auto conversion = import_urdf(urdf, UrdfImportOptions{}, diag);
+  ASSERT_TRUE(conversion);
+  const Diagnostic* found = nullptr;
+  for (const Diagnostic& d : diag.all()) {
+    if (d.code == "URDF_MESH_NOT_FOUND") found = &d;
+  }
+  ASSERT_NE(found, nullptr);
+  EXPECT_EQ(found->severity, Severity::kWarning);
+  EXPECT_EQ(found->pointer, "/robot/link[@name='a']/visual[1]");
+  EXPECT_NE(found->message.find("base.STL"), std::string::npos) << found->message;
+  EXPECT_NE(found->message.find("the link's mass is its <inertial>"), std::string::npos) << found->message;
+  ASSERT_EQ(conversion->robot.links.size(), 1u);
+  EXPECT_EQ(conversion->robot.links[0].inertial.mass, 2.5);
+
+  const testing::CommandResult run = testing::run_command("'" + testing::cli_path() + "' import '" + urdf.string() +
+                                                          "' -o '" + (dir / "out.gltf").string() + "'");
+  EXPECT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.err.find("warning URDF_MESH_NOT_FOUND"), std::string::npos) << run.err;
+  EXPECT_TRUE(fs::exists(dir / "out.gltf"));
+}
+
 // Why the URDF cannot be read, in the user's terms: missing, a folder, unreadable (it used to say
 // "not a regular file" for all of them).
 void expect_read_failure(const fs::path& urdf, const std::string& why) {

@@ -21,6 +21,7 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(ACCESSOR_ELEMENT_OUT_OF_MAX_BOUND, kSeverityError, "glTF") \
   X(ACCESSOR_ELEMENT_OUT_OF_MIN_BOUND, kSeverityError, "glTF") \
   X(ACCESSOR_INDEX_OOB, kSeverityError, "glTF") \
+  X(ACCESSOR_JOINTS_INDEX_OOB, kSeverityError, "glTF") \
   X(ACCESSOR_INDEX_PRIMITIVE_RESTART, kSeverityError, "glTF") \
   X(ACCESSOR_INVALID_FLOAT, kSeverityError, "glTF") \
   X(ACCESSOR_MAX_MISMATCH, kSeverityWarning, "glTF") \
@@ -156,7 +157,7 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(URDF_MASSLESS_MOVING_LINK, kSeverityWarning, "URDF") \
   X(URDF_MESH_FORMAT_UNSUPPORTED, kSeverityWarning, "URDF") \
   X(URDF_MESH_INVALID, kSeverityError, "URDF") \
-  X(URDF_MESH_NOT_FOUND, kSeverityError, "URDF") \
+  X(URDF_MESH_NOT_FOUND, kSeverityError | kSeverityWarning, "URDF") \
   X(URDF_MULTIPLE_ROOTS, kSeverityError, "URDF") \
   X(URDF_NAME_CHANGED, kSeverityWarning, "URDF") \
   X(URDF_NOT_A_ROBOT, kSeverityError, "URDF") \

@@ -126,4 +126,9 @@ void check_missing_properties(const Json& document, const std::vector<NodeType>&
 // Extent or masses implausible for metres: probably a model drawn in millimetres.
 void check_units(const Json& document, const Robot& robot, Diagnostics& diag);
 
+// An error for each link whose mass, centre of mass or inertia is not finite (sizes or densities
+// that overflow double precision: a scale of 1e38 on a node and its child). The output would hold
+// JSON null in their place. False when there was one.
+bool check_finite_inertials(const Json& document, const Robot& robot, Diagnostics& diag);
+
 }  // namespace rdtf

@@ -268,6 +268,14 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
     }
     const int link = link_of_node[owner];
     const Eigen::Affine3d X_LN = robot.links[link].X_SL.inverse() * world[node];
+    // A scale of 0 on the node or an ancestor flattens the mesh: its volume, and with it a part of
+    // the link's mass, vanish. (A matrix that does so is refused as not decomposable; a TRS scale
+    // of 0 is valid glTF, and cut a link's mass without a word.)
+    if (X_LN.linear().determinant() == 0.0) {
+      after_check.warning(codes::MESH_SCALED_TO_NOTHING, pointer,
+                          "mesh node '" + name + "' is scaled to nothing (a scale of 0 on it or an ancestor): "
+                          "it adds no volume and no mass to its link; give it a non-zero scale, or remove it");
+    }
     // Every instance (EXT_mesh_gpu_instancing) is a solid of the link; a node's rdtf_mass is
     // the mass of them all.
     std::uint64_t triangles = 0;

@@ -257,10 +257,21 @@ class Builder {
     out["friction"] = joint.dynamics ? joint.dynamics->friction : 0.0;
     out["damping"] = joint.dynamics ? joint.dynamics->damping : 0.0;
     out["springStiffness"] = 0.0;
-    if (joint.mimic || joint.safety || joint.calibration) {
+    // A mimic joint moves with another (a gripper's second finger): without the coupling it moves
+    // on its own in every simulation, which the user must hear of. The other two change nothing
+    // the dynamics see.
+    if (joint.mimic) {
+      diag.warning(codes::URDF_MIMIC_IGNORED, joint_pointer(joint.name) + "/mimic",
+                   "joint '" + joint.name + "' mimics joint '" + joint.mimic->joint_name + "' (multiplier " +
+                       exact_number(joint.mimic->multiplier) + ", offset " + exact_number(joint.mimic->offset) +
+                       "): RDTF has no coupled joints, so it is imported as a joint of its own that moves freely");
+    }
+    if (joint.safety || joint.calibration) {
+      const std::string which = joint.safety && joint.calibration ? "<safety_controller> and <calibration>"
+                                : joint.safety                    ? "<safety_controller>"
+                                                                  : "<calibration>";
       diag.info(codes::URDF_IGNORED, joint_pointer(joint.name),
-                "joint '" + joint.name + "': <mimic>, <safety_controller> and <calibration> have no "
-                "RDTF equivalent and are not imported");
+                "joint '" + joint.name + "': " + which + " has no RDTF equivalent and is not imported");
     }
     return out;
   }

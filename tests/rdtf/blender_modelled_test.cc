@@ -261,6 +261,41 @@ TEST(BlenderModelled, AxesOfAnyLengthKeepTheirDirection) {
   }
 }
 
+// A TRS scale of 0 (valid glTF) flattens a mesh: its part of the link's mass vanishes, and the
+// user hears of it (a scale of [0, 1, 1] on upper_arm's motor cut the link's mass without a word).
+TEST(BlenderModelled, AMeshScaledToNothingIsAWarningAndAddsNoMass) {
+  testing::TempDir dir;
+  Json document = Json::parse(testing::read_file(testing::data_dir() / "blender" / "arm3.gltf"));
+  ASSERT_EQ(document["nodes"][5]["name"], "upper_arm_motor");
+  std::filesystem::copy_file(testing::data_dir() / "blender" / "arm3.bin", dir / "arm3.bin");
+  testing::write_file(dir / "arm3.gltf", document.dump());
+  Diagnostics whole_diag;
+  const auto whole = convert_file(dir / "arm3.gltf", ConvertOptions{}, whole_diag);
+  ASSERT_TRUE(whole);
+  document["nodes"][5]["scale"] = {0.0, 1.0, 1.0};
+  testing::write_file(dir / "arm3.gltf", document.dump());
+  Diagnostics diag;
+  const auto flat = convert_file(dir / "arm3.gltf", ConvertOptions{}, diag);
+  ASSERT_TRUE(flat);
+  const Diagnostic* found = nullptr;
+  for (const Diagnostic& d : diag.all()) {
+    if (d.code == "MESH_SCALED_TO_NOTHING") found = &d;
+  }
+  ASSERT_NE(found, nullptr);
+  EXPECT_EQ(found->severity, Severity::kWarning);
+  EXPECT_EQ(found->pointer, "/nodes/5");
+  EXPECT_NE(found->message.find("'upper_arm_motor'"), std::string::npos) << found->message;
+  // The link keeps exactly the mass of its other mesh.
+  double motor = 0;
+  for (const LinkMesh& mesh : link_named(whole->robot, "upper_arm").meshes) {
+    if (mesh.node == 5) motor = mesh.volume * mesh.density;
+  }
+  EXPECT_GT(motor, 0.0);
+  const double before = link_named(whole->robot, "upper_arm").inertial.mass;
+  EXPECT_NEAR(link_named(flat->robot, "upper_arm").inertial.mass, before - motor, 1e-12 * before);
+  for (const Diagnostic& d : whole_diag.all()) EXPECT_NE(d.code, "MESH_SCALED_TO_NOTHING");
+}
+
 TEST(BlenderModelled, PivotIsTheJointEmptyNotTheChildOrigin) {
   // The forearm's node sits 0.25 above the elbow empty (Blender puts a cylinder's origin at its
   // centre): the joint and the forearm's link frame are at the empty, 1 above the base.

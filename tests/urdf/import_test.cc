@@ -391,6 +391,27 @@ TEST(UrdfImport, WheelLimitsOfEffortAndSpeedAreNoRangeAndFixedJointLimitsAreDrop
   EXPECT_FALSE(back->getJoint("camera_joint")->limits);
 }
 
+// Franka's second finger mimics the first: RDTF cannot couple them, and the user hears of it with
+// a warning naming both joints (it was an info, hidden without -v, naming <mimic>,
+// <safety_controller> and <calibration> together whichever the joint had).
+TEST(UrdfImport, MimicJointIsAWarningNamingTheJointItFollows) {
+  Diagnostics diag;
+  import_or_fail(testing::data_dir() / "robots" / "panda.urdf", diag);
+  const Diagnostic* mimic = nullptr;
+  for (const Diagnostic& d : diag.all()) {
+    if (d.code == "URDF_MIMIC_IGNORED") mimic = &d;
+    if (d.code == "URDF_IGNORED") {
+      EXPECT_EQ(d.message.find("<mimic>"), std::string::npos) << d.message;
+    }
+  }
+  ASSERT_NE(mimic, nullptr);
+  EXPECT_EQ(mimic->severity, Severity::kWarning);
+  EXPECT_EQ(mimic->pointer, "/robot/joint[@name='panda_finger_joint2']/mimic");
+  EXPECT_EQ(mimic->message,
+            "joint 'panda_finger_joint2' mimics joint 'panda_finger_joint1' (multiplier 1, offset 0): RDTF has no "
+            "coupled joints, so it is imported as a joint of its own that moves freely");
+}
+
 TEST(UrdfImport, RoundTripOfTheTutorialPhysicsRobot) { round_trip(tutorial("07-physics.urdf")); }
 
 TEST(UrdfImport, RoundTripOfEveryJointKindAndRotatedInertial) {

@@ -125,6 +125,7 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(MESH_INCONSISTENT_WINDING, kSeverityWarning, "model") \
   X(MESH_INSIDE_OUT, kSeverityWarning, "model") \
   X(MESH_OPEN, kSeverityWarning, "model") \
+  X(MESH_SCALED_TO_NOTHING, kSeverityWarning, "model") \
   X(MESH_PRIMITIVE_INCOMPATIBLE_MODE, kSeverityWarning, "model") \
   X(MESH_WITHOUT_LINK, kSeverityWarning, "model") \
   X(NO_LINKS, kSeverityWarning, "model") \
@@ -147,6 +148,7 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(URDF_FLOATING_JOINT, kSeverityWarning, "URDF") \
   X(URDF_GEOMETRY_SKIPPED, kSeverityWarning, "URDF") \
   X(URDF_IGNORED, kSeverityInfo, "URDF") \
+  X(URDF_MIMIC_IGNORED, kSeverityWarning, "URDF") \
   X(URDF_INVALID, kSeverityError, "URDF") \
   X(URDF_INVALID_INERTIAL, kSeverityError, "URDF") \
   X(URDF_INVALID_NUMBER, kSeverityError, "URDF") \

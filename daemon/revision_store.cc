@@ -78,7 +78,7 @@ Json to_json(const LinkFacts& l) {
 Json to_json(const JointFacts& j) {
   return {{"name", j.name}, {"urdf_name", j.urdf_name}, {"type", j.type}, {"parent", j.parent},
           {"child", j.child}, {"origin", j.origin}, {"axis", j.axis}, {"has_limits", j.has_limits},
-          {"limits", j.limits}, {"dynamics", j.dynamics}};
+          {"has_range", j.has_range}, {"limits", j.limits}, {"dynamics", j.dynamics}};
 }
 
 LinkFacts link_from(const Json& j, const std::string& where) {
@@ -105,6 +105,8 @@ JointFacts joint_from(const Json& j, const std::string& where) {
   numbers(j, "origin", f.origin, where);
   numbers(j, "axis", f.axis, where);
   f.has_limits = field(j, "has_limits", Json::value_t::boolean, where).get<bool>();
+  // Files written before limits could come without a range have no has_range: theirs had one.
+  f.has_range = j.contains("has_range") ? field(j, "has_range", Json::value_t::boolean, where).get<bool>() : f.has_limits;
   numbers(j, "limits", f.limits, where);
   numbers(j, "dynamics", f.dynamics, where);
   return f;

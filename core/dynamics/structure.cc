@@ -208,8 +208,8 @@ std::vector<double> reach_bounds(const Robot& robot, const std::vector<int>& ord
     const Joint& joint = robot.joints[pj];
     double travel = 0;
     if (joint.kind == JointKind::kPrismatic) {
-      travel = joint.limits ? std::max(std::abs(joint.limits->lower), std::abs(joint.limits->upper))
-                            : kInfinity;
+      travel = position_limited(joint) ? std::max(std::abs(joint.limits->lower), std::abs(joint.limits->upper))
+                                       : kInfinity;
     } else if (joint.kind == JointKind::kFloating || joint.kind == JointKind::kPlanar) {
       travel = kInfinity;
     }

@@ -247,7 +247,7 @@ std::map<std::string, double> validation_start_pose(const Robot& robot, const Va
     if (joint.kind != JointKind::kRevolute && joint.kind != JointKind::kContinuous) continue;
     if (pose.contains(joint.name)) continue;
     double q = options.start_offset_angular;
-    if (joint.kind == JointKind::kRevolute && joint.limits) {
+    if (position_limited(joint)) {
       const double lower = joint.limits->lower, upper = joint.limits->upper;
       if (!(lower <= upper) || !std::isfinite(lower) || !std::isfinite(upper)) continue;  // reported elsewhere
       if (q > upper || q < lower) q = -q;

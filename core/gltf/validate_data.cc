@@ -11,6 +11,7 @@
 #include <map>
 #include <set>
 
+#include "rdtf/completion.h"
 #include "rdtf/validate.h"
 #include "validate_util.h"
 #include "rdtf/diagnostic_codes.h"
@@ -677,7 +678,7 @@ void DataCheck::check_skin_joint_indices() {
                     name + " accessor " + std::to_string(*accessor) + " (" + json_pointer("/accessors", *accessor) +
                         ") names joint " + std::to_string(static_cast<std::uint64_t>(largest)) + " (element " +
                         std::to_string(largest_at) + "), but the skin of node " + std::to_string(n) +
-                        (node.contains("name") && node["name"].is_string() ? " '" + node["name"].get<std::string>() + "'" : "") +
+                        (node.contains("name") && node["name"].is_string() ? " " + value_text(node["name"]) : "") +
                         " has only " + counted(joints, "joint", "joints"));
       }
     }

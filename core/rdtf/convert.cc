@@ -82,9 +82,10 @@ std::optional<Conversion> convert(GltfAsset asset, const ConvertOptions& options
   Robot robot = build_robot(asset.document, types, *scene, diag);
   robot.name = robot_name(asset);
   compute_link_inertia(asset, types, options.default_density, robot, diag);
-  if (diag.has_errors() || !check_finite_inertials(asset.document, robot, diag)) return std::nullopt;
-  read_khr_physics(asset.document, types, robot, diag);
   if (diag.has_errors()) return std::nullopt;
+  read_khr_physics(asset.document, types, robot, diag);
+  // After KHR motion, which may replace an inertial that overflowed or overflow one itself.
+  if (diag.has_errors() || !check_finite_inertials(asset.document, robot, diag)) return std::nullopt;
   check_units(asset.document, robot, diag);
   if (options.khr_physics) write_khr_physics(asset.document, types, robot);
   if (!write_rdtf_extras(asset.document, types, robot, diag)) return std::nullopt;

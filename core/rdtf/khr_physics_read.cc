@@ -380,6 +380,11 @@ std::optional<Joint> joint_from_khr(const Json& document, const std::vector<Eige
         return std::nullopt;
       }
       out.limits = limits;
+    } else if (parsed->max_force[d] > 0) {  // A free axis with a drive's maxForce: effort alone.
+      JointLimits limits;
+      limits.effort = parsed->max_force[d];
+      limits.position = false;
+      out.limits = limits;
     }
     out.damping = parsed->damping[d];
     out.spring_stiffness = parsed->stiffness[d];
@@ -387,10 +392,13 @@ std::optional<Joint> joint_from_khr(const Json& document, const std::vector<Eige
   return out;
 }
 
-// A revolute joint without lower and upper turns as a continuous one does, and the draft has one
-// form for both (no limit on the angular axis): the two are the same joint.
+// The draft has one form for joints that move alike: a revolute joint without lower and upper
+// turns as a continuous one does (no limit on the angular axis), and a revolute or prismatic joint
+// with the range [0, 0] is as locked as a fixed one (its axis limited to 0, as the others).
 JointKind motion_kind(const Joint& joint) {
-  return joint.kind == JointKind::kRevolute && !position_limited(joint) ? JointKind::kContinuous : joint.kind;
+  if (joint.kind == JointKind::kRevolute && !position_limited(joint)) return JointKind::kContinuous;
+  if (position_limited(joint) && joint.limits->lower == 0 && joint.limits->upper == 0) return JointKind::kFixed;
+  return joint.kind;
 }
 
 std::string limits_text(const Joint& joint) {
@@ -400,9 +408,11 @@ std::string limits_text(const Joint& joint) {
 
 // How the KHR joint `khr` differs from the RDTF joint `rdtf`, in words; nothing when they agree.
 std::optional<std::string> joint_difference(const Joint& khr, const Joint& rdtf) {
-  if (motion_kind(khr) != motion_kind(rdtf)) {
+  const JointKind kind = motion_kind(rdtf);
+  if (motion_kind(khr) != kind) {
     return std::string("type ") + to_string(khr.kind) + " against " + to_string(rdtf.kind);
   }
+  if (kind == JointKind::kFixed) return std::nullopt;  // Nothing moves: no axis, range or drive.
   if (position_limited(khr) != position_limited(rdtf) ||
       (position_limited(khr) &&
        (!close(khr.limits->lower, rdtf.limits->lower, std::max(1.0, std::abs(rdtf.limits->lower))) ||

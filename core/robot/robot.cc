@@ -154,10 +154,11 @@ void read_axis(const JointSource& source, const Eigen::Affine3d& X_SF, const Eig
     if (source.blender_axes) *axis = blender_to_gltf_axes() * *axis;
     *axis = X_SC.linear().transpose() * (X_SF.linear() * *axis);
     if (axis->allFinite()) in_range(*axis);
-    if (!axis->allFinite() || !(axis->norm() > 0.0)) {  // The node's scale flattens it (a scale of 0).
+    if (!axis->allFinite() || !(axis->norm() > 0.0)) {  // A scale of 0 flattens it, one of 1e200 overflows.
       diag.error(codes::JOINT_AXIS_ZERO, pointer,
                  source.label + ": the joint axis " + value_text(value) +
-                     " has no length in the scene: the node's scale flattens it");
+                     (axis->allFinite() ? " has no length in the scene: the node's scale flattens it"
+                                        : " has no direction in the scene: the nodes' scales overflow it"));
       return;
     }
   }
@@ -183,7 +184,8 @@ void read_joint_properties(const JointSource& source, const Eigen::Affine3d& X_S
   const auto upper = read_number(source, key_for(source, "upper", "rdtf_upper"), diag);
   const auto effort = read_number(source, key_for(source, "effort", "rdtf_effort"), diag);
   const auto velocity = read_number(source, key_for(source, "velocity", "rdtf_velocity"), diag);
-  if (lower || upper || effort || velocity) {
+  // An effort or speed of 0 is "not given" (JointLimits): alone, it makes no limits at all.
+  if (lower || upper || effort.value_or(0) != 0 || velocity.value_or(0) != 0) {
     JointLimits limits;
     limits.lower = lower.value_or(0.0);
     limits.upper = upper.value_or(0.0);

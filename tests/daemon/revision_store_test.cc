@@ -40,6 +40,7 @@ ModelState sample() {
   joint.child = "tip";
   joint.origin[0] = std::nextafter(1.0, 2.0);
   joint.has_limits = true;
+  joint.has_range = true;
   joint.limits[1] = 3.141592653589793;
   live.facts.joints.push_back(joint);
   state.live = live;
@@ -63,6 +64,28 @@ TEST(RevisionStore, StateComesBackExactly) {
   EXPECT_TRUE(diff_robots(state.live->facts, back->live->facts).empty());
   EXPECT_EQ(back->live->facts.links[0].mass, 0.1 + 0.2);
   EXPECT_EQ(back->live->facts.joints[0].origin[0], std::nextafter(1.0, 2.0));
+  EXPECT_TRUE(back->live->facts.joints[0].has_range);
+}
+
+// Whether a joint's limits have a range is kept (it was lost, and after a restart every DELTA
+// then said the limits of every joint with a range had changed); a file written before the flag
+// existed reads as "a range wherever there were limits", which was true then.
+TEST(RevisionStore, AJointsRangeComesBackAndOldFilesHadOne) {
+  ModelState state = sample();
+  state.live->facts.joints[0].has_range = false;  // Effort and speed limits alone.
+  std::string why;
+  auto back = state_from_json(state_to_json(state), why);
+  ASSERT_TRUE(back) << why;
+  EXPECT_FALSE(back->live->facts.joints[0].has_range);
+  EXPECT_TRUE(diff_robots(state.live->facts, back->live->facts).empty());
+
+  Json old = Json::parse(state_to_json(sample()));
+  bool erased = false;
+  for (Json& joint : old["live"]["joints"]) erased = joint.erase("has_range") > 0 || erased;
+  ASSERT_TRUE(erased) << old.dump();
+  back = state_from_json(old.dump(), why);
+  ASSERT_TRUE(back) << why;
+  EXPECT_TRUE(back->live->facts.joints[0].has_range);
 }
 
 TEST(RevisionStore, AnythingElseIsRefusedWithItsReason) {

@@ -240,6 +240,11 @@ TEST(DynamicsGate, StartPoseBendsEveryRevoluteJointWithinItsLimits) {
   b.joint(1).limits = JointLimits{-1.0, 0.1, 0, 0};
   b.joint(2).limits = JointLimits{0.5, 0.7, 0, 0};
   b.joint(5).limits = JointLimits{-0.1, 0.1, 0, 0};
+  // Effort and speed limits alone are no range: "free" and the wheel still bend (they were held
+  // at rest, as if their range were [0, 0]).
+  const JointLimits effort_only{0, 0, 5, 2, false};
+  b.joint(0).limits = effort_only;
+  b.joint(4).limits = effort_only;
   ValidationOptions options;
   options.initial_positions = {{"named", 1.25}};
   options.start_offset_angular = 0.3;
@@ -251,6 +256,20 @@ TEST(DynamicsGate, StartPoseBendsEveryRevoluteJointWithinItsLimits) {
   ValidationOptions defaults;
   defaults.initial_positions = {{"named", 1.25}};
   EXPECT_EQ(validation_start_pose(b.robot(), defaults), (std::map<std::string, double>{{"named", 1.25}}));
+}
+
+// A slide with effort and speed limits alone has no range, so no bound on how far its carriage
+// goes: falling freely for the whole run (44 m in 3 s) is no body leaving its region. (Its reach
+// was taken as 0, from the range [0, 0] it does not have, and the gate refused the robot.)
+TEST(DynamicsGate, ASlideWithEffortLimitsAloneHasNoReachBound) {
+  RobotBuilder b;
+  const int root = b.root("column", MassProperties{});
+  b.child(root, "lift", JointKind::kPrismatic, Eigen::Isometry3d::Identity(), Eigen::Vector3d::UnitY(), "carriage",
+          box_inertial(2.0, {0.2, 0.2, 0.2}));
+  b.joint(0).limits = JointLimits{0, 0, 100, 10, false};
+  const ValidationReport report = validate_dynamics(b.robot(), ValidationOptions{});
+  EXPECT_TRUE(report.passed) << all_text(report.diagnostics);
+  EXPECT_FALSE(report.diagnostics.contains("SIM_BODY_LEFT_REGION")) << all_text(report.diagnostics);
 }
 
 // ------------------------------------------------------------------------------------------------

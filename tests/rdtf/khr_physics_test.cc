@@ -272,6 +272,21 @@ TEST(KhrPhysicsWrite, AJointWithoutARangeIsFreeAndReadsBackAsItself) {
   }
 }
 
+// A revolute joint given the range [0, 0] is written with every axis locked, as a fixed joint is:
+// read back, the two are the same joint (rdtf warned "type fixed against revolute" about its own
+// output).
+TEST(KhrPhysicsWrite, ARangeOfZeroReadsBackWithoutADisagreement) {
+  testing::TempDir dir;
+  json input = generated_arm();
+  input["nodes"][3]["extras"] = {
+      {"rdtf_joint", "revolute"}, {"rdtf_axis", {1, 1, 0}}, {"rdtf_lower", 0.0}, {"rdtf_upper", 0.0}};
+  Diagnostics diag;
+  auto conversion = convert_json(dir, "arm.gltf", input, diag);
+  ASSERT_TRUE(conversion) << all_text(diag);
+  ASSERT_TRUE(write_rdtf(conversion->asset, dir / "out.gltf", OutputFormat::kGltf, diag)) << all_text(diag);
+  expect_reads_back_as(conversion->robot, dir / "out.gltf");
+}
+
 TEST(KhrPhysicsWrite, OffLeavesTheExtensionOut) {
   testing::TempDir dir;
   Diagnostics diag;
@@ -322,6 +337,25 @@ Diagnostic expect_diagnostic(const json& doc, const std::string& code) {
 
 const std::string kMotion = std::string("/extensions/") + kKhrPhysics + "/motion";
 const std::string kJoint = std::string("/extensions/") + kKhrPhysics + "/joint";
+
+// A KHR joint whose angular axis is free and whose drive has a maxForce is a continuous joint with
+// that effort limit and no range (the effort was read only on a limited axis, and lost).
+TEST(KhrPhysicsRead, TheMaxForceOfAFreeAxisIsAnEffortLimitWithoutARange) {
+  json doc = khr_twin();
+  json& definition = doc["extensions"][kKhrPhysics]["physicsJoints"][0];
+  definition["limits"].erase(2);  // angular 0: free
+  definition["drives"][0]["maxForce"] = 7.5;
+  testing::TempDir dir;
+  Diagnostics diag;
+  auto conversion = convert_json(dir, "free.gltf", doc, diag);
+  ASSERT_TRUE(conversion) << all_text(diag);
+  const Joint& joint = conversion->robot.joints[0];
+  EXPECT_EQ(joint.kind, JointKind::kContinuous);
+  ASSERT_TRUE(joint.limits);
+  EXPECT_FALSE(joint.limits->position);
+  EXPECT_EQ(joint.limits->effort, 7.5);
+  EXPECT_EQ(joint.damping, 0.3);
+}
 
 TEST(KhrPhysicsRead, BadValuesAreNamed) {
   {

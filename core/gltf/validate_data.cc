@@ -11,7 +11,6 @@
 #include <map>
 #include <set>
 
-#include "rdtf/completion.h"
 #include "rdtf/validate.h"
 #include "validate_util.h"
 #include "rdtf/diagnostic_codes.h"
@@ -677,9 +676,7 @@ void DataCheck::check_skin_joint_indices() {
                     json_pointer(json_pointer("/meshes", mesh_index) + "/primitives", p) + "/attributes/" + name,
                     name + " accessor " + std::to_string(*accessor) + " (" + json_pointer("/accessors", *accessor) +
                         ") names joint " + std::to_string(static_cast<std::uint64_t>(largest)) + " (element " +
-                        std::to_string(largest_at) + "), but the skin of node " + std::to_string(n) +
-                        (node.contains("name") && node["name"].is_string() ? " " + value_text(node["name"]) : "") +
-                        " has only " + counted(joints, "joint", "joints"));
+                        std::to_string(largest_at) + "), but the skin of " + node_named(doc_, n) + " has only " + counted(joints, "joint", "joints"));
       }
     }
   }

@@ -5,7 +5,6 @@
 
 #include "document_check.h"
 #include "validate_util.h"
-#include "rdtf/completion.h"
 #include "rdtf/diagnostic_codes.h"
 
 namespace rdtf::internal {
@@ -25,18 +24,6 @@ bool decomposable(const std::vector<double>& m) {
     }
   }
   return true;
-}
-
-// "node 3 'elbow'" (its name when it has one): users know their nodes by name.
-std::string named(const Json& document, std::size_t i) {
-  std::string label = "node " + std::to_string(i);
-  const auto nodes = document.find("nodes");
-  if (nodes == document.end() || !nodes->is_array() || i >= nodes->size() || !(*nodes)[i].is_object()) return label;
-  const auto name = (*nodes)[i].find("name");
-  if (name != (*nodes)[i].end() && name->is_string() && !name->get_ref<const std::string&>().empty()) {
-    label += " " + value_text(*name);
-  }
-  return label;
 }
 
 }  // namespace
@@ -119,7 +106,7 @@ void DocumentCheck::check_node_graph() {
         continue;
       }
       diag_.error(codes::NODE_PARENT_OVERRIDE, json_pointer(json_pointer("/nodes", i) + "/children", k),
-                  named(doc_, child) + " is already a child of " + named(doc_, parents_[child]) +
+                  node_named(doc_, child) + " is already a child of " + node_named(doc_, parents_[child]) +
                       "; a node can have only one parent");
     }
   }
@@ -154,7 +141,7 @@ void DocumentCheck::report_loops() {
         if (!reported[it->first]) {
           reported[it->first] = 1;
           diag_.error(codes::NODE_LOOP, json_pointer("/nodes", it->first),
-                      named(doc_, it->first) + " is its own descendant: the children lists form a loop");
+                      node_named(doc_, it->first) + " is its own descendant: the children lists form a loop");
         }
         if (it->first == child) break;
       }
@@ -259,7 +246,7 @@ void DocumentCheck::check_scenes() {
       const auto node = as_uint((*listed)[k]);
       if (!node || *node >= parents_.size() || parents_[*node] == kNone) continue;
       diag_.error(codes::SCENE_NON_ROOT_NODE, json_pointer(pointer, k),
-                  named(doc_, *node) + " is a child of " + named(doc_, parents_[*node]) +
+                  node_named(doc_, *node) + " is a child of " + node_named(doc_, parents_[*node]) +
                       ", so it cannot be a root of the scene");
     }
   }

@@ -9,9 +9,23 @@
 #include <optional>
 #include <string>
 
+#include "rdtf/completion.h"
 #include "rdtf/gltf.h"
 
 namespace rdtf::internal {
+
+// "node 3 'elbow'" (its name when it has one; any document, however malformed): users know their
+// nodes by name.
+inline std::string node_named(const Json& document, std::size_t i) {
+  std::string label = "node " + std::to_string(i);
+  const auto nodes = document.find("nodes");
+  if (nodes == document.end() || !nodes->is_array() || i >= nodes->size() || !(*nodes)[i].is_object()) return label;
+  const auto name = (*nodes)[i].find("name");
+  if (name != (*nodes)[i].end() && name->is_string() && !name->get_ref<const std::string&>().empty()) {
+    label += " " + value_text(*name);
+  }
+  return label;
+}
 
 inline constexpr std::uint64_t kByte = 5120, kUnsignedByte = 5121, kShort = 5122,
                                kUnsignedShort = 5123, kUnsignedInt = 5125, kFloat = 5126;

@@ -14,7 +14,7 @@ namespace {
 
 using Json = nlohmann::json;
 
-constexpr std::string_view kFormat = "rdtfd-results 2";  // As kCacheFormat (result_cache.cc)
+constexpr std::string_view kFormat = "rdtfd-results 3";  // As kCacheFormat (result_cache.cc)
 
 struct Refused {
   std::string why;
@@ -85,14 +85,16 @@ Json robot_json(const Robot& robot) {
                      {"child_joints", l.child_joints}, {"x_sl", pose_json(l.X_SL)}, {"meshes", meshes},
                      {"volume", l.inertial.volume}, {"mass", l.inertial.mass},
                      {"center_of_mass", vector_json(l.inertial.center_of_mass)}, {"inertia", inertia},
-                     {"authored", l.inertial_source == InertialSource::kAuthored}, {"inertial_node", l.inertial_node}});
+                     {"authored", l.inertial_source == InertialSource::kAuthored}, {"inertial_node", l.inertial_node},
+                     {"ignored_inertial_extras", l.ignored_inertial_extras}});
   }
   Json joints = Json::array();
   for (const Joint& j : robot.joints) {
     Json limits = nullptr;
     if (j.limits) limits = {j.limits->lower, j.limits->upper, j.limits->effort, j.limits->velocity, j.limits->position};
     joints.push_back({{"name", j.name}, {"node", j.node}, {"frame_node", j.frame_node}, {"source_node", j.source_node},
-                      {"source_is_entry", j.source_is_entry}, {"parent_link", j.parent_link},
+                      {"source_is_entry", j.source_is_entry}, {"ignored_extras_node", j.ignored_extras_node},
+                      {"parent_link", j.parent_link},
                       {"child_link", j.child_link}, {"kind", to_string(j.kind)}, {"x_pj", pose_json(j.X_PJ)},
                       {"axis", vector_json(j.axis)}, {"limits", limits}, {"damping", j.damping},
                       {"friction", j.friction}, {"spring_stiffness", j.spring_stiffness}});
@@ -135,6 +137,7 @@ Robot robot_from(const Json& j) {
     }
     link.inertial_source = flag(at(l, "authored")) ? InertialSource::kAuthored : InertialSource::kComputed;
     link.inertial_node = integer(at(l, "inertial_node"));
+    link.ignored_inertial_extras = flag(at(l, "ignored_inertial_extras"));
     robot.links.push_back(std::move(link));
   }
   for (const Json& j2 : at(j, "joints")) {
@@ -144,6 +147,7 @@ Robot robot_from(const Json& j) {
     joint.frame_node = integer(at(j2, "frame_node"));
     joint.source_node = integer(at(j2, "source_node"));
     joint.source_is_entry = flag(at(j2, "source_is_entry"));
+    joint.ignored_extras_node = integer(at(j2, "ignored_extras_node"));
     joint.parent_link = integer(at(j2, "parent_link"));
     joint.child_link = integer(at(j2, "child_link"));
     const auto kind = joint_kind_from_string(text(at(j2, "kind")));

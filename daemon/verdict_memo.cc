@@ -13,7 +13,7 @@ namespace {
 #if defined(__x86_64__) && defined(__GLIBCXX__)
 static_assert(sizeof(LinkMesh) == 24, "a field was added to LinkMesh: hash it in check_digest");
 static_assert(sizeof(MassProperties) == 112, "a field was added to MassProperties: hash it in check_digest");
-static_assert(sizeof(Link) == 336, "a field was added to Link: hash it in check_digest");
+static_assert(sizeof(Link) == 352, "a field was added to Link: hash it in check_digest");
 static_assert(sizeof(JointLimits) == 40, "a field was added to JointLimits: hash it in check_digest");
 static_assert(sizeof(Joint) == 288, "a field was added to Joint: hash it in check_digest");
 static_assert(sizeof(Robot) == 104, "a field was added to Robot: hash it in check_digest");
@@ -82,6 +82,7 @@ void add(Hasher& h, const Link& l) {
   add(h, l.inertial);
   h.add(static_cast<int>(l.inertial_source));
   h.add(l.inertial_node);
+  h.add(l.ignored_inertial_extras);
 }
 
 void add(Hasher& h, const Joint& j) {
@@ -90,6 +91,7 @@ void add(Hasher& h, const Joint& j) {
   h.add(j.frame_node);
   h.add(j.source_node);
   h.add(j.source_is_entry);
+  h.add(j.ignored_extras_node);
   h.add(j.parent_link);
   h.add(j.child_link);
   h.add(static_cast<int>(j.kind));

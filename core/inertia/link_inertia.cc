@@ -1,5 +1,6 @@
 #include "rdtf/link_inertia.h"
 
+#include <algorithm>
 #include <cmath>
 #include <future>
 #include <map>
@@ -167,6 +168,11 @@ std::optional<MassProperties> authored_inertial(const Json& inertial, const std:
     return std::nullopt;
   }
   result.mass = inertial["mass"].get<double>();
+  if (result.mass < 0) {
+    diag.error(codes::RDTF_INVALID_VALUE, where + "/mass",
+               label + ": mass " + value_text(inertial["mass"]) + " kg is negative: a mass is 0 or more");
+    return std::nullopt;
+  }
   if (inertial.contains("gravityCenter")) {
     const Json& c = inertial["gravityCenter"];
     if (!c.is_array() || c.size() != 3 || !number(c[0]) || !number(c[1]) || !number(c[2])) {
@@ -199,6 +205,48 @@ std::optional<MassProperties> authored_inertial(const Json& inertial, const std:
   if (inertial.contains("volume") && number(inertial["volume"])) result.volume = inertial["volume"].get<double>();
   return result;
 }
+
+std::string mass_text(const std::optional<MassProperties>& inertial) {
+  return inertial ? "mass " + value_text(Json(inertial->mass)) + " kg" : std::string("computed from the geometry");
+}
+
+// The inertial node's rdtf_inertial against the extras.RDTF inertial that took precedence (`entry`,
+// nullopt when computed). A tool that keeps node extras only (Blender's importer) would read the
+// node extra instead, so a difference is a warning, and the writer rewrites the node extra.
+bool warn_if_extras_differ(const Json& node, const std::optional<MassProperties>& entry, const std::string& label,
+                           int inertial_node, Diagnostics& diag) {
+  if (!node.contains("extras") || !node["extras"].is_object() || !node["extras"].contains("rdtf_inertial")) return false;
+  const std::string pointer = json_pointer("/nodes", inertial_node) + "/extras/rdtf_inertial";
+  Diagnostics scratch;
+  const auto extras = authored_inertial(node["extras"]["rdtf_inertial"], pointer, label, scratch);
+  std::string difference;
+  if (scratch.has_errors()) {
+    const auto error = std::find_if(scratch.all().begin(), scratch.all().end(),
+                                    [](const Diagnostic& d) { return d.severity == Severity::kError; });
+    difference = "it is invalid (" + error->message + ")";
+  } else if (extras.has_value() != entry.has_value()) {
+    difference = "it says " + mass_text(extras) + ", extras.RDTF says " + mass_text(entry);
+  } else if (extras) {
+    const auto agree = [](double a, double b, double scale) { return std::abs(a - b) <= 1e-9 * std::max(1e-300, scale); };
+    const double length = std::max({1.0, extras->center_of_mass.norm(), entry->center_of_mass.norm()});
+    const double moment = std::max(extras->inertia.cwiseAbs().maxCoeff(), entry->inertia.cwiseAbs().maxCoeff());
+    if (!agree(extras->mass, entry->mass, std::max(std::abs(extras->mass), std::abs(entry->mass)))) {
+      difference = "it says " + mass_text(extras) + ", extras.RDTF says " + mass_text(entry);
+    } else if (!agree((extras->center_of_mass - entry->center_of_mass).norm(), 0, length)) {
+      difference = "its gravityCenter differs from extras.RDTF's by " +
+                   value_text(Json((extras->center_of_mass - entry->center_of_mass).norm())) + " m";
+    } else if (!agree((extras->inertia - entry->inertia).cwiseAbs().maxCoeff(), 0, moment)) {
+      difference = "its inertia differs from extras.RDTF's by up to " +
+                   value_text(Json((extras->inertia - entry->inertia).cwiseAbs().maxCoeff())) + " kg m^2";
+    }
+  }
+  if (difference.empty()) return false;
+  diag.warning(codes::RDTF_NODE_EXTRAS_IGNORED, pointer,
+               label + ": rdtf_inertial: " + difference +
+                   "; extras.RDTF takes precedence, and the output's rdtf_inertial is rewritten to agree");
+  return true;
+}
+
 
 // extras.RDTF entry of a node, if any.
 const Json* rdtf_entry(const Json& document, std::size_t node, std::string& pointer) {
@@ -321,6 +369,7 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
       std::optional<MassProperties> authored;
       if (entry != nullptr && entry->contains("inertial")) {
         authored = authored_inertial((*entry)["inertial"], entry_pointer + "/inertial", label, diag);
+        link.ignored_inertial_extras = warn_if_extras_differ(node, authored, label, link.inertial_node, diag);
       } else if (node.contains("extras") && node["extras"].is_object() &&
                  node["extras"].contains("rdtf_inertial")) {
         authored = authored_inertial(node["extras"]["rdtf_inertial"],

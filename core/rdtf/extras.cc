@@ -95,7 +95,12 @@ void write_node_extras(Json& document, const std::vector<NodeType>& types, const
     if (extras == nullptr) continue;
     bool has_joint_keys = false;
     for (const char* key : kJointExtrasKeys) has_joint_keys |= extras->contains(key);
-    if (has_joint_keys) continue;
+    if (has_joint_keys) {
+      // Kept as they are, unless they say otherwise than extras.RDTF (build_robot warned).
+      if (joint.ignored_extras_node != joint.frame_node) continue;
+      for (const char* key : kJointExtrasKeys) extras->erase(key);
+      extras->erase("rdtf_axes");
+    }
     // The axis is in the child link frame (the frame node's, scale removed); as a node-extras
     // vector it is read in the node's frame with its scale: R_FJ undoes that.
     const Eigen::Matrix3d R_FJ = world[joint.frame_node].linear().inverse() *
@@ -107,7 +112,7 @@ void write_node_extras(Json& document, const std::vector<NodeType>& types, const
   for (const Link& link : robot.links) {
     if (link.inertial_node >= 0) {
       Json* extras = extras_object(nodes[link.inertial_node]);
-      if (extras != nullptr && !extras->contains("rdtf_inertial")) {
+      if (extras != nullptr && (!extras->contains("rdtf_inertial") || link.ignored_inertial_extras)) {
         (*extras)["rdtf_inertial"] = link.inertial_source == InertialSource::kComputed
                                          ? inertial_to_json(link.inertial)
                                          : authored_inertial_json(link.inertial);

@@ -1,6 +1,8 @@
 #include "rdtf/robot.h"
 
+#include <algorithm>
 #include <cmath>
+#include <tuple>
 
 #include "rdtf/completion.h"
 #include "rdtf/geometry.h"
@@ -34,6 +36,17 @@ std::optional<double> read_number(const JointSource& source, const std::string& 
     return std::nullopt;
   }
   return value.get<double>();
+}
+
+// A number that is 0 or more: an effort or speed limit, damping, friction, a spring's stiffness.
+std::optional<double> read_amount(const JointSource& source, const std::string& key, Diagnostics& diag) {
+  const auto value = read_number(source, key, diag);
+  if (value && *value < 0) {
+    diag.error(codes::RDTF_INVALID_VALUE, json_pointer(source.pointer, key),
+               source.label + ": " + key + " is " + value_text(Json(*value)) + ", which is negative: it must be 0 or more");
+    return std::nullopt;
+  }
+  return value;
 }
 
 // The extras.RDTF entry for each node that has one.
@@ -182,8 +195,8 @@ void read_joint_properties(const JointSource& source, const Eigen::Affine3d& X_S
   read_axis(source, X_SF, X_SC, joint, diag);
   const auto lower = read_number(source, key_for(source, "lower", "rdtf_lower"), diag);
   const auto upper = read_number(source, key_for(source, "upper", "rdtf_upper"), diag);
-  const auto effort = read_number(source, key_for(source, "effort", "rdtf_effort"), diag);
-  const auto velocity = read_number(source, key_for(source, "velocity", "rdtf_velocity"), diag);
+  const auto effort = read_amount(source, key_for(source, "effort", "rdtf_effort"), diag);
+  const auto velocity = read_amount(source, key_for(source, "velocity", "rdtf_velocity"), diag);
   // An effort or speed of 0 is "not given" (JointLimits): alone, it makes no limits at all.
   if (lower || upper || effort.value_or(0) != 0 || velocity.value_or(0) != 0) {
     JointLimits limits;
@@ -199,11 +212,46 @@ void read_joint_properties(const JointSource& source, const Eigen::Affine3d& X_S
     }
     joint.limits = limits;
   }
-  joint.damping = read_number(source, key_for(source, "damping", "rdtf_damping"), diag).value_or(0);
-  joint.friction = read_number(source, key_for(source, "friction", "rdtf_friction"), diag).value_or(0);
+  joint.damping = read_amount(source, key_for(source, "damping", "rdtf_damping"), diag).value_or(0);
+  joint.friction = read_amount(source, key_for(source, "friction", "rdtf_friction"), diag).value_or(0);
   joint.spring_stiffness =
-      read_number(source, key_for(source, "springStiffness", "rdtf_spring_stiffness"), diag)
+      read_amount(source, key_for(source, "springStiffness", "rdtf_spring_stiffness"), diag)
           .value_or(0);
+}
+
+std::string vector_text(const Eigen::Vector3d& v) { return Json::array({v.x(), v.y(), v.z()}).dump(); }
+
+bool agree(double a, double b) { return std::abs(a - b) <= 1e-9 * std::max({1.0, std::abs(a), std::abs(b)}); }
+
+// What differs between a joint as its node extras give it and as its extras.RDTF entry does:
+// "<property>: <node extras' value> in node extras, <entry's value> in extras.RDTF"; nothing
+// when they agree to 1e-9 relative (rdtf writes the axis of its node-extras copy in another
+// frame, which rounds).
+std::optional<std::string> joint_properties_differ(const Joint& extras, const Joint& entry) {
+  const auto both = [](const std::string& what, const std::string& in_extras, const std::string& in_entry) {
+    return what + ": " + in_extras + " in node extras, " + in_entry + " in extras.RDTF";
+  };
+  const auto text = [](double value) { return value_text(Json(value)); };
+  if (extras.kind != entry.kind) return both("type", to_string(extras.kind), to_string(entry.kind));
+  const bool has_axis = entry.kind != JointKind::kFixed && entry.kind != JointKind::kFloating && entry.kind != JointKind::kBall;
+  if (has_axis && (extras.axis - entry.axis).norm() > 1e-9) {
+    return both("axis (in the child link frame)", vector_text(extras.axis), vector_text(entry.axis));
+  }
+  const JointLimits none{0, 0, 0, 0, false};
+  const JointLimits& a = extras.limits ? *extras.limits : none;
+  const JointLimits& b = entry.limits ? *entry.limits : none;
+  const auto range = [&](const JointLimits& l) {
+    return l.position ? "[" + text(l.lower) + ", " + text(l.upper) + "]" : std::string("none");
+  };
+  if (a.position != b.position || (a.position && (!agree(a.lower, b.lower) || !agree(a.upper, b.upper)))) {
+    return both("position limits", range(a), range(b));
+  }
+  for (const auto& [what, x, y] : {std::tuple{"effort limit", a.effort, b.effort}, {"velocity limit", a.velocity, b.velocity},
+                                   {"damping", extras.damping, entry.damping}, {"friction", extras.friction, entry.friction},
+                                   {"spring stiffness", extras.spring_stiffness, entry.spring_stiffness}}) {
+    if (!agree(x, y)) return both(what, text(x), text(y));
+  }
+  return std::nullopt;
 }
 
 }  // namespace
@@ -346,6 +394,37 @@ Robot build_robot(const Json& document, const std::vector<NodeType>& types, std:
     joint.source_node = source ? source->frame_node : -1;
     joint.source_is_entry = source && source->rdtf_entry;
     if (source) read_joint_properties(*source, world[source->frame_node], child.X_SL, joint, diag);
+    // The entry wins over node extras. A tool that keeps node extras only (Blender's importer)
+    // would read the node extras instead, so say where they disagree.
+    for (std::size_t i = 0; joint.source_is_entry && i < extras_nodes.size(); ++i) {
+      const int node = extras_nodes[i];
+      const Json* extras = node_extras(document, node);
+      if (!has_joint_keys(extras)) continue;
+      Diagnostics scratch;
+      const JointSource shadow_source{extras, json_pointer("/nodes", node) + "/extras", node_label(document, node),
+                                      false, node, reads_blender_axes(document, node, scratch)};
+      Joint shadow = joint;
+      shadow.kind = JointKind::kFixed;
+      shadow.axis = Eigen::Vector3d::UnitX();
+      shadow.limits.reset();
+      shadow.damping = shadow.friction = shadow.spring_stiffness = 0;
+      read_joint_properties(shadow_source, world[node], child.X_SL, shadow, scratch);
+      std::optional<std::string> difference;
+      if (scratch.has_errors()) {
+        const auto error = std::find_if(scratch.all().begin(), scratch.all().end(),
+                                        [](const Diagnostic& d) { return d.severity == Severity::kError; });
+        difference = "an invalid value in node extras (" + error->message + ")";
+      } else {
+        difference = joint_properties_differ(shadow, joint);
+      }
+      if (difference) {
+        joint.ignored_extras_node = node;
+        diag.warning(codes::RDTF_NODE_EXTRAS_IGNORED, shadow_source.pointer,
+                     shadow_source.label + ": joint '" + joint.name + "': " + *difference +
+                         "; extras.RDTF takes precedence, and the output's node extras are rewritten to agree");
+      }
+      break;
+    }
     child.parent_joint = static_cast<int>(robot.joints.size());
     robot.links[joint.parent_link].child_joints.push_back(child.parent_joint);
     robot.joints.push_back(std::move(joint));

@@ -73,6 +73,7 @@ void expect_same_robot(const Robot& a, const Robot& b) {
     EXPECT_EQ(x.inertial.inertia, y.inertial.inertia);
     EXPECT_EQ(x.inertial_source, y.inertial_source);
     EXPECT_EQ(x.inertial_node, y.inertial_node);
+    EXPECT_EQ(x.ignored_inertial_extras, y.ignored_inertial_extras);
   }
   ASSERT_EQ(a.joints.size(), b.joints.size());
   for (std::size_t i = 0; i < a.joints.size(); ++i) {
@@ -82,6 +83,7 @@ void expect_same_robot(const Robot& a, const Robot& b) {
     EXPECT_EQ(x.frame_node, y.frame_node);
     EXPECT_EQ(x.source_node, y.source_node);
     EXPECT_EQ(x.source_is_entry, y.source_is_entry);
+    EXPECT_EQ(x.ignored_extras_node, y.ignored_extras_node);
     EXPECT_EQ(x.parent_link, y.parent_link);
     EXPECT_EQ(x.child_link, y.child_link);
     EXPECT_EQ(x.kind, y.kind);

@@ -21,9 +21,9 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(ACCESSOR_ELEMENT_OUT_OF_MAX_BOUND, kSeverityError, "glTF") \
   X(ACCESSOR_ELEMENT_OUT_OF_MIN_BOUND, kSeverityError, "glTF") \
   X(ACCESSOR_INDEX_OOB, kSeverityError, "glTF") \
-  X(ACCESSOR_JOINTS_INDEX_OOB, kSeverityError, "glTF") \
   X(ACCESSOR_INDEX_PRIMITIVE_RESTART, kSeverityError, "glTF") \
   X(ACCESSOR_INVALID_FLOAT, kSeverityError, "glTF") \
+  X(ACCESSOR_JOINTS_INDEX_OOB, kSeverityError, "glTF") \
   X(ACCESSOR_MAX_MISMATCH, kSeverityWarning, "glTF") \
   X(ACCESSOR_MIN_MISMATCH, kSeverityWarning, "glTF") \
   X(ACCESSOR_NORMALIZED_INVALID, kSeverityError, "glTF") \
@@ -125,8 +125,8 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(MESH_INCONSISTENT_WINDING, kSeverityWarning, "model") \
   X(MESH_INSIDE_OUT, kSeverityWarning, "model") \
   X(MESH_OPEN, kSeverityWarning, "model") \
-  X(MESH_SCALED_TO_NOTHING, kSeverityWarning, "model") \
   X(MESH_PRIMITIVE_INCOMPATIBLE_MODE, kSeverityWarning, "model") \
+  X(MESH_SCALED_TO_NOTHING, kSeverityWarning, "model") \
   X(MESH_WITHOUT_LINK, kSeverityWarning, "model") \
   X(NO_LINKS, kSeverityWarning, "model") \
   X(NO_RDTF_PROPERTIES, kSeverityWarning, "model") \
@@ -136,6 +136,7 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(RDTF_INVALID_NODE_ENTRY, kSeverityError, "model") \
   X(RDTF_INVALID_TYPE, kSeverityError, "model") \
   X(RDTF_INVALID_VALUE, kSeverityError, "model") \
+  X(RDTF_NODE_EXTRAS_IGNORED, kSeverityWarning, "model") \
   X(SKIN_NO_WEIGHTS, kSeverityWarning, "model") \
   X(SKIN_PART_SHARED, kSeverityInfo, "model") \
   X(UNITS_IMPLAUSIBLE, kSeverityWarning, "model") \
@@ -148,7 +149,6 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(URDF_FLOATING_JOINT, kSeverityWarning, "URDF") \
   X(URDF_GEOMETRY_SKIPPED, kSeverityWarning, "URDF") \
   X(URDF_IGNORED, kSeverityInfo, "URDF") \
-  X(URDF_MIMIC_IGNORED, kSeverityWarning, "URDF") \
   X(URDF_INVALID, kSeverityError, "URDF") \
   X(URDF_INVALID_INERTIAL, kSeverityError, "URDF") \
   X(URDF_INVALID_NUMBER, kSeverityError, "URDF") \
@@ -160,6 +160,7 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(URDF_MESH_FORMAT_UNSUPPORTED, kSeverityWarning, "URDF") \
   X(URDF_MESH_INVALID, kSeverityError, "URDF") \
   X(URDF_MESH_NOT_FOUND, kSeverityError | kSeverityWarning, "URDF") \
+  X(URDF_MIMIC_IGNORED, kSeverityWarning, "URDF") \
   X(URDF_MULTIPLE_ROOTS, kSeverityError, "URDF") \
   X(URDF_NAME_CHANGED, kSeverityWarning, "URDF") \
   X(URDF_NOT_A_ROBOT, kSeverityError, "URDF") \

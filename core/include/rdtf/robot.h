@@ -40,6 +40,9 @@ struct Link {
   MassProperties inertial;          // Centre of mass and inertia in the link frame.
   InertialSource inertial_source = InertialSource::kComputed;
   int inertial_node = -1;           // The inserted (or authored) inertial node.
+  // Its rdtf_inertial node extra says otherwise than the extras.RDTF entry that took precedence
+  // (warned: RDTF_NODE_EXTRAS_IGNORED); the writer rewrites it.
+  bool ignored_inertial_extras = false;
 };
 
 struct JointLimits {
@@ -63,6 +66,10 @@ struct Joint {
   // extras held them; -1 when none did (a fixed joint, List 4's default).
   int source_node = -1;
   bool source_is_entry = false;
+  // A node whose node-extras joint keys say otherwise than the extras.RDTF entry that took
+  // precedence (warned: RDTF_NODE_EXTRAS_IGNORED); -1 when none. The writer rewrites its keys, so
+  // that a tool that keeps node extras only (Blender's importer) reads the same joint.
+  int ignored_extras_node = -1;
   int parent_link = -1;
   int child_link = -1;
   JointKind kind = JointKind::kFixed;

@@ -1,0 +1,178 @@
+// The two copies of a robot's properties in an RDTF file: extras.RDTF and the node extras a tool
+// such as Blender's importer keeps alone. When they disagree, extras.RDTF wins with a warning
+// that names the node and both values, and the output's node extras are rewritten to agree, so
+// that the output read without extras.RDTF (as Blender reads it) is the same robot. Negative
+// amounts in node extras are errors that name the node and the key.
+#include <gtest/gtest.h>
+
+#include "rdtf/convert.h"
+#include "rdtf/diagnostic_codes.h"
+#include "support/test_support.h"
+
+namespace rdtf {
+namespace {
+
+using nlohmann::json;
+
+std::optional<Conversion> convert_json(const testing::TempDir& dir, const std::string& name, const json& doc,
+                                       Diagnostics& diag) {
+  testing::write_file(dir / name, doc.dump(2));
+  return convert_file(dir / name, {}, diag);
+}
+
+std::vector<Diagnostic> with_code(const Diagnostics& diag, const std::string& code) {
+  std::vector<Diagnostic> out;
+  for (const Diagnostic& d : diag.all()) {
+    if (d.code == code) out.push_back(d);
+  }
+  return out;
+}
+
+std::size_t node_named(const json& doc, const std::string& name) {
+  for (std::size_t i = 0; i < doc["nodes"].size(); ++i) {
+    if (doc["nodes"][i].value("name", "") == name) return i;
+  }
+  ADD_FAILURE() << "no node " << name;
+  return 0;
+}
+
+// What Blender's importer keeps of a file: the node extras, not the document's extras, and no
+// extension it does not know.
+json as_blender_keeps_it(json doc) {
+  doc.erase("extras");
+  doc.erase("extensionsUsed");
+  doc.erase("extensions");
+  for (json& node : doc["nodes"]) node.erase("extensions");
+  return doc;
+}
+
+void expect_same_robot(const Robot& a, const Robot& b) {
+  ASSERT_EQ(a.links.size(), b.links.size());
+  for (std::size_t l = 0; l < a.links.size(); ++l) {
+    SCOPED_TRACE(a.links[l].name);
+    const double mass = a.links[l].inertial.mass;
+    EXPECT_NEAR(b.links[l].inertial.mass, mass, 1e-12 * mass);
+    EXPECT_LE((b.links[l].inertial.inertia - a.links[l].inertial.inertia).cwiseAbs().maxCoeff(),
+              1e-12 * a.links[l].inertial.inertia.cwiseAbs().maxCoeff());
+  }
+  ASSERT_EQ(a.joints.size(), b.joints.size());
+  for (std::size_t j = 0; j < a.joints.size(); ++j) {
+    SCOPED_TRACE(a.joints[j].name);
+    EXPECT_EQ(a.joints[j].kind, b.joints[j].kind);
+    EXPECT_LE((a.joints[j].axis - b.joints[j].axis).norm(), 1e-12);
+    EXPECT_EQ(a.joints[j].damping, b.joints[j].damping);
+    EXPECT_EQ(a.joints[j].spring_stiffness, b.joints[j].spring_stiffness);
+    ASSERT_EQ(a.joints[j].limits.has_value(), b.joints[j].limits.has_value());
+    if (a.joints[j].limits) {
+      EXPECT_EQ(a.joints[j].limits->lower, b.joints[j].limits->lower);
+      EXPECT_EQ(a.joints[j].limits->upper, b.joints[j].limits->upper);
+    }
+  }
+}
+
+class NodeExtras : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    Diagnostics diag;
+    auto first = convert_file(testing::data_dir() / "khr" / "arm_extras.gltf", {}, diag);
+    ASSERT_TRUE(first) << diag.all().size();
+    rdtf_ = first->asset.document;
+    robot_ = first->robot;
+    arm_ = node_named(rdtf_, "arm");
+    arm_inertial_ = node_named(rdtf_, "arm_inertial");
+    // The arm's inertial was authored in node extras only; give extras.RDTF a copy, as rdtf's
+    // URDF import writes it.
+    for (json& entry : rdtf_["extras"]["RDTF"]["nodes"]) {
+      if (entry["node"] == arm_inertial_) entry["inertial"] = rdtf_["nodes"][arm_inertial_]["extras"]["rdtf_inertial"];
+    }
+  }
+
+  testing::TempDir dir_;
+  json rdtf_;  // arm_extras.gltf converted: extras.RDTF and node extras that agree.
+  Robot robot_;
+  std::size_t arm_ = 0, arm_inertial_ = 0;
+};
+
+TEST_F(NodeExtras, RdtfsOwnOutputConvertsWithoutAWarning) {
+  Diagnostics diag;
+  ASSERT_TRUE(convert_json(dir_, "again.gltf", rdtf_, diag));
+  EXPECT_TRUE(with_code(diag, codes::RDTF_NODE_EXTRAS_IGNORED).empty());
+}
+
+TEST_F(NodeExtras, EditedNodeExtrasAreNamedIgnoredAndRewrittenToAgree) {
+  json edited = rdtf_;
+  edited["nodes"][arm_]["extras"]["rdtf_damping"] = 0.9;  // extras.RDTF says 0.3
+  edited["nodes"][arm_inertial_]["extras"]["rdtf_inertial"]["mass"] = 5.0;  // extras.RDTF says 1.25
+  Diagnostics diag;
+  auto converted = convert_json(dir_, "edited.gltf", edited, diag);
+  ASSERT_TRUE(converted);
+  EXPECT_FALSE(diag.has_errors());
+  const auto warnings = with_code(diag, codes::RDTF_NODE_EXTRAS_IGNORED);
+  ASSERT_EQ(warnings.size(), 2u);
+  EXPECT_EQ(warnings[0].severity, Severity::kWarning);
+  EXPECT_EQ(warnings[0].pointer, "/nodes/" + std::to_string(arm_) + "/extras");
+  EXPECT_NE(warnings[0].message.find("'arm'"), std::string::npos) << warnings[0].message;
+  EXPECT_NE(warnings[0].message.find("damping: 0.9 in node extras, 0.3 in extras.RDTF"), std::string::npos)
+      << warnings[0].message;
+  EXPECT_EQ(warnings[1].pointer, "/nodes/" + std::to_string(arm_inertial_) + "/extras/rdtf_inertial");
+  EXPECT_NE(warnings[1].message.find("'arm_inertial'"), std::string::npos) << warnings[1].message;
+  EXPECT_NE(warnings[1].message.find("mass 5.0 kg"), std::string::npos) << warnings[1].message;
+  EXPECT_NE(warnings[1].message.find("mass 1.25 kg"), std::string::npos) << warnings[1].message;
+  // extras.RDTF won.
+  expect_same_robot(robot_, converted->robot);
+
+  // The output's node extras now say what extras.RDTF says: read as Blender keeps it, the same robot.
+  const json& output = converted->asset.document;
+  EXPECT_EQ(output["nodes"][arm_]["extras"]["rdtf_damping"], 0.3);
+  EXPECT_EQ(output["nodes"][arm_inertial_]["extras"]["rdtf_inertial"]["mass"], 1.25);
+  Diagnostics blender_diag;
+  auto blender = convert_json(dir_, "blender.gltf", as_blender_keeps_it(output), blender_diag);
+  ASSERT_TRUE(blender);
+  EXPECT_TRUE(with_code(blender_diag, codes::RDTF_NODE_EXTRAS_IGNORED).empty());
+  expect_same_robot(robot_, blender->robot);
+}
+
+TEST_F(NodeExtras, InvalidNodeExtrasBesideExtrasRdtfAreAWarningAndRewritten) {
+  json edited = rdtf_;
+  edited["nodes"][arm_]["extras"]["rdtf_damping"] = -0.5;
+  edited["nodes"][arm_inertial_]["extras"]["rdtf_inertial"]["mass"] = -2.0;
+  Diagnostics diag;
+  auto converted = convert_json(dir_, "invalid.gltf", edited, diag);
+  ASSERT_TRUE(converted);
+  EXPECT_FALSE(diag.has_errors());
+  const auto warnings = with_code(diag, codes::RDTF_NODE_EXTRAS_IGNORED);
+  ASSERT_EQ(warnings.size(), 2u);
+  EXPECT_NE(warnings[0].message.find("rdtf_damping is -0.5, which is negative"), std::string::npos)
+      << warnings[0].message;
+  EXPECT_NE(warnings[1].message.find("mass -2.0 kg is negative"), std::string::npos) << warnings[1].message;
+  Diagnostics blender_diag;
+  auto blender = convert_json(dir_, "blender.gltf", as_blender_keeps_it(converted->asset.document), blender_diag);
+  ASSERT_TRUE(blender);
+  expect_same_robot(robot_, blender->robot);
+}
+
+TEST_F(NodeExtras, NegativeAmountsAloneAreErrorsNamingTheNodeAndKey) {
+  for (const char* key : {"rdtf_damping", "rdtf_friction", "rdtf_spring_stiffness", "rdtf_effort", "rdtf_velocity"}) {
+    SCOPED_TRACE(key);
+    json edited = as_blender_keeps_it(rdtf_);
+    edited["nodes"][arm_]["extras"][key] = -0.25;
+    Diagnostics diag;
+    convert_json(dir_, "negative.gltf", edited, diag);
+    const auto errors = with_code(diag, codes::RDTF_INVALID_VALUE);
+    ASSERT_EQ(errors.size(), 1u);
+    EXPECT_EQ(errors[0].pointer, "/nodes/" + std::to_string(arm_) + "/extras/" + key);
+    EXPECT_NE(errors[0].message.find("node " + std::to_string(arm_) + " 'arm'"), std::string::npos) << errors[0].message;
+    EXPECT_NE(errors[0].message.find("-0.25, which is negative"), std::string::npos) << errors[0].message;
+  }
+  json edited = as_blender_keeps_it(rdtf_);
+  edited["nodes"][arm_inertial_]["extras"]["rdtf_inertial"]["mass"] = -2.0;
+  Diagnostics diag;
+  convert_json(dir_, "negative_mass.gltf", edited, diag);
+  const auto errors = with_code(diag, codes::RDTF_INVALID_VALUE);
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_EQ(errors[0].pointer, "/nodes/" + std::to_string(arm_inertial_) + "/extras/rdtf_inertial/mass");
+  EXPECT_NE(errors[0].message.find("'arm_inertial': mass -2.0 kg is negative"), std::string::npos) << errors[0].message;
+}
+
+}  // namespace
+}  // namespace rdtf

@@ -162,30 +162,24 @@ class Builder {
     }
     std::string why;
     const auto path = resolve_mesh_path(mesh.filename, urdf.parent_path().empty() ? fs::path(".") : urdf.parent_path(), why);
-    // A published robot often comes without its mesh package. Where the link's mass is its
-    // <inertial>, a missing mesh costs only its look: a warning, and the rest is imported. Where
-    // the mass would be computed from the mesh, it cannot be: an error.
-    const auto missing = [&](const std::string& message) {
+    // A published robot often comes without its mesh package, or with a mesh no tool can read.
+    // Where the link's mass is its <inertial>, such a mesh costs only its look: a warning, and
+    // the rest is imported. Where the mass would be computed from the mesh, it cannot be: an error.
+    const auto unusable = [&](const char* code, const std::string& message) {
       if (authored_mass) {
-        diag.warning_at_line(codes::URDF_MESH_NOT_FOUND, pointer, row,
-                             message + "; this geometry is skipped (the link's mass is its <inertial>)");
+        diag.warning_at_line(code, pointer, row, message + "; this geometry is skipped (the link's mass is its <inertial>)");
       } else {
-        diag.error_at_line(codes::URDF_MESH_NOT_FOUND, pointer, row,
-                           message + " (the link has no <inertial>: its mass would come from this mesh)");
+        diag.error_at_line(code, pointer, row, message + " (the link has no <inertial>: its mass would come from this mesh)");
         ok = false;
       }
       return std::nullopt;
     };
-    if (!path) return missing(why);
+    if (!path) return unusable(codes::URDF_MESH_NOT_FOUND, why);
     Diagnostics read_diag(path->string());
     const auto bytes = read_text(*path, options.convert.limits.max_file_bytes, read_diag);
-    if (!bytes) return missing("mesh '" + mesh.filename + "': " + read_diag.all().front().message);
+    if (!bytes) return unusable(codes::URDF_MESH_NOT_FOUND, "mesh '" + mesh.filename + "': " + read_diag.all().front().message);
     auto triangles_read = parse_stl(std::vector<std::uint8_t>(bytes->begin(), bytes->end()), why);
-    if (!triangles_read) {
-      diag.error_at_line(codes::URDF_MESH_INVALID, pointer, row, "mesh '" + path->string() + "': " + why);
-      ok = false;
-      return std::nullopt;
-    }
+    if (!triangles_read) return unusable(codes::URDF_MESH_INVALID, "mesh '" + path->string() + "': " + why);
     if (triangles_read->triangles.empty()) return skip("mesh '" + path->string() + "' has no triangles");
     scale = to_eigen(mesh.scale);
     return triangles_read;

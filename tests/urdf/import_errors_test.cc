@@ -8,6 +8,7 @@
 #include <cstdio>
 
 #include <cctype>
+#include <functional>
 #include <regex>
 
 #include "urdf/urdf_test_support.h"
@@ -233,19 +234,21 @@ INSTANTIATE_TEST_SUITE_P(BadInput, UrdfImportErrors, ::testing::ValuesIn(kBadUrd
                            return name;
                          });
 
-// A published robot without its mesh package: where the link's mass is its <inertial>, the
-// missing mesh is a warning naming it, and the robot is imported with that mass (it used to stop
-// the import). Without an <inertial> it stays the error above: the mass would come from the mesh.
-TEST(UrdfImportErrors, MissingMeshOfALinkWithAnInertialIsAWarning) {
+// A published robot without its mesh package, or with a mesh that is no STL: where the link's
+// mass is its <inertial>, the mesh is a warning naming it, and the robot is imported with that mass
+// (it used to stop the import). Without an <inertial> it stays the error above: the mass would
+// come from the mesh.
+void expect_unusable_mesh_is_a_warning(const std::string& code, const std::function<void(const fs::path&)>& make_mesh) {
   TempDir dir;
   const fs::path urdf = dir / "robot.urdf";
+  make_mesh(dir.path());
   testing::write_file(urdf, link_urdf(inertial("2.5") + "\n<visual><geometry><mesh filename=\"package://arm/meshes/base.STL\"/></geometry></visual>"));
   Diagnostics diag;
   const auto conversion = import_urdf(urdf, UrdfImportOptions{}, diag);
   ASSERT_TRUE(conversion);
   const Diagnostic* found = nullptr;
   for (const Diagnostic& d : diag.all()) {
-    if (d.code == "URDF_MESH_NOT_FOUND") found = &d;
+    if (d.code == code) found = &d;
   }
   ASSERT_NE(found, nullptr);
   EXPECT_EQ(found->severity, Severity::kWarning);
@@ -258,8 +261,19 @@ TEST(UrdfImportErrors, MissingMeshOfALinkWithAnInertialIsAWarning) {
   const testing::CommandResult run = testing::run_command("'" + testing::cli_path() + "' import '" + urdf.string() +
                                                           "' -o '" + (dir / "out.gltf").string() + "'");
   EXPECT_EQ(run.exit_code, 0) << run.err;
-  EXPECT_NE(run.err.find("warning URDF_MESH_NOT_FOUND"), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find("warning " + code), std::string::npos) << run.err;
   EXPECT_TRUE(fs::exists(dir / "out.gltf"));
+}
+
+TEST(UrdfImportErrors, MissingMeshOfALinkWithAnInertialIsAWarning) {
+  expect_unusable_mesh_is_a_warning("URDF_MESH_NOT_FOUND", [](const fs::path&) {});
+}
+
+TEST(UrdfImportErrors, MeshThatIsNoStlOfALinkWithAnInertialIsAWarning) {
+  expect_unusable_mesh_is_a_warning("URDF_MESH_INVALID", [](const fs::path& dir) {
+    fs::create_directories(dir / "arm" / "meshes");
+    testing::write_file(dir / "arm" / "meshes" / "base.STL", "this is no STL file");
+  });
 }
 
 // Why the URDF cannot be read, in the user's terms: missing, a folder, unreadable (it used to say

@@ -158,7 +158,7 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(URDF_MALFORMED_XML, kSeverityError, "URDF") \
   X(URDF_MASSLESS_MOVING_LINK, kSeverityWarning, "URDF") \
   X(URDF_MESH_FORMAT_UNSUPPORTED, kSeverityWarning, "URDF") \
-  X(URDF_MESH_INVALID, kSeverityError, "URDF") \
+  X(URDF_MESH_INVALID, kSeverityError | kSeverityWarning, "URDF") \
   X(URDF_MESH_NOT_FOUND, kSeverityError | kSeverityWarning, "URDF") \
   X(URDF_MIMIC_IGNORED, kSeverityWarning, "URDF") \
   X(URDF_MULTIPLE_ROOTS, kSeverityError, "URDF") \

@@ -99,19 +99,37 @@ bool has_own_transform(const Json& node) {
          differs("matrix", {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1});
 }
 
-// Does a node-extras vector of this node read in Blender's axes? "rdtf_axes" on the node says so
-// ("blender" or "gltf"); without it, yes exactly when Blender's exporter wrote the file.
+// Whether the node is a joint of a skin: a bone, in Blender's terms.
+bool is_skin_joint(const Json& document, std::size_t node) {
+  if (!document.contains("skins") || !document["skins"].is_array()) return false;
+  for (const Json& skin : document["skins"]) {
+    if (!skin.is_object() || !skin.contains("joints") || !skin["joints"].is_array()) continue;
+    for (const Json& joint : skin["joints"]) {
+      if (joint.is_number_unsigned() && joint.get<std::size_t>() == node) return true;
+    }
+  }
+  return false;
+}
+
+// Does a node-extras vector of this node need turning from Blender's axes to the node's? "rdtf_axes"
+// on the node says whether it is in Blender's axes ("blender" or "gltf"); without it, it is exactly
+// when Blender's exporter wrote the file. A bone is never turned: Blender's exporter writes a bone's
+// node in the bone's own axes as Blender draws them (Y from head to tail); only objects' frames are
+// turned from Blender's Z up to glTF's Y up.
 bool reads_blender_axes(const Json& document, std::size_t node, Diagnostics& diag) {
   const Json* extras = node_extras(document, node);
+  bool blender = written_by_blender(document);
   if (extras != nullptr && extras->contains("rdtf_axes")) {
     const Json& value = (*extras)["rdtf_axes"];
-    if (value == "blender") return true;
-    if (value == "gltf") return false;
-    diag.error(codes::RDTF_INVALID_VALUE, json_pointer("/nodes", node) + "/extras/rdtf_axes",
-               node_label(document, node) + ": rdtf_axes is " + value_text(value) +
-                   ", not \"blender\" or \"gltf\"");
+    if (value == "blender" || value == "gltf") {
+      blender = value == "blender";
+    } else {
+      diag.error(codes::RDTF_INVALID_VALUE, json_pointer("/nodes", node) + "/extras/rdtf_axes",
+                 node_label(document, node) + ": rdtf_axes is " + value_text(value) +
+                     ", not \"blender\" or \"gltf\"");
+    }
   }
-  return written_by_blender(document);
+  return blender && !is_skin_joint(document, node);
 }
 
 // "x", "-z", "+y": a unit vector along a named axis.

@@ -113,7 +113,7 @@ TEST(BlenderModelled, BonePropertiesMakeTheJointBetweenBoneLinks) {
   Json expected = modelled("modelled_bones");
   std::vector<std::string> names;
   for (const Link& link : robot.links) names.push_back(link.name);
-  EXPECT_EQ(names, (std::vector<std::string>{"rig", "lower", "upper"}));
+  EXPECT_EQ(names, (std::vector<std::string>{"rig", "lower", "upper", "hand"}));
   Robot bones = robot;
   // Compare the bone links and their joint only.
   bones.links.erase(bones.links.begin());

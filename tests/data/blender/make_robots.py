@@ -9,8 +9,9 @@
 #                            with their origins at their centres, custom properties exported
 #   modelled_arm.glb         the same, as GLB
 #   modelled_arm_no_extras.glb   the same with "Include > Custom Properties" off (the default)
-#   modelled_bones.gltf/.bin an armature of two bones whose Bone properties make the joint, with a
-#                            mesh rigidly skinned to it
+#   modelled_bones.gltf/.bin an armature of three bones whose Bone properties make the joints (the
+#                            last one bent and rolled, its axis the bone's Z), with a mesh rigidly
+#                            skinned to it
 #   modelled_arm_mm.glb      the arm modelled in millimetres (everything 1000 times too large)
 #   modelled.json            what Blender itself says: each joint's pivot and axis in glTF's scene
 #                            axes (glTF (x, y, z) = Blender (x, z, -y)), each link's volume from
@@ -145,6 +146,13 @@ def build_bones():
     upper.tail = (0, 0.3, 0.3)  # The upper bone points along Blender's Y.
     upper.parent = lower
     upper.use_connect = True
+    # The hand bends away from both and is rolled: its axes are none of the armature's.
+    hand = bones.new("hand")
+    hand.head = (0, 0.3, 0.3)
+    hand.tail = (0.15, 0.45, 0.4)
+    hand.roll = math.radians(30)
+    hand.parent = upper
+    hand.use_connect = True
     bpy.ops.object.mode_set(mode="OBJECT")
     # Bone properties (not pose-bone ones: the exporter writes only these).
     bone = rig.data.bones["upper"]
@@ -152,12 +160,20 @@ def build_bones():
     bone["rdtf_axis"] = "x"
     bone["rdtf_lower"] = -1.0
     bone["rdtf_upper"] = 1.0
-    # Two boxes in one mesh, each wholly bound to one bone.
-    parts = [("lower", (0.1, 0.1, 0.3), (0, 0, 0.15)), ("upper", (0.08, 0.3, 0.08), (0, 0.15, 0.3))]
+    # A bone's Z, as Blender draws the bone's axes: Blender's exporter writes a bone's node in the
+    # bone's own axes, not turned to glTF's as an object's are.
+    rig.data.bones["hand"]["rdtf_joint"] = "revolute"
+    rig.data.bones["hand"]["rdtf_axis"] = "z"
+    hand_rest = rig.matrix_world @ rig.data.bones["hand"].matrix_local
+    hand_length = (Vector((0.15, 0.45, 0.4)) - Vector((0, 0.3, 0.3))).length
+    # Boxes in one mesh, each wholly bound to one bone.
+    parts = [("lower", (0.1, 0.1, 0.3), Matrix.Translation((0, 0, 0.15))),
+             ("upper", (0.08, 0.3, 0.08), Matrix.Translation((0, 0.15, 0.3))),
+             ("hand", (0.06, hand_length, 0.04), hand_rest @ Matrix.Translation((0, hand_length / 2, 0)))]
     volumes = {}
     objects = []
-    for bone_name, size, centre in parts:
-        obj = cube("part_" + bone_name, size, Matrix.Translation(centre))
+    for bone_name, size, world in parts:
+        obj = cube("part_" + bone_name, size, world)
         volumes[bone_name] = world_volume(obj)
         group = obj.vertex_groups.new(name=bone_name)
         group.add(list(range(len(obj.data.vertices))), 1.0, "REPLACE")
@@ -173,12 +189,14 @@ def build_bones():
     modifier = body.modifiers.new("Armature", "ARMATURE")
     modifier.object = rig
     bpy.context.view_layer.update()
-    M = rig.matrix_world @ rig.data.bones["upper"].matrix_local
-    axis_world = (M.to_3x3().normalized() @ Vector((1, 0, 0))).normalized()
     links = {name: {"volume": v, "density": 1000.0, "mass": 1000.0 * v} for name, v in volumes.items()}
     # The joint between bones is named after both: "<parent bone>_<bone>_joint".
-    joints = [{"name": "lower_upper_joint", "parent": "lower", "child": "upper",
-               "pivot_scene": to_gltf(M.translation), "axis_scene": to_gltf(axis_world)}]
+    joints = []
+    for parent, child, axis in (("lower", "upper", (1, 0, 0)), ("upper", "hand", (0, 0, 1))):
+        M = rig.matrix_world @ rig.data.bones[child].matrix_local
+        axis_world = (M.to_3x3().normalized() @ Vector(axis)).normalized()
+        joints.append({"name": parent + "_" + child + "_joint", "parent": parent, "child": child,
+                       "pivot_scene": to_gltf(M.translation), "axis_scene": to_gltf(axis_world)})
     return {"links": links, "joints": joints}
 
 

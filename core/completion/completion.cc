@@ -73,7 +73,7 @@ std::string value_text(const Json& value) {
   return text;
 }
 
-void complete_nodes(Json& document, std::vector<NodeType>& types, Diagnostics& diag) {
+void complete_nodes(Json& document, std::vector<NodeType>& types, Diagnostics& diag, std::vector<int>* carried_by) {
   if (!document.contains("nodes")) return;
   const std::size_t original_count = document["nodes"].size();
   for (std::size_t link = 0; link < original_count; ++link) {
@@ -83,10 +83,17 @@ void complete_nodes(Json& document, std::vector<NodeType>& types, Diagnostics& d
     std::vector<std::size_t> link_children;
     std::vector<std::size_t> other_children;
     if (document["nodes"][link].contains("mesh")) {
-      mesh_children.push_back(split_off_mesh(document, types, link));
+      const bool has_children = document["nodes"][link].contains("children") && !document["nodes"][link]["children"].empty();
+      const std::size_t mesh_node = split_off_mesh(document, types, link);
+      mesh_children.push_back(mesh_node);
+      if (carried_by != nullptr) {
+        carried_by->resize(document["nodes"].size(), -1);
+        (*carried_by)[mesh_node] = static_cast<int>(link);
+      }
       diag.info(codes::LINK_MESH_SPLIT, json_pointer("/nodes", link),
-                "link '" + name + "' carries a mesh and children (Blender's layout): its mesh " +
-                    "moved to the new node '" + name + "_mesh'");
+                "link '" + name + "' carries its own mesh" + (has_children ? " and children (Blender's layout)" : "") +
+                    ": its mesh moved to the new node '" + name + "_mesh' (node " + std::to_string(mesh_node) +
+                    " of the output)");
     }
     bool has_inertial = false;
     const Json children = document["nodes"][link].value("children", Json::array());

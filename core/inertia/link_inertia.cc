@@ -269,7 +269,8 @@ const Json* rdtf_entry(const Json& document, std::size_t node, std::string& poin
 }  // namespace
 
 void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& types,
-                          double default_density, Robot& robot, Diagnostics& diag) {
+                          double default_density, Robot& robot, Diagnostics& diag,
+                          const std::vector<int>& carried_by) {
   const Json& document = asset.document;
   if (!document.contains("nodes")) return;
   const auto parents = node_parents(document);
@@ -284,8 +285,10 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
     if (types[node] != NodeType::kMesh || !document["nodes"][node].contains("mesh")) continue;
     int owner = parents[node];
     while (owner >= 0 && types[owner] != NodeType::kLink) owner = parents[owner];
-    const std::string pointer = json_pointer("/nodes", node);
-    const std::string name = node_name(document, node);
+    // Named as the input names it: a mesh split off its link node by its link node.
+    const std::size_t reported = node < carried_by.size() && carried_by[node] >= 0 ? static_cast<std::size_t>(carried_by[node]) : node;
+    const std::string pointer = json_pointer("/nodes", reported);
+    const std::string name = node_name(document, reported);
     const bool skinned = document["nodes"][node].contains("skin");
     if (owner < 0 && !skinned) {
       diag.warning(codes::MESH_WITHOUT_LINK, pointer, "mesh node '" + name + "' belongs to no link; ignored");

@@ -78,10 +78,11 @@ std::optional<Conversion> convert(GltfAsset asset, const ConvertOptions& options
   if (diag.has_errors()) return std::nullopt;
   check_missing_properties(asset.document, types, diag);
   add_missing_strides(asset.document, diag);
-  complete_nodes(asset.document, types, diag);
+  std::vector<int> carried_by;
+  complete_nodes(asset.document, types, diag, &carried_by);
   Robot robot = build_robot(asset.document, types, *scene, diag);
   robot.name = robot_name(asset);
-  compute_link_inertia(asset, types, options.default_density, robot, diag);
+  compute_link_inertia(asset, types, options.default_density, robot, diag, carried_by);
   if (diag.has_errors()) return std::nullopt;
   read_khr_physics(asset.document, types, robot, diag);
   // After KHR motion, which may replace an inertial that overflowed or overflow one itself.

@@ -66,7 +66,9 @@ Sphere open_inside_out_sphere(int rings) {
 
 // One link holding the sphere. With `bad_mass` its node asks for an impossible mass (rdtf_mass
 // -1): an error found after the surface check's warnings and before the mass kernel's.
-std::vector<std::uint8_t> model_glb(const Sphere& sphere, bool bad_mass) {
+// With `mesh_on_link`, the link node carries the mesh itself (Blender's layout), so the
+// conversion moves it to a node the input does not have.
+std::vector<std::uint8_t> model_glb(const Sphere& sphere, bool bad_mass, bool mesh_on_link = false) {
   std::vector<std::uint8_t> bin(sphere.positions.size() * 4 + sphere.indices.size() * 4);
   std::memcpy(bin.data(), sphere.positions.data(), sphere.positions.size() * 4);
   std::memcpy(bin.data() + sphere.positions.size() * 4, sphere.indices.data(), sphere.indices.size() * 4);
@@ -79,9 +81,10 @@ std::vector<std::uint8_t> model_glb(const Sphere& sphere, bool bad_mass) {
       {"asset", {{"version", "2.0"}}},
       {"scene", 0},
       {"scenes", {{{"nodes", {0}}}}},
-      {"nodes", {{{"name", "base"}, {"children", {1}}},
-                 bad_mass ? Json{{"name", "shell"}, {"mesh", 0}, {"extras", {{"rdtf_mass", -1.0}}}}
-                          : Json{{"name", "shell"}, {"mesh", 0}}}},
+      {"nodes", mesh_on_link ? Json{{{"name", "shell"}, {"mesh", 0}}}
+                             : Json{{{"name", "base"}, {"children", {1}}},
+                                    bad_mass ? Json{{"name", "shell"}, {"mesh", 0}, {"extras", {{"rdtf_mass", -1.0}}}}
+                                             : Json{{"name", "shell"}, {"mesh", 0}}}},
       {"meshes", {{{"primitives", {{{"attributes", {{"POSITION", 0}}}, {"indices", 1}}}}}}},
       {"accessors",
        {{{"bufferView", 0}, {"componentType", 5126}, {"count", sphere.positions.size() / 3}, {"type", "VEC3"},
@@ -137,6 +140,24 @@ TEST(SurfaceCheckThread, LargeAndSmallMeshesReportAlikeInTheSameOrder) {
     EXPECT_GT(converted.volume, 0.95 * 4.0 / 3.0 * std::numbers::pi);
     EXPECT_LT(converted.volume, 4.0 / 3.0 * std::numbers::pi);
   }
+}
+
+// A link node that carries its own mesh (Blender's layout) has it moved to a new node of the
+// output; what is wrong with the mesh is still reported on the node the input has, by its name.
+TEST(SurfaceCheckThread, AMeshMovedOffItsLinkIsReportedOnTheInputsNode) {
+  Diagnostics diag("shell.glb");
+  auto asset = load_gltf_from_memory(model_glb(open_inside_out_sphere(20), false, /*mesh_on_link=*/true), "shell.glb",
+                                     {}, LoadLimits{}, diag);
+  ASSERT_TRUE(asset);
+  ASSERT_TRUE(convert(std::move(*asset), ConvertOptions{}, diag));
+  int reported = 0;
+  for (const Diagnostic& d : diag.all()) {
+    if (d.code != codes::MESH_OPEN && d.code != codes::MESH_INSIDE_OUT) continue;
+    ++reported;
+    EXPECT_EQ(d.pointer, "/nodes/0") << format(d);
+    EXPECT_NE(d.message.find("mesh of 'shell' "), std::string::npos) << format(d);
+  }
+  EXPECT_EQ(reported, 2);
 }
 
 }  // namespace

@@ -13,8 +13,11 @@ namespace rdtf {
 // in link order (so the paper's List 1 becomes List 5 exactly) and extending `types` to match.
 // A link that carries its own mesh (Blender) gets a new mesh node for it, first under its visual
 // node. Links that already have their visual, joint and inertial nodes are left as they are, so
-// completing twice changes nothing.
-void complete_nodes(Json& document, std::vector<NodeType>& types, Diagnostics& diag);
+// completing twice changes nothing. `carried_by`, when given, gets for each node the input node
+// whose mesh it took (a link that carried its own mesh), else -1: what diagnostics about that
+// mesh name, since the input has no node of the output's index.
+void complete_nodes(Json& document, std::vector<NodeType>& types, Diagnostics& diag,
+                    std::vector<int>* carried_by = nullptr);
 
 // The name a node goes by in generated names and the robot: its name, else "node<index>".
 std::string node_name(const Json& document, std::size_t node);

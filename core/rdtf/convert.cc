@@ -77,6 +77,7 @@ std::optional<Conversion> convert(GltfAsset asset, const ConvertOptions& options
   auto types = type_nodes(asset.document, *scene, diag);
   if (diag.has_errors()) return std::nullopt;
   check_missing_properties(asset.document, types, diag);
+  check_extras_keys(asset.document, diag);
   add_missing_strides(asset.document, diag);
   std::vector<int> carried_by;
   complete_nodes(asset.document, types, diag, &carried_by);

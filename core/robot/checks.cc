@@ -1,8 +1,12 @@
 // Checks that the converted robot is the one that was modelled: the mistakes a modeller makes
 // that still give a valid (but wrong) robot.
 #include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <iterator>
+#include <limits>
 #include <sstream>
+#include <vector>
 
 #include "rdtf/completion.h"
 #include "rdtf/robot.h"
@@ -17,6 +21,17 @@ namespace {
 // tonnes) and far below what the millimetre mistake gives for anything of hand size.
 constexpr double kMaxExtent = 100.0;     // m
 constexpr double kMaxMass = 1.0e6;       // kg
+// Both at once are beyond mobile machines too (a large excavator: 10 m, 50 t).
+constexpr double kLargeExtent = 10.0;    // m
+constexpr double kLargeMass = 1.0e5;     // kg
+constexpr double kMinExtent = 1.0e-3;    // m: smaller than any robot a glTF describes
+// Densities of solids: from foams (about 30 kg/m^3) to osmium (22,590). Off by 1000 either way,
+// a density typed in g/cm^3 or a mass in grams lands outside.
+constexpr double kMinDensity = 30.0;     // kg/m^3
+constexpr double kMaxDensity = 25000.0;  // kg/m^3
+constexpr double kFullTurn = 2 * 3.14159265358979323846;  // rad
+// A slide longer than ten times the robot (or 1 m) is a length typed in millimetres.
+constexpr double kSlideReach = 10.0;
 
 std::string short_number(double value) {
   std::ostringstream out;
@@ -39,33 +54,152 @@ bool has_rdtf_keys(const Json& document) {
   return false;
 }
 
-void check_units_of(const Json& document, const Robot& robot, Diagnostics& diag) {
-  if (robot.links.empty()) return;
+// How large the robot is: the diagonal of the box around its link frames and centres of mass, or
+// the edge of a cube of its largest link's volume if that is more (a robot of one link).
+double robot_extent(const Robot& robot) {
   Eigen::AlignedBox3d box;
-  double largest_part = 0;  // m: edge of a cube of the largest link's volume
-  double mass = 0;
-  int heaviest = 0;
-  for (std::size_t l = 0; l < robot.links.size(); ++l) {
-    const Link& link = robot.links[l];
+  double largest_part = 0;  // m
+  for (const Link& link : robot.links) {
     box.extend(link.X_SL.translation());
     if (link.inertial.mass > 0) box.extend(link.X_SL * link.inertial.center_of_mass);
     largest_part = std::max(largest_part, std::cbrt(std::max(0.0, link.inertial.volume)));
+  }
+  return std::max(box.isEmpty() ? 0.0 : box.diagonal().norm(), largest_part);
+}
+
+void check_units_of(const Json& document, const Robot& robot, Diagnostics& diag) {
+  if (robot.links.empty()) return;
+  double mass = 0;
+  double volume = 0;
+  int heaviest = 0;
+  for (std::size_t l = 0; l < robot.links.size(); ++l) {
+    const Link& link = robot.links[l];
     mass += link.inertial.mass;
+    volume += std::max(0.0, link.inertial.volume);
     if (link.inertial.mass > robot.links[heaviest].inertial.mass) heaviest = static_cast<int>(l);
   }
-  const double extent = std::max(box.diagonal().norm(), largest_part);
-  if (extent <= kMaxExtent && mass <= kMaxMass) return;
+  const double extent = robot_extent(robot);
   const Link& link = robot.links[heaviest];
-  diag.warning(codes::UNITS_IMPLAUSIBLE, json_pointer("/nodes", link.node),
-               "the robot is " + short_number(extent) + " m across and weighs " +
-                   short_number(mass) + " kg (" + node_label(document, link.node) + " alone " +
-                   short_number(link.inertial.mass) +
-                   " kg): implausible in metres. glTF lengths are metres; the model was likely "
-                   "drawn in millimetres: scale it by 0.001 (in Blender: select all, scale by "
-                   "0.001, Object > Apply > Scale) and export again");
+  // Large or heavy beyond any robot, or both large and heavy beyond a mobile one (a hand-sized
+  // part drawn in millimetres: a 25 mm gripper becomes 25 m and hundreds of tonnes).
+  const bool too_large = extent > kMaxExtent || mass > kMaxMass || (extent > kLargeExtent && mass > kLargeMass);
+  if (too_large) {
+    diag.warning(codes::UNITS_IMPLAUSIBLE, json_pointer("/nodes", link.node),
+                 "the robot is " + short_number(extent) + " m across and weighs " +
+                     short_number(mass) + " kg (" + node_label(document, link.node) + " alone " +
+                     short_number(link.inertial.mass) +
+                     " kg): implausible in metres. glTF lengths are metres; the model was likely "
+                     "drawn in millimetres: scale it by 0.001 (in Blender: select all, scale by "
+                     "0.001, Object > Apply > Scale) and export again");
+  } else if (mass > 0 && volume > 0 && extent < kMinExtent) {
+    // (Only with geometry to measure: a robot of one link without meshes, as URDFs without their
+    // mesh files give, has no size at all.)
+    diag.warning(codes::UNITS_IMPLAUSIBLE, json_pointer("/nodes", link.node),
+                 "the robot is " + short_number(extent) + " m across and weighs " + short_number(mass) +
+                     " kg: implausibly small in metres. glTF lengths are metres: was the model scaled "
+                     "down twice, or drawn in kilometres?");
+  }
+}
+
+// A link's mass over its volume, for links whose mass comes from their meshes: a density or mass
+// typed in another unit (g/cm^3, grams) is off by 1000 and lands outside what solids have.
+void check_densities(const Json& document, const Robot& robot, Diagnostics& diag) {
+  for (const Link& link : robot.links) {
+    if (link.inertial_source != InertialSource::kComputed || link.inertial.volume <= 0 || link.inertial.mass <= 0) {
+      continue;
+    }
+    const double density = link.inertial.mass / link.inertial.volume;
+    if (density >= kMinDensity && density <= kMaxDensity) continue;
+    diag.warning(codes::DENSITY_IMPLAUSIBLE, json_pointer("/nodes", link.node),
+                 node_label(document, static_cast<std::size_t>(link.node)) + ": the link's " +
+                     short_number(link.inertial.mass) + " kg over its " + short_number(link.inertial.volume) +
+                     " m^3 is " + short_number(density) + " kg/m^3, " +
+                     (density < kMinDensity ? "lighter than any solid (foams are about 30)"
+                                            : "denser than any material (osmium is 22,600)") +
+                     ". Densities are kg/m^3 (2.7 g/cm^3 is 2700 kg/m^3) and masses kg (2500 g is 2.5 kg): "
+                     "check rdtf_density and rdtf_mass on the link and its meshes, and --density");
+  }
+}
+
+// Limits a modeller typed in Blender's custom properties (node extras) in the units Blender shows:
+// degrees for an angle, millimetres for a length. Limits from extras.RDTF or a URDF are left
+// alone: published robots give multi-turn ranges on purpose.
+void check_typed_limits(const Json& document, const Robot& robot, Diagnostics& diag) {
+  const double extent = robot_extent(robot);
+  for (const Joint& joint : robot.joints) {
+    if (joint.source_node < 0 || joint.source_is_entry || !position_limited(joint)) continue;
+    const JointLimits& limits = *joint.limits;
+    const double reach = std::max(std::abs(limits.lower), std::abs(limits.upper));
+    const std::string range = "[" + short_number(limits.lower) + ", " + short_number(limits.upper) + "]";
+    const std::string where = json_pointer("/nodes", static_cast<std::size_t>(joint.source_node)) + "/extras";
+    const std::string label = node_label(document, static_cast<std::size_t>(joint.source_node));
+    if (joint.kind == JointKind::kRevolute && reach > kFullTurn * 1.001) {
+      const double to_rad = kFullTurn / 360.0;
+      diag.warning(codes::JOINT_LIMITS_IMPLAUSIBLE, where,
+                   label + ": joint '" + joint.name + "' limits " + range +
+                       " rad reach beyond a full turn. Limits are radians: in degrees they would be [" +
+                       short_number(limits.lower * to_rad) + ", " + short_number(limits.upper * to_rad) +
+                       "] rad; a joint that turns without end is \"continuous\"");
+    } else if (joint.kind == JointKind::kPrismatic && extent > 0 && reach > kSlideReach * std::max(extent, 0.1)) {
+      diag.warning(codes::JOINT_LIMITS_IMPLAUSIBLE, where,
+                   label + ": joint '" + joint.name + "' limits " + range + " m reach " +
+                       short_number(reach / extent) + " times the robot's size (" + short_number(extent) +
+                       " m). Limits are metres: in millimetres they would be [" + short_number(limits.lower / 1000) +
+                       ", " + short_number(limits.upper / 1000) + "] m");
+    }
+  }
+}
+
+// The node-extras keys rdtf reads (docs/format.md, "Node extras").
+constexpr const char* kExtrasKeys[] = {"rdtf_joint",   "rdtf_axis",     "rdtf_axes",    "rdtf_lower",
+                                       "rdtf_upper",   "rdtf_effort",   "rdtf_velocity", "rdtf_damping",
+                                       "rdtf_friction", "rdtf_spring_stiffness", "rdtf_density", "rdtf_mass",
+                                       "rdtf_type",    "rdtf_inertial"};
+
+// Optimal string alignment distance: insertions, deletions, substitutions and swaps of two
+// neighbours, each 1 ("rdft_axis" is 1 from "rdtf_axis").
+std::size_t typing_distance(const std::string& a, const std::string& b) {
+  std::vector<std::vector<std::size_t>> d(a.size() + 1, std::vector<std::size_t>(b.size() + 1));
+  for (std::size_t i = 0; i <= a.size(); ++i) d[i][0] = i;
+  for (std::size_t j = 0; j <= b.size(); ++j) d[0][j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t cost = a[i - 1] == b[j - 1] ? 0 : 1;
+      d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + cost});
+      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1]) d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
+    }
+  }
+  return d[a.size()][b.size()];
 }
 
 }  // namespace
+
+void check_extras_keys(const Json& document, Diagnostics& diag) {
+  if (!document.contains("nodes") || !document["nodes"].is_array()) return;
+  for (std::size_t i = 0; i < document["nodes"].size(); ++i) {
+    const Json& node = document["nodes"][i];
+    if (!node.is_object() || !node.contains("extras") || !node["extras"].is_object()) continue;
+    for (const auto& [key, value] : node["extras"].items()) {
+      if (std::find(std::begin(kExtrasKeys), std::end(kExtrasKeys), key) != std::end(kExtrasKeys)) continue;
+      std::string lower = key;
+      for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+      const char* nearest = nullptr;
+      std::size_t distance = std::numeric_limits<std::size_t>::max();
+      for (const char* known : kExtrasKeys) {
+        const std::size_t d = typing_distance(lower, known);
+        if (d < distance) distance = d, nearest = known;
+      }
+      const bool rdtf_like = lower.rfind("rdtf", 0) == 0 || lower.rfind("rdft", 0) == 0;
+      if (distance > 2 && !rdtf_like) continue;  // Somebody else's property.
+      diag.warning(codes::RDTF_UNKNOWN_KEY, json_pointer(json_pointer("/nodes", i) + "/extras", key),
+                   node_label(document, i) + ": custom property " + value_text(Json(key)) +
+                       " is no property rdtf reads, so it is ignored" +
+                       (distance <= 2 ? ": did you mean '" + std::string(nearest) + "'?"
+                                      : " (docs/format.md, \"Node extras\", lists them)"));
+    }
+  }
+}
+
 
 void check_missing_properties(const Json& document, const std::vector<NodeType>& types,
                               Diagnostics& diag) {
@@ -117,7 +251,28 @@ void check_missing_properties(const Json& document, const std::vector<NodeType>&
 }
 
 void check_units(const Json& document, const Robot& robot, Diagnostics& diag) {
-  if (document.contains("nodes")) check_units_of(document, robot, diag);
+  if (!document.contains("nodes")) return;
+  if (robot.root_links.size() > 1) {
+    std::string names;
+    for (std::size_t k = 0; k < robot.root_links.size(); ++k) {
+      if (k == 4) {
+        names += ", ...";
+        break;
+      }
+      names += (k ? ", '" : "'") + robot.links[robot.root_links[k]].name + "'";
+    }
+    const Link& second = robot.links[robot.root_links[1]];
+    diag.warning(codes::MULTIPLE_ROOT_LINKS, json_pointer("/nodes", second.node),
+                 std::to_string(robot.root_links.size()) + " root links (" + names +
+                     "): a robot has one, so the others are bodies of their own (rdtf validate refuses "
+                     "this; a URDF export holds them all by fixed joints). Parent them to the robot, or "
+                     "leave them out of the export: Blender exports hidden objects, and the objects of "
+                     "a collection excluded from the view layer, unless Include > Visible Objects is "
+                     "ticked");
+  }
+  check_units_of(document, robot, diag);
+  check_densities(document, robot, diag);
+  check_typed_limits(document, robot, diag);
 }
 
 bool check_finite_inertials(const Json& document, const Robot& robot, Diagnostics& diag) {

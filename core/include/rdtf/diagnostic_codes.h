@@ -110,11 +110,13 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(VALUE_NOT_IN_LIST, kSeverityError | kSeverityWarning, "glTF") \
   X(VALUE_NOT_IN_RANGE, kSeverityError, "glTF") \
   X(BUFFER_VIEW_STRIDE_ADDED, kSeverityInfo, "model") \
+  X(DENSITY_IMPLAUSIBLE, kSeverityWarning, "model") \
   X(EXTRAS_NOT_OBJECT, kSeverityError, "model") \
   X(IMAGE_NOT_COPIED, kSeverityWarning, "model") \
   X(IMAGE_NOT_EMBEDDED, kSeverityWarning, "model") \
   X(JOINT_AXIS_ZERO, kSeverityError, "model") \
   X(JOINT_CHAIN, kSeverityInfo, "model") \
+  X(JOINT_LIMITS_IMPLAUSIBLE, kSeverityWarning, "model") \
   X(JOINT_LIMITS_INVERTED, kSeverityError, "model") \
   X(KHR_JOINT_FRAMES_DISAGREE, kSeverityError, "model") \
   X(KHR_PHYSICS_IGNORED, kSeverityWarning, "model") \
@@ -128,6 +130,7 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(MESH_PRIMITIVE_INCOMPATIBLE_MODE, kSeverityWarning, "model") \
   X(MESH_SCALED_TO_NOTHING, kSeverityWarning, "model") \
   X(MESH_WITHOUT_LINK, kSeverityWarning, "model") \
+  X(MULTIPLE_ROOT_LINKS, kSeverityWarning, "model") \
   X(NO_LINKS, kSeverityWarning, "model") \
   X(NO_RDTF_PROPERTIES, kSeverityWarning, "model") \
   X(NO_SCENE, kSeverityError, "model") \
@@ -137,6 +140,7 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(RDTF_INVALID_TYPE, kSeverityError, "model") \
   X(RDTF_INVALID_VALUE, kSeverityError, "model") \
   X(RDTF_NODE_EXTRAS_IGNORED, kSeverityWarning, "model") \
+  X(RDTF_UNKNOWN_KEY, kSeverityWarning, "model") \
   X(SKIN_NO_WEIGHTS, kSeverityWarning, "model") \
   X(SKIN_PART_SHARED, kSeverityInfo, "model") \
   X(UNITS_IMPLAUSIBLE, kSeverityWarning, "model") \

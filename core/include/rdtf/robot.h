@@ -130,7 +130,12 @@ Robot build_robot(const Json& document, const std::vector<NodeType>& types, std:
 // completion) with no rdtf_* property anywhere: the exporter probably left custom properties out.
 void check_missing_properties(const Json& document, const std::vector<NodeType>& types,
                               Diagnostics& diag);
-// Extent or masses implausible for metres: probably a model drawn in millimetres.
+// Custom properties that look like rdtf's but are not ("rdft_axis", "rdtf_axes_", "Rdtf_mass"): a
+// typo leaves a property out without a word otherwise.
+void check_extras_keys(const Json& document, Diagnostics& diag);
+// Extent or masses implausible for metres (a model drawn in millimetres); a link's density beyond
+// any solid (g/cm^3 or grams typed); limits typed in node extras in degrees or millimetres; more
+// than one root link (an object the modeller did not mean to export).
 void check_units(const Json& document, const Robot& robot, Diagnostics& diag);
 
 // An error for each link whose mass, centre of mass or inertia is not finite (sizes or densities

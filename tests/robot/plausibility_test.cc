@@ -1,0 +1,144 @@
+// Checks on the modelled robot (core/robot/checks.cc, docs/format.md "Checks on the modelled
+// robot"): a model that converts but was typed in other units, or with a misspelt custom
+// property, or with an object the modeller did not mean to export, gets a warning that names the
+// node and what to do. The same model typed right gets none. The base model is
+// tests/data/khr/arm_extras.gltf: base (5 kg by rdtf_mass, a 0.016 m^3 box), arm (revolute,
+// [-1, 1.5] rad, authored inertial), slider (prismatic, [0, 0.2] m, a 0.016 m^3 box at 1000 kg/m^3).
+#include <gtest/gtest.h>
+
+#include <map>
+
+#include "rdtf/convert.h"
+#include "rdtf/diagnostic_codes.h"
+#include "support/test_support.h"
+
+namespace rdtf {
+namespace {
+
+using nlohmann::json;
+
+json arm() { return json::parse(testing::read_file(testing::data_dir() / "khr" / "arm_extras.gltf")); }
+
+std::vector<Diagnostic> convert_and_find(const json& doc, const std::string& code) {
+  testing::TempDir dir;
+  testing::write_file(dir / "arm.gltf", doc.dump());
+  Diagnostics diag;
+  const auto conversion = convert_file(dir / "arm.gltf", {}, diag);
+  EXPECT_TRUE(conversion.has_value());
+  EXPECT_FALSE(diag.has_errors());
+  std::vector<Diagnostic> found;
+  for (const Diagnostic& d : diag.all()) {
+    if (d.code == code) found.push_back(d);
+  }
+  return found;
+}
+
+void expect_one(const std::vector<Diagnostic>& found, const std::string& pointer,
+                const std::vector<std::string>& phrases) {
+  ASSERT_EQ(found.size(), 1u);
+  EXPECT_EQ(found[0].severity, Severity::kWarning);
+  EXPECT_EQ(found[0].pointer, pointer);
+  for (const std::string& phrase : phrases) {
+    EXPECT_NE(found[0].message.find(phrase), std::string::npos) << "no \"" << phrase << "\" in: " << found[0].message;
+  }
+}
+
+TEST(Plausibility, TheArmAsTypedGetsNoneOfTheWarnings) {
+  for (const char* code : {codes::JOINT_LIMITS_IMPLAUSIBLE, codes::DENSITY_IMPLAUSIBLE, codes::UNITS_IMPLAUSIBLE,
+                           codes::RDTF_UNKNOWN_KEY, codes::MULTIPLE_ROOT_LINKS}) {
+    EXPECT_TRUE(convert_and_find(arm(), code).empty()) << code;
+  }
+}
+
+TEST(Plausibility, RevoluteLimitsTypedInDegreesAreNamedWithTheirRadians) {
+  json doc = arm();
+  doc["nodes"][1]["extras"]["rdtf_lower"] = -90;
+  doc["nodes"][1]["extras"]["rdtf_upper"] = 90;
+  expect_one(convert_and_find(doc, codes::JOINT_LIMITS_IMPLAUSIBLE), "/nodes/1/extras",
+             {"node 1 'arm'", "[-90, 90] rad reach beyond a full turn", "[-1.57, 1.57] rad"});
+  // A full turn each way, typed as modellers do, is no mistake.
+  for (const double turn : {6.283185307179586, 6.2832}) {
+    doc["nodes"][1]["extras"]["rdtf_lower"] = -turn;
+    doc["nodes"][1]["extras"]["rdtf_upper"] = turn;
+    EXPECT_TRUE(convert_and_find(doc, codes::JOINT_LIMITS_IMPLAUSIBLE).empty()) << turn;
+  }
+}
+
+TEST(Plausibility, LimitsFromExtrasRdtfAreNotJudged) {
+  // rdtf's output of a URDF with a multi-turn joint: the limits are in extras.RDTF (and, agreeing,
+  // in node extras that the entry takes precedence over).
+  testing::TempDir dir;
+  Diagnostics diag;
+  json doc = arm();
+  doc["nodes"][1]["extras"]["rdtf_lower"] = -20.0;
+  doc["nodes"][1]["extras"]["rdtf_upper"] = 20.0;
+  testing::write_file(dir / "in.gltf", doc.dump());
+  const auto first = convert_file(dir / "in.gltf", {}, diag);
+  ASSERT_TRUE(first);
+  EXPECT_TRUE(convert_and_find(first->asset.document, codes::JOINT_LIMITS_IMPLAUSIBLE).empty());
+}
+
+TEST(Plausibility, SlideTypedInMillimetresIsNamedWithItsMetres) {
+  json doc = arm();
+  doc["nodes"][2]["extras"]["rdtf_upper"] = 200;
+  expect_one(convert_and_find(doc, codes::JOINT_LIMITS_IMPLAUSIBLE), "/nodes/2/extras",
+             {"node 2 'slider'", "limits [0, 200] m reach", "[0, 0.2] m"});
+}
+
+TEST(Plausibility, DensityInGramsPerCubicCentimetreAndMassInGrams) {
+  json doc = arm();
+  doc["nodes"][2]["extras"]["rdtf_density"] = 2.7;
+  expect_one(convert_and_find(doc, codes::DENSITY_IMPLAUSIBLE), "/nodes/2",
+             {"node 2 'slider'", "2.7 kg/m^3, lighter than any solid", "2700 kg/m^3"});
+  doc = arm();
+  doc["nodes"][0]["extras"]["rdtf_mass"] = 5000.0;  // 5 kg typed in grams, over 0.016 m^3
+  expect_one(convert_and_find(doc, codes::DENSITY_IMPLAUSIBLE), "/nodes/0",
+             {"node 0 'base'", "3.12e+05 kg/m^3, denser than any material"});
+  // Steel is steel.
+  doc = arm();
+  doc["nodes"][2]["extras"]["rdtf_density"] = 7850.0;
+  EXPECT_TRUE(convert_and_find(doc, codes::DENSITY_IMPLAUSIBLE).empty());
+}
+
+TEST(Plausibility, MisspeltCustomPropertiesAreNamedWithTheNearestKey) {
+  json doc = arm();
+  json& extras = doc["nodes"][1]["extras"];
+  extras["rdft_damping"] = 0.2;  // two letters swapped
+  extras["RDTF_MASS"] = 1.0;     // the wrong case
+  extras["rdtf_colour"] = "red";  // no rdtf key at all
+  extras["note"] = "made by hand";  // somebody else's property: no word
+  const auto found = convert_and_find(doc, codes::RDTF_UNKNOWN_KEY);
+  ASSERT_EQ(found.size(), 3u);
+  std::map<std::string, std::string> by_pointer;
+  for (const Diagnostic& d : found) by_pointer[d.pointer] = d.message;
+  EXPECT_NE(by_pointer["/nodes/1/extras/rdft_damping"].find("did you mean 'rdtf_damping'?"), std::string::npos);
+  EXPECT_NE(by_pointer["/nodes/1/extras/RDTF_MASS"].find("did you mean 'rdtf_mass'?"), std::string::npos);
+  EXPECT_NE(by_pointer["/nodes/1/extras/rdtf_colour"].find("node 1 'arm': custom property 'rdtf_colour' is no property"),
+            std::string::npos)
+      << by_pointer["/nodes/1/extras/rdtf_colour"];
+}
+
+TEST(Plausibility, ASecondRootLinkIsNamedWithTheUsualBlenderCauses) {
+  json doc = arm();
+  doc["nodes"].push_back({{"name", "cutter"}, {"mesh", 0}, {"translation", {2.0, 0.0, 0.0}}});
+  doc["scenes"][0]["nodes"].push_back(doc["nodes"].size() - 1);
+  expect_one(convert_and_find(doc, codes::MULTIPLE_ROOT_LINKS), "/nodes/4",
+             {"2 root links ('base', 'cutter')", "Blender exports hidden objects"});
+}
+
+TEST(Plausibility, AGripperDrawnInMillimetresAndARobotScaledToAMillimetre) {
+  // 30 times too large: 18 m and 600 t (the base keeps its 5 kg), within the bounds of 100 m and
+  // 1000 t but beyond a 10 m, 100 t machine.
+  json doc = arm();
+  doc["nodes"][0]["scale"] = {30.0, 30.0, 30.0};
+  expect_one(convert_and_find(doc, codes::UNITS_IMPLAUSIBLE), "/nodes/2", {"implausible in metres", "0.001"});
+  // A thousandth: the arm's authored inertial (its centre of mass 0.2 m out) goes, so that its
+  // mass comes from its scaled mesh as the others' do.
+  doc["nodes"][0]["scale"] = {0.001, 0.001, 0.001};
+  doc["nodes"].erase(3);
+  doc["nodes"][1]["children"] = json::array({2});
+  expect_one(convert_and_find(doc, codes::UNITS_IMPLAUSIBLE), "/nodes/0", {"implausibly small in metres"});
+}
+
+}  // namespace
+}  // namespace rdtf

@@ -87,6 +87,19 @@ class NodeExtras : public ::testing::Test {
     }
   }
 
+  // rdtf_ with the arm's node-extras damping and its rdtf_inertial's mass edited, converted: the
+  // RDTF_NODE_EXTRAS_IGNORED warnings, and the conversion in `converted`.
+  std::vector<Diagnostic> convert_edited(double damping, double mass, std::optional<Conversion>& converted) {
+    json edited = rdtf_;
+    edited["nodes"][arm_]["extras"]["rdtf_damping"] = damping;
+    edited["nodes"][arm_inertial_]["extras"]["rdtf_inertial"]["mass"] = mass;
+    Diagnostics diag;
+    converted = convert_json(dir_, "edited.gltf", edited, diag);
+    EXPECT_TRUE(converted);
+    EXPECT_FALSE(diag.has_errors());
+    return with_code(diag, codes::RDTF_NODE_EXTRAS_IGNORED);
+  }
+
   testing::TempDir dir_;
   json rdtf_;  // arm_extras.gltf converted: extras.RDTF and node extras that agree.
   Robot robot_;
@@ -100,14 +113,9 @@ TEST_F(NodeExtras, RdtfsOwnOutputConvertsWithoutAWarning) {
 }
 
 TEST_F(NodeExtras, EditedNodeExtrasAreNamedIgnoredAndRewrittenToAgree) {
-  json edited = rdtf_;
-  edited["nodes"][arm_]["extras"]["rdtf_damping"] = 0.9;  // extras.RDTF says 0.3
-  edited["nodes"][arm_inertial_]["extras"]["rdtf_inertial"]["mass"] = 5.0;  // extras.RDTF says 1.25
-  Diagnostics diag;
-  auto converted = convert_json(dir_, "edited.gltf", edited, diag);
+  std::optional<Conversion> converted;
+  const auto warnings = convert_edited(0.9, 5.0, converted);  // extras.RDTF says 0.3 and 1.25
   ASSERT_TRUE(converted);
-  EXPECT_FALSE(diag.has_errors());
-  const auto warnings = with_code(diag, codes::RDTF_NODE_EXTRAS_IGNORED);
   ASSERT_EQ(warnings.size(), 2u);
   EXPECT_EQ(warnings[0].severity, Severity::kWarning);
   EXPECT_EQ(warnings[0].pointer, "/nodes/" + std::to_string(arm_) + "/extras");
@@ -133,14 +141,9 @@ TEST_F(NodeExtras, EditedNodeExtrasAreNamedIgnoredAndRewrittenToAgree) {
 }
 
 TEST_F(NodeExtras, InvalidNodeExtrasBesideExtrasRdtfAreAWarningAndRewritten) {
-  json edited = rdtf_;
-  edited["nodes"][arm_]["extras"]["rdtf_damping"] = -0.5;
-  edited["nodes"][arm_inertial_]["extras"]["rdtf_inertial"]["mass"] = -2.0;
-  Diagnostics diag;
-  auto converted = convert_json(dir_, "invalid.gltf", edited, diag);
+  std::optional<Conversion> converted;
+  const auto warnings = convert_edited(-0.5, -2.0, converted);
   ASSERT_TRUE(converted);
-  EXPECT_FALSE(diag.has_errors());
-  const auto warnings = with_code(diag, codes::RDTF_NODE_EXTRAS_IGNORED);
   ASSERT_EQ(warnings.size(), 2u);
   EXPECT_NE(warnings[0].message.find("rdtf_damping is -0.5, which is negative"), std::string::npos)
       << warnings[0].message;

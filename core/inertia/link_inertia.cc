@@ -157,7 +157,11 @@ VolumeIntegrals oriented(VolumeIntegrals integrals, const std::string& pointer,
 // extras rdtf_inertial that carries the same keys.
 std::optional<MassProperties> authored_inertial(const Json& inertial, const std::string& where,
                                                 const std::string& label, Diagnostics& diag) {
-  if (!inertial.is_object()) return std::nullopt;
+  if (!inertial.is_object()) {
+    diag.error(codes::RDTF_INVALID_VALUE, where,
+               label + ": an inertial is an object (mass, gravityCenter, inertia); this one is " + value_text(inertial));
+    return std::nullopt;
+  }
   if (inertial.contains("source") && inertial["source"] == "computed") return std::nullopt;
   auto number = [&](const Json& value) { return value.is_number() && std::isfinite(value.get<double>()); };
   MassProperties result;

@@ -20,7 +20,8 @@ Json joint_to_json(const Joint& joint) {
       out["lower"] = joint.limits->lower;
       out["upper"] = joint.limits->upper;
     }
-    // 0 is "not given"; a negative value is kept as given, for the dynamics check to refuse.
+    // 0 is "not given". A negative value (only a robot built in code has one: the readers refuse it)
+    // is kept as given, for the dynamics check to refuse.
     if (joint.limits->effort != 0) out["effort"] = joint.limits->effort;
     if (joint.limits->velocity != 0) out["velocity"] = joint.limits->velocity;
   }
@@ -91,16 +92,19 @@ void write_node_extras(Json& document, const std::vector<NodeType>& types, const
   // they are read again (joint properties make a node a pivot, and this one is already the pivot).
   for (const Joint& joint : robot.joints) {
     if (joint.source_node >= 0 && !joint.source_is_entry) continue;
+    // Node-extras keys that said otherwise than extras.RDTF (build_robot warned) go, wherever
+    // they are: the joint's keys are written again on its frame node below.
+    if (joint.ignored_extras_node >= 0 && nodes[joint.ignored_extras_node].contains("extras") &&
+        nodes[joint.ignored_extras_node]["extras"].is_object()) {
+      Json& stale = nodes[joint.ignored_extras_node]["extras"];
+      for (const char* key : kJointExtrasKeys) stale.erase(key);
+      stale.erase("rdtf_axes");
+    }
     Json* extras = extras_object(nodes[joint.frame_node]);
     if (extras == nullptr) continue;
     bool has_joint_keys = false;
     for (const char* key : kJointExtrasKeys) has_joint_keys |= extras->contains(key);
-    if (has_joint_keys) {
-      // Kept as they are, unless they say otherwise than extras.RDTF (build_robot warned).
-      if (joint.ignored_extras_node != joint.frame_node) continue;
-      for (const char* key : kJointExtrasKeys) extras->erase(key);
-      extras->erase("rdtf_axes");
-    }
+    if (has_joint_keys) continue;  // They agree with extras.RDTF: kept as they are.
     // The axis is in the child link frame (the frame node's, scale removed); as a node-extras
     // vector it is read in the node's frame with its scale: R_FJ undoes that.
     const Eigen::Matrix3d R_FJ = world[joint.frame_node].linear().inverse() *

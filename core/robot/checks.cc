@@ -30,8 +30,8 @@ constexpr double kMinExtent = 1.0e-3;    // m: smaller than any robot a glTF des
 constexpr double kMinDensity = 30.0;     // kg/m^3
 constexpr double kMaxDensity = 25000.0;  // kg/m^3
 constexpr double kFullTurn = 2 * 3.14159265358979323846;  // rad
-// A slide longer than ten times the robot (or 1 m) is a length typed in millimetres.
-constexpr double kSlideReach = 10.0;
+// A slide longer than a hundred times the robot (and 10 m) is a length typed in millimetres.
+constexpr double kSlideReach = 100.0;
 
 std::string short_number(double value) {
   std::ostringstream out;
@@ -128,6 +128,12 @@ void check_typed_limits(const Json& document, const Robot& robot, Diagnostics& d
   const double extent = robot_extent(robot);
   for (const Joint& joint : robot.joints) {
     if (joint.source_node < 0 || joint.source_is_entry || !position_limited(joint)) continue;
+    // rdtf's own output carries every joint in node extras too, beside rdtf_type (which
+    // modellers do not type): those came from extras.RDTF or a URDF, and are left alone.
+    const Json& source_node = document["nodes"][static_cast<std::size_t>(joint.source_node)];
+    if (source_node.contains("extras") && source_node["extras"].is_object() && source_node["extras"].contains("rdtf_type")) {
+      continue;
+    }
     const JointLimits& limits = *joint.limits;
     const double reach = std::max(std::abs(limits.lower), std::abs(limits.upper));
     const std::string range = "[" + short_number(limits.lower) + ", " + short_number(limits.upper) + "]";
@@ -141,6 +147,7 @@ void check_typed_limits(const Json& document, const Robot& robot, Diagnostics& d
                        short_number(limits.lower * to_rad) + ", " + short_number(limits.upper * to_rad) +
                        "] rad; a joint that turns without end is \"continuous\"");
     } else if (joint.kind == JointKind::kPrismatic && extent > 0 && reach > kSlideReach * std::max(extent, 0.1)) {
+      // (A rail of 20 times the robot's length is a real machine; millimetres are 1000 times.)
       diag.warning(codes::JOINT_LIMITS_IMPLAUSIBLE, where,
                    label + ": joint '" + joint.name + "' limits " + range + " m reach " +
                        short_number(reach / extent) + " times the robot's size (" + short_number(extent) +
@@ -155,6 +162,8 @@ constexpr const char* kExtrasKeys[] = {"rdtf_joint",   "rdtf_axis",     "rdtf_ax
                                        "rdtf_upper",   "rdtf_effort",   "rdtf_velocity", "rdtf_damping",
                                        "rdtf_friction", "rdtf_spring_stiffness", "rdtf_density", "rdtf_mass",
                                        "rdtf_type",    "rdtf_inertial"};
+
+constexpr std::size_t kLongestExtrasKey = 21;  // rdtf_spring_stiffness
 
 // Optimal string alignment distance: insertions, deletions, substitutions and swaps of two
 // neighbours, each 1 ("rdft_axis" is 1 from "rdtf_axis").
@@ -185,9 +194,13 @@ void check_extras_keys(const Json& document, Diagnostics& diag) {
       for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
       const char* nearest = nullptr;
       std::size_t distance = std::numeric_limits<std::size_t>::max();
-      for (const char* known : kExtrasKeys) {
-        const std::size_t d = typing_distance(lower, known);
-        if (d < distance) distance = d, nearest = known;
+      // Two edits from a key of at most 21 characters: a longer key is nobody's typo of one (and a
+      // key of megabytes costs nothing here).
+      if (lower.size() <= kLongestExtrasKey + 2) {
+        for (const char* known : kExtrasKeys) {
+          const std::size_t d = typing_distance(lower, known);
+          if (d < distance) distance = d, nearest = known;
+        }
       }
       const bool rdtf_like = lower.rfind("rdtf", 0) == 0 || lower.rfind("rdft", 0) == 0;
       if (distance > 2 && !rdtf_like) continue;  // Somebody else's property.
@@ -267,8 +280,8 @@ void check_units(const Json& document, const Robot& robot, Diagnostics& diag) {
                      "): a robot has one, so the others are bodies of their own (rdtf validate refuses "
                      "this; a URDF export holds them all by fixed joints). Parent them to the robot, or "
                      "leave them out of the export: Blender exports hidden objects, and the objects of "
-                     "a collection excluded from the view layer, unless Include > Visible Objects is "
-                     "ticked");
+                     "a collection excluded from the view layer, unless Include > Limit to > Visible "
+                     "Objects is ticked");
   }
   check_units_of(document, robot, diag);
   check_densities(document, robot, diag);

@@ -52,6 +52,8 @@ void expect_same_robot(const Robot& a, const Robot& b) {
     SCOPED_TRACE(a.links[l].name);
     const double mass = a.links[l].inertial.mass;
     EXPECT_NEAR(b.links[l].inertial.mass, mass, 1e-12 * mass);
+    EXPECT_LE((b.links[l].inertial.center_of_mass - a.links[l].inertial.center_of_mass).norm(), 1e-12);
+    EXPECT_TRUE(b.links[l].X_SL.isApprox(a.links[l].X_SL, 1e-12));
     EXPECT_LE((b.links[l].inertial.inertia - a.links[l].inertial.inertia).cwiseAbs().maxCoeff(),
               1e-12 * a.links[l].inertial.inertia.cwiseAbs().maxCoeff());
   }
@@ -60,12 +62,16 @@ void expect_same_robot(const Robot& a, const Robot& b) {
     SCOPED_TRACE(a.joints[j].name);
     EXPECT_EQ(a.joints[j].kind, b.joints[j].kind);
     EXPECT_LE((a.joints[j].axis - b.joints[j].axis).norm(), 1e-12);
+    EXPECT_TRUE(a.joints[j].X_PJ.isApprox(b.joints[j].X_PJ, 1e-12));
     EXPECT_EQ(a.joints[j].damping, b.joints[j].damping);
+    EXPECT_EQ(a.joints[j].friction, b.joints[j].friction);
     EXPECT_EQ(a.joints[j].spring_stiffness, b.joints[j].spring_stiffness);
     ASSERT_EQ(a.joints[j].limits.has_value(), b.joints[j].limits.has_value());
     if (a.joints[j].limits) {
       EXPECT_EQ(a.joints[j].limits->lower, b.joints[j].limits->lower);
       EXPECT_EQ(a.joints[j].limits->upper, b.joints[j].limits->upper);
+      EXPECT_EQ(a.joints[j].limits->effort, b.joints[j].limits->effort);
+      EXPECT_EQ(a.joints[j].limits->velocity, b.joints[j].limits->velocity);
     }
   }
 }

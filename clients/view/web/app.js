@@ -195,8 +195,17 @@ function diagnosticsOf(info) {
   return [...((info.error && info.error.diagnostics) || []), ...((info.validation && info.validation.diagnostics) || [])];
 }
 
+// The same description again (rdtfd answers every REQUEST and republishes now and then): the
+// timing of its arrival aside, nothing to show or draw anew.
+function sameInfo(a, b) {
+  const { timing: ta, ...restA } = a;
+  const { timing: tb, ...restB } = b;
+  return JSON.stringify(restA) === JSON.stringify(restB);
+}
+
 async function onModel(info) {
   const m = entry(info.id);
+  const previous = m.info;
   m.info = info;
   if (info.status === 'error' || info.status === 'removed') releaseMotion(info.id);  // no revision follows
   if (selected === null && info.status !== 'removed') selected = info.id;
@@ -245,6 +254,7 @@ async function onModel(info) {
     retainDrawn();
     return;
   }
+  if (previous && m.view && m.view.revision === info.revision && sameInfo(previous, info)) return;
   if (m.view) m.view.highlight(diagnosticsOf(m.info));
   refreshPanel();
   retainDrawn();

@@ -1,4 +1,6 @@
 // RDTF -> URDF with urdfdom's own model types and exporter. docs/urdf.md describes the mapping.
+#include <cstdint>
+#include <cstdio>
 #include <fstream>
 #include <map>
 #include <memory>
@@ -110,8 +112,28 @@ urdf::LinkSharedPtr make_link(const std::string& name, const Link* link, const L
   return out;
 }
 
+// A link's name as a file stem: whole when it is short; a name too long for a file system (255
+// bytes a name on Linux; a link named with 200 accented letters is valid glTF) keeps its first 120
+// bytes, cut between characters, and a 64-bit FNV-1a digest of the whole name, so that two long
+// names that start alike still name two files.
+std::string mesh_file_stem(const std::string& link) {
+  constexpr std::size_t kKept = 120;
+  if (link.size() <= kKept + 20) return link;
+  std::size_t cut = kKept;
+  while (cut > 0 && (static_cast<unsigned char>(link[cut]) & 0xC0) == 0x80) --cut;  // Not inside a character.
+  std::uint64_t digest = 14695981039346656037ull;
+  for (const char c : link) {
+    digest ^= static_cast<unsigned char>(c);
+    digest *= 1099511628211ull;
+  }
+  char hex[17];
+  std::snprintf(hex, sizeof(hex), "%016llx", static_cast<unsigned long long>(digest));
+  return link.substr(0, cut) + "~" + hex;
+}
+
 std::string mesh_file_name(const std::string& link, std::span<const std::uint8_t> stl, const UrdfOptions& options) {
-  return options.mesh_digest ? content_addressed_name(link, ".stl", stl, options.mesh_digest) : link + ".stl";
+  const std::string stem = mesh_file_stem(link);
+  return options.mesh_digest ? content_addressed_name(stem, ".stl", stl, options.mesh_digest) : stem + ".stl";
 }
 
 void collect_mesh_filenames(const TiXmlElement* element, std::vector<std::string>& names) {

@@ -4,9 +4,11 @@
 // could not read, with a zero mass or without that geometry. So every attribute import depends on
 // is read here, as urdfdom reads it, and checked: present where urdfdom requires it, numbers where
 // numbers are due, finite, and in the range that means something.
+#include <algorithm>
 #include <cctype>
 #include <charconv>
 #include <cmath>
+#include <cstring>
 #include <map>
 #include <set>
 #include <string_view>
@@ -427,12 +429,92 @@ bool check_tree(XmlRobot& robot, Diagnostics& diag) {
   return true;
 }
 
+// TinyXML parses an element's children by recursion, one stack frame per level: 50,000 nested
+// elements in a 350 KB file overflow the stack. No URDF nests deeper than a dozen levels (a
+// <gazebo> block of SDF a few more), so deeper text is refused before it is parsed. Returns the
+// line of the first element past `limit`, or 0. Comments, CDATA, processing instructions and
+// declarations are skipped; quoted attribute values may hold '>'.
+int line_past_depth(const std::string& text, int limit) {
+  int depth = 0;
+  int line = 1;
+  const std::size_t n = text.size();
+  // From the '<' at `from` past the first `end` found from `search`, counting the lines passed.
+  const auto skip_to = [&](std::size_t from, std::size_t search, const char* end) {
+    const std::size_t at = text.find(end, search);
+    const std::size_t stop = at == std::string::npos ? n : at + std::strlen(end);
+    line += static_cast<int>(std::count(text.begin() + static_cast<std::ptrdiff_t>(from),
+                                        text.begin() + static_cast<std::ptrdiff_t>(stop), '\n'));
+    return stop;
+  };
+  for (std::size_t i = 0; i < n;) {
+    if (text[i] == '\n') ++line;
+    if (text[i] != '<') {
+      ++i;
+      continue;
+    }
+    if (text.compare(i, 4, "<!--") == 0) {
+      i = skip_to(i, i, "-->");
+    } else if (text.compare(i, 9, "<![CDATA[") == 0) {
+      i = skip_to(i, i, "]]>");
+    } else if (text.compare(i, 2, "<?") == 0) {
+      i = skip_to(i, i, "?>");
+    } else if (text.compare(i, 2, "<!") == 0) {
+      // A declaration; a DOCTYPE's internal subset [...] may hold '>'.
+      const std::size_t bracket = text.find_first_of("[>", i);
+      const bool subset = bracket != std::string::npos && text[bracket] == '[';
+      i = skip_to(i, subset ? bracket : i, subset ? "]" : ">");
+      if (subset) i = skip_to(i, i, ">");
+    } else if (text.compare(i, 2, "</") == 0) {
+      --depth;
+      i = skip_to(i, i, ">");
+    } else {
+      // A start tag: to its '>' outside quotes; "/>" closes it at once.
+      const int at_line = line;
+      char quote = 0;
+      std::size_t j = i + 1;
+      for (; j < n; ++j) {
+        const char c = text[j];
+        if (c == '\n') ++line;
+        if (quote != 0) {
+          if (c == quote) quote = 0;
+        } else if (c == '"' || c == '\'') {
+          quote = c;
+        } else if (c == '>') {
+          break;
+        }
+      }
+      if (j >= n || text[j - 1] != '/') {
+        if (++depth > limit) return at_line;
+      }
+      i = j + 1;
+    }
+  }
+  return 0;
+}
+
+constexpr int kMaxXmlDepth = 256;
+
+// The first element in document order named "xacro:..." (depth-bounded by kMaxXmlDepth).
+const TiXmlElement* first_xacro_element(const TiXmlElement* element) {
+  for (; element != nullptr; element = element->NextSiblingElement()) {
+    if (std::string_view(element->Value()).rfind("xacro:", 0) == 0) return element;
+    if (const TiXmlElement* inner = first_xacro_element(element->FirstChildElement())) return inner;
+  }
+  return nullptr;
+}
+
 }  // namespace
 
 std::string link_pointer(const std::string& name) { return "/robot/link[@name='" + name + "']"; }
 std::string joint_pointer(const std::string& name) { return "/robot/joint[@name='" + name + "']"; }
 
 std::optional<XmlRobot> scan_urdf_xml(const std::string& text, Diagnostics& diag) {
+  if (const int line = line_past_depth(text, kMaxXmlDepth)) {
+    diag.error_at_line(codes::URDF_MALFORMED_XML, "", line,
+                       "elements nest more than " + std::to_string(kMaxXmlDepth) +
+                           " deep here: no URDF does, and the XML parser would run out of stack; is this a URDF?");
+    return std::nullopt;
+  }
   TiXmlDocument document;
   document.Parse(text.c_str(), nullptr, TIXML_ENCODING_UTF8);
   if (document.Error()) {
@@ -444,8 +526,18 @@ std::optional<XmlRobot> scan_urdf_xml(const std::string& text, Diagnostics& diag
   const TiXmlElement* robot_element = document.RootElement();
   if (robot_element == nullptr || std::string(robot_element->Value()) != "robot") {
     diag.error(codes::URDF_NOT_A_ROBOT, "",
-               "the root element is <" + std::string(robot_element ? robot_element->Value() : "") +
-                   ">, not <robot>: this is not a URDF");
+               robot_element != nullptr
+                   ? "the root element is <" + std::string(robot_element->Value()) + ">, not <robot>: this is not a URDF"
+                   : std::string("the XML parser found no root element (a <!DOCTYPE> with entities is not read): "
+                                 "a URDF is one <robot> element"));
+    return std::nullopt;
+  }
+  // A xacro file is no URDF: its macros, includes and properties would be dropped without a
+  // word, and with them the links a macro makes.
+  if (const TiXmlElement* xacro = first_xacro_element(robot_element)) {
+    diag.error_at_line(codes::URDF_INVALID, "", xacro->Row(),
+                       "<" + std::string(xacro->Value()) +
+                           ">: this is a xacro file, not a URDF; expand it first (xacro robot.urdf.xacro > robot.urdf)");
     return std::nullopt;
   }
   XmlRobot robot;

@@ -442,5 +442,26 @@ TEST(UrdfExport, MeshFilenamesOfAnUrdfText) {
   EXPECT_TRUE(urdf_mesh_filenames("not XML <").empty());
 }
 
+// A link name longer than a file name may be (valid glTF: 200 accented letters, 400 bytes) names
+// its mesh file by its first 120 bytes, cut between characters, and a digest of the whole name;
+// two such names that start alike name two files. The URDF is written (it failed: "File name
+// too long").
+TEST(UrdfExport, LongLinkNamesMakeShortMeshFileNames) {
+  std::string accented;
+  for (int i = 0; i < 200; ++i) accented += "\xc3\xa9";  // U+00E9
+  GltfBuilder b;
+  const int mesh = b.box_mesh(Eigen::Vector3f(0.2f, 0.2f, 0.2f));
+  const int base = b.node(accented + "a", -1, Json{{"mesh", mesh}});
+  b.node(accented + "b", base, Json{{"mesh", mesh}, {"translation", {0.0, 1.0, 0.0}}});
+  Diagnostics diag;
+  const Conversion conversion = b.convert(diag);
+  TempDir dir;
+  const auto model = parse_with_urdfdom(export_to(conversion, dir.path()));
+  std::set<std::string> files = names_in(dir / "meshes");
+  ASSERT_EQ(files.size(), 2u);
+  for (const std::string& file : files) EXPECT_LE(file.size(), 160u) << file;
+  EXPECT_EQ(model->links_.size(), 2u);
+}
+
 }  // namespace
 }  // namespace rdtf

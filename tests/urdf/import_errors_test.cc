@@ -50,7 +50,24 @@ std::string inertial(const std::string& mass, const std::string& inertia = kIner
 
 std::string visual(const std::string& shape) { return "<visual><geometry>" + shape + "</geometry></visual>"; }
 
+// A robot whose link 'a' (line 2) is followed by `levels` nested <x> elements, one a line from
+// line 3: the robot is depth 1, so the element past depth 256 is on line 258.
+std::string nested(int levels) {
+  std::string text = "<robot name=\"r\">\n<link name=\"a\"/>\n";
+  for (int i = 0; i < levels; ++i) text += "<x>\n";
+  for (int i = 0; i < levels; ++i) text += "</x>";
+  return text + "\n</robot>\n";
+}
+
 const BadUrdf kBadUrdfs[] = {
+    // 50,000 levels overflowed TinyXML's stack (SIGSEGV); refused before it parses.
+    {"nested_too_deep", nested(50000), "URDF_MALFORMED_XML", "", "line 258: elements nest more than 256 deep"},
+    {"nested_one_too_deep", nested(256), "URDF_MALFORMED_XML", "", "line 258: elements nest more than 256 deep"},
+    // A xacro file given as a URDF: the macro's link would be lost without a word.
+    {"xacro_file",
+     "<robot name=\"r\" xmlns:xacro=\"http://www.ros.org/wiki/xacro\">\n<link name=\"a\"/>\n"
+     "<xacro:macro name=\"m\"><link name=\"b\"/></xacro:macro>\n<xacro:m/>\n</robot>\n",
+     "URDF_INVALID", "", "line 3: <xacro:macro>: this is a xacro file, not a URDF"},
     {"missing mesh",
      "<robot name=\"r\">\n<link name=\"a\">\n<visual><geometry><mesh filename=\"meshes/gone.stl\"/></geometry></visual>\n"
      "</link>\n</robot>\n",

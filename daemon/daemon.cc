@@ -20,6 +20,7 @@
 #include "../core/gltf/confined_files.h"
 #include "daemon_internal.h"
 #include "rdtf/atomic_file.h"
+#include "rdtf/utf8.h"
 #include "revision_store.h"
 
 namespace rdtf::daemon {
@@ -31,39 +32,15 @@ std::string milliseconds(std::chrono::microseconds duration) {
 }
 
 std::string first_error(const Diagnostics& diag) {
-  for (const Diagnostic& d : diag.all()) {
-    if (d.severity == Severity::kError) return format(d);
-  }
-  return "unknown error";
+  const Diagnostic* error = diag.first_error();
+  return error != nullptr ? format(*error) : "unknown error";
 }
 
 std::string Daemon::since(Clock::time_point start) const {
   return milliseconds(std::chrono::duration_cast<std::chrono::microseconds>(clock_->now() - start));
 }
 
-std::string escape_for_log(std::string_view text) {
-  std::string out;
-  out.reserve(text.size());
-  for (const char c : text) {
-    const auto byte = static_cast<unsigned char>(c);
-    if (c == '\\') {
-      out += "\\\\";
-    } else if (c == '\n') {
-      out += "\\n";
-    } else if (c == '\r') {
-      out += "\\r";
-    } else if (c == '\t') {
-      out += "\\t";
-    } else if (byte < 0x20 || byte == 0x7f) {
-      char escaped[8];
-      std::snprintf(escaped, sizeof(escaped), "\\x%02x", byte);
-      out += escaped;
-    } else {
-      out += c;
-    }
-  }
-  return out;
-}
+std::string escape_for_log(std::string_view text) { return escape_for_terminal(text); }
 
 void log_line(const std::string& text) {
   const auto now = std::chrono::system_clock::now();

@@ -69,7 +69,7 @@ int main(int argc, char** argv) {
       } else {
         line["message"] = {{"type", nullptr}, {"size", buffer->data_size}};
       }
-      std::cout << line.dump() << std::endl;
+      std::cout << line.dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace) << std::endl;
       ++*printed;
     }
   } handler{omit_json, &printed};
@@ -97,7 +97,7 @@ int main(int argc, char** argv) {
             {"validated", s->validation.has_value()},
             {"files", s->manifest.size()}};
         nlohmann::ordered_json line = {{"channel", prefix + "/" + s->model_id()}, {"snapshot", snapshot}};
-        std::cout << line.dump() << std::endl;
+        std::cout << line.dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace) << std::endl;
         ++printed;
       };
     }

@@ -6,6 +6,7 @@
 #include "commands.h"
 #include "rdtf/write.h"
 #include "rdtf/diagnostic_codes.h"
+#include "rdtf/utf8.h"
 
 namespace rdtf::cli {
 namespace fs = std::filesystem;
@@ -146,7 +147,8 @@ void add_conversion_options(CLI::App& command, ConvertOptions& options) {
 void print_diagnostics(const Diagnostics& diag, bool include_infos) {
   for (const Diagnostic& d : diag.all()) {
     if (d.severity == Severity::kInfo && !include_infos) continue;
-    std::cerr << format(d) << "\n";
+    // Names and paths come from the input: escaped, so that none can forge a line or drive the terminal.
+    std::cerr << escape_for_terminal(format(d)) << "\n";
   }
 }
 

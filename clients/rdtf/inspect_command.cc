@@ -17,7 +17,7 @@ int run_inspect(const InspectArguments& args) {
   const auto conversion = convert_or_report(args.input, args.options, diag);
   if (!conversion) return kExitInvalidInput;
   if (args.json) {
-    std::cout << robot_summary(conversion->robot, conversion->asset.document, diag).dump(2) << "\n";
+    std::cout << robot_summary(conversion->robot, conversion->asset.document, diag).dump(2, ' ', false, Json::error_handler_t::replace) << "\n";
   } else {
     std::cout << robot_table(conversion->robot, diag);
   }

@@ -36,7 +36,7 @@ int run_validate(ValidateArguments& args) {
         out["conversionDiagnostics"].push_back(diagnostic_json(d));
       }
     }
-    std::cout << out.dump(2) << "\n";
+    std::cout << out.dump(2, ' ', false, Json::error_handler_t::replace) << "\n";
   } else {
     print_diagnostics(diag, args.verbose);
     print_diagnostics(report.diagnostics, args.verbose);

@@ -51,6 +51,28 @@ TEST(Cli, InspectPrintsLinksJointsAndMass) {
   }
 }
 
+// A node name is the input's to choose: a newline or a terminal escape in it must not forge a
+// line of the CLI's output or drive the terminal that shows it.
+TEST(Cli, NamesInDiagnosticsAreEscaped) {
+  testing::TempDir folder;
+  auto document = nlohmann::json::parse(testing::read_file(testing::data_dir() / "blender" / "arm3.gltf"));
+  for (auto& node : document["nodes"]) {
+    if (node["name"] == "elbow") {
+      node["name"] = "el\nbow\x1b[2J";
+      node["extras"]["rdtf_lower"] = -90;  // JOINT_LIMITS_IMPLAUSIBLE names the node.
+    }
+  }
+  testing::write_file(folder / "arm3.gltf", document.dump());
+  std::filesystem::copy_file(testing::data_dir() / "blender" / "arm3.bin", folder / "arm3.bin");
+  const auto run = testing::run_command(cli() + " convert '" + (folder / "arm3.gltf").string() + "' -o '" +
+                                        (folder / "out.gltf").string() + "'");
+  EXPECT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.err.find("JOINT_LIMITS_IMPLAUSIBLE"), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find("el\\nbow\\x1b[2J"), std::string::npos) << run.err;
+  EXPECT_EQ(run.err.find('\x1b'), std::string::npos) << run.err;
+  EXPECT_EQ(run.err.find("el\nbow"), std::string::npos) << run.err;
+}
+
 TEST(Cli, InspectJsonIsMachineReadable) {
   const auto run = testing::run_command(cli() + " inspect --json " + fixture("arm3.gltf"));
   ASSERT_EQ(run.exit_code, 0) << run.err;

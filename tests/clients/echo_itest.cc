@@ -39,5 +39,26 @@ TEST(Echo, ALateEchoAsksAtStartAndPrintsEveryLiveRevision) {
   }
 }
 
+// Any peer can put any bytes in an LCM string. A REQUEST whose strings are not UTF-8 (it killed
+// every rdtf-echo on the bus: the JSON printer threw) prints with U+FFFD in their place.
+TEST(Echo, StringsThatAreNotUtf8PrintReplaced) {
+  Session s;
+  s.start();
+  ChildProcess echo({RDTF_ECHO_PATH, "-c", "RDTF/REQUEST", "--no-request", "-n", "1"}, s.root / "echo.out");
+  rdtf::request_t request;
+  request.model_id = "\xff\xfe\xc0\xaf";
+  request.requester = "mallory\xff";
+  std::optional<int> exit;
+  // Sent until the echo, which may not have subscribed yet, has printed it.
+  for (int tries = 0; tries < 50 && !exit; ++tries) {
+    s.subscriber.publish("RDTF/REQUEST", request);
+    exit = echo.wait_exit(100ms);
+  }
+  ASSERT_EQ(exit, std::optional<int>(0)) << echo.output();
+  const Json line = Json::parse(echo.output().substr(0, echo.output().find('\n')));
+  EXPECT_EQ(line["message"]["requester"], "mallory\xef\xbf\xbd") << line.dump();
+  EXPECT_EQ(line["message"]["model_id"], "\xef\xbf\xbd\xef\xbf\xbd\xef\xbf\xbd\xef\xbf\xbd") << line.dump();
+}
+
 }  // namespace
 }  // namespace rdtf::itest

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstddef>
+#include <string>
 #include <string_view>
 
 namespace rdtf {
@@ -9,5 +10,11 @@ namespace rdtf {
 // Length of the well-formed UTF-8 sequence at text[i] (no overlong forms, no surrogates, nothing
 // past U+10FFFF), or 0 if there is none. i < text.size().
 std::size_t utf8_sequence_length(std::string_view text, std::size_t i);
+
+// One line of text as a terminal or a log shows it safely: a backslash, a control character
+// (newline, carriage return, tab, escape, NUL, DEL) and a byte that is not UTF-8 are escaped
+// ("\\", "\n", "\x1b", "\xff"), so a node name or a file name cannot start a line of its own,
+// move the cursor or recolour a terminal. Well-formed UTF-8 is kept.
+std::string escape_for_terminal(std::string_view text);
 
 }  // namespace rdtf

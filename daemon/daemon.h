@@ -151,6 +151,7 @@ class Daemon {
   Clock::time_point next_status_;
   bool watches_failing_ = false;  // Some folder could not be watched (inotify limit).
   Clock::time_point next_watch_retry_;
+  int watch_retries_ = 0;  // Retries since every folder was last watched.
   std::shared_ptr<ReadBudget> read_budget_;  // Shared with the workers.
   std::shared_ptr<ResultCache> cache_;       // Shared with the workers; null when off.
   std::string cache_key_;                    // settings_key(config_).

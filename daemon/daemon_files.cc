@@ -120,12 +120,13 @@ void Daemon::check_watches(Clock::time_point now) {
   if (unwatched.empty()) {
     if (watches_failing_) log_line("every folder is watched again");
     watches_failing_ = false;
+    watch_retries_ = 0;
     return;
   }
   if (!watches_failing_) {
     watches_failing_ = true;
     next_watch_retry_ = now + kWatchRetryPeriod;
-    for (const auto& [folder, missing] : unwatched) {
+    for (const auto& [folder, missing, why] : unwatched) {
       if (missing) {
         log_line("watched folder " + folder.string() + " is missing; looking for it every second");
         publish_daemon_error(codes::WATCH_FAILED, folder.string(),
@@ -134,15 +135,19 @@ void Daemon::check_watches(Clock::time_point now) {
                                  "it is looked for every second and watched again when it is back");
       } else {
         publish_daemon_error(codes::WATCH_FAILED, folder.string(),
-                             "cannot watch " + folder.string() +
-                                 ": inotify watches exhausted (raise /proc/sys/fs/inotify/max_user_watches); "
-                                 "its models were converted once, and the folder is tried again every second");
+                             why + "; what could be read of it was converted once, and the folder is tried "
+                                   "again every second for a while, then less often (up to once a minute)");
       }
     }
     return;
   }
   if (now >= next_watch_retry_) {
-    next_watch_retry_ = now + kWatchRetryPeriod;
+    // Every second at first (a limit raised, a folder made again); then, for a folder that stays
+    // unwatchable (its permissions), less often, since each retry rescans every folder.
+    ++watch_retries_;
+    auto period = kWatchRetryPeriod;
+    for (int k = 8; k < watch_retries_ && period < kWatchRetryLongest; ++k) period *= 2;
+    next_watch_retry_ = now + std::min<Clock::duration>(period, kWatchRetryLongest);
     const bool worth_a_rescan = std::any_of(unwatched.begin(), unwatched.end(), [](const auto& entry) {
       std::error_code ec;
       return !entry.missing || std::filesystem::is_directory(std::filesystem::symlink_status(entry.folder, ec));

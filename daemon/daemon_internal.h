@@ -15,6 +15,7 @@ constexpr std::size_t kLongestKind = sizeof("/DESCRIPTION_CHUNK") - 1;
 
 // How often folders that could not be watched are tried again.
 constexpr std::chrono::milliseconds kWatchRetryPeriod{1000};
+constexpr std::chrono::milliseconds kWatchRetryLongest{60000};
 
 // The publisher's burst, in receive-buffer bytes: 60% of Linux's default 212,992-byte socket
 // buffer, so that a subscriber that wakes late still holds a whole burst, with room left for

@@ -79,10 +79,11 @@ void InotifyWatcher::add_folder(const std::filesystem::path& folder,
     // A subfolder that went between its listing and its watch is simply gone (its parent's events
     // tell); only a watched folder itself is looked for again.
     if (missing && std::find(roots_.begin(), roots_.end(), folder) == roots_.end()) return;
+    const std::string why = missing ? "cannot watch " + folder.string() + ": it is missing" : watch_error(folder);
     if (!error.empty()) error += "; ";
-    error += missing ? "cannot watch " + folder.string() + ": it is missing" : watch_error(folder);
+    error += why;
     // Still list it: its models are converted now, and seen again when a retry can watch it.
-    unwatched_.push_back({folder, missing});
+    unwatched_.push_back({folder, missing, why});
   } else {
     folders_[wd] = folder;
   }

@@ -26,6 +26,7 @@ struct FileEvent {
 struct UnwatchedFolder {
   std::filesystem::path folder;
   bool missing = false;
+  std::string why;  // "cannot watch <folder>: <the system's reason>".
 };
 
 // What the daemon needs of a watcher (ports.h): inotify here, made-up events in tests.

@@ -262,13 +262,13 @@ ReadBeneath read_beneath(const std::filesystem::path& root, const std::filesyste
       why = "is a symbolic link: rdtfd reads no model through a symbolic link, wherever it points";
       return ReadBeneath::kRefused;
     }
-    why = std::strerror(error);
+    why = std::string("cannot be opened: ") + std::strerror(error);
     return error == ENOENT || error == ENOTDIR ? ReadBeneath::kGone : ReadBeneath::kRefused;
   }
   Fd fd(raw_fd);
   struct stat info {};
   if (::fstat(fd.get(), &info) != 0) {
-    why = std::strerror(errno);
+    why = std::string("cannot be examined: ") + std::strerror(errno);
     return ReadBeneath::kRefused;
   }
   if (S_ISDIR(info.st_mode)) {

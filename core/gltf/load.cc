@@ -1,6 +1,8 @@
 #include <tiny_gltf.h>
 
 #include <algorithm>
+#include <cctype>
+#include <cstdio>
 #include <cstring>
 #include <map>
 #include <span>
@@ -336,6 +338,17 @@ bool looks_like_glb(const std::vector<std::uint8_t>& bytes) {
 
 namespace {
 
+// A file meant as a GLB without GLB's magic: named .glb, or not JSON (no '{' or byte order mark
+// first) with GLB's version 2 where the header has it. Reported as a damaged GLB, not as JSON
+// that fails at its first byte.
+bool glb_by_name_or_header(const std::filesystem::path& display_path, const std::vector<std::uint8_t>& bytes) {
+  std::string extension = display_path.extension().string();
+  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (extension == ".glb") return true;
+  const bool json_start = bytes[0] == '{' || bytes[0] == 0xEF || std::isspace(bytes[0]) != 0;
+  return !json_start && bytes.size() >= 8 && bytes[4] == 2 && bytes[5] == 0 && bytes[6] == 0 && bytes[7] == 0;
+}
+
 // The GLB's BIN chunk when it is the only buffer and tinygltf would load it without complaint
 // (it copies the chunk's first byteLength bytes after checks that all pass here): that buffer is
 // taken straight from the file's bytes, which spares rebuilding an 18 MB GLB for tinygltf and
@@ -446,6 +459,15 @@ std::optional<GltfAsset> load_from_bytes(const std::vector<std::uint8_t>& bytes,
   asset.folder = folder;
   asset.limits = limits;
   asset.binary = looks_like_glb(bytes);
+  if (!asset.binary && glb_by_name_or_header(display_path, bytes)) {
+    char shown[64];
+    std::snprintf(shown, sizeof(shown), "%02x %02x %02x %02x", bytes[0], bytes.size() > 1 ? bytes[1] : 0,
+                  bytes.size() > 2 ? bytes[2] : 0, bytes.size() > 3 ? bytes[3] : 0);
+    diag.error_at_offset(codes::GLB_INVALID_MAGIC, 0,
+                         std::string("a GLB (by its name or its version field) whose first four bytes are ") + shown +
+                             ", not 'glTF' (67 6c 54 46): the file is damaged, or is no GLB");
+    return std::nullopt;
+  }
 
   std::string_view json_text(reinterpret_cast<const char*>(bytes.data()), bytes.size());
   std::span<const std::uint8_t> bin;

@@ -53,8 +53,10 @@ std::vector<BadCase> cases() {
   {
     std::string bytes = glb_bytes();
     bytes[0] = 'G';
-    // Not glTF's magic, so it is read as JSON and is not JSON.
-    all.push_back({"WrongMagicReadAsJson", raw_file("model.glb", bytes), "line 1"});
+    // Not glTF's magic: a damaged GLB by its name, and by its header's version 2 whatever its
+    // name (it was read as JSON that failed at line 1).
+    all.push_back({"WrongMagicByName", raw_file("model.glb", bytes), "@0: error GLB_INVALID_MAGIC: a GLB"});
+    all.push_back({"WrongMagicByVersion", raw_file("model.gltf", bytes), "47 6c 54 46, not 'glTF'"});
   }
   all.push_back({"InvalidJson", raw_file("model.gltf", "{\"asset\": {\"version\": \"2.0\"},\n \"nodes\": [}"),
                  "line 2"});

@@ -67,6 +67,12 @@ bool Diagnostics::contains(std::string_view code) const {
                      [&](const Diagnostic& d) { return d.code == code; });
 }
 
+const Diagnostic* Diagnostics::first_error() const {
+  const auto error = std::find_if(items_.begin(), items_.end(),
+                                  [](const Diagnostic& d) { return d.severity == Severity::kError; });
+  return error == items_.end() ? nullptr : &*error;
+}
+
 std::string json_pointer(std::string_view base, std::string_view token) {
   std::string out(base);
   out += '/';

@@ -55,17 +55,17 @@ std::optional<std::size_t> attribute_accessor(const GltfAsset& asset, const Json
 
 std::optional<std::vector<Eigen::Affine3d>> instance_transforms(const GltfAsset& asset, std::size_t node,
                                                                 std::uint64_t max_instances,
-                                                                Diagnostics& diag) {
+                                                                Diagnostics& diag, std::size_t input_node) {
   const Json& node_json = asset.document["nodes"][node];
   if (!node_json.contains("extensions") || !node_json["extensions"].is_object() ||
       !node_json["extensions"].contains(kInstancing)) {
     return std::vector<Eigen::Affine3d>{Eigen::Affine3d::Identity()};
   }
-  const std::string pointer = json_pointer("/nodes", node) + "/extensions/" + kInstancing + "/attributes";
+  const std::string pointer = json_pointer("/nodes", input_node) + "/extensions/" + kInstancing + "/attributes";
   const Json& extension = node_json["extensions"][kInstancing];
   if (!extension.is_object() || !extension.contains("attributes") || !extension["attributes"].is_object() ||
       extension["attributes"].empty()) {
-    diag.error(codes::INSTANCING_INVALID, pointer, node_label(asset.document, node) +
+    diag.error(codes::INSTANCING_INVALID, pointer, node_label(asset.document, input_node) +
                ": the extension needs an 'attributes' object with TRANSLATION, ROTATION or SCALE");
     return std::nullopt;
   }
@@ -86,7 +86,7 @@ std::optional<std::vector<Eigen::Affine3d>> instance_transforms(const GltfAsset&
     count = n;
     if (n > max_instances) {
       diag.error(codes::LIMIT_EXCEEDED, pointer + "/" + name,
-                 std::to_string(n) + " instances of " + node_label(asset.document, node) +
+                 std::to_string(n) + " instances of " + node_label(asset.document, input_node) +
                      " exceed what the triangle limit allows for its mesh (" + std::to_string(max_instances) + ")");
       return std::nullopt;
     }

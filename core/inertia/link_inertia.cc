@@ -224,9 +224,7 @@ bool warn_if_extras_differ(const Json& node, const std::optional<MassProperties>
   Diagnostics scratch;
   const auto extras = authored_inertial(node["extras"]["rdtf_inertial"], pointer, label, scratch);
   std::string difference;
-  if (scratch.has_errors()) {
-    const auto error = std::find_if(scratch.all().begin(), scratch.all().end(),
-                                    [](const Diagnostic& d) { return d.severity == Severity::kError; });
+  if (const Diagnostic* error = scratch.first_error()) {
     difference = "it is invalid (" + error->message + ")";
   } else if (extras.has_value() != entry.has_value()) {
     difference = "it says " + mass_text(extras) + ", extras.RDTF says " + mass_text(entry);
@@ -249,25 +247,6 @@ bool warn_if_extras_differ(const Json& node, const std::optional<MassProperties>
                label + ": rdtf_inertial: " + difference +
                    "; extras.RDTF takes precedence, and the output's rdtf_inertial is rewritten to agree");
   return true;
-}
-
-
-// extras.RDTF entry of a node, if any.
-const Json* rdtf_entry(const Json& document, std::size_t node, std::string& pointer) {
-  if (!document.contains("extras") || !document["extras"].is_object()) return nullptr;
-  const Json& extras = document["extras"];
-  if (!extras.contains("RDTF") || !extras["RDTF"].is_object()) return nullptr;
-  const Json& rdtf = extras["RDTF"];
-  if (!rdtf.contains("nodes") || !rdtf["nodes"].is_array()) return nullptr;
-  for (std::size_t i = 0; i < rdtf["nodes"].size(); ++i) {
-    const Json& entry = rdtf["nodes"][i];
-    if (entry.is_object() && entry.contains("node") && entry["node"].is_number_unsigned() &&
-        entry["node"].get<std::size_t>() == node) {
-      pointer = json_pointer("/extras/RDTF/nodes", i);
-      return &entry;
-    }
-  }
-  return nullptr;
 }
 
 }  // namespace
@@ -336,7 +315,8 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
     std::uint64_t triangles = 0;
     for (const TriangleMeshView& piece : geometry.pieces) triangles += piece.triangle_count;
     const auto instances =
-        instance_transforms(asset, node, asset.limits.max_triangles / std::max<std::uint64_t>(triangles, 1), after_check);
+        instance_transforms(asset, node, asset.limits.max_triangles / std::max<std::uint64_t>(triangles, 1),
+                            after_check, reported);
     // The mass kernel runs while the surface check of a large mesh does (check_surface).
     std::vector<VolumeIntegrals> solids;
     if (instances) {
@@ -360,6 +340,8 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
     }
   }
 
+  std::vector<std::string> entry_pointers;
+  const auto entries = rdtf_entries(document, entry_pointers);
   for (std::size_t l = 0; l < robot.links.size(); ++l) {
     Link& link = robot.links[l];
     const std::string pointer = json_pointer("/nodes", link.node);
@@ -370,8 +352,8 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
       // The extras.RDTF entry's inertial, else the inertial node's rdtf_inertial (what survives a
       // tool that keeps node extras only).
       const std::string label = node_label(document, static_cast<std::size_t>(link.inertial_node));
-      std::string entry_pointer;
-      const Json* entry = rdtf_entry(document, link.inertial_node, entry_pointer);
+      const Json* entry = entries[static_cast<std::size_t>(link.inertial_node)];
+      const std::string& entry_pointer = entry_pointers[static_cast<std::size_t>(link.inertial_node)];
       const Json& node = document["nodes"][link.inertial_node];
       std::optional<MassProperties> authored;
       if (entry != nullptr && entry->contains("inertial")) {

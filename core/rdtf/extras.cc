@@ -91,7 +91,15 @@ void write_node_extras(Json& document, const std::vector<NodeType>& types, const
   // Joints whose properties were not in node extras: written on the joint's frame node, where
   // they are read again (joint properties make a node a pivot, and this one is already the pivot).
   for (const Joint& joint : robot.joints) {
-    if (joint.source_node >= 0 && !joint.source_is_entry) continue;
+    if (joint.source_node >= 0 && !joint.source_is_entry) {
+      // Kept as the author typed them. Which axes an rdtf_axis is in depends on the generator,
+      // which encoders replace (gltfpack): say it on the node, where it survives them.
+      Json& extras = nodes[joint.source_node]["extras"];
+      if (extras.contains("rdtf_axis") && !extras.contains("rdtf_axes")) {
+        extras["rdtf_axes"] = node_extras_in_blender_axes(document, joint.source_node) ? "blender" : "gltf";
+      }
+      continue;
+    }
     // Node-extras keys that said otherwise than extras.RDTF (build_robot warned) go, wherever
     // they are: the joint's keys are written again on its frame node below.
     if (joint.ignored_extras_node >= 0 && nodes[joint.ignored_extras_node].contains("extras") &&

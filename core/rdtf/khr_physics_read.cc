@@ -39,15 +39,30 @@ std::vector<int> bodies(const Json& document, const std::vector<NodeType>& types
   std::vector<int> link_of_node(count, -1);
   for (std::size_t l = 0; l < robot.links.size(); ++l) link_of_node[static_cast<std::size_t>(robot.links[l].node)] = static_cast<int>(l);
   const auto parents = node_parents(document);
-  std::vector<int> body(count, -1);
+  // Each node's answer is its own link or its parent's: walked up once to the first node already
+  // answered, then filled in on the way back, so a chain of n nodes costs n steps, not n^2.
+  constexpr int kUnknown = -2;
+  std::vector<int> body(count, kUnknown);
+  std::vector<std::size_t> path;
   for (std::size_t n = 0; n < count && n < types.size(); ++n) {
+    int answer = -1;
     for (int at = static_cast<int>(n); at >= 0; at = parents[static_cast<std::size_t>(at)]) {
-      if (link_of_node[static_cast<std::size_t>(at)] >= 0) {
-        body[n] = link_of_node[static_cast<std::size_t>(at)];
+      const auto a = static_cast<std::size_t>(at);
+      if (body[a] != kUnknown) {
+        answer = body[a];
         break;
       }
+      if (link_of_node[a] >= 0) {
+        answer = link_of_node[a];
+        body[a] = answer;
+        break;
+      }
+      path.push_back(a);
     }
+    for (std::size_t a : path) body[a] = answer;
+    path.clear();
   }
+  for (int& b : body) b = b == kUnknown ? -1 : b;
   return body;
 }
 

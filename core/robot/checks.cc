@@ -184,6 +184,24 @@ std::size_t typing_distance(const std::string& a, const std::string& b) {
 }  // namespace
 
 void check_extras_keys(const Json& document, Diagnostics& diag) {
+  // rdtf keys on a mesh: Blender exports the Object Data tab's custom properties as the mesh's
+  // extras, shared by every object that uses the mesh; rdtf reads the object's (node's) only.
+  if (document.contains("meshes") && document["meshes"].is_array()) {
+    for (std::size_t m = 0; m < document["meshes"].size(); ++m) {
+      const Json& mesh = document["meshes"][m];
+      if (!mesh.is_object() || !mesh.contains("extras") || !mesh["extras"].is_object()) continue;
+      for (const auto& [key, value] : mesh["extras"].items()) {
+        std::string lower = key.substr(0, 4);
+        for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+        if (lower != "rdtf" && lower != "rdft") continue;
+        const std::string name = mesh.contains("name") && mesh["name"].is_string() ? " " + value_text(mesh["name"]) : "";
+        diag.warning(codes::RDTF_UNKNOWN_KEY, json_pointer(json_pointer("/meshes", m) + "/extras", key),
+                     "mesh " + std::to_string(m) + name + ": custom property " + value_text(Json(key)) +
+                         " is on the mesh data (in Blender, the Object Data tab), where rdtf does not read it, so "
+                         "it is ignored; set it on the object (the Object tab)");
+      }
+    }
+  }
   if (!document.contains("nodes") || !document["nodes"].is_array()) return;
   for (std::size_t i = 0; i < document["nodes"].size(); ++i) {
     const Json& node = document["nodes"][i];
@@ -235,18 +253,24 @@ void check_missing_properties(const Json& document, const std::vector<NodeType>&
     }
   }
   std::vector<std::size_t> empties;
-  bool bones = false;
+  // An armature: a skinned mesh, or bones without one (parts parented to bones).
+  bool bones = document.contains("skins") && document["skins"].is_array() && !document["skins"].empty();
+  std::size_t links = 0;
   for (std::size_t i = 0; i < types.size() && i < document["nodes"].size(); ++i) {
     const Json& node = document["nodes"][i];
     if (types[i] == NodeType::kNone) continue;
     if (node.contains("skin")) bones = true;
+    if (types[i] == NodeType::kLink) ++links;
     const bool has_children = node.contains("children") && !node["children"].empty();
     if (!node.contains("mesh") && has_children && is_child[i] && !bone[i] &&
         (types[i] == NodeType::kJoint || types[i] == NodeType::kLink)) {
       empties.push_back(i);
     }
   }
-  if (empties.empty() && !bones) return;
+  // Parts parented to parts and nothing else, from Blender: the joint empties were probably left
+  // out (Limit to > Selected Objects with only the meshes selected).
+  const bool parts_only = empties.empty() && !bones && links > 1 && written_by_blender(document);
+  if (empties.empty() && !bones && !parts_only) return;
   std::string names;
   for (std::size_t k = 0; k < empties.size() && k < 4; ++k) {
     names += (k ? ", " : "") + node_label(document, empties[k]);
@@ -257,6 +281,11 @@ void check_missing_properties(const Json& document, const std::vector<NodeType>&
                            "one rigid body") +
                    (names.empty() ? std::string() : "; these empties look like joints: " + names) +
                    (bones ? std::string("; the model has an armature") : std::string()) +
+                   (parts_only ? "; its " + std::to_string(links) +
+                                     " parts are parented to one another with no empty between them (were the "
+                                     "joint empties left out of the export, by Include > Limit to > Selected "
+                                     "Objects with only the meshes selected?)"
+                               : std::string()) +
                    ". In Blender, tick File > Export > glTF 2.0 > Include > Custom Properties "
                    "(export_extras=True): it is off by default; on an armature set the "
                    "properties on the Bone (Bone tab, edit or object mode), not on the pose bone, "

@@ -49,27 +49,6 @@ std::optional<double> read_amount(const JointSource& source, const std::string& 
   return value;
 }
 
-// The extras.RDTF entry for each node that has one.
-std::vector<const Json*> rdtf_entries(const Json& document, std::vector<std::string>& pointers) {
-  const std::size_t count = document["nodes"].size();
-  std::vector<const Json*> entries(count, nullptr);
-  pointers.assign(count, "");
-  if (!document.contains("extras") || !document["extras"].is_object()) return entries;
-  const Json& extras = document["extras"];
-  if (!extras.contains("RDTF") || !extras["RDTF"].is_object()) return entries;
-  const Json& rdtf = extras["RDTF"];
-  if (!rdtf.contains("nodes") || !rdtf["nodes"].is_array()) return entries;
-  for (std::size_t i = 0; i < rdtf["nodes"].size(); ++i) {
-    const Json& entry = rdtf["nodes"][i];
-    if (!entry.is_object() || !entry.contains("node") || !entry["node"].is_number_unsigned()) continue;
-    const auto node = entry["node"].get<std::size_t>();
-    if (node < count) {
-      entries[node] = &entry;
-      pointers[node] = json_pointer("/extras/RDTF/nodes", i);
-    }
-  }
-  return entries;
-}
 
 const Json* node_extras(const Json& document, std::size_t node) {
   const Json& n = document["nodes"][node];
@@ -131,6 +110,36 @@ bool reads_blender_axes(const Json& document, std::size_t node, Diagnostics& dia
   }
   return blender && !is_skin_joint(document, node);
 }
+
+}  // namespace
+
+bool node_extras_in_blender_axes(const Json& document, std::size_t node) {
+  Diagnostics scratch;
+  return reads_blender_axes(document, node, scratch);
+}
+
+std::vector<const Json*> rdtf_entries(const Json& document, std::vector<std::string>& pointers) {
+  const std::size_t count = document["nodes"].size();
+  std::vector<const Json*> entries(count, nullptr);
+  pointers.assign(count, "");
+  if (!document.contains("extras") || !document["extras"].is_object()) return entries;
+  const Json& extras = document["extras"];
+  if (!extras.contains("RDTF") || !extras["RDTF"].is_object()) return entries;
+  const Json& rdtf = extras["RDTF"];
+  if (!rdtf.contains("nodes") || !rdtf["nodes"].is_array()) return entries;
+  for (std::size_t i = 0; i < rdtf["nodes"].size(); ++i) {
+    const Json& entry = rdtf["nodes"][i];
+    if (!entry.is_object() || !entry.contains("node") || !entry["node"].is_number_unsigned()) continue;
+    const auto node = entry["node"].get<std::size_t>();
+    if (node < count && entries[node] == nullptr) {  // A node listed again: typing refused it.
+      entries[node] = &entry;
+      pointers[node] = json_pointer("/extras/RDTF/nodes", i);
+    }
+  }
+  return entries;
+}
+
+namespace {
 
 // "x", "-z", "+y": a unit vector along a named axis.
 std::optional<Eigen::Vector3d> named_axis(const std::string& text) {
@@ -326,7 +335,31 @@ Robot build_robot(const Json& document, const std::vector<NodeType>& types, std:
   std::vector<std::string> entry_pointers;
   const auto entries = rdtf_entries(document, entry_pointers);
 
-  // Links in pre-order of the scene, so parents come before children.
+  // A joint node with joint properties is one degree of freedom: whatever hangs from it moves as
+  // one part. The link among its children (the first, if several) is that part, and what else
+  // hangs from the joint node hangs from that link: a part parented to a bone beside the next
+  // bone, an elbow empty parented to the shoulder empty beside the upper arm, two jaws under
+  // one grip empty. A joint node without properties (the paper's, which groups a link's child
+  // links in one node, or rdtf's inserted ones) moves nothing: each link below it keeps its own
+  // joint to the link above.
+  const auto carries_joint = [&](std::size_t node) {
+    const Json* entry = entries[node];
+    return (entry != nullptr && entry->contains("joint") && (*entry)["joint"].is_object()) ||
+           has_joint_keys(node_extras(document, node));
+  };
+  std::vector<int> carried_link(types.size(), -1);
+  for (std::size_t node = 0; node < types.size(); ++node) {
+    if (types[node] != NodeType::kJoint || !carries_joint(node)) continue;
+    for (const Json& child : document["nodes"][node].value("children", Json::array())) {
+      if (types[child.get<std::size_t>()] == NodeType::kLink) {
+        carried_link[node] = child.get<int>();
+        break;
+      }
+    }
+  }
+
+  // Links in pre-order of the scene, so parents come before children: a joint node's carried
+  // link before its other children.
   std::vector<int> link_of_node(types.size(), -1);
   std::vector<std::size_t> stack;
   const Json roots = scene_json.value("nodes", Json::array());
@@ -346,17 +379,34 @@ Robot build_robot(const Json& document, const std::vector<NodeType>& types, std:
       robot.links.push_back(std::move(link));
     }
     const Json children = document["nodes"][node].value("children", Json::array());
-    for (auto it = children.rbegin(); it != children.rend(); ++it) stack.push_back(it->get<std::size_t>());
+    for (auto it = children.rbegin(); it != children.rend(); ++it) {
+      if (it->get<int>() != carried_link[node]) stack.push_back(it->get<std::size_t>());
+    }
+    if (carried_link[node] >= 0) stack.push_back(static_cast<std::size_t>(carried_link[node]));
   }
 
   for (std::size_t c = 0; c < robot.links.size(); ++c) {
     Link& child = robot.links[c];
-    // Walk up to the parent link, remembering the joint-typed nodes passed on the way.
+    // Walk up to the parent link, remembering the joint-typed nodes passed on the way; a joint
+    // node that carries another link ends the walk at that link.
     std::vector<int> joint_nodes;
+    int below = child.node;
     int up = parents[child.node];
     while (up >= 0 && types[up] != NodeType::kLink) {
+      if (carried_link[up] >= 0 && carried_link[up] != below) break;
       if (types[up] == NodeType::kJoint) joint_nodes.push_back(up);
+      below = up;
       up = parents[up];
+    }
+    if (up >= 0 && types[up] != NodeType::kLink) {
+      const int joint_node = up;
+      up = carried_link[joint_node];
+      if (joint_nodes.empty()) {
+        diag.info(codes::JOINT_MOVES_SEVERAL_LINKS, json_pointer("/nodes", joint_node),
+                  "joint " + node_label(document, joint_node) + " moves '" + node_name(document, up) + "' and '" +
+                      child.name + "' as one part: '" + child.name + "' is fixed to '" + node_name(document, up) +
+                      "'");
+      }
     }
     if (up < 0) {
       robot.root_links.push_back(static_cast<int>(c));
@@ -370,9 +420,28 @@ Robot build_robot(const Json& document, const std::vector<NodeType>& types, std:
     joint.name = joint.node >= 0 ? node_name(document, joint.node)
                                  : parent.name + "_" + child.name + "_joint";
     if (joint_nodes.size() > 1) {
-      diag.info(codes::JOINT_CHAIN, json_pointer("/nodes", joint_nodes.front()),
-                std::to_string(joint_nodes.size()) + " joint nodes between links '" + parent.name +
-                    "' and '" + child.name + "': they make one joint");
+      // Two joint nodes with properties and no link between them are two degrees of freedom the
+      // model cannot have: only the nearest the child's are read (an empty stacked on an empty).
+      std::vector<int> with_properties;
+      for (int node : joint_nodes) {
+        if (carries_joint(static_cast<std::size_t>(node))) with_properties.push_back(node);
+      }
+      if (with_properties.size() > 1) {
+        std::string ignored;
+        for (std::size_t i = 1; i < with_properties.size(); ++i) {
+          ignored += (i > 1 ? ", " : "") + node_label(document, with_properties[i]);
+        }
+        diag.warning(codes::JOINT_CHAIN, json_pointer("/nodes", with_properties[1]),
+                     std::to_string(joint_nodes.size()) + " joint nodes between links '" + parent.name + "' and '" +
+                         child.name + "' make one joint, '" + node_name(document, with_properties.front()) +
+                         "'; the joint properties of " + ignored +
+                         " are not used: a joint moves a link, so parent the next joint node to a link (a part "
+                         "with a mesh), not to a joint node");
+      } else {
+        diag.info(codes::JOINT_CHAIN, json_pointer("/nodes", joint_nodes.front()),
+                  std::to_string(joint_nodes.size()) + " joint nodes between links '" + parent.name +
+                      "' and '" + child.name + "': they make one joint");
+      }
     }
     // The joint frame, and so the child link frame (URDF keeps them one), is the pivot the
     // modeller placed: the joint node nearest the child that has a transform of its own or joint
@@ -428,9 +497,7 @@ Robot build_robot(const Json& document, const std::vector<NodeType>& types, std:
       shadow.damping = shadow.friction = shadow.spring_stiffness = 0;
       read_joint_properties(shadow_source, world[node], child.X_SL, shadow, scratch);
       std::optional<std::string> difference;
-      if (scratch.has_errors()) {
-        const auto error = std::find_if(scratch.all().begin(), scratch.all().end(),
-                                        [](const Diagnostic& d) { return d.severity == Severity::kError; });
+      if (const Diagnostic* error = scratch.first_error()) {
         difference = "an invalid value in node extras (" + error->message + ")";
       } else {
         difference = joint_properties_differ(shadow, joint);

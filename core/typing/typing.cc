@@ -1,6 +1,7 @@
 #include "rdtf/typing.h"
 
 #include <cstdint>
+#include <map>
 
 #include "rdtf/completion.h"
 #include "rdtf/geometry.h"
@@ -59,8 +60,17 @@ void read_authored_types(const Json& document, std::vector<NodeType>& types,
   if (document.contains("extras") && document["extras"].is_object() &&
       document["extras"].contains("RDTF")) {
     const Json& rdtf = document["extras"]["RDTF"];
+    // What the output would silently replace: an RDTF that is no object, nodes that are no list.
+    if (!rdtf.is_object()) {
+      diag.error(codes::RDTF_INVALID_VALUE, "/extras/RDTF",
+                 "extras.RDTF is " + value_text(rdtf) + ", not an object (docs/format.md)");
+    } else if (rdtf.contains("nodes") && !rdtf["nodes"].is_array()) {
+      diag.error(codes::RDTF_INVALID_VALUE, "/extras/RDTF/nodes",
+                 "extras.RDTF.nodes is " + value_text(rdtf["nodes"]) + ", not an array of node entries");
+    }
     if (rdtf.is_object() && rdtf.contains("nodes") && rdtf["nodes"].is_array()) {
       const Json& entries = rdtf["nodes"];
+      std::map<std::size_t, std::size_t> first_entry;  // Node -> its first entry.
       for (std::size_t i = 0; i < entries.size(); ++i) {
         const std::string pointer = json_pointer("/extras/RDTF/nodes", i);
         const Json& entry = entries[i];
@@ -72,6 +82,21 @@ void read_authored_types(const Json& document, std::vector<NodeType>& types,
                          (entry.is_object() && entry.contains("node") ? value_text(entry["node"])
                                                                       : std::string("none")));
           continue;
+        }
+        const auto listed = entry["node"].get<std::size_t>();
+        if (!first_entry.emplace(listed, i).second) {
+          diag.error(codes::RDTF_INVALID_NODE_ENTRY, pointer + "/node",
+                     node_label(document, listed) + " is listed again (first at " +
+                         json_pointer("/extras/RDTF/nodes", first_entry[listed]) +
+                         "): one entry per node, or which one holds its type and properties is a guess");
+          continue;
+        }
+        for (const char* key : {"joint", "inertial"}) {
+          if (entry.contains(key) && !entry[key].is_object()) {
+            diag.error(codes::RDTF_INVALID_VALUE, pointer + "/" + key,
+                       "entry for " + node_label(document, listed) + ": " + key + " is " + value_text(entry[key]) +
+                           ", not an object (docs/format.md lists its keys)");
+          }
         }
         if (!entry.contains("type")) continue;
         const auto type =
@@ -129,7 +154,12 @@ NodeType mesh_or_visual(const Json& nodes, const MeshOwnership& meshes, int pare
   const Json* parent = parent_index < 0 ? nullptr : &nodes[parent_index];
   const auto has_mesh = [&](std::size_t i) { return meshes.has_mesh(i); };
   if (meshes.carrier(index)) return NodeType::kMesh;
-  const auto children = children_of(node);
+  // A carrier child is the node's own mesh moved by an encoder, not a child of the author's: a
+  // leaf mesh node whose mesh gltfpack moved into a carrier is still a leaf.
+  std::vector<std::size_t> children;
+  for (std::size_t child : children_of(node)) {
+    if (!meshes.carrier(child)) children.push_back(child);
+  }
   if (has_mesh(index)) {
     // A skinned mesh moves with its bones, whose links carry its mass: never a link itself.
     if (node.contains("skin") && children.empty()) return NodeType::kMesh;

@@ -11,6 +11,7 @@
 #include "publisher.h"
 #include "rdtf/diagnostic_codes.h"
 #include "rdtf/diagnostics_json.h"
+#include "rdtf/utf8.h"
 #include "support/test_support.h"
 
 namespace rdtf {
@@ -29,6 +30,25 @@ TEST(DiagnosticForms, AUrdfFindingHasItsLineInAFieldAndInItsMessage) {
   EXPECT_EQ(d.pointer, "/robot/joint[@name='j']/limit/@lower");
   EXPECT_EQ(d.message, "line 5: <limit lower=\"abc\">: 'abc' is not a number");
   EXPECT_FALSE(d.byte_offset);
+}
+
+TEST(DiagnosticForms, FirstErrorSkipsWarningsAndIsNothingWithoutErrors) {
+  Diagnostics diag("a.glb");
+  diag.warning(codes::MESH_OPEN, "/nodes/2", "open");
+  EXPECT_EQ(diag.first_error(), nullptr);
+  diag.error(codes::ACCESSOR_TOO_LONG, "/accessors/1", "first");
+  diag.error(codes::ACCESSOR_TOO_LONG, "/accessors/2", "second");
+  ASSERT_NE(diag.first_error(), nullptr);
+  EXPECT_EQ(diag.first_error()->pointer, "/accessors/1");
+  EXPECT_EQ(diag.first_error()->message, "first");
+}
+
+TEST(DiagnosticForms, TerminalTextEscapesControlsBackslashesAndBytesThatAreNotUtf8) {
+  EXPECT_EQ(escape_for_terminal("a\nb\r\x1b[31m\tc\\ \xc3\xa9\xff\xc0\xaf\x7f"),
+            "a\\nb\\r\\x1b[31m\\tc\\\\ \xc3\xa9\\xff\\xc0\\xaf\\x7f");
+  EXPECT_EQ(escape_for_terminal(std::string("n\0x", 3)), "n\\x00x");
+  EXPECT_EQ(escape_for_terminal("\xf0\x9f\xa4\x96 plain"), "\xf0\x9f\xa4\x96 plain");  // U+1F916, kept
+  EXPECT_EQ(escape_for_terminal("cut \xe2\x82"), "cut \\xe2\\x82");  // A sequence cut short.
 }
 
 TEST(DiagnosticForms, JsonHasLineAndByteOffsetOnlyWhenGiven) {

@@ -140,6 +140,8 @@ struct Case {
   // carrier node's scale (dequantization is q * scale + offset); Draco's is the range of the
   // mesh's bounding box over 2^11 - 1 (11 position bits, both tools' default).
   enum { kGltfpackScale, kDraco11 } step;
+  // What it was made from, under tests/data (make.sh).
+  std::string source = "encoded/arm_source.gltf";
 };
 
 class EncodedModel : public ::testing::TestWithParam<Case> {};
@@ -149,13 +151,14 @@ TEST_P(EncodedModel, ConvertsToTheOriginalRobot) {
   // An encoder that drops node extras is compared with the source without them (the modeller's
   // joints and densities are then gone, by the encoder's doing).
   testing::TempDir stripped;
-  std::filesystem::path source_path = encoded("arm_source.gltf");
+  std::filesystem::path source_path = testing::data_dir() / c.source;
   if (!c.keeps_extras) {
     Json document = Json::parse(testing::read_file(source_path));
     for (Json& node : document["nodes"]) node.erase("extras");
-    source_path = stripped / "arm_source.gltf";
+    const std::string bin = document["buffers"][0]["uri"].get<std::string>();
+    source_path = stripped / source_path.filename();
     testing::write_file(source_path, document.dump());
-    std::filesystem::copy_file(encoded("arm_source.bin"), stripped / "arm_source.bin");
+    std::filesystem::copy_file((testing::data_dir() / c.source).parent_path() / bin, stripped / bin);
   }
   const Conversion source = convert_ok(source_path);
   const Conversion enc = convert_ok(encoded(c.file));
@@ -224,7 +227,11 @@ INSTANTIATE_TEST_SUITE_P(
     ::testing::Values(Case{"arm_gltfpack.gltf", true, Case::kGltfpackScale},
                       Case{"arm_meshopt.glb", true, Case::kGltfpackScale},
                       Case{"arm_draco.gltf", true, Case::kDraco11},
-                      Case{"arm_draco_transcoder.gltf", false, Case::kDraco11}),
+                      Case{"arm_draco_transcoder.gltf", false, Case::kDraco11},
+                      // Named leaf mesh nodes under empty links: each keeps its carrier as its mesh.
+                      Case{"arm3_gltfpack.glb", true, Case::kGltfpackScale, "encoded/arm3_source.gltf"},
+                      // rdtf's output of a Blender export: its node extras say their axes.
+                      Case{"arm_rdtf_gltfpack.glb", true, Case::kGltfpackScale, "blender/modelled_arm.gltf"}),
     [](const ::testing::TestParamInfo<Case>& param) {
       return param.param.file.substr(0, param.param.file.find('.'));
     });

@@ -144,5 +144,27 @@ TEST(Plausibility, TooLargeAndHeavyForAMachineAndScaledToAMillimetre) {
   expect_one(convert_and_find(doc, codes::UNITS_IMPLAUSIBLE), "/nodes/0", {"implausibly small in metres"});
 }
 
+// Blender exports the Object Data tab's custom properties on the mesh, where rdtf reads nothing.
+TEST(Plausibility, RdtfKeysOnMeshDataAreNamed) {
+  json doc = arm();
+  doc["meshes"][0]["name"] = "Cube.001";
+  doc["meshes"][0]["extras"] = {{"rdtf_density", 2700}, {"colour", "red"}};
+  expect_one(convert_and_find(doc, codes::RDTF_UNKNOWN_KEY), "/meshes/0/extras/rdtf_density",
+             {"mesh 0 'Cube.001'", "on the mesh data", "set it on the object"});
+}
+
+// Exported from Blender with only the meshes selected: the joint empties are gone, every joint is
+// fixed, and nothing else would say so.
+TEST(Plausibility, PartsParentedToPartsFromBlenderWithoutPropertiesAreNamed) {
+  json doc = arm();
+  for (json& node : doc["nodes"]) node.erase("extras");
+  doc["asset"]["generator"] = "Khronos glTF Blender I/O v3.4.50";
+  expect_one(convert_and_find(doc, codes::NO_RDTF_PROPERTIES), "/nodes",
+             {"every joint is fixed", "parented to one another", "Selected Objects"});
+  // From another tool, a model of parts alone is not judged (a fixed assembly is a model too).
+  doc["asset"]["generator"] = "some CAD exporter";
+  EXPECT_TRUE(convert_and_find(doc, codes::NO_RDTF_PROPERTIES).empty());
+}
+
 }  // namespace
 }  // namespace rdtf

@@ -115,9 +115,10 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(IMAGE_NOT_COPIED, kSeverityWarning, "model") \
   X(IMAGE_NOT_EMBEDDED, kSeverityWarning, "model") \
   X(JOINT_AXIS_ZERO, kSeverityError, "model") \
-  X(JOINT_CHAIN, kSeverityInfo, "model") \
+  X(JOINT_CHAIN, kSeverityInfo | kSeverityWarning, "model") \
   X(JOINT_LIMITS_IMPLAUSIBLE, kSeverityWarning, "model") \
   X(JOINT_LIMITS_INVERTED, kSeverityError, "model") \
+  X(JOINT_MOVES_SEVERAL_LINKS, kSeverityInfo, "model") \
   X(KHR_JOINT_FRAMES_DISAGREE, kSeverityError, "model") \
   X(KHR_PHYSICS_IGNORED, kSeverityWarning, "model") \
   X(KHR_PHYSICS_INVALID, kSeverityError, "model") \

@@ -67,6 +67,8 @@ class Diagnostics {
   std::size_t error_count() const { return error_count_; }
   const std::vector<Diagnostic>& all() const { return items_; }
   bool contains(std::string_view code) const;
+  // The first error added, or nullptr when there is none.
+  const Diagnostic* first_error() const;
 
  private:
   std::string file_;

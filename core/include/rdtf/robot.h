@@ -114,6 +114,16 @@ inline constexpr const char* kJointExtrasKeys[] = {
 // ..."): its custom-property vectors were typed in Blender's axes.
 bool written_by_blender(const Json& document);
 
+// Whether the node's extras vectors (rdtf_axis) are read in Blender's axes: as its rdtf_axes says,
+// else when Blender's exporter wrote the document; never for a bone (a skin joint), whose node
+// Blender writes in the bone's own axes. An invalid rdtf_axes counts as absent here (build_robot
+// reports it).
+bool node_extras_in_blender_axes(const Json& document, std::size_t node);
+
+// The extras.RDTF entry of each node (nullptr for none) and its JSON pointer, in one pass over the
+// entries. A node listed twice keeps its first entry (typing reports the second as an error).
+std::vector<const Json*> rdtf_entries(const Json& document, std::vector<std::string>& pointers);
+
 // Blender's axes (Z up) to glTF's (Y up), as Blender's exporter turns every frame:
 // glTF (x, y, z) = Blender (x, z, -y).
 Eigen::Matrix3d blender_to_gltf_axes();

@@ -35,6 +35,30 @@ PY
 "$bin/gltf-pipeline" -i arm_source.gltf -o arm_draco.gltf -d
 # draco_transcoder (Debian draco), default quantization (11 bits for positions); it drops extras.
 draco_transcoder -i arm_source.gltf -o arm_draco_transcoder.gltf
+# arm3: parts as named leaf mesh nodes under empties (Blender's "empty holding meshes" link).
+# gltfpack moves each mesh into a carrier under its named node, which must stay a mesh node.
+python3 - "$root/tests/data/blender/arm3.gltf" <<'PY'
+import json, shutil, sys
+source = sys.argv[1]
+document = json.load(open(source))
+for node in document["nodes"]:
+    extras = node.get("extras", {})
+    if "rdtf_axis" in extras:
+        extras["rdtf_axes"] = "blender"
+document["buffers"][0]["uri"] = "arm3_source.bin"
+json.dump(document, open("arm3_source.gltf", "w"), indent=1)
+shutil.copy(source.replace(".gltf", ".bin"), "arm3_source.bin")
+PY
+"$bin/gltfpack" -i arm3_source.gltf -o arm3_gltfpack.glb -kn -ke
+
+# rdtf's own output of Blender's modelled_arm (as exported: no rdtf_axes), through gltfpack,
+# which drops extras.RDTF and replaces asset.generator: the node extras alone must keep the
+# robot, axes included. Needs a built rdtf (RDTF, else build/clients/rdtf/rdtf).
+rdtf=${RDTF:-$root/build/clients/rdtf/rdtf}
+"$rdtf" convert "$root/tests/data/blender/modelled_arm.gltf" -o "$here/arm_rdtf_output.glb"
+"$bin/gltfpack" -i arm_rdtf_output.glb -o arm_rdtf_gltfpack.glb -kn -ke
+rm arm_rdtf_output.glb
+
 # A unit cube with texture coordinates as a bare Draco stream (Debian draco's draco_encoder,
 # defaults: edgebreaker, the portable texture-coordinate prediction); fuzz/make_decoder_seeds.py
 # makes the draco fuzz seed and the regression inputs of the orientation bound from it.

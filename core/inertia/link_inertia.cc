@@ -265,6 +265,15 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
   std::vector<std::vector<MassPiece>> pieces(robot.links.size());
 
   for (std::size_t node = 0; node < types.size(); ++node) {
+    // A mesh on a node typed otherwise by its author (a link typed "joint" in extras.RDTF): its
+    // mass would vanish without a word.
+    if (types[node] != NodeType::kMesh && types[node] != NodeType::kLink && types[node] != NodeType::kNone &&
+        document["nodes"][node].contains("mesh")) {
+      diag.warning(codes::MESH_WITHOUT_LINK, json_pointer("/nodes", node),
+                   node_label(document, node) + " has a mesh but is typed " + to_string(types[node]) +
+                       " (extras.RDTF or rdtf_type): its mesh adds no mass to any link; type it link or mesh");
+      continue;
+    }
     if (types[node] != NodeType::kMesh || !document["nodes"][node].contains("mesh")) continue;
     int owner = parents[node];
     while (owner >= 0 && types[owner] != NodeType::kLink) owner = parents[owner];

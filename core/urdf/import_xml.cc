@@ -107,7 +107,12 @@ NumberError parse_number(std::string_view text, double& value) {
   return std::isfinite(value) ? NumberError::kNone : NumberError::kNotFinite;
 }
 
-enum class Range { kAny, kNonNegative, kPositive, kUnit, kNonZero };
+enum class Range { kAny, kNonNegative, kPositive, kUnit, kNonZero, kSize, kScale };
+
+// The largest size or scale a shape may have, in metres: a million kilometres. Beyond it a box's
+// volume and inertia overflow double (1e200 made them infinite, and the import failed inside the
+// glTF it builds, at a pointer into a file the user never saw).
+constexpr double kLargestSize = 1e9;
 
 // What an attribute holds: how many numbers, their range, and what one is ("a mass") for messages.
 struct Rule {
@@ -200,6 +205,14 @@ class Checker {
         case Range::kNonZero:
           if (number == 0) why = " is zero: " + std::string(rule.what) + " of 0 flattens the shape";
           break;
+        case Range::kSize:
+          if (number < 0) why = " is negative: " + std::string(rule.what) + " is 0 or more";
+          if (number > kLargestSize) why = " is over 1e9 m: no robot part is that large (a size in other units?)";
+          break;
+        case Range::kScale:
+          if (number == 0) why = " is zero: " + std::string(rule.what) + " of 0 flattens the shape";
+          if (std::abs(number) > kLargestSize) why = " is over 1e9: no robot part is scaled that much";
+          break;
       }
       if (!why.empty()) {
         error(code, at, e->Row(), said + quoted + why);
@@ -265,17 +278,17 @@ void check_geometry(Checker& c, const TiXmlElement* holder, const std::string& p
   const std::string kind = shape->Value();
   const std::string at = pointer + "/geometry/" + kind;
   if (kind == "box") {
-    c.numbers(shape, at, "size", {3, Range::kNonNegative, "a box size"}, true);
+    c.numbers(shape, at, "size", {3, Range::kSize, "a box size"}, true);
   } else if (kind == "cylinder") {
-    c.numbers(shape, at, "radius", {1, Range::kNonNegative, "a cylinder radius"}, true);
-    c.numbers(shape, at, "length", {1, Range::kNonNegative, "a cylinder length"}, true);
+    c.numbers(shape, at, "radius", {1, Range::kSize, "a cylinder radius"}, true);
+    c.numbers(shape, at, "length", {1, Range::kSize, "a cylinder length"}, true);
   } else if (kind == "sphere") {
-    c.numbers(shape, at, "radius", {1, Range::kNonNegative, "a sphere radius"}, true);
+    c.numbers(shape, at, "radius", {1, Range::kSize, "a sphere radius"}, true);
   } else if (kind == "mesh") {
     if (shape->Attribute("filename") == nullptr) {
       c.error(codes::URDF_INVALID, at, shape->Row(), "<mesh> has no filename attribute");
     }
-    c.numbers(shape, at, "scale", {3, Range::kNonZero, "a mesh scale"}, false);
+    c.numbers(shape, at, "scale", {3, Range::kScale, "a mesh scale"}, false);
   } else {
     c.error(codes::URDF_INVALID, at, shape->Row(),
             "<" + shown(kind) + "> is no URDF shape: the shapes are <box>, <cylinder>, <sphere> and <mesh>");

@@ -65,5 +65,22 @@ TEST(RdtfEntries, ANodeListedTwiceIsRefused) {
       << d.message;
 }
 
+// The base link (a 0.016 m^3 box of 5 kg by rdtf_mass) typed joint by its author: its mass is
+// lost, and a warning says so.
+TEST(RdtfEntries, AMeshTypedJointIsNamed) {
+  json doc = arm();
+  doc["extras"]["RDTF"] = {{"nodes", {{{"node", 2}, {"type", "joint"}}}}};
+  testing::TempDir dir;
+  testing::write_file(dir / "arm.gltf", doc.dump());
+  Diagnostics diag;
+  ASSERT_TRUE(convert_file(dir / "arm.gltf", {}, diag).has_value());
+  bool named = false;
+  for (const Diagnostic& d : diag.all()) {
+    named |= d.code == codes::MESH_WITHOUT_LINK && d.pointer == "/nodes/2" &&
+             d.message.find("node 2 'slider' has a mesh but is typed joint") != std::string::npos;
+  }
+  EXPECT_TRUE(named);
+}
+
 }  // namespace
 }  // namespace rdtf

@@ -63,6 +63,12 @@ const BadUrdf kBadUrdfs[] = {
     // 50,000 levels overflowed TinyXML's stack (SIGSEGV); refused before it parses.
     {"nested_too_deep", nested(50000), "URDF_MALFORMED_XML", "", "line 258: elements nest more than 256 deep"},
     {"nested_one_too_deep", nested(256), "URDF_MALFORMED_XML", "", "line 258: elements nest more than 256 deep"},
+    // Sizes whose volume overflows double failed inside the glTF the import builds.
+    {"box_beyond_any_robot", link_urdf(visual("<box size=\"1e200 1e200 1e200\"/>")), "URDF_INVALID_NUMBER",
+     "/robot/link[@name='a']/visual[1]/geometry/box/@size", "'1e200' is over 1e9 m"},
+    {"mesh_scale_beyond_any_robot",
+     link_urdf(visual("<mesh filename=\"junk.stl\" scale=\"1 1e300 1\"/>")), "URDF_INVALID_NUMBER",
+     "/robot/link[@name='a']/visual[1]/geometry/mesh/@scale", "'1e300' is over 1e9"},
     // A xacro file given as a URDF: the macro's link would be lost without a word.
     {"xacro_file",
      "<robot name=\"r\" xmlns:xacro=\"http://www.ros.org/wiki/xacro\">\n<link name=\"a\"/>\n"

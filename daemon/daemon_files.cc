@@ -144,7 +144,10 @@ void Daemon::check_watches(Clock::time_point now) {
   if (now >= next_watch_retry_) {
     // Every second at first (a limit raised, a folder made again); then, for a folder that stays
     // unwatchable (its permissions), less often, since each retry rescans every folder.
-    ++watch_retries_;
+    // A missing folder is looked for every second (a stat each, docs/daemon.md); only a folder
+    // that is there and cannot be watched backs off.
+    const bool all_missing = std::all_of(unwatched.begin(), unwatched.end(), [](const auto& entry) { return entry.missing; });
+    watch_retries_ = all_missing ? 0 : watch_retries_ + 1;
     auto period = kWatchRetryPeriod;
     for (int k = 8; k < watch_retries_ && period < kWatchRetryLongest; ++k) period *= 2;
     next_watch_retry_ = now + std::min<Clock::duration>(period, kWatchRetryLongest);

@@ -90,6 +90,8 @@ void write_node_extras(Json& document, const std::vector<NodeType>& types, const
   }
   // Joints whose properties were not in node extras: written on the joint's frame node, where
   // they are read again (joint properties make a node a pivot, and this one is already the pivot).
+  std::map<int, int> frames_shared;
+  for (const Joint& joint : robot.joints) ++frames_shared[joint.frame_node];
   for (const Joint& joint : robot.joints) {
     if (joint.source_node >= 0 && !joint.source_is_entry) {
       // Kept as the author typed them. Which axes an rdtf_axis is in depends on the generator,
@@ -108,15 +110,18 @@ void write_node_extras(Json& document, const std::vector<NodeType>& types, const
       for (const char* key : kJointExtrasKeys) stale.erase(key);
       stale.erase("rdtf_axes");
     }
-    Json* extras = extras_object(nodes[joint.frame_node]);
+    // On the frame node, unless other joints share it (a grouping joint node with a transform of
+    // its own): joint keys there would make it one moving part when read again. The child link
+    // node is read as a source too.
+    const int target = frames_shared[joint.frame_node] > 1 ? robot.links[joint.child_link].node : joint.frame_node;
+    Json* extras = extras_object(nodes[target]);
     if (extras == nullptr) continue;
     bool has_joint_keys = false;
     for (const char* key : kJointExtrasKeys) has_joint_keys |= extras->contains(key);
     if (has_joint_keys) continue;  // They agree with extras.RDTF: kept as they are.
     // The axis is in the child link frame (the frame node's, scale removed); as a node-extras
     // vector it is read in the node's frame with its scale: R_FJ undoes that.
-    const Eigen::Matrix3d R_FJ = world[joint.frame_node].linear().inverse() *
-                                 robot.links[joint.child_link].X_SL.linear();
+    const Eigen::Matrix3d R_FJ = world[target].linear().inverse() * robot.links[joint.child_link].X_SL.linear();
     joint_to_extras(joint, R_FJ, *extras);
   }
   // Inertials and densities, so that a tool that keeps node extras only (Blender's importer drops
@@ -162,9 +167,19 @@ bool write_rdtf_extras(Json& document, const std::vector<NodeType>& types, const
       }
     }
   }
+  // A joint node shared by several joints (the paper's node grouping a link's child links) gets
+  // no "joint" in its entry: one entry cannot hold them all, and a joint node with properties is
+  // one moving part when read again (docs/format.md, "Links and joints"). Their properties are in
+  // node extras (write_node_extras).
   std::map<int, const Joint*> joint_of_node;
+  std::map<int, int> joints_on_node;
   for (const Joint& joint : robot.joints) {
-    if (joint.node >= 0) joint_of_node[joint.node] = &joint;
+    if (joint.node < 0) continue;
+    joint_of_node[joint.node] = &joint;
+    ++joints_on_node[joint.node];
+  }
+  for (const auto& [node, count] : joints_on_node) {
+    if (count > 1) joint_of_node.erase(node);
   }
   std::map<int, const Link*> link_of_inertial;
   for (const Link& link : robot.links) {

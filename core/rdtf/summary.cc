@@ -6,6 +6,7 @@
 
 #include "rdtf/rdtf_extras.h"
 #include "rdtf/diagnostics_json.h"
+#include "rdtf/utf8.h"
 
 namespace rdtf {
 namespace {
@@ -93,11 +94,13 @@ Json robot_summary(const Robot& robot, const Json& document, const Diagnostics& 
 
 std::string robot_table(const Robot& robot, const Diagnostics& diag) {
   std::ostringstream out;
-  out << "robot '" << robot.name << "': " << robot.links.size() << " links, " << robot.joints.size()
+  // Names are the input's to choose: escaped, so that none can forge a line or drive the terminal.
+  const auto shown = [](const std::string& name) { return escape_for_terminal(name); };
+  out << "robot '" << shown(robot.name) << "': " << robot.links.size() << " links, " << robot.joints.size()
       << " joints\n\nLINKS (inertial in the link frame)\n";
   for (const Link& link : robot.links) {
     const auto& I = link.inertial.inertia;
-    out << "  " << link.name << "  (node " << link.node << ")"
+    out << "  " << shown(link.name) << "  (node " << link.node << ")"
         << (link.parent_joint < 0 ? "  root" : "") << "\n"
         << "    mass " << fixed(link.inertial.mass) << " kg   volume " << fixed(link.inertial.volume)
         << " m^3   " << (link.inertial_source == InertialSource::kAuthored ? "authored" : "computed")
@@ -108,8 +111,8 @@ std::string robot_table(const Robot& robot, const Diagnostics& diag) {
   }
   out << "\nJOINTS (origin and axis in the parent link frame / joint frame)\n";
   for (const Joint& joint : robot.joints) {
-    out << "  " << joint.name << "  " << to_string(joint.kind) << "  "
-        << robot.links[joint.parent_link].name << " -> " << robot.links[joint.child_link].name
+    out << "  " << shown(joint.name) << "  " << to_string(joint.kind) << "  "
+        << shown(robot.links[joint.parent_link].name) << " -> " << shown(robot.links[joint.child_link].name)
         << "\n    origin " << vector_text(joint.X_PJ.translation()) << " m   axis "
         << vector_text(joint.axis);
     if (joint.limits && joint.limits->position) {
@@ -125,7 +128,7 @@ std::string robot_table(const Robot& robot, const Diagnostics& diag) {
       << " m^3   centre of mass (scene) " << vector_text(totals.center_of_mass_scene) << " m\n";
   if (!diag.all().empty()) {
     out << "\nDIAGNOSTICS\n";
-    for (const Diagnostic& d : diag.all()) out << "  " << format(d) << "\n";
+    for (const Diagnostic& d : diag.all()) out << "  " << shown(format(d)) << "\n";
   }
   return out.str();
 }

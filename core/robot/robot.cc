@@ -347,12 +347,31 @@ Robot build_robot(const Json& document, const std::vector<NodeType>& types, std:
     return (entry != nullptr && entry->contains("joint") && (*entry)["joint"].is_object()) ||
            has_joint_keys(node_extras(document, node));
   };
+  // Whether a link node has geometry: a mesh of its own or below it before the next link or joint
+  // (a marker empty beside the part under a joint empty is a link too, and carries nothing).
+  const auto has_geometry = [&](std::size_t link) {
+    std::vector<std::size_t> stack{link};
+    while (!stack.empty()) {
+      const std::size_t at = stack.back();
+      stack.pop_back();
+      if (document["nodes"][at].contains("mesh")) return true;
+      for (const Json& child : document["nodes"][at].value("children", Json::array())) {
+        const auto c = child.get<std::size_t>();
+        if (types[c] != NodeType::kLink && types[c] != NodeType::kJoint) stack.push_back(c);
+      }
+    }
+    return false;
+  };
   std::vector<int> carried_link(types.size(), -1);
   for (std::size_t node = 0; node < types.size(); ++node) {
     if (types[node] != NodeType::kJoint || !carries_joint(node)) continue;
+    // The first link child with geometry, else the first link child.
     for (const Json& child : document["nodes"][node].value("children", Json::array())) {
-      if (types[child.get<std::size_t>()] == NodeType::kLink) {
-        carried_link[node] = child.get<int>();
+      const auto c = child.get<std::size_t>();
+      if (types[c] != NodeType::kLink) continue;
+      if (carried_link[node] < 0) carried_link[node] = static_cast<int>(c);
+      if (has_geometry(c)) {
+        carried_link[node] = static_cast<int>(c);
         break;
       }
     }
@@ -404,8 +423,8 @@ Robot build_robot(const Json& document, const std::vector<NodeType>& types, std:
       if (joint_nodes.empty()) {
         diag.info(codes::JOINT_MOVES_SEVERAL_LINKS, json_pointer("/nodes", joint_node),
                   "joint " + node_label(document, joint_node) + " moves '" + node_name(document, up) + "' and '" +
-                      child.name + "' as one part: '" + child.name + "' is fixed to '" + node_name(document, up) +
-                      "'");
+                      child.name + "' as one part: '" + child.name + "' hangs from '" + node_name(document, up) +
+                      "' (by a fixed joint, unless it has joint properties of its own)");
       }
     }
     if (up < 0) {
@@ -422,10 +441,15 @@ Robot build_robot(const Json& document, const std::vector<NodeType>& types, std:
     if (joint_nodes.size() > 1) {
       // Two joint nodes with properties and no link between them are two degrees of freedom the
       // model cannot have: only the nearest the child's are read (an empty stacked on an empty).
-      std::vector<int> with_properties;
+      // Counted by source: rdtf's output holds a joint's properties in its joint node's entry and,
+      // for Blender, on another node's extras; that is one joint told twice, not two.
+      std::vector<int> with_properties, with_entries;
       for (int node : joint_nodes) {
-        if (carries_joint(static_cast<std::size_t>(node))) with_properties.push_back(node);
+        const Json* entry = entries[static_cast<std::size_t>(node)];
+        if (has_joint_keys(node_extras(document, static_cast<std::size_t>(node)))) with_properties.push_back(node);
+        if (entry != nullptr && entry->contains("joint") && (*entry)["joint"].is_object()) with_entries.push_back(node);
       }
+      if (with_properties.size() < 2) with_properties = with_entries;
       if (with_properties.size() > 1) {
         std::string ignored;
         for (std::size_t i = 1; i < with_properties.size(); ++i) {

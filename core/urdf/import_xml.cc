@@ -445,8 +445,9 @@ bool check_tree(XmlRobot& robot, Diagnostics& diag) {
 // TinyXML parses an element's children by recursion, one stack frame per level: 50,000 nested
 // elements in a 350 KB file overflow the stack. No URDF nests deeper than a dozen levels (a
 // <gazebo> block of SDF a few more), so deeper text is refused before it is parsed. Returns the
-// line of the first element past `limit`, or 0. Comments, CDATA, processing instructions and
-// declarations are skipped; quoted attribute values may hold '>'.
+// line of the first element past `limit`, or 0. Comments and CDATA are skipped, processing
+// instructions and declarations up to their first '>' (as TinyXML 2.6 reads them); quoted
+// attribute values may hold '>'.
 int line_past_depth(const std::string& text, int limit) {
   int depth = 0;
   int line = 1;
@@ -469,14 +470,10 @@ int line_past_depth(const std::string& text, int limit) {
       i = skip_to(i, i, "-->");
     } else if (text.compare(i, 9, "<![CDATA[") == 0) {
       i = skip_to(i, i, "]]>");
-    } else if (text.compare(i, 2, "<?") == 0) {
-      i = skip_to(i, i, "?>");
-    } else if (text.compare(i, 2, "<!") == 0) {
-      // A declaration; a DOCTYPE's internal subset [...] may hold '>'.
-      const std::size_t bracket = text.find_first_of("[>", i);
-      const bool subset = bracket != std::string::npos && text[bracket] == '[';
-      i = skip_to(i, subset ? bracket : i, subset ? "]" : ">");
-      if (subset) i = skip_to(i, i, ">");
+    } else if (text.compare(i, 2, "<?") == 0 || text.compare(i, 2, "<!") == 0) {
+      // A declaration or processing instruction ends at its first '>', as TinyXML ends it: what
+      // follows is parsed as elements (a DOCTYPE's internal subset included), so it is counted.
+      i = skip_to(i, i, ">");
     } else if (text.compare(i, 2, "</") == 0) {
       --depth;
       i = skip_to(i, i, ">");

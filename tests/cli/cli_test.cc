@@ -71,6 +71,11 @@ TEST(Cli, NamesInDiagnosticsAreEscaped) {
   EXPECT_NE(run.err.find("el\\nbow\\x1b[2J"), std::string::npos) << run.err;
   EXPECT_EQ(run.err.find('\x1b'), std::string::npos) << run.err;
   EXPECT_EQ(run.err.find("el\nbow"), std::string::npos) << run.err;
+  // The table of rdtf inspect too.
+  const auto table = testing::run_command(cli() + " inspect '" + (folder / "arm3.gltf").string() + "'");
+  EXPECT_EQ(table.exit_code, 0) << table.err;
+  EXPECT_NE(table.out.find("el\\nbow\\x1b[2J  revolute"), std::string::npos) << table.out;
+  EXPECT_EQ(table.out.find('\x1b'), std::string::npos) << table.out;
 }
 
 TEST(Cli, InspectJsonIsMachineReadable) {

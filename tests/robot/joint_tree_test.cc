@@ -127,7 +127,7 @@ TEST(JointTree, TwoPartsUnderOneJointEmptyMoveTogether) {
   ASSERT_EQ(info.size(), 1u);
   EXPECT_EQ(info[0].severity, Severity::kInfo);
   EXPECT_EQ(info[0].pointer, "/nodes/1");
-  EXPECT_NE(info[0].message.find("'jaw_b' is fixed to 'jaw_a'"), std::string::npos) << info[0].message;
+  EXPECT_NE(info[0].message.find("'jaw_b' hangs from 'jaw_a'"), std::string::npos) << info[0].message;
   expect_same_tree_again(c);
 }
 
@@ -161,6 +161,46 @@ TEST(JointTree, AJointNodeWithoutPropertiesGroupsIndependentLinks) {
   EXPECT_EQ(tree(c.robot), (std::vector<std::string>{"left <- base by base_joint (revolute)",
                                                       "right <- base by base_joint (revolute)"}));
   EXPECT_TRUE(with_code(c.diag, codes::JOINT_MOVES_SEVERAL_LINKS).empty());
+  expect_same_tree_again(c);
+  // With a transform of its own (the joints' frame) and links without properties (fixed joints,
+  // whose keys rdtf writes in the output): the same again.
+  json grouped = nodes;
+  grouped[1]["translation"] = {0, 0.3, 0};
+  grouped[2].erase("extras");
+  grouped[3].erase("extras");
+  const Converted g = convert_doc(with_nodes(grouped, {0}));
+  EXPECT_EQ(tree(g.robot), (std::vector<std::string>{"left <- base by base_joint (fixed)",
+                                                      "right <- base by base_joint (fixed)"}));
+  expect_same_tree_again(g);
+}
+
+// A marker empty beside the part under a joint empty is a link (it has a mesh-bearing sibling)
+// but carries nothing: the part is what the joint moves.
+TEST(JointTree, TheJointMovesThePartNotAMarkerBesideIt) {
+  const json nodes = {
+      {{"name", "base"}, {"mesh", 0}, {"children", {1}}},
+      {{"name", "elbow"}, {"translation", {0, 0.3, 0}}, {"children", {2, 3}}, {"extras", revolute("z")}},
+      {{"name", "a_marker"}, {"translation", {0, 0.1, 0}}},
+      {{"name", "forearm"}, {"mesh", 0}, {"translation", {0, 0.2, 0}}}};
+  const Converted c = convert_doc(with_nodes(nodes, {0}));
+  EXPECT_EQ(tree(c.robot),
+            (std::vector<std::string>{"forearm <- base by elbow (revolute)", "a_marker <- forearm by forearm_a_marker_joint (fixed)"}));
+  expect_same_tree_again(c);
+}
+
+// rdtf's output of a joint empty with properties above a pivot without (its own transform) holds
+// the joint in the pivot's entry and the author's keys on the empty: one joint, no warning.
+TEST(JointTree, AJointToldTwiceInTheOutputIsNoLostDegreeOfFreedom) {
+  const json nodes = {
+      {{"name", "base"}, {"mesh", 0}, {"children", {1}}},
+      {{"name", "yaw"}, {"translation", {0, 0.3, 0}}, {"children", {2}}, {"extras", revolute("z")}},
+      {{"name", "offset"}, {"translation", {0, 0.1, 0}}, {"children", {3}}, {"extras", {{"rdtf_type", "joint"}}}},
+      {{"name", "head"}, {"mesh", 0}}};
+  const Converted c = convert_doc(with_nodes(nodes, {0}));
+  EXPECT_EQ(tree(c.robot), (std::vector<std::string>{"head <- base by offset (revolute)"}));
+  const Converted again = convert_doc(c.document);
+  EXPECT_EQ(tree(again.robot), tree(c.robot));
+  for (const Diagnostic& d : with_code(again.diag, codes::JOINT_CHAIN)) EXPECT_EQ(d.severity, Severity::kInfo) << d.message;
 }
 
 }  // namespace

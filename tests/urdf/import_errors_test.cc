@@ -63,6 +63,12 @@ const BadUrdf kBadUrdfs[] = {
     // 50,000 levels overflowed TinyXML's stack (SIGSEGV); refused before it parses.
     {"nested_too_deep", nested(50000), "URDF_MALFORMED_XML", "", "line 258: elements nest more than 256 deep"},
     {"nested_one_too_deep", nested(256), "URDF_MALFORMED_XML", "", "line 258: elements nest more than 256 deep"},
+    // TinyXML ends a declaration or a processing instruction at its first '>' and parses what
+    // follows as elements: nesting hidden in a DOCTYPE's subset or after '<?pi >' is counted.
+    {"nested_after_a_doctype_subset", "<!DOCTYPE robot [\n" + nested(300) + "]>\n", "URDF_MALFORMED_XML", "",
+     "elements nest more than 256 deep"},
+    {"nested_after_a_processing_instruction", "<?pi >\n" + nested(300) + "?>\n", "URDF_MALFORMED_XML", "",
+     "elements nest more than 256 deep"},
     // Sizes whose volume overflows double failed inside the glTF the import builds.
     {"box_beyond_any_robot", link_urdf(visual("<box size=\"1e200 1e200 1e200\"/>")), "URDF_INVALID_NUMBER",
      "/robot/link[@name='a']/visual[1]/geometry/box/@size", "'1e200' is over 1e9 m"},

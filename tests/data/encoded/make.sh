@@ -10,21 +10,25 @@ root=$(cd "$here/../../.." && pwd)
 bin=${RDTF_ENCODERS_BIN:-$root/tools/encoders/node_modules/.bin}
 cd "$here"
 
-# The source: Blender's modelled_arm (tests/data/blender) with "rdtf_axes": "blender" beside each
-# rdtf_axis. Encoders replace asset.generator, which is how rdtf tells Blender's axes otherwise
-# (docs/format.md, Node extras); the robot is the same as modelled_arm's.
-python3 - "$root/tests/data/blender/modelled_arm.gltf" <<'PY'
+# A copy of a Blender fixture (tests/data/blender/NAME.gltf) as NAME_source.gltf with
+# "rdtf_axes": "blender" beside each rdtf_axis. Encoders replace asset.generator, which is how rdtf
+# tells Blender's axes otherwise (docs/format.md, Node extras); the robot is the fixture's.
+source_of() {
+  python3 - "$root/tests/data/blender/$1.gltf" "$2" <<'PY'
 import json, shutil, sys
-source = sys.argv[1]
+source, name = sys.argv[1], sys.argv[2]
 document = json.load(open(source))
 for node in document["nodes"]:
     extras = node.get("extras", {})
     if "rdtf_axis" in extras:
         extras["rdtf_axes"] = "blender"
-document["buffers"][0]["uri"] = "arm_source.bin"
-json.dump(document, open("arm_source.gltf", "w"), indent=1)
-shutil.copy(source.replace(".gltf", ".bin"), "arm_source.bin")
+document["buffers"][0]["uri"] = name + ".bin"
+json.dump(document, open(name + ".gltf", "w"), indent=1)
+shutil.copy(source.replace(".gltf", ".bin"), name + ".bin")
 PY
+}
+
+source_of modelled_arm arm_source
 
 # gltfpack, keeping named nodes and extras: KHR_mesh_quantization, each mesh moved into a new
 # child node that carries the dequantization transform.
@@ -37,18 +41,7 @@ PY
 draco_transcoder -i arm_source.gltf -o arm_draco_transcoder.gltf
 # arm3: parts as named leaf mesh nodes under empties (Blender's "empty holding meshes" link).
 # gltfpack moves each mesh into a carrier under its named node, which must stay a mesh node.
-python3 - "$root/tests/data/blender/arm3.gltf" <<'PY'
-import json, shutil, sys
-source = sys.argv[1]
-document = json.load(open(source))
-for node in document["nodes"]:
-    extras = node.get("extras", {})
-    if "rdtf_axis" in extras:
-        extras["rdtf_axes"] = "blender"
-document["buffers"][0]["uri"] = "arm3_source.bin"
-json.dump(document, open("arm3_source.gltf", "w"), indent=1)
-shutil.copy(source.replace(".gltf", ".bin"), "arm3_source.bin")
-PY
+source_of arm3 arm3_source
 "$bin/gltfpack" -i arm3_source.gltf -o arm3_gltfpack.glb -kn -ke
 
 # rdtf's own output of Blender's modelled_arm (as exported: no rdtf_axes), through gltfpack,

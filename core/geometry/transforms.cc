@@ -79,27 +79,8 @@ Eigen::Isometry3d rigid_part(const Eigen::Affine3d& X) {
   Eigen::Matrix3d U = svd.matrixU();
   const Eigen::Matrix3d V = svd.matrixV();
   // A proper rotation: if U V^T mirrors, flip the axis of the smallest singular value.
-  const bool mirrors = (U * V.transpose()).determinant() < 0;
-  if (mirrors) U.col(2) = -U.col(2);
+  if ((U * V.transpose()).determinant() < 0) U.col(2) = -U.col(2);
   rigid.linear() = U * V.transpose();
-  if (mirrors) {
-    // When singular values coincide (a mirror with a uniform scale, as Blender writes a mirrored
-    // part) the axis of the smallest is any axis of their plane: the SVD's pick moves with the
-    // last bit of the input (a quaternion printed with fewer digits turned a frame by 0.5
-    // degrees). Flipping one of the frame's own axes, x, then y, then z, is as near when they
-    // coincide, and a choice that stays put; the SVD's flip is kept when it is nearer.
-    const double nearest = (A - rigid.linear()).norm();
-    for (int axis = 0; axis < 3; ++axis) {
-      Eigen::Matrix3d flipped = A;
-      flipped.col(axis) = -flipped.col(axis);
-      Eigen::JacobiSVD<Eigen::Matrix3d> polar(flipped, Eigen::ComputeFullU | Eigen::ComputeFullV);
-      const Eigen::Matrix3d R = polar.matrixU() * polar.matrixV().transpose();
-      if (R.determinant() > 0 && (A - R).norm() <= nearest * (1 + 1e-6)) {
-        rigid.linear() = R;
-        break;
-      }
-    }
-  }
   // Pure rotations (orthonormal A) come back exactly as given.
   if ((A.transpose() * A - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() < 1e-12 &&
       A.determinant() > 0) {

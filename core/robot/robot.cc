@@ -49,7 +49,6 @@ std::optional<double> read_amount(const JointSource& source, const std::string& 
   return value;
 }
 
-
 const Json* node_extras(const Json& document, std::size_t node) {
   const Json& n = document["nodes"][node];
   if (!n.contains("extras") || !n["extras"].is_object()) return nullptr;
@@ -342,10 +341,13 @@ Robot build_robot(const Json& document, const std::vector<NodeType>& types, std:
   // one grip empty. A joint node without properties (the paper's, which groups a link's child
   // links in one node, or rdtf's inserted ones) moves nothing: each link below it keeps its own
   // joint to the link above.
-  const auto carries_joint = [&](std::size_t node) {
+  // A node's extras.RDTF joint object, if it has one.
+  const auto entry_joint = [&](std::size_t node) -> const Json* {
     const Json* entry = entries[node];
-    return (entry != nullptr && entry->contains("joint") && (*entry)["joint"].is_object()) ||
-           has_joint_keys(node_extras(document, node));
+    return entry != nullptr && entry->contains("joint") && (*entry)["joint"].is_object() ? &(*entry)["joint"] : nullptr;
+  };
+  const auto carries_joint = [&](std::size_t node) {
+    return entry_joint(node) != nullptr || has_joint_keys(node_extras(document, node));
   };
   // Whether a link node has geometry: a mesh of its own or below it before the next link or joint
   // (a marker empty beside the part under a joint empty is a link too, and carries nothing).
@@ -445,9 +447,8 @@ Robot build_robot(const Json& document, const std::vector<NodeType>& types, std:
       // for Blender, on another node's extras; that is one joint told twice, not two.
       std::vector<int> with_properties, with_entries;
       for (int node : joint_nodes) {
-        const Json* entry = entries[static_cast<std::size_t>(node)];
         if (has_joint_keys(node_extras(document, static_cast<std::size_t>(node)))) with_properties.push_back(node);
-        if (entry != nullptr && entry->contains("joint") && (*entry)["joint"].is_object()) with_entries.push_back(node);
+        if (entry_joint(static_cast<std::size_t>(node)) != nullptr) with_entries.push_back(node);
       }
       if (with_properties.size() < 2) with_properties = with_entries;
       if (with_properties.size() > 1) {
@@ -485,9 +486,8 @@ Robot build_robot(const Json& document, const std::vector<NodeType>& types, std:
     // of the joint nodes (nearest the child first), then of the child link node.
     std::optional<JointSource> source;
     for (int node : joint_nodes) {
-      const Json* entry = entries[node];
-      if (entry != nullptr && entry->contains("joint") && (*entry)["joint"].is_object()) {
-        source = JointSource{&(*entry)["joint"], entry_pointers[node] + "/joint",
+      if (const Json* joint_json = entry_joint(static_cast<std::size_t>(node))) {
+        source = JointSource{joint_json, entry_pointers[node] + "/joint",
                              "entry for " + node_label(document, node), true, node, false};
         break;
       }

@@ -59,9 +59,9 @@ bool mass_checks(const MassProperties& in) {
 }
 
 // Errors for what ODE cannot take: the model is refused when there is one. Links welded to the
-// world never move: their mass is not used. In a moving group every link with mass must be one
-// ODE accepts, except a point mass (zero inertia) welded to other links, which only adds to the
-// group's inertia; and the group's combined mass must be one too.
+// world never move: their mass is not used. A moving group is one ODE body: its top link (the one
+// its joint moves) must have a mass ODE accepts, unless a point mass, and so must the combined
+// mass; the links welded below the top only add to it.
 void check_mappable(const Robot& robot, const WeldGroups& welds, Diagnostics& diag) {
   for (std::size_t l = 0; l < robot.links.size(); ++l) {
     const Link& link = robot.links[l];
@@ -78,8 +78,10 @@ void check_mappable(const Robot& robot, const WeldGroups& welds, Diagnostics& di
       diag.error(codes::ODE_MASS_CHECK_FAILED, where, name + "mass, inertia or centre of mass is not finite");
       continue;
     }
+    // Welded to a link above it, it is part of that link's body, whose combined mass is checked
+    // below; the top link's own must be a mass ODE accepts, except a point mass (zero inertia).
     const bool point_mass = inertial.mass > 0 && inertial.inertia.isZero(0) && group.links.size() > 1;
-    if (!point_mass && !mass_checks(inertial)) {
+    if (static_cast<int>(l) == group.top && !point_mass && !mass_checks(inertial)) {
       diag.error(codes::ODE_MASS_CHECK_FAILED, where,
                  name + "dMassCheck refuses " + mass_text(inertial) +
                      " (mass must be positive, inertia positive definite)");

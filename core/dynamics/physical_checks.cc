@@ -128,6 +128,47 @@ double polar_lower_bound(const Link& link) {
   return bound * (link.inertial.mass / mass);  // rdtf_mass on a link rescales its inertia so
 }
 
+// Symmetry, positive definiteness and the triangle inequality of I; each failure goes to
+// `report(code, message)`. False when the moments could not be judged further.
+template <typename Report>
+bool principal_moments_check(const Eigen::Matrix3d& I, const std::string& name, const PhysicalCheckOptions& options,
+                             const Report& report) {
+  const double largest = I.cwiseAbs().maxCoeff();
+  const double asymmetry = (I - I.transpose()).cwiseAbs().maxCoeff();
+  if (asymmetry > options.symmetry_tolerance * largest) {
+    report(codes::LINK_INERTIA_NOT_SYMMETRIC, name + "inertia is not symmetric: |I - I^T| reaches " +
+                                                  number(asymmetry) + " kg m^2 (largest entry " + number(largest) + ")");
+    return false;
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(0.5 * (I + I.transpose()), Eigen::EigenvaluesOnly);
+  const Eigen::Vector3d moments = solver.eigenvalues();  // ascending
+  const double a = moments[0], b = moments[1], c = moments[2];
+  const std::string principal = "principal moments " + vector_text(moments) + " kg m^2";
+  if (!(a > 0)) {
+    report(codes::LINK_INERTIA_NOT_POSITIVE_DEFINITE, name + "inertia is not positive definite: " + principal);
+    return false;
+  }
+  if (a + b < c - options.triangle_tolerance * (a + b + c)) {
+    report(codes::LINK_INERTIA_TRIANGLE_INEQUALITY, name + "inertia breaks the triangle inequality A + B >= C of a real body: " +
+                                                        principal + ", A + B = " + number(a + b) + " < C = " + number(c));
+  }
+  return true;
+}
+
+// The body a moving weld group makes: what the simulation moves, so what must be a real body.
+void check_combined_inertia(const Robot& robot, const WeldGroup& group, const PhysicalCheckOptions& options,
+                            Diagnostics& diag) {
+  if (group.links.size() < 2 || group.welded_to_world || group.bounded || !(group.merged.mass > 0) ||
+      !group.merged.inertia.allFinite()) {
+    return;
+  }
+  const Link& top = robot.links[group.top];
+  principal_moments_check(group.merged.inertia, body_text(robot, group) + " (welded by fixed joints): combined ",
+                          options, [&](const char* code, const std::string& message) {
+                            diag.error(code, where(top), message);
+                          });
+}
+
 void check_inertia(const Robot& robot, const Link& link, const WeldGroup& group, const PhysicalCheckOptions& options,
                    Diagnostics& diag) {
   const Eigen::Matrix3d& I = link.inertial.inertia;
@@ -144,29 +185,25 @@ void check_inertia(const Robot& robot, const Link& link, const WeldGroup& group,
                   (group.welded_to_world ? std::string("the world") : body_text(robot, group)));
     return;
   }
-  const double largest = I.cwiseAbs().maxCoeff();
-  const double asymmetry = (I - I.transpose()).cwiseAbs().maxCoeff();
-  if (asymmetry > options.symmetry_tolerance * largest) {
-    diag.error(codes::LINK_INERTIA_NOT_SYMMETRIC, where(link),
-               name + "inertia is not symmetric: |I - I^T| reaches " + number(asymmetry) +
-                   " kg m^2 (largest entry " + number(largest) + ")");
-    return;
-  }
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(0.5 * (I + I.transpose()),
-                                                              Eigen::EigenvaluesOnly);
-  const Eigen::Vector3d moments = solver.eigenvalues();  // ascending
-  const double a = moments[0], b = moments[1], c = moments[2];
-  const std::string principal = "principal moments " + vector_text(moments) + " kg m^2";
-  if (!(a > 0)) {
-    diag.error(codes::LINK_INERTIA_NOT_POSITIVE_DEFINITE, where(link),
-               name + "inertia is not positive definite: " + principal);
-    return;
-  }
-  if (a + b < c - options.triangle_tolerance * (a + b + c)) {
-    diag.error(codes::LINK_INERTIA_TRIANGLE_INEQUALITY, where(link),
-               name + "inertia breaks the triangle inequality A + B >= C of a real body: " +
-                   principal + ", A + B = " + number(a + b) + " < C = " + number(c));
-  }
+  // Welded (fixed joints) to a link above it or to the world, a link is no body of its own: the
+  // simulation moves the body of the link it is welded to (check_combined_inertia), as MuJoCo's
+  // fusestatic and Gazebo do, or nothing. A tensor no real part has (a published 1 mg antenna's, a
+  // sensor frame's rounding noise) is then a warning; a tool that keeps every link a body (Drake)
+  // refuses it. The link a joint moves is the body's own, and MuJoCo checks it alone: an error.
+  const bool welded = group.welded_to_world || (group.links.size() > 1 && link.node != robot.links[group.top].node);
+  const auto report = [&](const char* code, const std::string& message) {
+    if (!welded) {
+      diag.error(code, where(link), message);
+      return;
+    }
+    diag.warning(code, where(link),
+                 message + "; it is welded (fixed joints) into " +
+                     (group.welded_to_world ? std::string("the world, and never moves")
+                                            : "the body of " + body_text(robot, group) +
+                                                  ", whose combined inertia is what moves") +
+                     " (a simulator that keeps each link a body refuses it)");
+  };
+  if (!principal_moments_check(I, name, options, report)) return;
   if (link.inertial_source == InertialSource::kComputed) {
     const double polar = 0.5 * I.trace();
     const double bound = polar_lower_bound(link);
@@ -291,6 +328,7 @@ void check_physics(const Robot& robot, const PhysicalCheckOptions& options, cons
     const std::optional<Eigen::AlignedBox3d> none;
     check_center_of_mass(link, bounds && l < bounds->size() ? (*bounds)[l] : none, options, diag);
   }
+  for (const WeldGroup& group : welds.groups) check_combined_inertia(robot, group, options, diag);
   for (const Joint& joint : robot.joints) check_joint(robot, joint, welds, options, diag);
 }
 

@@ -115,13 +115,78 @@ TEST(MergedBodies, SensorOnAFixedJointMovesAsMergedByHand) {
   EXPECT_EQ(robot.links[1].inertial.mass, arm_inertial().mass);
 }
 
-// The per-link checks still run on a link that is welded into another's body.
+// The per-link checks still run on a link welded into another's body, as warnings: the body
+// that moves is the combined one, and that must be a real body.
 TEST(MergedBodies, PerLinkChecksSeeEveryWeldedLink) {
   Robot robot = chain_with_sensor();
   robot.links[2].inertial.inertia = Eigen::Vector3d(1e-6, 1e-6, 1e-5).asDiagonal();
   Diagnostics diag;
   check_physics(robot, {}, nullptr, diag);
-  dynamics_test::expect_one_error(diag, "LINK_INERTIA_TRIANGLE_INEQUALITY", robot.links[2].node, "sensor");
+  EXPECT_FALSE(diag.has_errors()) << dynamics_test::all_text(diag);
+  const std::vector<Diagnostic> found = dynamics_test::with_code(diag, "LINK_INERTIA_TRIANGLE_INEQUALITY");
+  ASSERT_EQ(found.size(), 1u) << dynamics_test::all_text(diag);
+  EXPECT_EQ(found[0].severity, Severity::kWarning);
+  EXPECT_EQ(found[0].pointer, "/nodes/" + std::to_string(robot.links[2].node));
+  EXPECT_NE(found[0].message.find("'sensor'"), std::string::npos) << found[0].message;
+  EXPECT_NE(found[0].message.find("welded (fixed joints) into the body of link 'arm'"), std::string::npos)
+      << found[0].message;
+  // The same model validates and steps: ODE moves the arm's combined body.
+  const ValidationReport report = validate_dynamics(robot, ValidationOptions{});
+  EXPECT_TRUE(report.passed) << dynamics_test::all_text(report.diagnostics);
+}
+
+// A published antenna of 1 mg whose tensor no body has, welded to a root the world holds: it
+// never moves, so it is a warning and the robot passes (TIAGo's base_antenna_left_link).
+TEST(MergedBodies, AnImpossiblePartWeldedToTheWorldIsAWarning) {
+  RobotBuilder b;
+  const int base = b.root("base", box_inertial(28.0, {0.5, 0.5, 0.3}));
+  MassProperties antenna;
+  antenna.mass = 1e-6;
+  antenna.inertia << 2.8e-8, 6.3e-8, 0, 6.3e-8, 2.8e-8, 0, 0, 0, 9.1e-8;  // |ixy| > sqrt(ixx iyy)
+  b.child(base, "antenna_joint", JointKind::kFixed, translation(0.1, 0.2, 0.3), Eigen::Vector3d::UnitX(), "antenna",
+          antenna);
+  b.child(base, "hinge", JointKind::kRevolute, translation(0, 0, 0.2), Eigen::Vector3d::UnitZ(), "arm", arm_inertial());
+  b.joint(1).limits = JointLimits{-2.5, 2.5, 0, 0};
+  const Robot robot = b.robot();
+  const ValidationReport report = validate_dynamics(robot, ValidationOptions{});
+  EXPECT_TRUE(report.passed) << dynamics_test::all_text(report.diagnostics);
+  const std::vector<Diagnostic> found = dynamics_test::with_code(report.diagnostics, "LINK_INERTIA_NOT_POSITIVE_DEFINITE");
+  ASSERT_EQ(found.size(), 1u) << dynamics_test::all_text(report.diagnostics);
+  EXPECT_EQ(found[0].severity, Severity::kWarning);
+  EXPECT_NE(found[0].message.find("'antenna'"), std::string::npos) << found[0].message;
+  EXPECT_NE(found[0].message.find("into the world, and never moves"), std::string::npos) << found[0].message;
+}
+
+// A welded part whose tensor breaks the combined body: that body, named by its top link, is the
+// error, and ODE is never handed it.
+TEST(MergedBodies, AWeldedPartThatBreaksTheCombinedBodyIsAnError) {
+  Robot robot = chain_with_sensor();
+  robot.links[2].inertial.inertia = Eigen::Vector3d(-1.0, 1.0, 1.0).asDiagonal();
+  Diagnostics diag;
+  check_physics(robot, {}, nullptr, diag);
+  const std::vector<Diagnostic> found = dynamics_test::with_code(diag, "LINK_INERTIA_NOT_POSITIVE_DEFINITE");
+  ASSERT_EQ(found.size(), 2u) << dynamics_test::all_text(diag);
+  // The part's own, a warning at the sensor; the combined body's, an error at the arm.
+  EXPECT_EQ(found[0].severity, Severity::kWarning);
+  EXPECT_EQ(found[0].pointer, "/nodes/" + std::to_string(robot.links[2].node));
+  EXPECT_EQ(found[1].severity, Severity::kError);
+  EXPECT_EQ(found[1].pointer, "/nodes/" + std::to_string(robot.links[1].node));
+  EXPECT_NE(found[1].message.find("link 'arm' and the 1 links fixed to it (welded by fixed joints): combined inertia"),
+            std::string::npos)
+      << found[1].message;
+  const ValidationReport report = validate_dynamics(robot, ValidationOptions{});
+  EXPECT_FALSE(report.passed);
+}
+
+// The link a joint moves is checked alone, welded children or not (MuJoCo does the same): a
+// bad tensor there is an error though the combined body would pass.
+TEST(MergedBodies, TheMovingLinkOfABodyIsCheckedAlone) {
+  Robot robot = chain_with_sensor();
+  robot.links[1].inertial.inertia = Eigen::Vector3d(1e-6, 1e-6, 1e-5).asDiagonal();
+  robot.links[2].inertial.inertia = Eigen::Vector3d(1e-3, 1e-3, 1e-3).asDiagonal();
+  Diagnostics diag;
+  check_physics(robot, {}, nullptr, diag);
+  dynamics_test::expect_one_error(diag, "LINK_INERTIA_TRIANGLE_INEQUALITY", robot.links[1].node, "arm");
 }
 
 // A quadruped-like trunk: 12 kg, with a 1 g IMU, camera optical frames of 1e-5 kg and zero inertia

@@ -117,6 +117,11 @@ double density_for(const Json& document, const std::vector<int>& parents, int no
   for (int up = node; up >= 0; up = parents[up]) {
     if (auto density = positive_extra(document, up, "rdtf_density", diag)) return *density;
     if (up == link_node) break;
+    // Past the joint node that carries the link (owning_link_nodes): the link's own, then no more.
+    if (parents[up] >= 0 && link_node >= 0 && parents[up] == parents[link_node]) {
+      if (auto density = positive_extra(document, link_node, "rdtf_density", diag)) return *density;
+      break;
+    }
   }
   return default_density;
 }
@@ -260,6 +265,7 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
   const auto world = node_world_transforms(document);
   std::vector<int> link_of_node(types.size(), -1);
   for (std::size_t l = 0; l < robot.links.size(); ++l) link_of_node[robot.links[l].node] = static_cast<int>(l);
+  const std::vector<int> owners = owning_link_nodes(document, types);
 
   std::map<std::size_t, MeshGeometry> cache;
   std::vector<std::vector<MassPiece>> pieces(robot.links.size());
@@ -275,8 +281,7 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
       continue;
     }
     if (types[node] != NodeType::kMesh || !document["nodes"][node].contains("mesh")) continue;
-    int owner = parents[node];
-    while (owner >= 0 && types[owner] != NodeType::kLink) owner = parents[owner];
+    const int owner = owners[node];
     // Named as the input names it: a mesh split off its link node by its link node.
     const std::size_t reported = node < carried_by.size() && carried_by[node] >= 0 ? static_cast<std::size_t>(carried_by[node]) : node;
     const std::string pointer = json_pointer("/nodes", reported);

@@ -33,36 +33,16 @@ const Json* physics_of(const Json& node) {
 
 std::string where(const Json& document, std::size_t node) { return node_label(document, node); }
 
-// The link whose body holds each node: the nearest link at or above it (-1: none).
+// The link whose body holds each node (-1: none): the link owning it (owning_link_nodes).
 std::vector<int> bodies(const Json& document, const std::vector<NodeType>& types, const Robot& robot) {
   const std::size_t count = document["nodes"].size();
   std::vector<int> link_of_node(count, -1);
   for (std::size_t l = 0; l < robot.links.size(); ++l) link_of_node[static_cast<std::size_t>(robot.links[l].node)] = static_cast<int>(l);
-  const auto parents = node_parents(document);
-  // Each node's answer is its own link or its parent's: walked up once to the first node already
-  // answered, then filled in on the way back, so a chain of n nodes costs n steps, not n^2.
-  constexpr int kUnknown = -2;
-  std::vector<int> body(count, kUnknown);
-  std::vector<std::size_t> path;
-  for (std::size_t n = 0; n < count && n < types.size(); ++n) {
-    int answer = -1;
-    for (int at = static_cast<int>(n); at >= 0; at = parents[static_cast<std::size_t>(at)]) {
-      const auto a = static_cast<std::size_t>(at);
-      if (body[a] != kUnknown) {
-        answer = body[a];
-        break;
-      }
-      if (link_of_node[a] >= 0) {
-        answer = link_of_node[a];
-        body[a] = answer;
-        break;
-      }
-      path.push_back(a);
-    }
-    for (std::size_t a : path) body[a] = answer;
-    path.clear();
+  const std::vector<int> owners = owning_link_nodes(document, types);
+  std::vector<int> body(count, -1);
+  for (std::size_t n = 0; n < owners.size(); ++n) {
+    if (owners[n] >= 0) body[n] = link_of_node[static_cast<std::size_t>(owners[n])];
   }
-  for (int& b : body) b = b == kUnknown ? -1 : b;
   return body;
 }
 

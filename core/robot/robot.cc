@@ -280,6 +280,50 @@ std::optional<std::string> joint_properties_differ(const Joint& extras, const Jo
   return std::nullopt;
 }
 
+// A joint node with joint properties is one degree of freedom: whatever hangs from it moves as
+// one part. The link among its children (the first with geometry, else the first) is that part,
+// and what else hangs from the joint node hangs from that link: a part parented to a bone beside
+// the next bone, an elbow empty parented to the shoulder empty beside the upper arm, two jaws under
+// one grip empty. A joint node without properties (the paper's, which groups a link's child links
+// in one node, or rdtf's inserted ones) moves nothing: each link below it keeps its own joint to
+// the link above. The link node each joint node carries, -1 for none.
+std::vector<int> carried_links(const Json& document, const std::vector<NodeType>& types,
+                               const std::vector<const Json*>& entries) {
+  std::vector<int> carried(types.size(), -1);
+  if (!document.contains("nodes")) return carried;
+  // Whether a link node has geometry: a mesh of its own or below it before the next link or joint
+  // (a marker empty beside the part under a joint empty is a link too, and carries nothing).
+  const auto has_geometry = [&](std::size_t link) {
+    std::vector<std::size_t> stack{link};
+    while (!stack.empty()) {
+      const std::size_t at = stack.back();
+      stack.pop_back();
+      if (document["nodes"][at].contains("mesh")) return true;
+      for (const Json& child : document["nodes"][at].value("children", Json::array())) {
+        const auto c = child.get<std::size_t>();
+        if (types[c] != NodeType::kLink && types[c] != NodeType::kJoint) stack.push_back(c);
+      }
+    }
+    return false;
+  };
+  for (std::size_t node = 0; node < types.size(); ++node) {
+    if (types[node] != NodeType::kJoint) continue;
+    const Json* entry = entries[node];
+    const bool has_entry_joint = entry != nullptr && entry->contains("joint") && (*entry)["joint"].is_object();
+    if (!has_entry_joint && !has_joint_keys(node_extras(document, node))) continue;
+    for (const Json& child : document["nodes"][node].value("children", Json::array())) {
+      const auto c = child.get<std::size_t>();
+      if (types[c] != NodeType::kLink) continue;
+      if (carried[node] < 0) carried[node] = static_cast<int>(c);
+      if (has_geometry(c)) {
+        carried[node] = static_cast<int>(c);
+        break;
+      }
+    }
+  }
+  return carried;
+}
+
 }  // namespace
 
 bool written_by_blender(const Json& document) {
@@ -334,50 +378,13 @@ Robot build_robot(const Json& document, const std::vector<NodeType>& types, std:
   std::vector<std::string> entry_pointers;
   const auto entries = rdtf_entries(document, entry_pointers);
 
-  // A joint node with joint properties is one degree of freedom: whatever hangs from it moves as
-  // one part. The link among its children (the first, if several) is that part, and what else
-  // hangs from the joint node hangs from that link: a part parented to a bone beside the next
-  // bone, an elbow empty parented to the shoulder empty beside the upper arm, two jaws under
-  // one grip empty. A joint node without properties (the paper's, which groups a link's child
-  // links in one node, or rdtf's inserted ones) moves nothing: each link below it keeps its own
-  // joint to the link above.
   // A node's extras.RDTF joint object, if it has one.
   const auto entry_joint = [&](std::size_t node) -> const Json* {
     const Json* entry = entries[node];
     return entry != nullptr && entry->contains("joint") && (*entry)["joint"].is_object() ? &(*entry)["joint"] : nullptr;
   };
-  const auto carries_joint = [&](std::size_t node) {
-    return entry_joint(node) != nullptr || has_joint_keys(node_extras(document, node));
-  };
-  // Whether a link node has geometry: a mesh of its own or below it before the next link or joint
-  // (a marker empty beside the part under a joint empty is a link too, and carries nothing).
-  const auto has_geometry = [&](std::size_t link) {
-    std::vector<std::size_t> stack{link};
-    while (!stack.empty()) {
-      const std::size_t at = stack.back();
-      stack.pop_back();
-      if (document["nodes"][at].contains("mesh")) return true;
-      for (const Json& child : document["nodes"][at].value("children", Json::array())) {
-        const auto c = child.get<std::size_t>();
-        if (types[c] != NodeType::kLink && types[c] != NodeType::kJoint) stack.push_back(c);
-      }
-    }
-    return false;
-  };
-  std::vector<int> carried_link(types.size(), -1);
-  for (std::size_t node = 0; node < types.size(); ++node) {
-    if (types[node] != NodeType::kJoint || !carries_joint(node)) continue;
-    // The first link child with geometry, else the first link child.
-    for (const Json& child : document["nodes"][node].value("children", Json::array())) {
-      const auto c = child.get<std::size_t>();
-      if (types[c] != NodeType::kLink) continue;
-      if (carried_link[node] < 0) carried_link[node] = static_cast<int>(c);
-      if (has_geometry(c)) {
-        carried_link[node] = static_cast<int>(c);
-        break;
-      }
-    }
-  }
+  // What each joint node with joint properties moves (carried_links, above).
+  const std::vector<int> carried_link = carried_links(document, types, entries);
 
   // Links in pre-order of the scene, so parents come before children: a joint node's carried
   // link before its other children.
@@ -543,6 +550,48 @@ Robot build_robot(const Json& document, const std::vector<NodeType>& types, std:
                  "the scene has no link: nothing in it carries a mesh or children");
   }
   return robot;
+}
+
+std::vector<int> owning_link_nodes(const Json& document, const std::vector<NodeType>& types) {
+  const std::size_t count = document.contains("nodes") ? std::min(document["nodes"].size(), types.size()) : 0;
+  std::vector<int> owner(count, -1);
+  if (count == 0) return owner;
+  std::vector<std::string> pointers;
+  const std::vector<int> carried = carried_links(document, types, rdtf_entries(document, pointers));
+  const auto parents = node_parents(document);
+  // Walked up once to the first node already answered, then filled in on the way back, so a
+  // chain of n nodes costs n steps, not n^2.
+  constexpr int kUnknown = -2;
+  std::vector<int> answer(count, kUnknown);
+  std::vector<std::size_t> path;
+  for (std::size_t n = 0; n < count; ++n) {
+    int found = -1;
+    std::size_t below = n;
+    for (int at = static_cast<int>(n); at >= 0; at = parents[static_cast<std::size_t>(at)]) {
+      const auto a = static_cast<std::size_t>(at);
+      // A joint node that carries a link: what hangs from it beside that link is that link's
+      // (the joint node's own answer, remembered below, is the link above it).
+      if (a != n && carried[a] >= 0 && static_cast<std::size_t>(carried[a]) != below) {
+        found = carried[a];
+        break;
+      }
+      if (answer[a] != kUnknown) {
+        found = answer[a];
+        break;
+      }
+      if (types[a] == NodeType::kLink) {
+        found = at;
+        answer[a] = found;
+        break;
+      }
+      path.push_back(a);
+      below = a;
+    }
+    for (std::size_t a : path) answer[a] = found;
+    path.clear();
+  }
+  for (std::size_t n = 0; n < count; ++n) owner[n] = answer[n] == kUnknown ? -1 : answer[n];
+  return owner;
 }
 
 }  // namespace rdtf

@@ -188,6 +188,28 @@ TEST(JointTree, TheJointMovesThePartNotAMarkerBesideIt) {
   expect_same_tree_again(c);
 }
 
+// A mesh its author typed `mesh`, beside the part under a joint empty, is geometry of that part:
+// it moves with it, so its mass is the part's, not the base's (and its density the part's).
+TEST(JointTree, AMeshTypedMeshBesideThePartIsThePartsMass) {
+  const json nodes = {
+      {{"name", "base"}, {"mesh", 0}, {"children", {1}}},
+      {{"name", "elbow"}, {"translation", {0, 0.3, 0}}, {"children", {2, 3}}, {"extras", revolute("z")}},
+      {{"name", "forearm"}, {"mesh", 0}, {"translation", {0, 0.2, 0}}, {"extras", {{"rdtf_density", 500.0}}}},
+      {{"name", "cover"}, {"mesh", 0}, {"translation", {0, 0.4, 0}}, {"extras", {{"rdtf_type", "mesh"}}}}};
+  const Converted c = convert_doc(with_nodes(nodes, {0}));
+  ASSERT_EQ(tree(c.robot), (std::vector<std::string>{"forearm <- base by elbow (revolute)"}));
+  // The same box (float positions) each time: the base one at the default 1000 kg/m^3, the
+  // forearm two at its 500 kg/m^3. The forearm's frame is the elbow's (the pivot), its box 0.2 m
+  // and the cover's 0.4 m above it: their centre of mass 0.3 m above the pivot.
+  const Link& base = c.robot.links[0];
+  const Link& forearm = c.robot.links[1];
+  ASSERT_EQ(forearm.name, "forearm");
+  EXPECT_NEAR(forearm.inertial.mass, base.inertial.mass, 1e-12 * base.inertial.mass);
+  EXPECT_NEAR(forearm.inertial.center_of_mass.y() - 0.3, base.inertial.center_of_mass.y(), 1e-12);
+  EXPECT_EQ(forearm.meshes.size(), 2u);
+  expect_same_tree_again(c);
+}
+
 // rdtf's output of a joint empty with properties above a pivot without (its own transform) holds
 // the joint in the pivot's entry and the author's keys on the empty: one joint, no warning.
 TEST(JointTree, AJointToldTwiceInTheOutputIsNoLostDegreeOfFreedom) {

@@ -134,6 +134,11 @@ Eigen::Matrix3d blender_to_gltf_axes();
 Robot build_robot(const Json& document, const std::vector<NodeType>& types, std::size_t scene,
                   Diagnostics& diag);
 
+// The link node whose part each node is (-1: none): the nearest link node at or above it, where a
+// joint node with joint properties hands what hangs from it to the link it moves (build_robot).
+// The meshes, colliders and bodies of a link are those of the nodes it owns.
+std::vector<int> owning_link_nodes(const Json& document, const std::vector<NodeType>& types);
+
 // Warnings about a model that converts but is probably not what was meant (docs/format.md,
 // "Checks on the modelled robot").
 // Empties with children (they look like joints) or a skin, in a typed document (before

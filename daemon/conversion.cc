@@ -202,20 +202,62 @@ struct StagedOutputs {
 
 namespace {
 
+// Creates root / relative folder by folder (or only checks what exists, `create` false), refusing a
+// component that is a symlink or no folder: a link planted in the output folder (<output>/<model>
+// -> elsewhere) would have rdtfd write, and clean up, outside it. The root itself is the
+// configuration's to choose.
+bool make_output_folder(const std::filesystem::path& root, const std::filesystem::path& relative, bool create,
+                        std::string& why) {
+  std::filesystem::path at = root;
+  for (const std::filesystem::path& part : relative) {
+    if (part.empty() || part == ".") continue;
+    at /= part;
+    struct stat info {};
+    if (::lstat(at.c_str(), &info) != 0) {
+      if (errno == ENOENT && !create) return true;
+      if (errno != ENOENT || (::mkdir(at.c_str(), 0755) != 0 && errno != EEXIST) || ::lstat(at.c_str(), &info) != 0) {
+        why = "cannot create " + at.string() + ": " + std::strerror(errno);
+        return false;
+      }
+    }
+    if (S_ISLNK(info.st_mode)) {
+      why = at.string() + " is a symbolic link: rdtfd writes and removes files only inside its output folder " +
+            root.string() + "; remove the link";
+      return false;
+    }
+    if (!S_ISDIR(info.st_mode)) {
+      why = at.string() + " is not a folder: remove it, rdtfd keeps this model's outputs there";
+      return false;
+    }
+  }
+  return true;
+}
+
 // Every file of the new revision is written into a stage folder first and moved into place only
 // when all of them are whole (the primary files last, commit_outputs), and the previous
 // generation's files go only after that: a disk that fills up between two files leaves the live
 // revision untouched. Null when the stage could not be written (diagnostics say why).
 std::unique_ptr<StagedOutputs> stage_outputs(const ConversionJob& job, const Conversion& conversion,
                                              ConvertedModel& converted, Diagnostics& diagnostics, bool& retry) {
-  std::error_code ec;
-  std::filesystem::create_directories(job.output_dir, ec);
-  if (ec) {
-    diagnostics.error(codes::WRITE_FAILED, "", "cannot create " + job.output_dir.string() + ": " + ec.message());
-    write_failed(job.output_dir, diagnostics, retry);
-    return nullptr;
-  }
   std::string why;
+  if (!job.output_root.empty()) {
+    const std::filesystem::path relative = job.output_dir.lexically_relative(job.output_root);
+    if (relative.empty() || *relative.begin() == ".." || !make_output_folder(job.output_root, relative, true, why) ||
+        (job.urdf && !make_output_folder(job.output_dir, std::filesystem::path("urdf") / "meshes", false, why))) {
+      if (why.empty()) why = job.output_dir.string() + " is not inside the output folder " + job.output_root.string();
+      diagnostics.error(codes::WRITE_FAILED, "", why);
+      write_failed(job.output_dir, diagnostics, retry);
+      return nullptr;
+    }
+  } else {
+    std::error_code ec;
+    std::filesystem::create_directories(job.output_dir, ec);
+    if (ec) {
+      diagnostics.error(codes::WRITE_FAILED, "", "cannot create " + job.output_dir.string() + ": " + ec.message());
+      write_failed(job.output_dir, diagnostics, retry);
+      return nullptr;
+    }
+  }
   auto stage = StagedOutput::create(job.output_dir, "stage", why);
   if (!stage) {
     diagnostics.error(codes::WRITE_FAILED, "", "cannot write: " + why);

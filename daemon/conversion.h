@@ -57,6 +57,9 @@ struct ConversionJob {
   std::filesystem::path root;        // The watched folder the model lies in (canonical).
   std::filesystem::path source;      // The model file: root / a path with no symlink on it.
   std::filesystem::path output_dir;  // This model's own output folder.
+  // The output folder output_dir lies in: nothing between the two may be a symlink, since rdtfd
+  // writes and removes files only inside it. Empty: output_dir is created as it is.
+  std::filesystem::path output_root;
   ConvertOptions options;
   std::string previous_hash;         // Content last converted (good or bad): skip when equal.
   std::optional<ValidationOptions> validation;  // Run the dynamics check when given.

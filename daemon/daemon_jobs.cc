@@ -129,6 +129,7 @@ ConversionJob Daemon::make_job(const ModelRecord& record) const {
   job.max_read_bytes = config_.max_read_bytes;
   job.budget = read_budget_;
   job.output_dir = config_.output / record.id;
+  job.output_root = config_.output;
   job.options = config_.convert;
   job.previous_hash = record.last_hash;
   job.write_failed = config_.publish_failed;

@@ -8,6 +8,8 @@
 // the namespace's multicast route, so every send fails with ENETUNREACH, then restores it. The
 // inotify limit (fs.inotify.max_user_watches is system-wide on this kernel, even from a user
 // namespace) is injected through the watcher's seam RDTFD_TEST_INOTIFY_LIMIT_FILE.
+#include <algorithm>
+#include <fstream>
 #include <sys/stat.h>
 
 #include "daemon/harness.h"
@@ -102,6 +104,44 @@ TEST(DaemonFault, LcmSendFailuresAreRetriedAndReportedOnceSendingWorks) {
   EXPECT_EQ(model_events(s.messages(), "arm.gltf"),
             concat({revision_events("arm.gltf", 1, content_hash(first)),
                     revision_events("arm.gltf", 2, content_hash(second))}));
+}
+
+// A symlink planted where a model's output folder goes (<output>/<model> -> elsewhere): rdtfd
+// writes nothing through it and removes nothing behind it, says so, and converts once it is gone.
+TEST(DaemonFault, ASymlinkInTheOutputFolderIsNeverFollowed) {
+  Session s;
+  const fs::path elsewhere = s.output.parent_path() / "elsewhere";
+  fs::create_directories(elsewhere / "urdf" / "meshes");
+  // Names shaped like rdtfd's own content-addressed outputs, which its clean-up removes.
+  for (const fs::path& file : {elsewhere / "keep.0123456789abcdef.bin", elsewhere / "urdf" / "meshes" / "part.0123456789abcdef.stl"}) {
+    std::ofstream(file) << "precious";
+  }
+  fs::create_directories(s.output);
+  fs::create_directory_symlink(elsewhere, s.output / "arm.gltf");
+  const auto model = box_model("link_base", 0.1, 2);
+  write_model(s.watch, "arm.gltf", model);
+  s.start();
+
+  ASSERT_TRUE(s.wait_for([](const auto& all) { return !on_kind(all, "ERROR", "arm.gltf").empty(); }));
+  const auto error = decoded<rdtf::model_error_t>(s.messages(), "ERROR", "arm.gltf").front();
+  EXPECT_TRUE(has_code(error, "WRITE_FAILED")) << diagnostics_text(error);
+  EXPECT_NE(diagnostics_text(error).find((s.output / "arm.gltf").string() + " is a symbolic link"), std::string::npos)
+      << diagnostics_text(error);
+  ASSERT_TRUE(s.daemon->wait_log("(attempt 2)"));
+  EXPECT_TRUE(on_kind(s.messages(), "DESCRIPTION", "arm.gltf").empty());
+  std::vector<std::string> there;
+  for (const auto& entry : fs::recursive_directory_iterator(elsewhere)) there.push_back(entry.path().lexically_relative(elsewhere).string());
+  std::sort(there.begin(), there.end());
+  EXPECT_EQ(there, (std::vector<std::string>{"keep.0123456789abcdef.bin", "urdf", "urdf/meshes",
+                                              "urdf/meshes/part.0123456789abcdef.stl"}));
+
+  // The link removed: the retry converts into a folder of rdtfd's own.
+  fs::remove(s.output / "arm.gltf");
+  ASSERT_TRUE(s.wait_revision("arm.gltf", 1, content_hash(model), 30s));
+  EXPECT_FALSE(fs::is_symlink(s.output / "arm.gltf"));
+  EXPECT_TRUE(fs::exists(s.output / "arm.gltf" / "arm.rdtf.gltf"));
+  EXPECT_TRUE(fs::exists(elsewhere / "keep.0123456789abcdef.bin"));
+  EXPECT_TRUE(s.daemon->running());
 }
 
 TEST(DaemonFault, UnreadableFilesAreReportedAndConvertOnceReadable) {

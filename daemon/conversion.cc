@@ -6,6 +6,7 @@
 
 #include <openssl/evp.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <memory>
@@ -567,6 +568,20 @@ ConversionOutcome run_conversion(const ConversionJob& job) {
   // .bin alone counts), and the loader converts the same bytes, whatever is written meanwhile.
   SourceFiles files = read_source_files(outcome.dependencies, folder, job.options.limits, job.read_file);
   outcome.content_hash = content_hash(model_bytes, outcome.dependencies, files);
+  // A file named through a symlink in the watched folder (current.bin -> meshes/arm3.bin, or a
+  // linked folder) is saved at its target, which is what inotify reports: that path is a
+  // dependency too, or an edit there would leave the model stale.
+  const std::size_t named = outcome.dependencies.size();
+  for (std::size_t i = 0; i < named; ++i) {
+    std::error_code resolve_error;
+    std::filesystem::path target = std::filesystem::canonical(outcome.dependencies[i], resolve_error);
+    if (resolve_error || target == outcome.dependencies[i]) continue;
+    const auto relative = target.lexically_relative(job.root);
+    if (relative.empty() || *relative.begin() == "..") continue;
+    if (std::find(outcome.dependencies.begin(), outcome.dependencies.end(), target) == outcome.dependencies.end()) {
+      outcome.dependencies.push_back(std::move(target));
+    }
+  }
   lap(outcome.stages.read);
   if (outcome.content_hash == job.previous_hash) {
     outcome.kind = ConversionOutcome::Kind::kUnchanged;

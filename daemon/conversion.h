@@ -148,7 +148,8 @@ struct ConversionOutcome {
   std::string content_hash;                  // Of what was read ("" when nothing could be).
   std::optional<ConvertedModel> converted;   // For kConverted.
   Diagnostics diagnostics;                   // Errors for kRejected; warnings otherwise.
-  std::vector<std::filesystem::path> dependencies;  // Files the model refers to.
+  // Files the model refers to, and their targets where it names them through a symlink.
+  std::vector<std::filesystem::path> dependencies;
   std::chrono::microseconds duration{0};
   StageTimes stages;
   // When the worker finished it (the event loop's pick-up delay is measured from here).

@@ -118,6 +118,39 @@ TEST(DaemonFilesystem, AWatchedSubfolderSwappedForASymlinkToAnOutsideFolderIsARe
   EXPECT_EQ(everything_said(s).find("outside_base"), std::string::npos);
 }
 
+// A .bin named through a symlink inside the watched folder (allowed: it stays inside) is saved at
+// its target, which is the path inotify reports: an edit there is a new revision of every model
+// that reads it, whether it names the target, a link to it, or a linked folder.
+TEST(DaemonFilesystem, ABinReadThroughASymlinkIsWatchedAtItsTarget) {
+  Session s;
+  fs::create_directories(s.watch / "meshes");
+  const auto direct = box_model("direct_base", 0.1, 2, "meshes/box.bin");
+  const auto by_link = box_model("link_base", 0.1, 2, "current.bin");
+  const auto by_folder = box_model("folder_base", 0.1, 2, "lnk/box.bin");
+  ASSERT_EQ(direct.bin, by_link.bin);
+  ASSERT_EQ(direct.bin, by_folder.bin);
+  write_model(s.watch, "direct.gltf", direct);
+  write_in_place(s.watch / "link.gltf", by_link.gltf);
+  write_in_place(s.watch / "folder.gltf", by_folder.gltf);
+  fs::create_symlink("meshes/box.bin", s.watch / "current.bin");
+  fs::create_directory_symlink("meshes", s.watch / "lnk");
+  s.start();
+  ASSERT_TRUE(s.wait_revision("direct.gltf", 1, content_hash(direct)));
+  ASSERT_TRUE(s.wait_revision("link.gltf", 1, content_hash(by_link)));
+  ASSERT_TRUE(s.wait_revision("folder.gltf", 1, content_hash(by_folder)));
+
+  // The boxes shrink inside the accessors' declared bounds: the same accessors, other bytes.
+  const std::string grown = box_model("direct_base", 0.08, 2, "meshes/box.bin").bin;
+  ASSERT_EQ(grown.size(), direct.bin.size());
+  ASSERT_NE(grown, direct.bin);
+  write_in_place(s.watch / "meshes" / "box.bin", grown);
+  for (auto [id, model] : {std::pair{"direct.gltf", direct}, std::pair{"link.gltf", by_link}, std::pair{"folder.gltf", by_folder}}) {
+    model.bin = grown;
+    EXPECT_TRUE(s.wait_revision(id, 2, content_hash(model))) << id << ": "
+        << ::testing::PrintToString(model_events(s.messages(), id));
+  }
+}
+
 TEST(DaemonFilesystem, AWatchedFolderDeletedAndMadeAgainIsWatchedAgain) {
   Session s;
   fs::create_directories(s.watch / "sub");

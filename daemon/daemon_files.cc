@@ -167,7 +167,15 @@ bool Daemon::ignored(const std::filesystem::path& path) const {
     return true;
   }
   const auto relative = path.lexically_relative(config_.output);
-  return !relative.empty() && *relative.begin() != "..";
+  if (!relative.empty() && *relative.begin() != "..") return true;
+  // Below a hidden folder of a watched folder (the watcher does not watch them; a rescan or an
+  // event of a folder moved in may still name such a path).
+  const auto in_root = path.lexically_relative(root_of(path));
+  for (const auto& part : in_root.parent_path()) {
+    const std::string folder = part.string();
+    if (!folder.empty() && folder.front() == '.' && folder != "." && folder != "..") return true;
+  }
+  return false;
 }
 
 std::filesystem::path Daemon::root_of(const std::filesystem::path& source) const {

@@ -47,6 +47,13 @@ bool is_staging_folder(const std::filesystem::path& folder) {
   return rdtf::temporary_writer_pid(folder.filename().string()).has_value();
 }
 
+// Hidden folders (.git, a desktop's .Trash, rdtfd's own .rdtfd-state when the output lies in a
+// watched folder) hold no models: not watched, not listed. (A stage folder is hidden too.)
+bool skipped_folder(const std::filesystem::path& folder) {
+  const std::string name = folder.filename().string();
+  return (!name.empty() && name.front() == '.') || is_staging_folder(folder);
+}
+
 }  // namespace
 
 int InotifyWatcher::add_watch(const std::filesystem::path& folder) {
@@ -91,7 +98,7 @@ void InotifyWatcher::add_folder(const std::filesystem::path& folder,
   for (std::filesystem::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
     std::error_code type_error;
     if (it->is_directory(type_error) && !it->is_symlink(type_error)) {
-      if (is_staging_folder(it->path())) continue;
+      if (skipped_folder(it->path())) continue;
       add_folder(it->path(), files, error);
     } else if (it->is_regular_file(type_error)) {
       files.push_back(it->path());
@@ -142,7 +149,7 @@ std::vector<FileEvent> InotifyWatcher::read_events(std::string& error) {
       if (event->len == 0) continue;
       const std::filesystem::path path = folder->second / event->name;
       if (event->mask & IN_ISDIR) {
-        if (is_staging_folder(path)) continue;
+        if (skipped_folder(path)) continue;
         if (event->mask & (IN_CREATE | IN_MOVED_TO)) {
           std::vector<std::filesystem::path> files;
           add_folder(path, files, error);

@@ -151,6 +151,33 @@ TEST(DaemonFilesystem, ABinReadThroughASymlinkIsWatchedAtItsTarget) {
   }
 }
 
+// Hidden folders hold no models: a .git, and a folder named like rdtfd's own state folder, whose
+// model would have had its outputs written over rdtfd's clean-stop mark.
+TEST(DaemonFilesystem, ModelsInHiddenFoldersAreNotConverted) {
+  Session s;
+  fs::create_directories(s.watch / ".rdtfd-state" / "clean-stop");
+  fs::create_directories(s.watch / "sub" / ".git");
+  const auto shown = box_model("shown_base", 0.1);
+  write_model(s.watch / "sub", "arm.gltf", shown);
+  write_model(s.watch / ".rdtfd-state" / "clean-stop", "x.gltf", box_model("hidden_base", 0.1));
+  s.start();
+  ASSERT_TRUE(s.wait_revision("sub/arm.gltf", 1, content_hash(shown)));
+  // Made while running, in a hidden folder made while running too.
+  write_model(s.watch / "sub" / ".git", "y.gltf", box_model("git_base", 0.1));
+  fs::create_directories(s.watch / ".later");
+  write_model(s.watch / ".later", "z.gltf", box_model("later_base", 0.1));
+  const auto idle = s.wait_idle();
+  ASSERT_TRUE(idle);
+  EXPECT_EQ(idle->num_models, 1);
+  const std::string said = everything_said(s);
+  for (const char* name : {"hidden_base", "git_base", "later_base", "x.gltf", "y.gltf", "z.gltf"}) {
+    EXPECT_EQ(said.find(name), std::string::npos) << name;
+  }
+  // rdtfd's own state is untouched: a clean stop is marked as one.
+  s.daemon->stop();
+  EXPECT_TRUE(fs::is_regular_file(s.output / ".rdtfd-state" / "clean-stop"));
+}
+
 TEST(DaemonFilesystem, AWatchedFolderDeletedAndMadeAgainIsWatchedAgain) {
   Session s;
   fs::create_directories(s.watch / "sub");

@@ -308,6 +308,12 @@ void Daemon::process_file_events(std::size_t max_events) {
         open_for_writing_.closed(event.path);
         note_change(event.path, FileChange::kClosed);
         break;
+      case FileEvent::Kind::kAttributes:
+        // chmod 644 on a file that could not be read, a second hard link removed: a model refused
+        // for them converts now (an unchanged one is found so by its content hash). A writer that
+        // still holds the file open still holds the model back (open_for_writing_).
+        note_change(event.path, FileChange::kClosed);
+        break;
     }
   }
   start_prepared_jobs(clock_->now());

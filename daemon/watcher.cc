@@ -15,7 +15,7 @@
 namespace rdtf::daemon {
 namespace {
 
-constexpr std::uint32_t kFolderMask = IN_CLOSE_WRITE | IN_MODIFY | IN_CREATE | IN_DELETE |
+constexpr std::uint32_t kFolderMask = IN_CLOSE_WRITE | IN_MODIFY | IN_CREATE | IN_DELETE | IN_ATTRIB |
                                       IN_MOVED_FROM | IN_MOVED_TO | IN_DELETE_SELF |
                                       IN_MOVE_SELF | IN_ONLYDIR | IN_DONT_FOLLOW | IN_EXCL_UNLINK;
 
@@ -128,7 +128,9 @@ std::vector<FileEvent> InotifyWatcher::read_events(std::string& error) {
     for (ssize_t offset = 0; offset < n;) {
       const auto* event = reinterpret_cast<const inotify_event*>(buffer + offset);
       offset += static_cast<ssize_t>(sizeof(inotify_event) + event->len);
-      if (event->mask & IN_Q_OVERFLOW) {
+      // Events lost, or the file system of a watched folder unmounted (a USB disk, an NFS or sshfs
+      // mount gone; IN_IGNORED follows for every watch on it): the rescan finds what is left.
+      if (event->mask & (IN_Q_OVERFLOW | IN_UNMOUNT)) {
         events.push_back({FileEvent::Kind::kRescan, {}});
         continue;
       }
@@ -150,6 +152,12 @@ std::vector<FileEvent> InotifyWatcher::read_events(std::string& error) {
       const std::filesystem::path path = folder->second / event->name;
       if (event->mask & IN_ISDIR) {
         if (skipped_folder(path)) continue;
+        // A subfolder's permissions changed (chmod 755 on a folder that could not be searched):
+        // what it holds may be readable now.
+        if (event->mask & IN_ATTRIB) {
+          events.push_back({FileEvent::Kind::kRescan, {}});
+          continue;
+        }
         if (event->mask & (IN_CREATE | IN_MOVED_TO)) {
           std::vector<std::filesystem::path> files;
           add_folder(path, files, error);
@@ -164,6 +172,8 @@ std::vector<FileEvent> InotifyWatcher::read_events(std::string& error) {
         events.push_back({FileEvent::Kind::kRemoved, path});
       } else if (event->mask & (IN_CLOSE_WRITE | IN_MOVED_TO)) {
         events.push_back({FileEvent::Kind::kWritten, path});
+      } else if (event->mask & IN_ATTRIB) {
+        events.push_back({FileEvent::Kind::kAttributes, path});
       } else if (event->mask & (IN_MODIFY | IN_CREATE)) {
         // Created or written and still open: a close (IN_CLOSE_WRITE) will follow.
         events.push_back({FileEvent::Kind::kModified, path});

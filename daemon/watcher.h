@@ -14,6 +14,7 @@ struct FileEvent {
     kModified,  // Written but not yet closed: an in-place save in progress.
     kWritten,   // Closed after writing, created, or moved in: content may be new.
     kRemoved,   // Deleted or moved out.
+    kAttributes,  // Permissions or hard links changed: a file refused for them may be read now.
     kRescan,    // Events were lost (queue overflow) or a watched tree moved: rescan everything.
   };
   Kind kind;

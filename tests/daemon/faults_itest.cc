@@ -11,6 +11,8 @@
 #include <algorithm>
 #include <fstream>
 #include <sys/stat.h>
+#include <cstring>
+#include <sys/mount.h>
 
 #include "daemon/harness.h"
 #include "support/harness/fs_support.h"
@@ -141,6 +143,29 @@ TEST(DaemonFault, ASymlinkInTheOutputFolderIsNeverFollowed) {
   EXPECT_FALSE(fs::is_symlink(s.output / "arm.gltf"));
   EXPECT_TRUE(fs::exists(s.output / "arm.gltf" / "arm.rdtf.gltf"));
   EXPECT_TRUE(fs::exists(elsewhere / "keep.0123456789abcdef.bin"));
+  EXPECT_TRUE(s.daemon->running());
+}
+
+// The file system of a watched folder unmounted (a USB disk pulled, an NFS or sshfs mount gone):
+// its models are removals, not revisions served from files that are no longer there, and the
+// folder left behind (the mount point) is watched as it is.
+TEST(DaemonFault, AnUnmountedFolderIsARemovalOfItsModels) {
+  Session s;
+  fs::create_directories(s.watch / "usb");
+  Tmpfs disk(s.watch / "usb", 1 << 20);
+  ASSERT_TRUE(disk.mounted()) << "cannot mount a tmpfs: run in tests/support/in_netns.sh";
+  const auto model = box_model("usb_base", 0.1, 2);
+  write_model(s.watch / "usb", "arm.gltf", model);
+  s.start();
+  ASSERT_TRUE(s.wait_revision("usb/arm.gltf", 1, content_hash(model)));
+
+  ASSERT_EQ(::umount2((s.watch / "usb").c_str(), MNT_DETACH), 0) << std::strerror(errno);
+  ASSERT_TRUE(s.wait_for([](const auto& all) { return !on_kind(all, "REMOVED", "usb/arm.gltf").empty(); }))
+      << ::testing::PrintToString(model_events(s.messages()));
+  // The mount point is an ordinary folder again, and watched: a model saved there converts.
+  const auto after = box_model("after_base", 0.12);
+  write_model(s.watch / "usb", "after.gltf", after);
+  ASSERT_TRUE(s.wait_revision("usb/after.gltf", 1, content_hash(after)));
   EXPECT_TRUE(s.daemon->running());
 }
 

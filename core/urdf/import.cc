@@ -401,9 +401,24 @@ std::optional<Conversion> import_urdf(const fs::path& urdf, const UrdfImportOpti
     for (auto it = joints.rbegin(); it != joints.rend(); ++it) stack.emplace_back(xml->joints[*it].child, &xml->joints[*it]);
     if (link->inertial) {  // Checked in the XML: a finite mass of 0 or more, a finite tensor.
       children.push_back(b.add_node(Json{{"name", name + "_inertial"}}, "inertial", b.inertial_json(*link->inertial)));
-    } else {
+    } else if (via != nullptr && model->getJoint(via->name)->type == urdf::Joint::FIXED) {
+      // URDF reads a link without <inertial> as massless. On a fixed joint (a sensor or tool
+      // frame, a collision helper) that is what it is: it adds nothing to the body it is fixed to,
+      // as in urdfdom, Gazebo and Drake. Its geometry must not make up mass the robot lacks.
+      children.push_back(b.add_node(Json{{"name", name + "_inertial"}}, "inertial", b.inertial_json(urdf::Inertial())));
       diag.info(codes::URDF_NO_INERTIAL, link_pointer(name),
-                "link '" + name + "' has no <inertial>: rdtf computes it from the link's geometry");
+                "link '" + name + "' has no <inertial> and is fixed to '" + via->parent + "' by joint '" + via->name +
+                    "': it is massless, as URDF reads it");
+    } else if (via == nullptr) {
+      diag.info(codes::URDF_NO_INERTIAL, link_pointer(name),
+                "root link '" + name + "' has no <inertial>: rdtf computes it from the link's geometry");
+    } else {
+      // Massless, as URDF reads it, a link could not move on its joint: its geometry's mass is the
+      // best guess, and a guess the robot's author did not make, so say so.
+      diag.warning(codes::URDF_NO_INERTIAL, link_pointer(name),
+                   "link '" + name + "' has no <inertial>, which URDF reads as massless, and moves on joint '" +
+                       via->name + "': rdtf computes its mass from its geometry at the density (--density); "
+                       "add an <inertial> with the real mass");
     }
     if (!children.empty()) b.document["nodes"][index]["children"] = std::move(children);
   }

@@ -117,8 +117,9 @@ TEST(UrdfImport, AuthoredInertialsAreKeptAndColladaMeshesSkippedWithAWarning) {
   EXPECT_TRUE(skipped);
 }
 
-// Links without <inertial> get their mass from the generated primitives at the default density:
-// the box exactly, the cylinder's polygon and the sphere's polyhedron scaled to the true volume.
+// The root and links on moving joints without <inertial> get their mass from the generated
+// primitives at the default density: the box exactly, the cylinder's polygon and the sphere's
+// polyhedron scaled to the true volume. (A link on a fixed joint is massless: below.)
 TEST(UrdfImport, PrimitivesHaveTheClosedFormVolumesAndBoxInertia) {
   TempDir dir;
   testing::write_file(dir / "shapes.urdf", R"(<?xml version="1.0"?>
@@ -126,11 +127,22 @@ TEST(UrdfImport, PrimitivesHaveTheClosedFormVolumesAndBoxInertia) {
   <link name="box"><visual><geometry><box size="0.6 0.1 0.2"/></geometry></visual></link>
   <link name="cylinder"><visual><geometry><cylinder radius="0.2" length="0.6"/></geometry></visual></link>
   <link name="sphere"><visual><geometry><sphere radius="0.3"/></geometry></visual></link>
-  <joint name="j1" type="fixed"><parent link="box"/><child link="cylinder"/><origin xyz="1 0 0"/></joint>
-  <joint name="j2" type="fixed"><parent link="box"/><child link="sphere"/><origin xyz="0 1 0"/></joint>
+  <joint name="j1" type="revolute"><parent link="box"/><child link="cylinder"/><origin xyz="1 0 0"/>
+    <axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+  <joint name="j2" type="continuous"><parent link="box"/><child link="sphere"/><origin xyz="0 1 0"/></joint>
 </robot>)");
   Diagnostics diag;
   const Conversion conversion = import_or_fail(dir / "shapes.urdf", diag);
+  // The moving links' mass is a guess the URDF does not make: a warning each; the root's an info.
+  std::map<std::string, Severity> said;
+  for (const Diagnostic& d : diag.all()) {
+    if (d.code != "URDF_NO_INERTIAL") continue;
+    for (const char* name : {"box", "cylinder", "sphere"}) {
+      if (d.message.find("link '" + std::string(name) + "'") != std::string::npos) said[name] = d.severity;
+    }
+  }
+  EXPECT_EQ(said, (std::map<std::string, Severity>{
+                      {"box", Severity::kInfo}, {"cylinder", Severity::kWarning}, {"sphere", Severity::kWarning}}));
   const double pi = std::numbers::pi;
   const std::map<std::string, double> volumes{
       {"box", 0.6 * 0.1 * 0.2}, {"cylinder", pi * 0.2 * 0.2 * 0.6}, {"sphere", 4.0 / 3.0 * pi * 0.3 * 0.3 * 0.3}};
@@ -152,6 +164,43 @@ TEST(UrdfImport, PrimitivesHaveTheClosedFormVolumesAndBoxInertia) {
   expect_valid_gltf(conversion, dir / "shapes.glb");
 }
 
+
+// URDF reads a link without <inertial> as massless; on a fixed joint (a sensor frame, a collision
+// helper, as Unitree's *_thigh_shoulder) it stays so, whatever geometry it has, and the export
+// writes no <inertial> for it: the round trip adds no mass.
+TEST(UrdfImport, ALinkWithoutInertialOnAFixedJointIsMassless) {
+  TempDir dir;
+  testing::write_file(dir / "frames.urdf", R"(<?xml version="1.0"?>
+<robot name="frames">
+  <link name="trunk"><inertial><mass value="12"/><inertia ixx="0.1" ixy="0" ixz="0" iyy="0.2" iyz="0" izz="0.25"/></inertial>
+    <visual><geometry><box size="0.4 0.2 0.1"/></geometry></visual></link>
+  <link name="shoulder_helper"><collision><geometry><cylinder radius="0.05" length="0.03"/></geometry></collision></link>
+  <joint name="helper_fixed" type="fixed"><parent link="trunk"/><child link="shoulder_helper"/><origin xyz="0.2 0.1 0"/></joint>
+</robot>)");
+  Diagnostics diag;
+  const Conversion conversion = import_or_fail(dir / "frames.urdf", diag);
+  ASSERT_EQ(conversion.robot.links.size(), 2u);
+  const Link& helper = conversion.robot.links[1];
+  ASSERT_EQ(helper.name, "shoulder_helper");
+  EXPECT_EQ(helper.inertial.mass, 0.0);
+  EXPECT_TRUE(helper.inertial.inertia.isZero(0));
+  EXPECT_EQ(helper.inertial_source, InertialSource::kAuthored);
+  bool told = false;
+  for (const Diagnostic& d : diag.all()) {
+    if (d.code != "URDF_NO_INERTIAL") continue;
+    told = true;
+    EXPECT_EQ(d.severity, Severity::kInfo);
+    EXPECT_NE(d.message.find("fixed to 'trunk' by joint 'helper_fixed': it is massless"), std::string::npos) << d.message;
+  }
+  EXPECT_TRUE(told);
+  // The export: no <inertial> on the helper, so urdfdom reads it massless, as the input.
+  Diagnostics export_diag;
+  ASSERT_TRUE(write_urdf(conversion, dir / "out", UrdfOptions{}, export_diag)) << export_diag.all().size();
+  const auto exported = parse_with_urdfdom(testing::read_file(dir / "out" / "robot.urdf"));
+  ASSERT_TRUE(exported);
+  EXPECT_FALSE(exported->getLink("shoulder_helper")->inertial);
+  EXPECT_DOUBLE_EQ(exported->getLink("trunk")->inertial->mass, 12.0);
+}
 TEST(UrdfImport, StlMeshesAreFoundByRelativeAbsoluteFileAndPackagePaths) {
   TempDir dir;
   fs::create_directories(dir / "my_pkg" / "meshes");

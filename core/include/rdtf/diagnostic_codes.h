@@ -170,7 +170,7 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(URDF_NAME_CHANGED, kSeverityWarning, "URDF") \
   X(URDF_NOT_A_ROBOT, kSeverityError, "URDF") \
   X(URDF_NOT_UTF8, kSeverityError, "URDF") \
-  X(URDF_NO_INERTIAL, kSeverityInfo, "URDF") \
+  X(URDF_NO_INERTIAL, kSeverityInfo | kSeverityWarning, "URDF") \
   X(URDF_NO_LINKS, kSeverityError, "URDF") \
   X(URDF_PARSE_FAILED, kSeverityError, "URDF") \
   X(URDF_PRISMATIC_WITHOUT_LIMITS, kSeverityError, "URDF") \
@@ -194,9 +194,9 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(LINK_COM_OUTSIDE_GEOMETRY, kSeverityError | kSeverityWarning, "dynamics") \
   X(LINK_INERTIA_BELOW_SOLID_BOUND, kSeverityError, "dynamics") \
   X(LINK_INERTIA_NOT_FINITE, kSeverityError, "dynamics") \
-  X(LINK_INERTIA_NOT_POSITIVE_DEFINITE, kSeverityError, "dynamics") \
-  X(LINK_INERTIA_NOT_SYMMETRIC, kSeverityError, "dynamics") \
-  X(LINK_INERTIA_TRIANGLE_INEQUALITY, kSeverityError, "dynamics") \
+  X(LINK_INERTIA_NOT_POSITIVE_DEFINITE, kSeverityError | kSeverityWarning, "dynamics") \
+  X(LINK_INERTIA_NOT_SYMMETRIC, kSeverityError | kSeverityWarning, "dynamics") \
+  X(LINK_INERTIA_TRIANGLE_INEQUALITY, kSeverityError | kSeverityWarning, "dynamics") \
   X(LINK_MASSLESS, kSeverityInfo, "dynamics") \
   X(LINK_MASSLESS_WITH_INERTIA, kSeverityError | kSeverityWarning, "dynamics") \
   X(LINK_MASS_NEGATIVE, kSeverityError, "dynamics") \

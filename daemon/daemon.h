@@ -72,7 +72,10 @@ class Daemon {
   void rescan(const char* why);
   void note_change(const std::filesystem::path& path, FileChange change);
   bool ignored(const std::filesystem::path& path) const;
-  std::string unique_model_id(const std::filesystem::path& source) const;
+  std::string unique_model_id(const std::filesystem::path& source, const std::set<std::string>& not_these = {}) const;
+  // Whether `source` is a model file in a watched folder, not yet known: the file an earlier run
+  // gave an id that another file now asks for.
+  bool held_by_a_file_here(const std::filesystem::path& source) const;
   // The watched folder a model lies in (the longest match when folders nest: the first listed).
   std::filesystem::path root_of(const std::filesystem::path& source) const;
 

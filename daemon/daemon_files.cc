@@ -1,5 +1,6 @@
 // rdtfd's view of the watched folders: file events, rescans, which model a file belongs to, and
 // the output folder's leftovers of an earlier run.
+#include <sys/stat.h>
 #include <sys/types.h>
 #include <unistd.h>
 
@@ -205,9 +206,22 @@ void Daemon::note_change(const std::filesystem::path& path, FileChange change) {
   };
   if (is_model_file(path)) {
     if (registry_.find(path) == nullptr) {
-      ModelRecord& record = registry_.ensure(path, unique_model_id(path));
-      const std::string refused = restore_revisions(config_.output, record);
-      if (!refused.empty()) log_line(refused);
+      // Ids that sanitise alike ("c 1.gltf", "c_1.gltf") are numbered as their files are found,
+      // which after a restart may be the other order: an id an earlier run gave another file that
+      // is still here stays that file's, or subscribers following it would switch robots.
+      std::set<std::string> held;
+      for (;;) {
+        ModelRecord& record = registry_.ensure(path, unique_model_id(path, held));
+        std::string held_by;
+        const std::string refused = restore_revisions(config_.output, record, &held_by);
+        if (!held_by.empty() && held.size() < 8 && held_by_a_file_here(held_by)) {
+          held.insert(record.id);
+          registry_.erase(path);
+          continue;
+        }
+        if (!refused.empty()) log_line(refused);
+        break;
+      }
     }
     touch(path);
     return;
@@ -224,13 +238,23 @@ void Daemon::note_change(const std::filesystem::path& path, FileChange change) {
   }
 }
 
-std::string Daemon::unique_model_id(const std::filesystem::path& source) const {
+bool Daemon::held_by_a_file_here(const std::filesystem::path& source) const {
+  if (registry_.all().count(source) != 0 || !is_model_file(source) || ignored(source)) return false;
+  const bool watched = std::any_of(config_.watch.begin(), config_.watch.end(), [&](const auto& root) {
+    const auto relative = source.lexically_relative(root);
+    return !relative.empty() && *relative.begin() != "..";
+  });
+  struct stat info {};
+  return watched && ::lstat(source.c_str(), &info) == 0 && S_ISREG(info.st_mode);
+}
+
+std::string Daemon::unique_model_id(const std::filesystem::path& source, const std::set<std::string>& not_these) const {
   const std::size_t max_id = kMaxChannelLength - config_.channel_prefix.size() - 1 - kLongestKind;
   // Three characters kept free for a "_N" that tells apart ids that sanitise alike.
   const std::string base = model_id_for(source, config_.watch, max_id - 3);
   std::string id = base;
   // Two names that sanitise alike ("a b.gltf", "a_b.gltf") must not share channels.
-  for (int n = 2; registry_.find_id(id) != nullptr; ++n) {
+  for (int n = 2; registry_.find_id(id) != nullptr || not_these.count(id) != 0; ++n) {
     id = base + "_" + std::to_string(n);
   }
   return id;

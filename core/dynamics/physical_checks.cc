@@ -1,4 +1,5 @@
 // Physical checks of a robot before it is simulated (docs/dynamics.md, "Physical checks").
+#include <algorithm>
 #include <cmath>
 
 #include <Eigen/Eigenvalues>
@@ -162,6 +163,12 @@ void check_combined_inertia(const Robot& robot, const WeldGroup& group, const Ph
       !group.merged.inertia.allFinite()) {
     return;
   }
+  // With one link of mass or inertia the combined body is that link's, checked on its own.
+  const auto adds = std::count_if(group.links.begin(), group.links.end(), [&](int l) {
+    const MassProperties& m = robot.links[l].inertial;
+    return m.mass != 0 || !m.inertia.isZero(0);
+  });
+  if (adds < 2) return;
   const Link& top = robot.links[group.top];
   principal_moments_check(group.merged.inertia, body_text(robot, group) + " (welded by fixed joints): combined ",
                           options, [&](const char* code, const std::string& message) {

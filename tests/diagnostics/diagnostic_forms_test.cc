@@ -51,6 +51,19 @@ TEST(DiagnosticForms, TerminalTextEscapesControlsBackslashesAndBytesThatAreNotUt
   EXPECT_EQ(escape_for_terminal("cut \xe2\x82"), "cut \\xe2\\x82");  // A sequence cut short.
 }
 
+TEST(DiagnosticForms, TerminalTextEscapesC1ControlsAndBidirectionalFormatting) {
+  // U+009B (CSI as one byte pair), U+0085 (next line): C1 controls.
+  EXPECT_EQ(escape_for_terminal("a\xc2\x9b""31mb\xc2\x85""c"), "a\\u009b31mb\\u0085c");
+  // "link_\u202Egnp.exe" shows as "link_exe.png" unescaped: right-to-left override.
+  EXPECT_EQ(escape_for_terminal("link_\xe2\x80\xae""gnp.exe"), "link_\\u202egnp.exe");
+  // Isolates, marks, and the line and paragraph separators.
+  EXPECT_EQ(escape_for_terminal("\xe2\x81\xa6x\xe2\x81\xa9\xe2\x80\x8f\xd8\x9c\xe2\x80\xa8\xe2\x80\xa9"),
+            "\\u2066x\\u2069\\u200f\\u061c\\u2028\\u2029");
+  // Their neighbours are text: U+00A0, U+00E9, U+2010 (hyphen), U+2030 (per mille), U+2070.
+  const std::string kept = "\xc2\xa0\xc3\xa9\xe2\x80\x90\xe2\x80\xb0\xe2\x81\xb0";
+  EXPECT_EQ(escape_for_terminal(kept), kept);
+}
+
 TEST(DiagnosticForms, JsonHasLineAndByteOffsetOnlyWhenGiven) {
   const Json urdf = diagnostic_json(urdf_finding());
   EXPECT_EQ(urdf.dump(), R"({"severity":"error","code":"URDF_INVALID_NUMBER","file":"arm.urdf",)"

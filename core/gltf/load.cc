@@ -108,6 +108,15 @@ std::optional<Json> parse_json(std::string_view text, Diagnostics& diag) {
     diag.error(codes::JSON_BOM, "", "the JSON starts with a UTF-8 byte order mark, which glTF forbids");
     return std::nullopt;
   }
+  // nlohmann's parser takes a NUL byte for the end of its input, so "{...}\0anything" would parse
+  // as if the rest were not there. JSON text has no NUL: not even a string may hold one unescaped.
+  if (const std::size_t nul = text.find('\0'); nul != std::string_view::npos) {
+    diag.error(codes::INVALID_JSON, "",
+               "invalid JSON at " + place_in(text, nul + 1) +
+                   ": a NUL byte (0x00), which JSON text never holds (a GLB's JSON chunk is padded with "
+                   "spaces, 0x20)");
+    return std::nullopt;
+  }
   std::size_t offset = 0;
   if (!json_depth_within(text, kMaxJsonDepth, offset)) {
     diag.error(codes::JSON_TOO_DEEP, "",

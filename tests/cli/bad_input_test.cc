@@ -6,6 +6,7 @@
 
 #include <functional>
 
+#include "rdtf/glb.h"
 #include "rdtf/gltf.h"
 #include "support/test_support.h"
 
@@ -61,6 +62,17 @@ std::vector<BadCase> cases() {
   all.push_back({"InvalidJson", raw_file("model.gltf", "{\"asset\": {\"version\": \"2.0\"},\n \"nodes\": [}"),
                  "line 2"});
   all.push_back({"EmptyFile", raw_file("model.gltf", ""), "empty"});
+  // nlohmann stops at a NUL byte: what follows one must not vanish unread.
+  all.push_back({"JsonWithANulByte",
+                 raw_file("model.gltf", std::string("{\"asset\": {\"version\": \"2.0\"}}\n\0{\"nodes\": [}", 43)),
+                 "line 2, column 1 (byte 31): a NUL byte (0x00)"});
+  {
+    // A GLB whose JSON chunk is padded with NULs instead of spaces (the validator refuses it too).
+    const std::string json = arm3().dump();
+    const auto glb = make_glb(json + std::string(4 - json.size() % 4, '\0'), {});
+    all.push_back({"GlbJsonChunkPaddedWithNuls", raw_file("model.glb", std::string(glb.begin(), glb.end())),
+                   "(byte " + std::to_string(json.size() + 1) + "): a NUL byte"});
+  }
   // Valid JSON syntax, but beyond a double: placed like any other JSON error (it named no place).
   all.push_back({"NumberBeyondDouble",
                  raw_file("model.gltf", "{\"asset\": {\"version\": \"2.0\"},\n \"nodes\": [{\"translation\": [1e400, 0, 0]}]}"),

@@ -1,5 +1,6 @@
 #include "rdtf/typing.h"
 
+#include <algorithm>
 #include <cstdint>
 #include <map>
 
@@ -53,6 +54,37 @@ std::vector<std::size_t> children_of(const Json& node) {
   return children;
 }
 
+// extras.RDTF.version, "MAJOR.MINOR" (docs/format.md). A minor version adds keys and keeps what the
+// others mean, so a later 1.x reads as 1.0 with a warning; another major changes meanings, so
+// reading it as 1.0 could give a wrong robot with no error.
+void check_format_version(const Json& version, Diagnostics& diag) {
+  const std::string pointer = "/extras/RDTF/version";
+  const std::string text = version.is_string() ? version.get<std::string>() : std::string();
+  std::size_t dot = text.find('.');
+  const auto digits = [&](std::size_t from, std::size_t to) {
+    return to > from && to - from <= 9 &&
+           std::all_of(text.begin() + static_cast<std::ptrdiff_t>(from), text.begin() + static_cast<std::ptrdiff_t>(to),
+                       [](char c) { return c >= '0' && c <= '9'; });
+  };
+  if (dot == std::string::npos || !digits(0, dot) || !digits(dot + 1, text.size())) {
+    diag.error(codes::RDTF_INVALID_VALUE, pointer,
+               "extras.RDTF.version is " + value_text(version) + ", not a version string such as \"1.0\"");
+    return;
+  }
+  const unsigned long major = std::stoul(text.substr(0, dot));
+  const unsigned long minor = std::stoul(text.substr(dot + 1));
+  if (major != 1) {
+    diag.error(codes::RDTF_INVALID_VALUE, pointer,
+               "extras.RDTF.version is " + value_text(version) +
+                   ": this rdtf reads RDTF format 1.x; another major version may give its keys other "
+                   "meanings, so reading it as 1.0 could give a wrong robot");
+  } else if (minor > 0) {
+    diag.warning(codes::RDTF_VERSION_NEWER, pointer,
+                 "extras.RDTF.version is " + value_text(version) +
+                     ", newer than the 1.0 this rdtf reads: its 1.0 keys are read, others are kept unread");
+  }
+}
+
 // Types the document or its author fixed: extras.RDTF.nodes[].type, then node extras rdtf_type.
 void read_authored_types(const Json& document, std::vector<NodeType>& types,
                          std::vector<char>& fixed, Diagnostics& diag) {
@@ -68,6 +100,7 @@ void read_authored_types(const Json& document, std::vector<NodeType>& types,
       diag.error(codes::RDTF_INVALID_VALUE, "/extras/RDTF/nodes",
                  "extras.RDTF.nodes is " + value_text(rdtf["nodes"]) + ", not an array of node entries");
     }
+    if (rdtf.is_object() && rdtf.contains("version")) check_format_version(rdtf["version"], diag);
     if (rdtf.is_object() && rdtf.contains("nodes") && rdtf["nodes"].is_array()) {
       const Json& entries = rdtf["nodes"];
       std::map<std::size_t, std::size_t> first_entry;  // Node -> its first entry.

@@ -65,6 +65,57 @@ TEST(RdtfEntries, ANodeListedTwiceIsRefused) {
       << d.message;
 }
 
+// Another major version may give its keys other meanings: refused, not read as 1.0.
+TEST(RdtfEntries, AVersionThatIsNotFormatOneIsRefused) {
+  for (const json& version : {json("2.0"), json("0.9"), json(1.0), json("1"), json("v1.0"), json("1.0.0"),
+                              json(".1"), json("1.x")}) {
+    json doc = arm();
+    doc["extras"]["RDTF"]["version"] = version;
+    const Diagnostic d = refused(doc, codes::RDTF_INVALID_VALUE);
+    EXPECT_EQ(d.pointer, "/extras/RDTF/version") << version;
+    EXPECT_NE(d.message.find("extras.RDTF.version is " + (version.is_string() ? "'" + version.get<std::string>() + "'"
+                                                                               : version.dump())),
+              std::string::npos)
+        << d.message;
+  }
+}
+
+// A later 1.x converts as 1.0 does, with one warning, and keeps its version and keys.
+TEST(RdtfEntries, ALaterMinorVersionIsReadAsOneZeroWithAWarning) {
+  const auto convert_with = [](const json& rdtf, Diagnostics& diag) {
+    json doc = arm();
+    doc["extras"]["RDTF"] = rdtf;
+    testing::TempDir dir;
+    testing::write_file(dir / "arm.gltf", doc.dump());
+    auto conversion = convert_file(dir / "arm.gltf", {}, diag);
+    EXPECT_TRUE(conversion.has_value());
+    return conversion;
+  };
+  Diagnostics plain_diag;
+  const auto plain = convert_with({{"version", "1.0"}}, plain_diag);
+  EXPECT_FALSE(plain_diag.contains(codes::RDTF_VERSION_NEWER));
+  Diagnostics newer_diag;
+  const auto newer = convert_with({{"version", "1.12"}, {"futureKey", {1, 2}}}, newer_diag);
+  ASSERT_TRUE(plain && newer);
+  int warnings = 0;
+  for (const Diagnostic& d : newer_diag.all()) {
+    if (d.code != codes::RDTF_VERSION_NEWER) continue;
+    ++warnings;
+    EXPECT_EQ(d.severity, Severity::kWarning);
+    EXPECT_EQ(d.pointer, "/extras/RDTF/version");
+    EXPECT_NE(d.message.find("'1.12', newer than the 1.0"), std::string::npos) << d.message;
+  }
+  EXPECT_EQ(warnings, 1);
+  const auto& written = newer->asset.document["extras"]["RDTF"];
+  EXPECT_EQ(written["version"], "1.12");
+  EXPECT_EQ(written["futureKey"], json({1, 2}));
+  EXPECT_EQ(plain->asset.document["extras"]["RDTF"]["nodes"], written["nodes"]);
+  ASSERT_EQ(plain->robot.links.size(), newer->robot.links.size());
+  for (std::size_t i = 0; i < plain->robot.links.size(); ++i) {
+    EXPECT_EQ(plain->robot.links[i].inertial.mass, newer->robot.links[i].inertial.mass);
+  }
+}
+
 // The base link (a 0.016 m^3 box of 5 kg by rdtf_mass) typed joint by its author: its mass is
 // lost, and a warning says so.
 TEST(RdtfEntries, AMeshTypedJointIsNamed) {

@@ -142,6 +142,7 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(RDTF_INVALID_VALUE, kSeverityError, "model") \
   X(RDTF_NODE_EXTRAS_IGNORED, kSeverityWarning, "model") \
   X(RDTF_UNKNOWN_KEY, kSeverityWarning, "model") \
+  X(RDTF_VERSION_NEWER, kSeverityWarning, "model") \
   X(SKIN_NO_WEIGHTS, kSeverityWarning, "model") \
   X(SKIN_PART_SHARED, kSeverityInfo, "model") \
   X(UNITS_IMPLAUSIBLE, kSeverityWarning, "model") \

@@ -10,9 +10,10 @@ bool is_triangle_mode(const Json& primitive) {
   return mode == 4 || mode == 5 || mode == 6;  // TRIANGLES, TRIANGLE_STRIP, TRIANGLE_FAN
 }
 
-// Grows `box` by the triangle primitives' positions of `mesh`, mapped by X.
-void add_mesh(const GltfAsset& asset, std::size_t mesh, const Eigen::Affine3d& X,
-              Eigen::AlignedBox3d& box) {
+// Grows `box` by the triangle primitives' positions of `mesh`, morphed by `weights` (morph_weights
+// of the node drawing it) and mapped by X.
+void add_mesh(const GltfAsset& asset, std::size_t mesh, std::span<const double> weights,
+              const Eigen::Affine3d& X, Eigen::AlignedBox3d& box) {
   const Json& meshes = asset.document["meshes"];
   if (mesh >= meshes.size()) return;
   for (const Json& primitive : meshes[mesh].value("primitives", Json::array())) {
@@ -21,10 +22,13 @@ void add_mesh(const GltfAsset& asset, std::size_t mesh, const Eigen::Affine3d& X
       continue;
     }
     const auto accessor = primitive["attributes"]["POSITION"].get<std::size_t>();
-    const std::vector<double> positions = read_accessor(asset, accessor);
-    for (std::size_t i = 0; i + 2 < positions.size(); i += 3) {
-      box.extend(X * Eigen::Vector3d(positions[i], positions[i + 1], positions[i + 2]));
+    const std::vector<double> values = read_accessor(asset, accessor);
+    std::vector<Eigen::Vector3d> positions(values.size() / 3);
+    for (std::size_t i = 0; i < positions.size(); ++i) {
+      positions[i] = Eigen::Vector3d(values[3 * i], values[3 * i + 1], values[3 * i + 2]);
     }
+    add_morph_displacements(asset, primitive, weights, positions);
+    for (const Eigen::Vector3d& p : positions) box.extend(X * p);
   }
 }
 
@@ -67,14 +71,15 @@ LinkBounds link_geometry_bounds(const GltfAsset& asset, const Robot& robot) {
       const Json& node = document["nodes"][mesh.node];
       if (!node.contains("mesh")) continue;
       const auto mesh_index = node["mesh"].get<std::size_t>();
+      const std::vector<double> weights = morph_weights(document, static_cast<std::size_t>(mesh.node));
       if (node.contains("skin")) {
         // The whole skinned mesh placed as this bone places its part (superset of the part).
         if (link.node < 0 || link.node >= node_count) continue;
         const auto ibm = inverse_bind(asset, node, link.node);
         if (!ibm) continue;
-        add_mesh(asset, mesh_index, X_LS * world[link.node] * *ibm, box);
+        add_mesh(asset, mesh_index, weights, X_LS * world[link.node] * *ibm, box);
       } else {
-        add_mesh(asset, mesh_index, X_LS * world[mesh.node], box);
+        add_mesh(asset, mesh_index, weights, X_LS * world[mesh.node], box);
       }
     }
     if (!box.isEmpty()) bounds[l] = box;

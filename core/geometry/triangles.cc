@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <array>
 #include <cstring>
 #include <optional>
@@ -245,6 +246,16 @@ std::optional<TriangleMeshView> view_in_place(const GltfAsset& asset, const Json
   return view;
 }
 
+// Whether a non-zero weight falls on a morph target that moves POSITION.
+bool morphs_positions(const Json& prim, std::span<const double> weights) {
+  if (weights.empty() || !prim.contains("targets")) return false;
+  const Json& targets = prim["targets"];
+  for (std::size_t t = 0; t < targets.size() && t < weights.size(); ++t) {
+    if (weights[t] != 0.0 && targets[t].contains("POSITION")) return true;
+  }
+  return false;
+}
+
 }  // namespace
 
 TriangleMesh PrimitiveTriangles::mesh() const {
@@ -263,10 +274,40 @@ TriangleMesh PrimitiveTriangles::mesh() const {
   return mesh;
 }
 
+std::vector<double> morph_weights(const Json& document, std::size_t node) {
+  const Json& n = document["nodes"][node];
+  const Json* weights = nullptr;
+  if (n.contains("weights")) {
+    weights = &n["weights"];
+  } else if (n.contains("mesh")) {
+    const Json& mesh = document["meshes"][n["mesh"].get<std::size_t>()];
+    if (mesh.contains("weights")) weights = &mesh["weights"];
+  }
+  std::vector<double> values;
+  if (weights == nullptr) return values;
+  for (const Json& w : *weights) values.push_back(w.get<double>());
+  if (std::all_of(values.begin(), values.end(), [](double w) { return w == 0.0; })) values.clear();
+  return values;
+}
+
+void add_morph_displacements(const GltfAsset& asset, const Json& primitive, std::span<const double> weights,
+                             std::vector<Eigen::Vector3d>& positions) {
+  if (!morphs_positions(primitive, weights)) return;
+  const Json& targets = primitive["targets"];
+  // Target by target, in order: base + w0 t0 + w1 t1 + ..., as the spec writes the sum.
+  for (std::size_t t = 0; t < targets.size() && t < weights.size(); ++t) {
+    if (weights[t] == 0.0 || !targets[t].contains("POSITION")) continue;
+    const auto displacements = read_points(asset, targets[t]["POSITION"].get<std::size_t>());
+    const std::size_t n = std::min(displacements.size(), positions.size());  // Equal once validated.
+    for (std::size_t i = 0; i < n; ++i) positions[i] += weights[t] * displacements[i];
+  }
+}
+
 std::optional<PrimitiveTriangles> read_primitive_in_place(const GltfAsset& asset, std::size_t mesh,
-                                                          std::size_t primitive, Diagnostics& diag) {
+                                                          std::size_t primitive, Diagnostics& diag,
+                                                          std::span<const double> weights) {
   const Json& prim = asset.document["meshes"][mesh]["primitives"][primitive];
-  if (const auto view = view_in_place(asset, prim)) {
+  if (const auto view = morphs_positions(prim, weights) ? std::nullopt : view_in_place(asset, prim)) {
     // What read_primitive_triangles says of the same primitive: the index count (or vertex
     // count, without indices) that is not a multiple of 3.
     const Json& accessors = asset.document["accessors"];
@@ -278,7 +319,7 @@ std::optional<PrimitiveTriangles> read_primitive_in_place(const GltfAsset& asset
         n, json_pointer(json_pointer("/meshes", mesh) + "/primitives", primitive), diag);
     return PrimitiveTriangles{*view, std::nullopt};
   }
-  auto copy = read_primitive_triangles(asset, mesh, primitive, diag);
+  auto copy = read_primitive_triangles(asset, mesh, primitive, diag, weights);
   if (!copy) return std::nullopt;
   return PrimitiveTriangles{{}, std::move(copy)};
 }
@@ -329,7 +370,8 @@ std::vector<double> read_accessor(const GltfAsset& asset, std::size_t index) {
 }
 
 std::optional<TriangleMesh> read_primitive_triangles(const GltfAsset& asset, std::size_t mesh,
-                                                     std::size_t primitive, Diagnostics& diag) {
+                                                     std::size_t primitive, Diagnostics& diag,
+                                                     std::span<const double> weights) {
   const Json& prim = asset.document["meshes"][mesh]["primitives"][primitive];
   const std::string pointer =
       json_pointer(json_pointer("/meshes", mesh) + "/primitives", primitive);
@@ -346,6 +388,7 @@ std::optional<TriangleMesh> read_primitive_triangles(const GltfAsset& asset, std
   }
   TriangleMesh result;
   result.positions = read_points(asset, prim["attributes"]["POSITION"].get<std::size_t>());
+  add_morph_displacements(asset, prim, weights, result.positions);
   if (mode == 4 && prim.contains("indices")) {
     const auto indices = prim["indices"].get<std::size_t>();
     if (read_indexed_triangles(asset, indices, result.triangles)) {

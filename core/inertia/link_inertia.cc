@@ -73,14 +73,18 @@ struct MeshGeometry {
   mutable std::future<SurfaceTopology> pending_;
 };
 
-const MeshGeometry& geometry_of(const GltfAsset& asset, std::size_t mesh,
-                                std::map<std::size_t, MeshGeometry>& cache, Diagnostics& diag) {
-  const auto found = cache.find(mesh);
+// A mesh as drawn with morph weights (none: as stored); every node drawing it so shares one.
+using GeometryKey = std::pair<std::size_t, std::vector<double>>;
+
+const MeshGeometry& geometry_of(const GltfAsset& asset, std::size_t mesh, std::vector<double> weights,
+                                std::map<GeometryKey, MeshGeometry>& cache, Diagnostics& diag) {
+  GeometryKey key{mesh, std::move(weights)};
+  const auto found = cache.find(key);
   if (found != cache.end()) return found->second;
   MeshGeometry geometry;
   const Json& primitives = asset.document["meshes"][mesh]["primitives"];
   for (std::size_t p = 0; p < primitives.size(); ++p) {
-    auto triangles = read_primitive_in_place(asset, mesh, p, diag);
+    auto triangles = read_primitive_in_place(asset, mesh, p, diag, key.second);
     if (!triangles) continue;
     geometry.primitives.push_back(std::move(*triangles));
     geometry.primitive_index.push_back(p);
@@ -90,7 +94,7 @@ const MeshGeometry& geometry_of(const GltfAsset& asset, std::size_t mesh,
   }
   // Started once the geometry has its place in the cache: the check reads the views where they
   // stay until the cache goes.
-  MeshGeometry& cached = cache.emplace(mesh, std::move(geometry)).first->second;
+  MeshGeometry& cached = cache.emplace(std::move(key), std::move(geometry)).first->second;
   cached.check_surface();
   return cached;
 }
@@ -267,7 +271,7 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
   for (std::size_t l = 0; l < robot.links.size(); ++l) link_of_node[robot.links[l].node] = static_cast<int>(l);
   const std::vector<int> owners = owning_link_nodes(document, types);
 
-  std::map<std::size_t, MeshGeometry> cache;
+  std::map<GeometryKey, MeshGeometry> cache;
   std::vector<std::vector<MassPiece>> pieces(robot.links.size());
 
   for (std::size_t node = 0; node < types.size(); ++node) {
@@ -292,7 +296,7 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
       continue;
     }
     const auto mesh = document["nodes"][node]["mesh"].get<std::size_t>();
-    const MeshGeometry& geometry = geometry_of(asset, mesh, cache, diag);
+    const MeshGeometry& geometry = geometry_of(asset, mesh, morph_weights(document, node), cache, diag);
     if (geometry.pieces.empty()) continue;
     if (skinned) report_topology(geometry, pointer, name, diag);
     // What is found from here on is reported after the surface check's findings, as when the

@@ -107,12 +107,13 @@ std::string strided_digest(const std::uint8_t* base, std::size_t stride, std::si
 
 // The digest of one mesh: every primitive's positions and triangles as the mass computation reads
 // them (in place as stored, or as the copy it makes of strips, fans and sparse accessors).
-std::string mesh_digest(const GltfAsset& asset, std::size_t mesh, const ContentDigest& digest) {
+std::string mesh_digest(const GltfAsset& asset, std::size_t mesh, std::span<const double> weights,
+                        const ContentDigest& digest) {
   std::vector<std::uint8_t> bytes;
   Diagnostics ignored;  // The conversion reported these already.
   const Json& primitives = asset.document["meshes"][mesh]["primitives"];
   for (std::size_t p = 0; p < primitives.size(); ++p) {
-    const auto triangles = read_primitive_in_place(asset, mesh, p, ignored);
+    const auto triangles = read_primitive_in_place(asset, mesh, p, ignored, weights);
     if (!triangles) {
       bytes.push_back(0);
       continue;
@@ -223,7 +224,8 @@ std::vector<std::string> link_geometry_digests(const GltfAsset& asset, const Rob
   if (!document.contains("nodes") || !document["nodes"].is_array()) return digests;
   const auto world = node_world_transforms(document);
   const auto parents = node_parents(document);
-  std::map<std::size_t, std::string> meshes;  // A mesh shared by several nodes is read once.
+  // A mesh shared by several nodes (with the same morph weights) is read once.
+  std::map<std::pair<std::size_t, std::vector<double>>, std::string> meshes;
   for (std::size_t l = 0; l < robot.links.size(); ++l) {
     const Link& link = robot.links[l];
     std::vector<std::uint8_t> bytes;
@@ -236,8 +238,12 @@ std::vector<std::string> link_geometry_digests(const GltfAsset& asset, const Rob
       const Json& n = document["nodes"][static_cast<std::size_t>(node)];
       if (!n.contains("mesh") || !n["mesh"].is_number_unsigned()) continue;
       const auto mesh = n["mesh"].get<std::size_t>();
-      auto found = meshes.find(mesh);
-      if (found == meshes.end()) found = meshes.emplace(mesh, mesh_digest(asset, mesh, digest)).first;
+      auto key = std::make_pair(mesh, morph_weights(document, static_cast<std::size_t>(node)));
+      auto found = meshes.find(key);
+      if (found == meshes.end()) {
+        const std::string mesh_bytes = mesh_digest(asset, mesh, key.second, digest);
+        found = meshes.emplace(std::move(key), mesh_bytes).first;
+      }
       append_placement(bytes, document, parents, world, link, node);
       append_text(bytes, found->second);
       if (n.contains("skin") && n["skin"].is_number_unsigned()) {

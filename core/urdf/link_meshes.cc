@@ -18,20 +18,23 @@ struct MeshPieces {
   bool closed = false;
 };
 
-const MeshPieces& pieces_of(const GltfAsset& asset, std::size_t mesh,
-                            std::map<std::size_t, MeshPieces>& cache) {
-  if (const auto found = cache.find(mesh); found != cache.end()) return found->second;
+// A mesh as drawn with morph weights (morph_weights; none: as stored), as the mass is computed.
+using PiecesKey = std::pair<std::size_t, std::vector<double>>;
+
+const MeshPieces& pieces_of(const GltfAsset& asset, PiecesKey key, std::map<PiecesKey, MeshPieces>& cache) {
+  if (const auto found = cache.find(key); found != cache.end()) return found->second;
   MeshPieces result;
   Diagnostics ignored;  // The conversion reported these already.
+  const std::size_t mesh = key.first;
   const Json& primitives = asset.document["meshes"][mesh]["primitives"];
   for (std::size_t p = 0; p < primitives.size(); ++p) {
-    if (auto triangles = read_primitive_triangles(asset, mesh, p, ignored)) {
+    if (auto triangles = read_primitive_triangles(asset, mesh, p, ignored, key.second)) {
       result.pieces.push_back(std::move(*triangles));
       result.primitive_index.push_back(p);
     }
   }
   result.closed = analyze_surface(result.pieces).closed();
-  return cache.emplace(mesh, std::move(result)).first->second;
+  return cache.emplace(std::move(key), std::move(result)).first->second;
 }
 
 // Appends one solid, mapped by X and wound outward. Returns false when it has no volume.
@@ -67,7 +70,7 @@ std::vector<LinkSurface> link_surfaces(const GltfAsset& asset, const Robot& robo
   const Json& document = asset.document;
   if (!document.contains("nodes")) return surfaces;
   const auto world = node_world_transforms(document);
-  std::map<std::size_t, MeshPieces> cache;
+  std::map<PiecesKey, MeshPieces> cache;
   std::map<int, std::vector<BoneGeometry>> bones_of_node;
 
   for (std::size_t l = 0; l < robot.links.size(); ++l) {
@@ -79,7 +82,8 @@ std::vector<LinkSurface> link_surfaces(const GltfAsset& asset, const Robot& robo
       if (std::find(done.begin(), done.end(), node) != done.end()) continue;
       done.push_back(node);
       const Json& n = document["nodes"][node];
-      const MeshPieces& mesh = pieces_of(asset, n["mesh"].get<std::size_t>(), cache);
+      const MeshPieces& mesh =
+          pieces_of(asset, {n["mesh"].get<std::size_t>(), morph_weights(document, static_cast<std::size_t>(node))}, cache);
       if (mesh.pieces.empty()) continue;
       if (!n.contains("skin")) {
         const Eigen::Affine3d X_LN = link.X_SL.inverse() * world[node];

@@ -4,6 +4,7 @@
 #include <array>
 #include <cstdint>
 #include <optional>
+#include <span>
 #include <vector>
 
 #include <Eigen/Core>
@@ -23,10 +24,22 @@ std::vector<double> read_accessor(const GltfAsset& asset, std::size_t accessor);
 // Number of components of an accessor's element type ("VEC3" -> 3, "MAT4" -> 16).
 int component_count(const std::string& type);
 
-// The triangles of one primitive (modes TRIANGLES, TRIANGLE_STRIP, TRIANGLE_FAN, indexed or not).
-// Points and lines give nothing and an info diagnostic.
+// The morph target weights a node draws its mesh with (glTF 2.0 section 3.7.2.2): the node's
+// `weights`, else its mesh's; empty when there are none or all are 0 (the mesh as stored). A
+// Blender shape key's value is exported as such a weight.
+std::vector<double> morph_weights(const Json& document, std::size_t node);
+
+// Adds each morph target's POSITION displacements, times its weight, to the primitive's
+// positions: what a viewer draws. Nothing when no weighted target moves POSITION.
+void add_morph_displacements(const GltfAsset& asset, const Json& primitive, std::span<const double> weights,
+                             std::vector<Eigen::Vector3d>& positions);
+
+// The triangles of one primitive (modes TRIANGLES, TRIANGLE_STRIP, TRIANGLE_FAN, indexed or not),
+// morphed by `weights` (morph_weights of the node that draws it). Points and lines give nothing
+// and an info diagnostic.
 std::optional<TriangleMesh> read_primitive_triangles(const GltfAsset& asset, std::size_t mesh,
-                                                     std::size_t primitive, Diagnostics& diag);
+                                                     std::size_t primitive, Diagnostics& diag,
+                                                     std::span<const double> weights = {});
 
 // A primitive's triangles for the mass and surface computations: read in place from the asset's
 // buffers when they allow it (mode TRIANGLES, POSITION as dense floats, indices dense unsigned
@@ -42,8 +55,10 @@ struct PrimitiveTriangles {
 };
 
 // Nothing (and the diagnostics of read_primitive_triangles) for a primitive without triangles.
+// A primitive that `weights` morph is always a copy.
 std::optional<PrimitiveTriangles> read_primitive_in_place(const GltfAsset& asset, std::size_t mesh,
-                                                          std::size_t primitive, Diagnostics& diag);
+                                                          std::size_t primitive, Diagnostics& diag,
+                                                          std::span<const double> weights = {});
 
 // A node's local transform (matrix, or translation * rotation * scale).
 Eigen::Affine3d node_local_transform(const Json& node);

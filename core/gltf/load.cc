@@ -172,6 +172,7 @@ std::vector<std::filesystem::path> files_named_by(const Json& document, const st
 struct ConfinedReads {
   SourceFiles* source = nullptr;
   std::map<std::string, std::filesystem::path> files;
+  std::map<std::string, std::uint64_t> lengths;  // Each buffer's byteLength, by its token.
   std::map<std::filesystem::path, int> uses;  // Buffers not yet loaded that name each file.
   std::vector<std::size_t> fallbacks;  // Buffers that EXT_meshopt_compression decodes into.
 };
@@ -217,6 +218,11 @@ bool fs_read(std::vector<unsigned char>* out, std::string* err, const std::strin
   } else {
     internal::reserve_huge(*out, source->second.bytes.size());
     out->assign(source->second.bytes.begin(), source->second.bytes.end());
+  }
+  // A file longer than its buffer's byteLength holds the buffer in its first bytes (the validator
+  // accepts it, and a GLB's BIN chunk may be longer too); tinygltf wants the exact length.
+  if (const auto length = reads->lengths.find(name); length != reads->lengths.end() && out->size() > length->second) {
+    out->resize(static_cast<std::size_t>(length->second));
   }
   return true;
 }
@@ -304,14 +310,15 @@ std::optional<Json> prepare_buffers(const Json& document, bool binary, const Loa
                      std::to_string(limits.max_file_bytes));
       continue;
     }
-    if (*size != declared) {
+    if (*size < declared) {
       diag.error(codes::BUFFER_EXTERNAL_BYTELENGTH_MISMATCH, pointer + "/byteLength",
                  "'" + uri + "' has " + std::to_string(*size) + " bytes but byteLength is " +
-                     std::to_string(declared));
+                     std::to_string(declared) + ": the file is shorter than the buffer it holds");
       continue;
     }
     const std::string token = "rdtf-confined-buffer-" + std::to_string(i);
     reads.files[token] = *path;
+    reads.lengths[token] = declared;
     ++reads.uses[*path];
     entry["uri"] = token;
     loader_document["buffers"].push_back(entry);

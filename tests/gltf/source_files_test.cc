@@ -107,6 +107,34 @@ TEST(SourceFiles, AFileThatCouldNotBeReadIsTheLoadersIoError) {
                                                    (dir / "arm3.bin").string() + ") missing"});
 }
 
+// A .bin longer than its buffer's byteLength holds the buffer in its first bytes, as the Khronos
+// validator reads it (and as a GLB's longer BIN chunk is read); a shorter one cannot hold it. Two
+// buffers naming the same file with other lengths each get theirs.
+TEST(SourceFiles, AFileLongerThanItsBufferHoldsItAndAShorterOneIsRefused) {
+  testing::TempDir folder;
+  const std::string bin = arm3_bin();
+  const fs::path model = write_arm3(folder.path(), [&](Json& d) {
+    d["buffers"].push_back(Json{{"uri", "arm3.bin"}, {"byteLength", 8}});
+  });
+  testing::write_file(folder / "arm3.bin", bin + "tail");
+  Diagnostics diag;
+  const auto asset = load_gltf(model, LoadLimits{}, diag);
+  ASSERT_TRUE(asset) << ::testing::PrintToString(errors(diag));
+  EXPECT_TRUE(diag.all().empty()) << format(diag.all().front());
+  ASSERT_EQ(asset->buffers.size(), 2u);
+  EXPECT_EQ(asset->buffers[0], bytes_of(bin));
+  EXPECT_EQ(asset->buffers[1], bytes_of(bin.substr(0, 8)));
+
+  testing::write_file(folder / "arm3.bin", bin.substr(0, bin.size() - 4));
+  Diagnostics short_diag;
+  EXPECT_FALSE(load_gltf(model, LoadLimits{}, short_diag));
+  EXPECT_EQ(errors(short_diag),
+            std::vector<std::string>{std::string(codes::BUFFER_EXTERNAL_BYTELENGTH_MISMATCH) +
+                                     " /buffers/0/byteLength: 'arm3.bin' has " + std::to_string(bin.size() - 4) +
+                                     " bytes but byteLength is " + std::to_string(bin.size()) +
+                                     ": the file is shorter than the buffer it holds"});
+}
+
 // The refusals of the confined read, as load_gltf (the CLI's path) reports them.
 TEST(SourceFiles, ConfinementRefusalsNameTheUriThePathAndWhy) {
   testing::TempDir root;

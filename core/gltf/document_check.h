@@ -129,8 +129,8 @@ class DocumentCheck {
 
   // validate_nodes.cc
   void check_nodes();
-  void check_node(const Json& node, const std::string& pointer, NodeFacts& facts);
-  void check_transform(const Json& node, const std::string& pointer);
+  void check_node(const Json& node, std::size_t index, const std::string& pointer, NodeFacts& facts);
+  void check_transform(const Json& node, std::size_t index, const std::string& pointer);
   void check_node_graph();
   void report_loops();
   void order_trees();

@@ -174,8 +174,14 @@ void DocumentCheck::check_attribute_format(const std::string& name, std::size_t 
     expected = "VEC4 of FLOAT, or of normalized UNSIGNED_BYTE or UNSIGNED_SHORT";
   }
   if (!ok) {
+    // Integer positions are valid glTF once the file declares the extension that allows them.
+    const bool needs_quantization = name == "POSITION" && !quantization_ && facts.type == "VEC3" &&
+                                    (type == kByte || type == kUnsignedByte || type == kShort || type == kUnsignedShort);
     diag_.error(codes::MESH_PRIMITIVE_ATTRIBUTES_ACCESSOR_INVALID_FORMAT, pointer,
-                "the accessor is " + format_name(facts) + "; " + name + " must be " + expected);
+                "the accessor is " + format_name(facts) + "; " + name + " must be " + expected +
+                    (needs_quantization ? " (integer positions need KHR_mesh_quantization in extensionsUsed "
+                                          "and extensionsRequired)"
+                                        : ""));
   }
   const Json& json = *entries_["accessors"][accessor];
   if (name == "POSITION" && ok && (!json.contains("min") || !json.contains("max"))) {

@@ -10,20 +10,40 @@
 namespace rdtf::internal {
 namespace {
 
-// Column-major 4x4: the last row is (0, 0, 0, 1) and the first three columns are orthogonal and
-// non-zero. The validator's tolerance: it accepts 1e-5 of shear and refuses 1e-4.
-bool decomposable(const std::vector<double>& m) {
-  if (m[3] != 0 || m[7] != 0 || m[11] != 0 || m[15] != 1) return false;
+// Why a column-major 4x4 matrix is no translation, rotation and scale, or "" when it is one: the
+// last row must be (0, 0, 0, 1) and the first three columns orthogonal and non-zero. The
+// validator's tolerance: it accepts 1e-5 of shear and refuses 1e-4.
+std::string not_decomposable(const std::vector<double>& m) {
+  if (m[3] != 0 || m[7] != 0 || m[11] != 0 || m[15] != 1) {
+    return "its last row is (" + number_text(m[3]) + ", " + number_text(m[7]) + ", " + number_text(m[11]) + ", " +
+           number_text(m[15]) + "), not (0, 0, 0, 1): it projects";
+  }
   const auto dot = [&](int a, int b) {
     return m[4 * a] * m[4 * b] + m[4 * a + 1] * m[4 * b + 1] + m[4 * a + 2] * m[4 * b + 2];
   };
+  static const char* const kAxes[] = {"x", "y", "z"};
   for (int a = 0; a < 3; ++a) {
-    if (!(dot(a, a) > 0) || !std::isfinite(dot(a, a))) return false;
-    for (int b = a + 1; b < 3; ++b) {
-      if (std::abs(dot(a, b)) > 5e-5 * std::sqrt(dot(a, a) * dot(b, b))) return false;
+    if (!(dot(a, a) > 0) || !std::isfinite(dot(a, a))) {
+      return std::string("its ") + kAxes[a] + " column has length " + number_text(std::sqrt(dot(a, a))) +
+             ": it collapses space (a scale of 0)";
     }
   }
-  return true;
+  for (int a = 0; a < 3; ++a) {
+    for (int b = a + 1; b < 3; ++b) {
+      const double cosine = dot(a, b) / std::sqrt(dot(a, a) * dot(b, b));
+      if (std::abs(cosine) > 5e-5) {
+        return std::string("its ") + kAxes[a] + " and " + kAxes[b] + " columns are not orthogonal (cosine " +
+               number_text(cosine) + "): it shears";
+      }
+    }
+  }
+  return "";
+}
+
+std::string numbers_text(const std::vector<double>& values) {
+  std::string text = "[";
+  for (std::size_t i = 0; i < values.size(); ++i) text += (i ? ", " : "") + number_text(values[i]);
+  return text + "]";
 }
 
 }  // namespace
@@ -32,11 +52,11 @@ void DocumentCheck::check_nodes() {
   const auto& nodes = entries_["nodes"];
   nodes_.resize(nodes.size());
   for (std::size_t i = 0; i < nodes.size(); ++i) {
-    if (nodes[i] != nullptr) check_node(*nodes[i], json_pointer("/nodes", i), nodes_[i]);
+    if (nodes[i] != nullptr) check_node(*nodes[i], i, json_pointer("/nodes", i), nodes_[i]);
   }
 }
 
-void DocumentCheck::check_node(const Json& node, const std::string& pointer, NodeFacts& facts) {
+void DocumentCheck::check_node(const Json& node, std::size_t index, const std::string& pointer, NodeFacts& facts) {
   facts.children = read_refs(node, "children", pointer, "nodes");
   facts.mesh = read_ref(node, "mesh", pointer, "meshes");
   facts.skin = read_ref(node, "skin", pointer, "skins");
@@ -58,10 +78,10 @@ void DocumentCheck::check_node(const Json& node, const std::string& pointer, Nod
                 "the node has a skin but mesh " + std::to_string(facts.mesh) +
                     " has no JOINTS_0 attribute");
   }
-  check_transform(node, pointer);
+  check_transform(node, index, pointer);
 }
 
-void DocumentCheck::check_transform(const Json& node, const std::string& pointer) {
+void DocumentCheck::check_transform(const Json& node, std::size_t index, const std::string& pointer) {
   const auto matrix = read_numbers(node, "matrix", pointer, 16);
   read_numbers(node, "translation", pointer, 3);
   read_numbers(node, "scale", pointer, 3);
@@ -69,12 +89,16 @@ void DocumentCheck::check_transform(const Json& node, const std::string& pointer
   if (node.contains("matrix") &&
       (node.contains("translation") || node.contains("rotation") || node.contains("scale"))) {
     diag_.error(codes::NODE_MATRIX_TRS, pointer + "/matrix",
-                "a node has either a matrix or translation/rotation/scale, not both");
+                node_named(doc_, index) + " has a matrix and translation/rotation/scale too; a node has "
+                "either, not both");
   }
-  if (matrix && !decomposable(*matrix)) {
-    diag_.error(codes::NODE_MATRIX_NON_TRS, pointer + "/matrix",
-                "the matrix is not a translation, rotation and scale (it shears, projects or "
-                "collapses space); apply the transform in the modeller before export");
+  if (matrix) {
+    if (const std::string why = not_decomposable(*matrix); !why.empty()) {
+      diag_.error(codes::NODE_MATRIX_NON_TRS, pointer + "/matrix",
+                  node_named(doc_, index) + ": the matrix " + numbers_text(*matrix) +
+                      " (column-major) is not a translation, rotation and scale: " + why +
+                      "; apply the transform in the modeller before export");
+    }
   }
   if (!rotation) return;
   double norm2 = 0;
@@ -90,7 +114,8 @@ void DocumentCheck::check_transform(const Json& node, const std::string& pointer
   if (std::abs(std::sqrt(norm2) - 1) > 0.00769) {
     diag_.error(
         codes::ROTATION_NON_UNIT, pointer + "/rotation",
-        "the rotation quaternion has length " + number_text(std::sqrt(norm2)) + "; it must be 1");
+        node_named(doc_, index) + ": the rotation quaternion " + numbers_text(*rotation) + " has length " +
+            number_text(std::sqrt(norm2)) + "; it must be 1 (x, y, z, w of a unit quaternion)");
   }
 }
 

@@ -274,6 +274,51 @@ TEST(ValidateDocument, NodeTransforms) {
   EXPECT_DIAGNOSTIC(check_document(document), "ARRAY_LENGTH_NOT_IN_LIST", "/nodes/0/scale");
 }
 
+// A transform error names the node by index and name, shows the value and says what is wrong.
+TEST(ValidateDocument, NodeTransformErrorsNameTheNodeTheValueAndWhy) {
+  const auto message = [](const Json& document, const std::string& code) {
+    const Diagnostics diag = check_document(document);
+    for (const Diagnostic& d : diag.all()) {
+      if (d.code == code) return d.message;
+    }
+    ADD_FAILURE() << "no " << code << ":\n" << listing(diag);
+    return std::string();
+  };
+  const Json identity = Json::array({1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1});
+  Json document = triangle_document();
+  document["nodes"][0]["matrix"] = identity;
+  document["nodes"][0]["matrix"][4] = 0.5;
+  EXPECT_EQ(message(document, "NODE_MATRIX_NON_TRS"),
+            "node 0 'base': the matrix [1, 0, 0, 0, 0.5, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1] (column-major) is not a "
+            "translation, rotation and scale: its x and y columns are not orthogonal (cosine 0.447213595): "
+            "it shears; apply the transform in the modeller before export");
+  document["nodes"][0]["matrix"] = identity;
+  document["nodes"][0]["matrix"][10] = 0;
+  EXPECT_NE(message(document, "NODE_MATRIX_NON_TRS").find("its z column has length 0: it collapses space"),
+            std::string::npos);
+  document["nodes"][0]["matrix"] = identity;
+  document["nodes"][0]["matrix"][3] = 0.25;
+  EXPECT_NE(message(document, "NODE_MATRIX_NON_TRS").find("its last row is (0.25, 0, 0, 1), not (0, 0, 0, 1): it projects"),
+            std::string::npos);
+  document["nodes"][0]["matrix"] = identity;
+  document["nodes"][0]["scale"] = Json::array({1, 1, 1});
+  EXPECT_EQ(message(document, "NODE_MATRIX_TRS"),
+            "node 0 'base' has a matrix and translation/rotation/scale too; a node has either, not both");
+
+  document = triangle_document();
+  document["nodes"][0]["rotation"] = Json::array({0, 0, 0, 0.5});
+  EXPECT_EQ(message(document, "ROTATION_NON_UNIT"),
+            "node 0 'base': the rotation quaternion [0, 0, 0, 0.5] has length 0.5; it must be 1 (x, y, z, w of a "
+            "unit quaternion)");
+
+  // SHORT positions are valid glTF with KHR_mesh_quantization: the error says so.
+  document = triangle_document();
+  document["accessors"][0]["componentType"] = 5122;
+  EXPECT_NE(message(document, "MESH_PRIMITIVE_ATTRIBUTES_ACCESSOR_INVALID_FORMAT")
+                .find("(integer positions need KHR_mesh_quantization in extensionsUsed and extensionsRequired)"),
+            std::string::npos);
+}
+
 TEST(ValidateDocument, WrongJsonTypesAreErrorsNotExceptions) {
   Json document = triangle_document();
   document["accessors"][0]["count"] = "3";

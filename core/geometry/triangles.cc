@@ -411,6 +411,11 @@ std::optional<TriangleMesh> read_primitive_triangles(const GltfAsset& asset, std
       result.triangles[i] = {order[3 * i], order[3 * i + 1], order[3 * i + 2]};
     }
     warn_incomplete_triangle(n, pointer, diag);
+  } else if (n < 3) {
+    // The validator's MESH_PRIMITIVE_INCOMPATIBLE_MODE for a strip or fan too short for a triangle.
+    diag.warning(codes::MESH_PRIMITIVE_INCOMPATIBLE_MODE, pointer,
+                 std::string("a triangle ") + (mode == 5 ? "strip" : "fan") + " of " + std::to_string(n) +
+                     (n == 1 ? " vertex" : " vertices") + " has no triangle; it adds nothing");
   } else if (mode == 5) {
     // glTF 2.0 section 3.7.2.1: triangle i is (i, i + 1 + i%2, i + 2 - i%2).
     for (std::size_t i = 0; i + 2 < n; ++i) {

@@ -302,6 +302,26 @@ TEST(Triangles, TriangleStripShortInputs) {
                    {{0, 1, 2}, {1, 3, 2}});
 }
 
+// A strip or fan of fewer than 3 vertices has no triangle: a warning, as the validator's
+// MESH_PRIMITIVE_INCOMPATIBLE_MODE, not silence.
+TEST(Triangles, AStripOrFanTooShortForATriangleIsAWarning) {
+  const std::vector<Vector3d> two{{0, 0, 0}, {1, 0, 0}};
+  for (int mode : {5, 6}) {
+    for (const std::vector<std::uint32_t>& order : {std::vector<std::uint32_t>{}, std::vector<std::uint32_t>{1, 0}}) {
+      Diagnostics diag;
+      const auto triangles = read_primitive_triangles(topology_asset(mode, two, order), 0, 0, diag);
+      ASSERT_TRUE(triangles.has_value());
+      EXPECT_TRUE(triangles->triangles.empty());
+      ASSERT_EQ(diag.all().size(), 1u);
+      EXPECT_EQ(diag.all()[0].code, "MESH_PRIMITIVE_INCOMPATIBLE_MODE");
+      EXPECT_EQ(diag.all()[0].severity, Severity::kWarning);
+      EXPECT_EQ(diag.all()[0].pointer, "/meshes/0/primitives/0");
+      EXPECT_EQ(diag.all()[0].message,
+                std::string("a triangle ") + (mode == 5 ? "strip" : "fan") + " of 2 vertices has no triangle; it adds nothing");
+    }
+  }
+}
+
 // Section 3.7.2.1: fan triangle i is (i + 1, i + 2, 0).
 TEST(Triangles, TriangleFan) {
   const std::vector<Vector3d> fan{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {-1, 1, 0}};

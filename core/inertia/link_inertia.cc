@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <future>
 #include <map>
 #include <numeric>
@@ -273,6 +274,8 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
 
   std::map<GeometryKey, MeshGeometry> cache;
   std::vector<std::vector<MassPiece>> pieces(robot.links.size());
+  // Mesh nodes whose own rdtf_mass set their density, by link: a link's rdtf_mass rescales them.
+  std::vector<std::vector<std::pair<std::size_t, double>>> mesh_masses(robot.links.size());
 
   for (std::size_t node = 0; node < types.size(); ++node) {
     // A mesh on a node typed otherwise by its author (a link typed "joint" in extras.RDTF): its
@@ -351,7 +354,10 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
       volume += integrals.volume;
     }
     double mesh_density = density;
-    if (mass_override && volume > 0) mesh_density = *mass_override / volume;
+    if (mass_override && volume > 0) {
+      mesh_density = *mass_override / volume;
+      mesh_masses[link].emplace_back(reported, *mass_override);
+    }
     for (const VolumeIntegrals& integrals : solids) {
       pieces[link].push_back({integrals, mesh_density});
       robot.links[link].meshes.push_back({static_cast<int>(node), integrals.volume, mesh_density});
@@ -395,6 +401,22 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
         const double factor = *mass / link.inertial.mass;
         link.inertial.mass = *mass;
         link.inertial.inertia *= factor;
+        // Every mesh's density scales alike, so that each mesh's density times its volume is
+        // still its share of the link's mass (rdtf inspect lists them).
+        for (LinkMesh& mesh : link.meshes) mesh.density *= factor;
+        const auto number_text = [](double kg) {
+          char text[32];
+          std::snprintf(text, sizeof(text), "%.6g", kg);
+          return std::string(text);
+        };
+        for (const auto& [node, mesh_mass] : mesh_masses[l]) {
+          if (std::abs(factor - 1.0) <= 1e-12) continue;
+          diag.warning(codes::RDTF_MASS_OVERRIDDEN, json_pointer("/nodes", node) + "/extras/rdtf_mass",
+                       node_label(document, node) + " sets rdtf_mass " + number_text(mesh_mass) + " kg, but link '" +
+                           link.name + "' sets rdtf_mass " + number_text(*mass) +
+                           " kg for all its meshes, which scales this one to " + number_text(mesh_mass * factor) +
+                           " kg; set the mass on the link or on its meshes, not both");
+        }
       }
     }
     if (link.inertial.volume <= 0) {

@@ -140,6 +140,7 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(RDTF_INVALID_NODE_ENTRY, kSeverityError, "model") \
   X(RDTF_INVALID_TYPE, kSeverityError, "model") \
   X(RDTF_INVALID_VALUE, kSeverityError, "model") \
+  X(RDTF_MASS_OVERRIDDEN, kSeverityWarning, "model") \
   X(RDTF_NODE_EXTRAS_IGNORED, kSeverityWarning, "model") \
   X(RDTF_UNKNOWN_KEY, kSeverityWarning, "model") \
   X(RDTF_VERSION_NEWER, kSeverityWarning, "model") \

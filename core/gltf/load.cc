@@ -402,6 +402,26 @@ std::vector<std::uint8_t> bin_chunk_buffer(std::span<const std::uint8_t> chunk,
   return buffer;
 }
 
+// A GLB's first buffer without a uri is its BIN chunk, which must be there and hold byteLength
+// bytes (it may hold up to 3 more, its padding). Said here with the sizes, in the validator's
+// codes, rather than by tinygltf's message about the whole buffers array.
+void check_bin_chunk(const Json& document, std::span<const std::uint8_t> file, std::span<const std::uint8_t> bin,
+                     Diagnostics& diag) {
+  if (!document.contains("buffers") || document["buffers"].empty()) return;
+  const Json& buffer = document["buffers"][0];
+  if (buffer.contains("uri") || internal::is_meshopt_fallback(buffer)) return;
+  const std::uint64_t declared = buffer["byteLength"].get<std::uint64_t>();
+  if (bin.data() == nullptr) {
+    diag.error(codes::BUFFER_MISSING_GLB_DATA, "/buffers/0",
+               "buffer 0 has no uri, so its " + std::to_string(declared) +
+                   " bytes are the GLB's BIN chunk, but the file has no BIN chunk");
+  } else if (bin.size() < declared) {
+    diag.error(codes::BUFFER_BYTE_LENGTH_MISMATCH, "/buffers/0",
+               "buffer 0 has byteLength " + std::to_string(declared) + ", but the GLB's BIN chunk (its data at byte " +
+                   std::to_string(bin.data() - file.data()) + ") holds only " + std::to_string(bin.size()) + " bytes");
+  }
+}
+
 // Every buffer of `loader_document` (prepare_buffers) through tinygltf, into asset.buffers.
 bool load_buffers(const Json& loader_document, bool binary, std::span<const std::uint8_t> bin,
                   ConfinedReads& reads, GltfAsset& asset, Diagnostics& diag) {
@@ -498,6 +518,7 @@ std::optional<GltfAsset> load_from_bytes(const std::vector<std::uint8_t>& bytes,
   if (!document) return std::nullopt;
   if (!data_uris_within_cap(*document, limits, diag)) return std::nullopt;
   validate_document(*document, limits, diag);
+  if (asset.binary) check_bin_chunk(*document, bytes, bin, diag);
   if (diag.has_errors()) return std::nullopt;
 
   // Every file the model names, read once (unless the caller already did, to hash them).

@@ -59,6 +59,24 @@ std::vector<BadCase> cases() {
     all.push_back({"WrongMagicByName", raw_file("model.glb", bytes), "@0: error GLB_INVALID_MAGIC: a GLB"});
     all.push_back({"WrongMagicByVersion", raw_file("model.gltf", bytes), "47 6c 54 46, not 'glTF'"});
   }
+  {
+    // arm3.glb with its BIN chunk 8 bytes short, and with none.
+    const std::string glb = glb_bytes();
+    const std::vector<std::uint8_t> bytes(glb.begin(), glb.end());
+    Diagnostics ignored;
+    const auto chunks = parse_glb(bytes, ignored);
+    if (chunks && chunks->bin) {
+      const std::span<const std::uint8_t> bin = *chunks->bin;
+      const auto shorter = make_glb(chunks->json, bin.subspan(0, bin.size() - 8));
+      all.push_back({"GlbBinChunkShorterThanItsBuffer", raw_file("model.glb", std::string(shorter.begin(), shorter.end())),
+                     "/buffers/0: error BUFFER_BYTE_LENGTH_MISMATCH: buffer 0 has byteLength " +
+                         std::to_string(bin.size()) + ", but the GLB's BIN chunk (its data at byte "});
+      const auto without = make_glb(chunks->json, {});
+      all.push_back({"GlbWithoutItsBinChunk", raw_file("model.glb", std::string(without.begin(), without.end())),
+                     "/buffers/0: error BUFFER_MISSING_GLB_DATA: buffer 0 has no uri, so its " +
+                         std::to_string(bin.size()) + " bytes are the GLB's BIN chunk, but the file has no BIN chunk"});
+    }
+  }
   all.push_back({"InvalidJson", raw_file("model.gltf", "{\"asset\": {\"version\": \"2.0\"},\n \"nodes\": [}"),
                  "line 2"});
   all.push_back({"EmptyFile", raw_file("model.gltf", ""), "empty"});

@@ -41,6 +41,7 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(BUFFER_DATA_URI_MIME_TYPE_INVALID, kSeverityError, "glTF") \
   X(BUFFER_EXTERNAL_BYTELENGTH_MISMATCH, kSeverityError, "glTF") \
   X(BUFFER_LOAD_FAILED, kSeverityError, "glTF") \
+  X(BUFFER_MISSING_GLB_DATA, kSeverityError, "glTF") \
   X(BUFFER_MISSING_URI, kSeverityError, "glTF") \
   X(BUFFER_VIEW_INVALID_BYTE_STRIDE, kSeverityError, "glTF") \
   X(BUFFER_VIEW_TARGET_OVERRIDE, kSeverityError, "glTF") \

@@ -147,9 +147,25 @@ std::optional<std::filesystem::path> resolve_mesh_path(const std::string& filena
     const fs::path path(filename);
     candidates.push_back(path.is_absolute() ? path : urdf_folder / path);
   }
+  // A candidate that is there but is no file (a FIFO would block the read, a folder has no
+  // bytes) is named as what it is, not as missing.
+  std::string not_a_file;
   for (const fs::path& candidate : candidates) {
     std::error_code error;
-    if (fs::is_regular_file(candidate, error)) return candidate;
+    const fs::file_status status = fs::status(candidate, error);
+    if (fs::is_regular_file(status)) return candidate;
+    if (!not_a_file.empty() || error || !fs::exists(status)) continue;
+    const fs::file_type type = status.type();
+    not_a_file = type == fs::file_type::directory ? "a folder"
+                 : type == fs::file_type::fifo    ? "a FIFO (named pipe)"
+                 : type == fs::file_type::socket  ? "a socket"
+                 : type == fs::file_type::block || type == fs::file_type::character ? "a device"
+                                                                                     : "not a regular file";
+    not_a_file = candidate.string() + " is " + not_a_file;
+  }
+  if (!not_a_file.empty()) {
+    why = "mesh file '" + filename + "': " + not_a_file + ", not a file rdtf reads";
+    return std::nullopt;
   }
   why = "mesh file '" + filename + "' not found (looked for " + candidates.front().string() +
         (candidates.size() > 1 ? " and " + std::to_string(candidates.size() - 1) + " other places" : "") + ")";

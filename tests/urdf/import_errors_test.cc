@@ -84,6 +84,11 @@ const BadUrdf kBadUrdfs[] = {
      "<robot name=\"r\">\n<link name=\"a\">\n<visual><geometry><mesh filename=\"meshes/gone.stl\"/></geometry></visual>\n"
      "</link>\n</robot>\n",
      "URDF_MESH_NOT_FOUND", "/robot/link[@name='a']/visual[1]", "line 3: mesh file 'meshes/gone.stl' not found"},
+    // There, but no file: a FIFO would block the read for ever, a folder has no bytes.
+    {"mesh that is a fifo", link_urdf(visual("<mesh filename=\"pipe.stl\"/>")), "URDF_MESH_NOT_FOUND",
+     "/robot/link[@name='a']/visual[1]", "pipe.stl is a FIFO (named pipe), not a file rdtf reads"},
+    {"mesh that is a folder", link_urdf(visual("<mesh filename=\"folder.stl\"/>")), "URDF_MESH_NOT_FOUND",
+     "/robot/link[@name='a']/visual[1]", "line 3: mesh file 'folder.stl': "},
     {"not an stl",
      "<robot name=\"r\">\n<link name=\"a\">\n<visual><geometry><mesh filename=\"junk.stl\"/></geometry></visual>\n"
      "</link>\n</robot>\n",
@@ -220,6 +225,8 @@ TEST_P(UrdfImportErrors, ClearErrorAndNoOutput) {
   const fs::path urdf = dir / "robot.urdf";
   testing::write_file(urdf, bad.text);
   testing::write_file(dir / "junk.stl", "this is no STL file");
+  ASSERT_EQ(::mkfifo((dir / "pipe.stl").c_str(), 0644), 0);
+  fs::create_directory(dir / "folder.stl");
 
   Diagnostics diag;
   EXPECT_FALSE(import_urdf(urdf, UrdfImportOptions{}, diag));

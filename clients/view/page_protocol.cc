@@ -1,9 +1,9 @@
 #include "page_protocol.h"
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <set>
-#include <sstream>
 
 #include <nlohmann/json.hpp>
 
@@ -17,11 +17,11 @@ using Json = nlohmann::json;
 // Quoted for a reason, made printable and short: the text came from anyone.
 std::string in_quotes(std::string_view text) { return "'" + rdtf::lcm_safe::printable(text, 80) + "'"; }
 
+// The shortest text that reads back as the same double: "1.58", not "1.5800000000000001".
 std::string number_text(double value) {
-  std::ostringstream out;
-  out.precision(17);
-  out << value;
-  return out.str();
+  char text[32];
+  const auto result = std::to_chars(text, text + sizeof(text), value);
+  return std::string(text, result.ptr);
 }
 
 Refusal refuse(std::string reason) { return Refusal{std::move(reason)}; }

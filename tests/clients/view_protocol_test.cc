@@ -66,7 +66,7 @@ TEST(ViewPageProtocol, RefusesEveryHostileMessageWithItsReason) {
       {R"({"type":"set_joint","model":"arm3.gltf","joint":"shoulder","value":1.5700000000000001e0,"kp":5})", "unknown key 'kp' in a set_joint message"},
       {R"({"type":"set_joint","model":"arm3.gltf","joint":"shoulder"})", "a set_joint message needs \"value\""},
       {R"({"type":"set_joint","model":"arm3.gltf","joint":"shoulder","value":1.58})",
-       "value 1.5800000000000001 of joint 'shoulder' outside its limits [-1.5700000000000001, 1.5700000000000001]"},
+       "value 1.58 of joint 'shoulder' outside its limits [-1.57, 1.57]"},
       {R"({"type":"set_joint","model":"arm3.gltf","joint":"elbow","value":-10001})", "value -10001 of joint 'elbow' outside its limits [-10000, 10000]"},
       {R"({"type":"release","model":"arm3.gltf","all":true})", "unknown key 'all' in a release message"},
   };

@@ -1,6 +1,7 @@
 #include "watcher.h"
 
 #include <sys/inotify.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -49,6 +50,15 @@ bool is_staging_folder(const std::filesystem::path& folder) {
 
 // Hidden folders (.git, a desktop's .Trash, rdtfd's own .rdtfd-state when the output lies in a
 // watched folder) hold no models: not watched, not listed. (A stage folder is hidden too.)
+// Whether a name just created is whole at once: not a regular file (a symbolic link, a FIFO, a
+// socket, a device), or a regular file with another name (a hard link: link() makes a name for
+// bytes already written). A file opened with O_CREAT has one name and may still be written.
+bool made_whole(const std::filesystem::path& path) {
+  struct stat st {};
+  if (::lstat(path.c_str(), &st) != 0) return false;  // Gone already: its removal follows.
+  return !S_ISREG(st.st_mode) || st.st_nlink > 1;
+}
+
 bool skipped_folder(const std::filesystem::path& folder) {
   const std::string name = folder.filename().string();
   return (!name.empty() && name.front() == '.') || is_staging_folder(folder);
@@ -174,6 +184,10 @@ std::vector<FileEvent> InotifyWatcher::read_events(std::string& error) {
         events.push_back({FileEvent::Kind::kWritten, path});
       } else if (event->mask & IN_ATTRIB) {
         events.push_back({FileEvent::Kind::kAttributes, path});
+      } else if ((event->mask & IN_CREATE) && made_whole(path)) {
+        // A symbolic link, a hard link, a FIFO: made whole by one call, never written, so no
+        // close follows. Taken as open, it held its folder back for max_open_wait.
+        events.push_back({FileEvent::Kind::kWritten, path});
       } else if (event->mask & (IN_MODIFY | IN_CREATE)) {
         // Created or written and still open: a close (IN_CLOSE_WRITE) will follow.
         events.push_back({FileEvent::Kind::kModified, path});

@@ -4,6 +4,7 @@
 #include "watcher.h"
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <gtest/gtest.h>
@@ -80,6 +81,23 @@ TEST_F(Watcher, AnInPlaceSaveIsModifiedWhileOpenThenWrittenWhenClosed) {
     ::close(append);
   }
   EXPECT_EQ(events(), (Events{"modified a.gltf", "written a.gltf", "modified a.gltf", "written a.gltf"}));
+}
+
+// A link or a FIFO is whole when made (no write, so no close, follows): written at once. Taken as
+// open, it used to hold its folder back for max_open_wait (5 s).
+TEST_F(Watcher, ALinkOrAFifoIsWrittenWhenMade) {
+  rdtf::testing::write_file(root_ / "a.gltf", "a");
+  watch();
+  fs::create_symlink("a.gltf", root_ / "soft.gltf");
+  fs::create_hard_link(root_ / "a.gltf", root_ / "hard.gltf");
+  ASSERT_EQ(::mkfifo((root_ / "pipe.gltf").c_str(), 0644), 0);
+  EXPECT_EQ(events(), (Events{"written soft.gltf", "written hard.gltf", "written pipe.gltf"}));
+  // A new file of one name may still be written: modified until closed, as before.
+  const int fd = ::open((root_ / "b.gltf").c_str(), O_WRONLY | O_CREAT | O_EXCL, 0644);
+  ASSERT_GE(fd, 0);
+  EXPECT_EQ(events(), (Events{"modified b.gltf"}));
+  ::close(fd);
+  EXPECT_EQ(events(), (Events{"written b.gltf"}));
 }
 
 TEST_F(Watcher, ASaveByRenameIsTheTemporaryWrittenThenTheModelWritten) {

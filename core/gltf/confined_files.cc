@@ -247,10 +247,12 @@ ReadBeneath read_beneath(const std::filesystem::path& root, const std::filesyste
     const int next = ::openat(dir->get(), parts[i].c_str(), O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC);
     if (next < 0) {
       const int error = errno;
-      why = "its folder " + parts[i] + " " +
+      why = "is in folder " + parts[i] + ", which " +
             (error == ELOOP || error == ENOTDIR ? std::string("is no longer a folder (a symbolic link or a file)")
-                                                : std::string(std::strerror(error)));
-      return ReadBeneath::kGone;
+                                                : "cannot be opened: " + std::string(std::strerror(error)));
+      // A folder that cannot be searched (chmod 000) still holds the model: refused, not gone, so
+      // that rdtfd keeps serving its last good revision until the folder is readable again.
+      return error == EACCES || error == EPERM ? ReadBeneath::kRefused : ReadBeneath::kGone;
     }
     dir = std::make_unique<Fd>(next);
   }

@@ -56,7 +56,8 @@ bool read_regular_file(const std::filesystem::path& path, std::uint64_t max_byte
 enum class ReadBeneath {
   kRead,     // `out` holds the file.
   kGone,     // Not there (any more): missing, a directory, or a folder on the way is no folder.
-  kRefused,  // There, but not readable as a model: `why` says why (never the file's content).
+  kRefused,  // There, but not readable as a model (or behind a folder that cannot be searched): `why`
+             // says why (never the file's content).
 };
 ReadBeneath read_beneath(const std::filesystem::path& root, const std::filesystem::path& path,
                          std::uint64_t max_bytes, std::vector<std::uint8_t>& out, std::string& why);

@@ -218,7 +218,10 @@ void check_inertia(const Robot& robot, const Link& link, const WeldGroup& group,
       diag.error(codes::LINK_INERTIA_BELOW_SOLID_BOUND, where(link),
                  name + "polar moment tr(I)/2 = " + number(polar) +
                      " kg m^2 is below " + number(bound) +
-                     ", the least any solid of its volume and mass can have (a ball's)");
+                     ", the least any solid of its volume and mass can have (a ball's). A mass computed from "
+                     "meshes falls below it only when some volume is counted twice: parts that overlap inside one "
+                     "mesh (objects joined in Blender with Ctrl+J), or a shell inside another wound the same way. "
+                     "Keep such parts separate objects, or unite them (Boolean Union)");
     }
   }
 }

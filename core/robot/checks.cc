@@ -5,10 +5,12 @@
 #include <cmath>
 #include <iterator>
 #include <limits>
+#include <map>
 #include <sstream>
 #include <vector>
 
 #include "rdtf/completion.h"
+#include "rdtf/geometry.h"
 #include "rdtf/robot.h"
 #include "rdtf/diagnostic_codes.h"
 
@@ -181,6 +183,90 @@ std::size_t typing_distance(const std::string& a, const std::string& b) {
   return d[a.size()][b.size()];
 }
 
+// The cosine of the widest non-right angle between the axes of a linear map (0: no shear). TRS
+// nodes map their axes to orthogonal ones; a rotation inside a non-uniform scale does not.
+double shear_of(const Eigen::Matrix3d& A) {
+  double worst = 0;
+  for (int a = 0; a < 3; ++a) {
+    for (int b = a + 1; b < 3; ++b) {
+      const double norms = A.col(a).norm() * A.col(b).norm();
+      if (norms > 0) worst = std::max(worst, std::abs(A.col(a).dot(A.col(b))) / norms);
+    }
+  }
+  return worst;
+}
+
+// Nodes whose shape or placement is skewed by a rotation inside an ancestor's non-uniform scale,
+// where the skew starts (the parent is not skewed) and something below has a mesh. Such a file is
+// valid glTF, but rarely meant: Blender cannot write a child of an object with unapplied
+// non-uniform scale as its scene shows it (glTF has no parent inverse and no shear in a TRS), so it
+// writes one askew, and the masses, pivots and axes of all below follow.
+void check_shear(const Json& document, Diagnostics& diag) {
+  const Json& nodes = document["nodes"];
+  const auto parents = node_parents(document);
+  const auto world = node_world_transforms(document);
+  std::vector<char> mesh_below(nodes.size(), 0);
+  for (std::size_t i = 0; i < nodes.size(); ++i) {
+    if (!nodes[i].contains("mesh")) continue;
+    for (int up = static_cast<int>(i); up >= 0 && !mesh_below[up]; up = parents[up]) mesh_below[up] = 1;
+  }
+  // The validator's tolerance for an orthogonal matrix stored as floats (validate_nodes.cc).
+  constexpr double kShear = 5e-5;
+  for (std::size_t i = 0; i < nodes.size(); ++i) {
+    const double shear = shear_of(world[i].linear());
+    if (!mesh_below[i] || shear <= kShear) continue;
+    if (parents[i] >= 0 && shear_of(world[parents[i]].linear()) > kShear) continue;
+    // The nearest ancestor whose own scale is not uniform.
+    std::string scaled = "an ancestor";
+    for (int up = parents[i]; up >= 0; up = parents[up]) {
+      const Eigen::Matrix3d L = node_local_transform(nodes[up]).linear();
+      const Eigen::Vector3d scale(L.col(0).norm(), L.col(1).norm(), L.col(2).norm());
+      if (scale.maxCoeff() - scale.minCoeff() > 1e-6 * scale.maxCoeff()) {
+        scaled = node_label(document, static_cast<std::size_t>(up)) + " (scale " + short_number(scale.x()) + ", " +
+                 short_number(scale.y()) + ", " + short_number(scale.z()) + ")";
+        break;
+      }
+    }
+    diag.warning(codes::NODE_SHEARED, json_pointer("/nodes", i),
+                 node_label(document, i) + " is skewed: it is turned inside the non-uniform scale of " + scaled +
+                     ", so its axes are not at right angles (cosine " + short_number(shear) +
+                     ") and the meshes, pivots and axes below it are skewed too. A modeller rarely means this: "
+                     "Blender writes a child of an object with unapplied non-uniform scale so. Apply that "
+                     "object's scale (Ctrl+A > Scale) and export again");
+  }
+}
+
+// Links or joints that share a name: subscribers tell them apart by name (LINK_STATE, joint
+// commands), so the URDF export and rdtfd name all but the first otherwise ("tyre_2").
+void check_duplicate_names(const Robot& robot, Diagnostics& diag) {
+  const auto report = [&](const char* what, const std::vector<std::pair<std::string, int>>& named) {
+    std::map<std::string, std::vector<int>> nodes_by_name;
+    for (const auto& [name, node] : named) {
+      if (node >= 0) nodes_by_name[name].push_back(node);
+    }
+    for (const auto& [name, nodes] : nodes_by_name) {
+      if (nodes.size() < 2) continue;
+      std::string listed;
+      for (std::size_t k = 0; k < nodes.size() && k < 4; ++k) listed += (k ? ", " : "") + std::to_string(nodes[k]);
+      if (nodes.size() > 4) listed += ", ...";
+      diag.warning(codes::DUPLICATE_NAMES, json_pointer("/nodes", static_cast<std::size_t>(nodes[1])),
+                   std::to_string(nodes.size()) + " " + what + " are named '" + name + "' (nodes " + listed +
+                       "): subscribers and the URDF export tell " + what + " apart by name, so all but the first "
+                       "are renamed there ('" + name + "_2', ...). Name them apart (the objects of a Blender "
+                       "collection instance keep the collection's names)");
+    }
+  };
+  std::vector<std::pair<std::string, int>> links, joints;
+  for (const Link& link : robot.links) links.emplace_back(link.name, link.node);
+  for (const Joint& joint : robot.joints) {
+    // A joint rdtf made between two links (no node of its own) is placed at its child link.
+    const int node = joint.node >= 0 || joint.child_link < 0 ? joint.node : robot.links[joint.child_link].node;
+    joints.emplace_back(joint.name, node);
+  }
+  report("links", links);
+  report("joints", joints);
+}
+
 }  // namespace
 
 void check_extras_keys(const Json& document, Diagnostics& diag) {
@@ -315,6 +401,8 @@ void check_units(const Json& document, const Robot& robot, Diagnostics& diag) {
   check_units_of(document, robot, diag);
   check_densities(document, robot, diag);
   check_typed_limits(document, robot, diag);
+  check_shear(document, diag);
+  check_duplicate_names(robot, diag);
 }
 
 bool check_finite_inertials(const Json& document, const Robot& robot, Diagnostics& diag) {

@@ -158,6 +158,36 @@ TEST(BlenderFixtures, TransformsChildrenOfTheChassisAreFixedLinks) {
   }
 }
 
+// The tilted sensor is a child of the chassis (scale 0.5, 0.1, 0.3) turned about an axis the scale
+// does not keep: Blender wrote it skewed (its scene shows a square box). Said once, at the sensor,
+// naming the chassis and its scale; the wheels, turned about the scale's own axes (a mirror on
+// one), are square and get nothing.
+TEST(BlenderFixtures, TransformsTheSkewedSensorIsNamedWithTheScaleThatSkewsIt) {
+  Diagnostics diag;
+  const Conversion conversion = convert_fixture("transforms.gltf", diag);
+  std::vector<const Diagnostic*> sheared;
+  for (const Diagnostic& d : diag.all()) {
+    if (d.code == "NODE_SHEARED") sheared.push_back(&d);
+  }
+  ASSERT_EQ(sheared.size(), 1u);
+  EXPECT_EQ(sheared[0]->severity, Severity::kWarning);
+  const Json& nodes = conversion.asset.document["nodes"];
+  const std::string pointer = sheared[0]->pointer;
+  ASSERT_EQ(pointer.rfind("/nodes/", 0), 0u);
+  EXPECT_EQ(nodes[std::stoul(pointer.substr(7))]["name"], "tilted_sensor");
+  EXPECT_NE(sheared[0]->message.find("'tilted_sensor' is skewed: it is turned inside the non-uniform scale of node "),
+            std::string::npos)
+      << sheared[0]->message;
+  EXPECT_NE(sheared[0]->message.find("'chassis' (scale 0.5, 0.1, 0.3)"), std::string::npos) << sheared[0]->message;
+  EXPECT_NE(sheared[0]->message.find("Ctrl+A > Scale"), std::string::npos) << sheared[0]->message;
+  // The other fixtures, square throughout, get none.
+  for (const char* name : {"arm3.gltf", "two_cylinder.gltf", "skinned_arm.gltf", "modelled_arm.gltf"}) {
+    Diagnostics other;
+    convert_fixture(name, other);
+    EXPECT_FALSE(other.contains("NODE_SHEARED")) << name;
+  }
+}
+
 TEST(BlenderFixtures, SkinnedArmBonesAreLinksCarryingTheirPartOfTheMesh) {
   Diagnostics diag;
   const Conversion conversion = convert_fixture("skinned_arm.gltf", diag);

@@ -168,3 +168,20 @@ TEST(Plausibility, PartsParentedToPartsFromBlenderWithoutPropertiesAreNamed) {
 
 }  // namespace
 }  // namespace rdtf
+
+namespace rdtf {
+namespace {
+
+// Two links named alike (the objects of a Blender collection instance keep the collection's
+// names): said once per name, at the second, listing their nodes. The model's own names are
+// distinct: nothing.
+TEST(Plausibility, LinksThatShareANameAreNamedOnce) {
+  EXPECT_TRUE(convert_and_find(arm(), codes::DUPLICATE_NAMES).empty());
+  json doc = arm();
+  doc["nodes"][2]["name"] = "arm";  // The slider, a link of its own, now named as the arm.
+  expect_one(convert_and_find(doc, codes::DUPLICATE_NAMES), "/nodes/2",
+             {"2 links are named 'arm' (nodes 1, 2)", "renamed there ('arm_2', ...)"});
+}
+
+}  // namespace
+}  // namespace rdtf

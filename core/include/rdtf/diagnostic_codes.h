@@ -112,6 +112,7 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(VALUE_NOT_IN_RANGE, kSeverityError, "glTF") \
   X(BUFFER_VIEW_STRIDE_ADDED, kSeverityInfo, "model") \
   X(DENSITY_IMPLAUSIBLE, kSeverityWarning, "model") \
+  X(DUPLICATE_NAMES, kSeverityWarning, "model") \
   X(EXTRAS_NOT_OBJECT, kSeverityError, "model") \
   X(IMAGE_NOT_COPIED, kSeverityWarning, "model") \
   X(IMAGE_NOT_EMBEDDED, kSeverityWarning, "model") \
@@ -136,6 +137,7 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(NO_LINKS, kSeverityWarning, "model") \
   X(NO_RDTF_PROPERTIES, kSeverityWarning, "model") \
   X(NO_SCENE, kSeverityError, "model") \
+  X(NODE_SHEARED, kSeverityWarning, "model") \
   X(PRIMITIVE_SKIPPED, kSeverityInfo, "model") \
   X(RDTF_INVALID_JOINT_TYPE, kSeverityError, "model") \
   X(RDTF_INVALID_NODE_ENTRY, kSeverityError, "model") \

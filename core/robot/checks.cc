@@ -9,6 +9,8 @@
 #include <sstream>
 #include <vector>
 
+#include <Eigen/SVD>
+
 #include "rdtf/completion.h"
 #include "rdtf/geometry.h"
 #include "rdtf/robot.h"
@@ -197,25 +199,53 @@ double shear_of(const Eigen::Matrix3d& A) {
 }
 
 // Nodes whose shape or placement is skewed by a rotation inside an ancestor's non-uniform scale,
-// where the skew starts (the parent is not skewed) and something below has a mesh. Such a file is
-// valid glTF, but rarely meant: Blender cannot write a child of an object with unapplied
-// non-uniform scale as its scene shows it (glTF has no parent inverse and no shear in a TRS), so it
-// writes one askew, and the masses, pivots and axes of all below follow.
+// where the skew starts (the parent is not skewed), in the converted scene, with a mesh at or below
+// them. Such a file is valid glTF, but rarely meant: Blender cannot write a child of an object with
+// unapplied non-uniform scale as its scene shows it (glTF has no parent inverse and no shear in a
+// TRS), so it writes one askew, and the masses, pivots and axes of all below follow.
 void check_shear(const Json& document, Diagnostics& diag) {
   const Json& nodes = document["nodes"];
+  if (!document.contains("scenes") || document["scenes"].empty()) return;
   const auto parents = node_parents(document);
   const auto world = node_world_transforms(document);
+  // The nodes of the scene converted (typing's default_scene: "scene", else the first).
+  std::vector<char> in_scene(nodes.size(), 0);
+  std::vector<std::size_t> stack;
+  const Json& scene = document["scenes"][document.value("scene", std::size_t{0})];
+  for (const Json& root : scene.value("nodes", Json::array())) stack.push_back(root.get<std::size_t>());
+  while (!stack.empty()) {
+    const std::size_t node = stack.back();
+    stack.pop_back();
+    if (node >= nodes.size() || in_scene[node]) continue;
+    in_scene[node] = 1;
+    for (const Json& child : nodes[node].value("children", Json::array())) stack.push_back(child.get<std::size_t>());
+  }
   std::vector<char> mesh_below(nodes.size(), 0);
   for (std::size_t i = 0; i < nodes.size(); ++i) {
-    if (!nodes[i].contains("mesh")) continue;
+    if (!in_scene[i] || !nodes[i].contains("mesh")) continue;
     for (int up = static_cast<int>(i); up >= 0 && !mesh_below[up]; up = parents[up]) mesh_below[up] = 1;
   }
-  // The validator's tolerance for an orthogonal matrix stored as floats (validate_nodes.cc).
-  constexpr double kShear = 5e-5;
+  const auto skewed = [&](int node) {
+    // A rotation stored as floats is off by up to about 2.4e-7 rad (2^-24 on each quaternion
+    // component); inside a scale whose axes differ by a ratio r that turns axes by up to about
+    // 2.4e-7 r from square. Four times that, and never less than the validator's tolerance for an
+    // orthogonal matrix (5e-5), is rounding; more is a skew. A scale of 0 flattens rather than
+    // skews (MESH_SCALED_TO_NOTHING says so).
+    if (node < 0) return 0.0;
+    const Eigen::Matrix3d& A = world[static_cast<std::size_t>(node)].linear();
+    const double shear = shear_of(A);
+    const int parent = parents[static_cast<std::size_t>(node)];
+    const Eigen::Vector3d scales =
+        parent < 0 ? Eigen::Vector3d::Ones()
+                   : Eigen::JacobiSVD<Eigen::Matrix3d>(world[static_cast<std::size_t>(parent)].linear()).singularValues();
+    if (!(scales.minCoeff() > 0) || !(A.col(0).norm() > 0 && A.col(1).norm() > 0 && A.col(2).norm() > 0)) return 0.0;
+    const double rounding = std::max(5e-5, 1e-6 * scales.maxCoeff() / scales.minCoeff());
+    return shear > rounding ? shear : 0.0;
+  };
   for (std::size_t i = 0; i < nodes.size(); ++i) {
-    const double shear = shear_of(world[i].linear());
-    if (!mesh_below[i] || shear <= kShear) continue;
-    if (parents[i] >= 0 && shear_of(world[parents[i]].linear()) > kShear) continue;
+    if (!in_scene[i] || !mesh_below[i]) continue;
+    const double shear = skewed(static_cast<int>(i));
+    if (shear == 0.0 || skewed(parents[i]) > 0.0) continue;
     // The nearest ancestor whose own scale is not uniform.
     std::string scaled = "an ancestor";
     for (int up = parents[i]; up >= 0; up = parents[up]) {
@@ -238,7 +268,7 @@ void check_shear(const Json& document, Diagnostics& diag) {
 
 // Links or joints that share a name: subscribers tell them apart by name (LINK_STATE, joint
 // commands), so the URDF export and rdtfd name all but the first otherwise ("tyre_2").
-void check_duplicate_names(const Robot& robot, Diagnostics& diag) {
+void check_duplicate_names(const Json& document, const Robot& robot, Diagnostics& diag) {
   const auto report = [&](const char* what, const std::vector<std::pair<std::string, int>>& named) {
     std::map<std::string, std::vector<int>> nodes_by_name;
     for (const auto& [name, node] : named) {
@@ -258,10 +288,14 @@ void check_duplicate_names(const Robot& robot, Diagnostics& diag) {
   };
   std::vector<std::pair<std::string, int>> links, joints;
   for (const Link& link : robot.links) links.emplace_back(link.name, link.node);
+  // Joints that take the name of an input node (the empty whose properties made them); those rdtf
+  // names after their links ("base_wheel_joint") repeat a link name already reported.
   for (const Joint& joint : robot.joints) {
-    // A joint rdtf made between two links (no node of its own) is placed at its child link.
-    const int node = joint.node >= 0 || joint.child_link < 0 ? joint.node : robot.links[joint.child_link].node;
-    joints.emplace_back(joint.name, node);
+    if (joint.source_node < 0) continue;
+    const Json& node = document["nodes"][static_cast<std::size_t>(joint.source_node)];
+    if (node.contains("name") && node["name"].is_string() && node["name"].get<std::string>() == joint.name) {
+      joints.emplace_back(joint.name, joint.source_node);
+    }
   }
   report("links", links);
   report("joints", joints);
@@ -402,7 +436,7 @@ void check_units(const Json& document, const Robot& robot, Diagnostics& diag) {
   check_densities(document, robot, diag);
   check_typed_limits(document, robot, diag);
   check_shear(document, diag);
-  check_duplicate_names(robot, diag);
+  check_duplicate_names(document, robot, diag);
 }
 
 bool check_finite_inertials(const Json& document, const Robot& robot, Diagnostics& diag) {

@@ -24,6 +24,7 @@
 #include "rdtf/geometry.h"
 #include "rdtf/gltf.h"
 #include "rdtf/triangle_mesh.h"
+#include "support/test_support.h"
 
 namespace rdtf {
 namespace {
@@ -87,22 +88,6 @@ GltfAsset make_asset(const std::string& json, const Bytes& bytes) {
   EXPECT_EQ(asset.document["buffers"][0]["byteLength"].get<std::size_t>(), bytes.data.size())
       << "fixture's byteLength does not match its bytes";
   return asset;
-}
-
-std::string base64(const std::vector<std::uint8_t>& bytes) {
-  static const char* const kAlphabet =
-      "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-  std::string out;
-  for (std::size_t i = 0; i < bytes.size(); i += 3) {
-    const std::uint32_t n = (std::uint32_t{bytes[i]} << 16) |
-                            (i + 1 < bytes.size() ? std::uint32_t{bytes[i + 1]} << 8 : 0) |
-                            (i + 2 < bytes.size() ? std::uint32_t{bytes[i + 2]} : 0);
-    out += kAlphabet[(n >> 18) & 63];
-    out += kAlphabet[(n >> 12) & 63];
-    out += i + 1 < bytes.size() ? kAlphabet[(n >> 6) & 63] : '=';
-    out += i + 2 < bytes.size() ? kAlphabet[n & 63] : '=';
-  }
-  return out;
 }
 
 TriangleMesh read_triangles(const GltfAsset& asset, std::size_t mesh, std::size_t primitive) {
@@ -635,7 +620,7 @@ TEST(Triangles, LoadedFromMemoryWithDataUri) {
       {"attributes": {"POSITION": 0}, "indices": 1},
       {"attributes": {"POSITION": 0}, "mode": 5},
       {"attributes": {"POSITION": 2}, "indices": 1}]}]
-  })", {{"@DATA@", base64(bytes.data)}});
+  })", {{"@DATA@", testing::base64(bytes.data)}});
   Diagnostics diag;
   const std::vector<std::uint8_t> file(json.begin(), json.end());
   const auto asset = load_gltf_from_memory(file, "in-memory.gltf", {}, LoadLimits{}, diag);

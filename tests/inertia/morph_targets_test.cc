@@ -29,21 +29,6 @@ using nlohmann::json;
 
 constexpr double kTol = 1e-9;  // Relative: exact boxes, float positions of small integers.
 
-std::string base64(const std::vector<std::uint8_t>& bytes) {
-  static const char* const kAlphabet = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-  std::string out;
-  for (std::size_t i = 0; i < bytes.size(); i += 3) {
-    const std::uint32_t n = (std::uint32_t{bytes[i]} << 16) |
-                            (i + 1 < bytes.size() ? std::uint32_t{bytes[i + 1]} << 8 : 0) |
-                            (i + 2 < bytes.size() ? std::uint32_t{bytes[i + 2]} : 0);
-    out += kAlphabet[(n >> 18) & 63];
-    out += kAlphabet[(n >> 12) & 63];
-    out += i + 1 < bytes.size() ? kAlphabet[(n >> 6) & 63] : '=';
-    out += i + 2 < bytes.size() ? kAlphabet[n & 63] : '=';
-  }
-  return out;
-}
-
 template <typename T>
 void append(std::vector<std::uint8_t>& bytes, const std::vector<T>& values) {
   const std::size_t at = bytes.size();
@@ -94,7 +79,7 @@ json cube_document(const json& mesh_weights, const json& nodes) {
       {"scenes", {{{"nodes", roots}}}},
       {"nodes", nodes},
       {"meshes", {mesh}},
-      {"buffers", {{{"byteLength", bytes.size()}, {"uri", "data:application/octet-stream;base64," + base64(bytes)}}}},
+      {"buffers", {{{"byteLength", bytes.size()}, {"uri", "data:application/octet-stream;base64," + testing::base64(bytes)}}}},
       {"bufferViews",
        {{{"buffer", 0}, {"byteOffset", 0}, {"byteLength", 96}},
         {{"buffer", 0}, {"byteOffset", 96}, {"byteLength", 96}},

@@ -185,3 +185,59 @@ TEST(Plausibility, LinksThatShareANameAreNamedOnce) {
 
 }  // namespace
 }  // namespace rdtf
+
+namespace rdtf {
+namespace {
+
+// Two joint empties of one name: the joints take it, and that is said. (Joints rdtf names after
+// their links are not: the links' own warning says it.)
+TEST(Plausibility, JointEmptiesThatShareANameAreNamed) {
+  json doc = arm();
+  const std::size_t first = doc["nodes"].size();
+  json hinge = {{"name", "hinge"}, {"children", {1}}, {"translation", doc["nodes"][1]["translation"]},
+                {"rotation", doc["nodes"][1]["rotation"]}, {"extras", doc["nodes"][1]["extras"]}};
+  json slide = {{"name", "hinge"}, {"children", {2}}, {"translation", doc["nodes"][2]["translation"]},
+                {"extras", doc["nodes"][2]["extras"]}};
+  for (const std::size_t part : {1, 2}) {
+    doc["nodes"][part].erase("extras");
+    doc["nodes"][part].erase("translation");
+    doc["nodes"][part].erase("rotation");
+  }
+  doc["nodes"].push_back(hinge);
+  doc["nodes"].push_back(slide);
+  doc["nodes"][0]["children"] = {first};
+  doc["nodes"][1]["children"] = {first + 1, 3};
+  const auto found = convert_and_find(doc, codes::DUPLICATE_NAMES);
+  expect_one(found, "/nodes/" + std::to_string(first + 1),
+             {"2 joints are named 'hinge' (nodes " + std::to_string(first) + ", " + std::to_string(first + 1) + ")"});
+}
+
+// A skew is named where a rotation inside a non-uniform scale makes one; the rounding of a float
+// quaternion (Blender's 90 degrees about x, [0.70710683, 0, 0, 0.70710671]) inside a scale of ratio
+// 300 is none, nor is a node outside the scene, nor a scale of 0 (which flattens).
+TEST(Plausibility, ASkewIsNamedButNotFloatRoundingNodesOutsideTheSceneOrAFlatteningScale) {
+  const auto with = [](const json& base_scale, const json& arm_rotation) {
+    json doc = arm();
+    doc["nodes"][0]["scale"] = base_scale;
+    doc["nodes"][1]["rotation"] = arm_rotation;
+    return doc;
+  };
+  const json thirty_about_x = {0.25881904510252074, 0, 0, 0.9659258262890683};
+  expect_one(convert_and_find(with({1, 1, 3}, thirty_about_x), codes::NODE_SHEARED), "/nodes/1",
+             {"node 1 'arm' is skewed", "node 0 'base' (scale 1, 1, 3)"});
+  EXPECT_TRUE(convert_and_find(with({1, 1, 1.0 / 300}, {0.7071068286895752, 0, 0, 0.7071067094802856}),
+                               codes::NODE_SHEARED)
+                  .empty());
+  // The same skew in a second scene that is not the one converted.
+  json other = with({1, 1, 3}, thirty_about_x);
+  other["scenes"].push_back({{"nodes", {0}}});
+  other["scenes"][0]["nodes"] = json::array();
+  other["nodes"].push_back({{"name", "root"}, {"mesh", 0}});
+  other["scenes"][0]["nodes"].push_back(other["nodes"].size() - 1);
+  other["scene"] = 0;
+  EXPECT_TRUE(convert_and_find(other, codes::NODE_SHEARED).empty());
+  EXPECT_TRUE(convert_and_find(with({1, 1, 0}, thirty_about_x), codes::NODE_SHEARED).empty());
+}
+
+}  // namespace
+}  // namespace rdtf

@@ -1,8 +1,10 @@
 // Shared helpers for the tests: where the data is, temporary folders, and the Khronos validator.
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -40,5 +42,8 @@ struct CommandResult {
 CommandResult run_command(const std::string& command);
 
 std::string cli_path();  // The built `rdtf` executable.
+
+// RFC 4648 base64 with padding: the payload of a glTF data: URI.
+std::string base64(const std::vector<std::uint8_t>& bytes);
 
 }  // namespace rdtf::testing

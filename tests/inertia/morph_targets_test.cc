@@ -139,7 +139,7 @@ TEST(MorphTargets, TheMeshsWeightsMorphItsMass) {
   ASSERT_EQ(c.robot.links.size(), 1u);
   expect_box(c.robot.links[0].inertial, 1.5, 1, 1);
   // The output keeps the targets and weights: still the model the modeller drew.
-  EXPECT_EQ(c.asset.document["meshes"][0]["weights"], json({0.5, 0.0}));
+  EXPECT_EQ(c.asset.document["meshes"][0]["weights"], Json({0.5, 0.0}));
   EXPECT_EQ(c.asset.document["meshes"][0]["primitives"][0]["targets"].size(), 2u);
 }
 

@@ -108,7 +108,7 @@ TEST(RdtfEntries, ALaterMinorVersionIsReadAsOneZeroWithAWarning) {
   EXPECT_EQ(warnings, 1);
   const auto& written = newer->asset.document["extras"]["RDTF"];
   EXPECT_EQ(written["version"], "1.12");
-  EXPECT_EQ(written["futureKey"], json({1, 2}));
+  EXPECT_EQ(written["futureKey"], Json({1, 2}));
   EXPECT_EQ(plain->asset.document["extras"]["RDTF"]["nodes"], written["nodes"]);
   ASSERT_EQ(plain->robot.links.size(), newer->robot.links.size());
   for (std::size_t i = 0; i < plain->robot.links.size(); ++i) {

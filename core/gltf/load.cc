@@ -407,10 +407,14 @@ std::vector<std::uint8_t> bin_chunk_buffer(std::span<const std::uint8_t> chunk,
 // codes, rather than by tinygltf's message about the whole buffers array.
 void check_bin_chunk(const Json& document, std::span<const std::uint8_t> file, std::span<const std::uint8_t> bin,
                      Diagnostics& diag) {
-  if (!document.contains("buffers") || document["buffers"].empty()) return;
-  const Json& buffer = document["buffers"][0];
-  if (buffer.contains("uri") || internal::is_meshopt_fallback(buffer)) return;
-  const std::uint64_t declared = buffer["byteLength"].get<std::uint64_t>();
+  // Run on a document validate_document passed; still, nothing is assumed of its shape here.
+  const auto buffers = document.find("buffers");
+  if (buffers == document.end() || !buffers->is_array() || buffers->empty()) return;
+  const Json& buffer = (*buffers)[0];
+  if (!buffer.is_object() || buffer.contains("uri") || internal::is_meshopt_fallback(buffer)) return;
+  const auto length = buffer.find("byteLength");
+  if (length == buffer.end() || !length->is_number_unsigned()) return;
+  const std::uint64_t declared = length->get<std::uint64_t>();
   if (bin.data() == nullptr) {
     diag.error(codes::BUFFER_MISSING_GLB_DATA, "/buffers/0",
                "buffer 0 has no uri, so its " + std::to_string(declared) +
@@ -518,7 +522,7 @@ std::optional<GltfAsset> load_from_bytes(const std::vector<std::uint8_t>& bytes,
   if (!document) return std::nullopt;
   if (!data_uris_within_cap(*document, limits, diag)) return std::nullopt;
   validate_document(*document, limits, diag);
-  if (asset.binary) check_bin_chunk(*document, bytes, bin, diag);
+  if (asset.binary && !diag.has_errors()) check_bin_chunk(*document, bytes, bin, diag);
   if (diag.has_errors()) return std::nullopt;
 
   // Every file the model names, read once (unless the caller already did, to hash them).

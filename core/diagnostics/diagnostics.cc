@@ -1,6 +1,7 @@
 #include "rdtf/diagnostics.h"
 
 #include <algorithm>
+#include <cstdio>
 
 namespace rdtf {
 
@@ -14,6 +15,12 @@ std::string_view to_string(Severity severity) {
       return "error";
   }
   return "error";
+}
+
+std::string format_number(double value, int significant_digits) {
+  char text[40];
+  std::snprintf(text, sizeof(text), "%.*g", significant_digits, value);
+  return text;
 }
 
 std::string format(const Diagnostic& d) {

@@ -7,11 +7,7 @@
 
 namespace rdtf::dynamics_internal {
 
-std::string number(double value) {
-  char text[64];
-  std::snprintf(text, sizeof(text), "%.6g", value);
-  return text;
-}
+std::string number(double value) { return format_number(value); }
 
 std::string vector_text(const Eigen::Vector3d& v) {
   return "(" + number(v.x()) + ", " + number(v.y()) + ", " + number(v.z()) + ")";

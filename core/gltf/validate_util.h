@@ -93,10 +93,6 @@ inline std::string describe(const Json& value) {
 }
 
 // A number as a modeller reads it: "0", "1.5", "0.100000001" (enough digits for a float).
-inline std::string number_text(double value) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.9g", value);
-  return text;
-}
+inline std::string number_text(double value) { return format_number(value, 9); }
 
 }  // namespace rdtf::internal

@@ -404,17 +404,12 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
         // Every mesh's density scales alike, so that each mesh's density times its volume is
         // still its share of the link's mass (rdtf inspect lists them).
         for (LinkMesh& mesh : link.meshes) mesh.density *= factor;
-        const auto number_text = [](double kg) {
-          char text[32];
-          std::snprintf(text, sizeof(text), "%.6g", kg);
-          return std::string(text);
-        };
         for (const auto& [node, mesh_mass] : mesh_masses[l]) {
           if (std::abs(factor - 1.0) <= 1e-12) continue;
           diag.warning(codes::RDTF_MASS_OVERRIDDEN, json_pointer("/nodes", node) + "/extras/rdtf_mass",
-                       node_label(document, node) + " sets rdtf_mass " + number_text(mesh_mass) + " kg, but link '" +
-                           link.name + "' sets rdtf_mass " + number_text(*mass) +
-                           " kg for all its meshes, which scales this one to " + number_text(mesh_mass * factor) +
+                       node_label(document, node) + " sets rdtf_mass " + format_number(mesh_mass) + " kg, but link '" +
+                           link.name + "' sets rdtf_mass " + format_number(*mass) +
+                           " kg for all its meshes, which scales this one to " + format_number(mesh_mass * factor) +
                            " kg; set the mass on the link or on its meshes, not both");
         }
       }

@@ -11,11 +11,7 @@
 namespace rdtf {
 namespace {
 
-std::string fixed(double value, int precision = 6) {
-  char text[64];
-  std::snprintf(text, sizeof(text), "%.*g", precision, value);
-  return text;
-}
+std::string fixed(double value) { return format_number(value); }
 
 std::string vector_text(const Eigen::Vector3d& v) {
   return "(" + fixed(v.x()) + ", " + fixed(v.y()) + ", " + fixed(v.z()) + ")";

@@ -23,11 +23,7 @@ void scale_to_volume(TriangleMesh& mesh, double volume) {
   for (Eigen::Vector3d& p : mesh.positions) p *= factor;
 }
 
-std::string size_text(double value) {
-  char text[32];
-  std::snprintf(text, sizeof(text), "%g", value);
-  return text;
-}
+std::string size_text(double value) { return format_number(value); }
 
 }  // namespace
 

@@ -76,6 +76,10 @@ class Diagnostics {
   std::size_t error_count_ = 0;
 };
 
+// A number as a diagnostic or a report shows it: printf's %g with this many significant digits
+// ("0.5", "1.2e+06"; 9 digits give every float back exactly). One helper for every message.
+std::string format_number(double value, int significant_digits = 6);
+
 // Appends a reference token to a JSON pointer, escaping '~' and '/' as RFC 6901 requires.
 std::string json_pointer(std::string_view base, std::string_view token);
 std::string json_pointer(std::string_view base, std::size_t index);

@@ -25,15 +25,20 @@ Eigen::Isometry3d conjugate(const Eigen::Matrix3d& C, const Eigen::Isometry3d& X
 }
 
 Eigen::Vector3d rpy_from_rotation(const Eigen::Matrix3d& R) {
-  // R = Rz(y) Ry(p) Rx(r): R(2,0) = -sin p, R(2,1) = cos p sin r, R(2,2) = cos p cos r,
-  // R(1,0) = sin y cos p, R(0,0) = cos y cos p.
+  // R = Rz(y) Ry(p) Rx(r): R(2,0) = -sin p, R(1,0) = sin y cos p, R(0,0) = cos y cos p.
   const double cos_pitch = std::hypot(R(0, 0), R(1, 0));
   const double pitch = std::atan2(-R(2, 0), cos_pitch);
-  if (cos_pitch > 1e-12) {
-    return {std::atan2(R(2, 1), R(2, 2)), pitch, std::atan2(R(1, 0), R(0, 0))};
-  }
-  // Gimbal lock: only roll - yaw (pitch +90) or roll + yaw (pitch -90) is defined; put it in roll.
-  return {std::atan2(-R(1, 2), R(1, 1)), pitch, 0.0};
+  // Near gimbal lock (pitch near +-90 degrees) yaw and roll are each ill-conditioned: entries of
+  // size cos p carry rounding of 1e-16 / cos p in the angles, 6e-6 rad at 1e-11 from the lock,
+  // which the URDF then turns every link below by. So only yaw is read from those entries (at
+  // the lock itself any yaw will do: 0), and roll from Rz(y)^T R = Ry(p) Rx(r), whose middle row
+  // (0, cos r, -sin r) has full-size entries: the angles give R back to rounding, lock or not.
+  const double yaw = std::atan2(R(1, 0), R(0, 0));
+  const double c = std::cos(yaw);
+  const double s = std::sin(yaw);
+  const double cos_roll = c * R(1, 1) - s * R(0, 1);
+  const double sin_roll = s * R(0, 2) - c * R(1, 2);
+  return {std::atan2(sin_roll, cos_roll), pitch, yaw};
 }
 
 Eigen::Matrix3d rotation_from_rpy(const Eigen::Vector3d& rpy) {
@@ -53,7 +58,10 @@ std::string exact_number(double value) {
 std::string valid_urdf_name(const std::string& text, const std::string& fallback) {
   std::string out;
   for (unsigned char c : text) {
-    const bool keep = std::isalnum(c) || c == '_' || c == '-' || c == '.';
+    // One '_' for each character another would be: a UTF-8 sequence's continuation bytes
+    // (10xxxxxx) add none, so "ä" is "_", not "__".
+    if ((c & 0xC0) == 0x80) continue;
+    const bool keep = (c < 0x80 && std::isalnum(c)) || c == '_' || c == '-' || c == '.';
     out += keep ? static_cast<char>(c) : '_';
   }
   return out.empty() ? fallback : out;

@@ -127,9 +127,10 @@ class Builder {
   }
 
   // The triangles of one <visual> (or <collision>) geometry in its own frame, or nothing.
-  // `authored_mass`: the link has an <inertial>, so its mass does not come from this geometry.
+  // `mass_from`: why the link's mass does not come from this geometry ("the link's mass is its
+  // <inertial>"), or null where it does.
   std::optional<TriangleMesh> geometry(const urdf::Geometry& g, const std::string& pointer, int row,
-                                       bool authored_mass, Eigen::Vector3d& scale) {
+                                       const char* mass_from, Eigen::Vector3d& scale) {
     auto skip = [&](const std::string& why) {
       diag.warning_at_line(codes::URDF_GEOMETRY_SKIPPED, pointer, row, why + "; this geometry is skipped");
       return std::nullopt;
@@ -166,8 +167,8 @@ class Builder {
     // Where the link's mass is its <inertial>, such a mesh costs only its look: a warning, and
     // the rest is imported. Where the mass would be computed from the mesh, it cannot be: an error.
     const auto unusable = [&](const char* code, const std::string& message) {
-      if (authored_mass) {
-        diag.warning_at_line(code, pointer, row, message + "; this geometry is skipped (the link's mass is its <inertial>)");
+      if (mass_from != nullptr) {
+        diag.warning_at_line(code, pointer, row, message + "; this geometry is skipped (" + mass_from + ")");
       } else {
         diag.error_at_line(code, pointer, row, message + " (the link has no <inertial>: its mass would come from this mesh)");
         ok = false;
@@ -185,12 +186,56 @@ class Builder {
     return triangles_read;
   }
 
+  // Whether import can read this geometry: a shape with sizes, or an STL mesh that is there. (A
+  // file that is there but no STL is still an error where the mass must come from it.)
+  bool readable(const urdf::GeometrySharedPtr& g) const {
+    if (!g || degenerate_shape(*g)) return false;
+    if (g->type != urdf::Geometry::MESH) return true;
+    const auto& mesh = static_cast<const urdf::Mesh&>(*g);
+    std::string extension = fs::path(mesh.filename).extension().string();
+    for (char& ch : extension) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+    std::string why;
+    return extension == ".stl" &&
+           resolve_mesh_path(mesh.filename, urdf.parent_path().empty() ? fs::path(".") : urdf.parent_path(), why);
+  }
+
   // The link's visual node with a mesh node per geometry, or nothing when it has none.
-  std::optional<std::size_t> visuals(const urdf::Link& link, const XmlLink& xml) {
-    bool use_collision = link.visual_array.empty() && !link.collision_array.empty();
-    if (use_collision) {
+  // `mass_from`: why the link's mass is not its geometry's (an <inertial>, or massless on a fixed
+  // joint), so that a geometry that cannot be read costs only its look; null where it is.
+  std::optional<std::size_t> visuals(const urdf::Link& link, const XmlLink& xml, const char* mass_from) {
+    const bool mass_authored = mass_from != nullptr;
+    // The <collision> geometry stands in for the <visual> where that gives nothing to show, or
+    // where the mass comes from the geometry and a visual cannot be read: a published robot's
+    // visuals are often COLLADA or missing while its collision meshes are STL (UR, Fetch, TIAGo).
+    const auto all_readable = [&](const auto& elements) {
+      return std::all_of(elements.begin(), elements.end(), [&](const auto& e) { return readable(e->geometry); });
+    };
+    const auto any_readable = [&](const auto& elements) {
+      return std::any_of(elements.begin(), elements.end(), [&](const auto& e) { return readable(e->geometry); });
+    };
+    bool use_collision = false;
+    if (link.visual_array.empty()) {
+      use_collision = !link.collision_array.empty();
+      if (use_collision) {
+        diag.info(codes::URDF_COLLISION_AS_VISUAL, link_pointer(link.name),
+                  "link '" + link.name + "' has no <visual>: its <collision> geometry is its mesh");
+      }
+    } else if (any_readable(link.collision_array) &&
+               (mass_authored ? !any_readable(link.visual_array) : !all_readable(link.visual_array))) {
+      use_collision = true;
+      std::string unread;  // The first visual import cannot read, by its file where it has one.
+      for (std::size_t i = 0; i < link.visual_array.size() && unread.empty(); ++i) {
+        const urdf::GeometrySharedPtr& g = link.visual_array[i]->geometry;
+        if (readable(g)) continue;
+        unread = "<visual> " + std::to_string(i + 1);
+        if (g && g->type == urdf::Geometry::MESH) unread += " ('" + static_cast<const urdf::Mesh&>(*g).filename + "')";
+      }
       diag.info(codes::URDF_COLLISION_AS_VISUAL, link_pointer(link.name),
-                "link '" + link.name + "' has no <visual>: its <collision> geometry is its mesh");
+                "link '" + link.name + "': import cannot read its " + unread +
+                    " (it reads STL files that are there, and boxes, cylinders and spheres)" +
+                    (mass_authored ? std::string(", nor any other <visual>")
+                                   : std::string(", and the link's mass comes from its geometry")) +
+                    ": its <collision> geometry is its mesh");
     }
     std::vector<std::size_t> mesh_nodes;
     const std::size_t count = use_collision ? link.collision_array.size() : link.visual_array.size();
@@ -203,7 +248,7 @@ class Builder {
       const std::string pointer = link_pointer(link.name) + "/" + element + "[" + std::to_string(i + 1) + "]";
       if (!g) continue;
       Eigen::Vector3d scale;
-      auto mesh = geometry(*g, pointer, row, link.inertial != nullptr, scale);
+      auto mesh = geometry(*g, pointer, row, mass_from, scale);
       if (!mesh) continue;
       triangles += mesh->triangles.size();
       if (triangles > options.convert.limits.max_triangles) {
@@ -390,7 +435,14 @@ std::optional<Conversion> import_urdf(const fs::path& urdf, const UrdfImportOpti
     const std::size_t index = b.add_node(std::move(node), "link");
     link_node[name] = index;
     Json children = Json::array();
-    if (const auto visual = b.visuals(*link, xml->links[xml_link.at(name)])) children.push_back(*visual);
+    // A link without <inertial> on a fixed joint is massless (below), so its geometry is looks only.
+    const bool fixed_massless = !link->inertial && via != nullptr && model->getJoint(via->name)->type == urdf::Joint::FIXED;
+    const char* mass_from = link->inertial ? "the link's mass is its <inertial>"
+                            : fixed_massless ? "the link has no <inertial> and is massless on its fixed joint"
+                                             : nullptr;
+    if (const auto visual = b.visuals(*link, xml->links[xml_link.at(name)], mass_from)) {
+      children.push_back(*visual);
+    }
     const auto& joints = child_joints[name];
     for (std::size_t j : joints) {
       const XmlJoint& joint = xml->joints[j];
@@ -401,7 +453,7 @@ std::optional<Conversion> import_urdf(const fs::path& urdf, const UrdfImportOpti
     for (auto it = joints.rbegin(); it != joints.rend(); ++it) stack.emplace_back(xml->joints[*it].child, &xml->joints[*it]);
     if (link->inertial) {  // Checked in the XML: a finite mass of 0 or more, a finite tensor.
       children.push_back(b.add_node(Json{{"name", name + "_inertial"}}, "inertial", b.inertial_json(*link->inertial)));
-    } else if (via != nullptr && model->getJoint(via->name)->type == urdf::Joint::FIXED) {
+    } else if (fixed_massless) {
       // URDF reads a link without <inertial> as massless. On a fixed joint (a sensor or tool
       // frame, a collision helper) that is what it is: it adds nothing to the body it is fixed to,
       // as in urdfdom, Gazebo and Drake. Its geometry must not make up mass the robot lacks.

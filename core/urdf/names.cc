@@ -1,30 +1,56 @@
 #include "rdtf/urdf_names.h"
 
+#include <unordered_set>
+
 #include "rdtf/diagnostic_codes.h"
 
 #include "urdf_internal.h"
 
 namespace rdtf {
 
-UrdfNames urdf_names(const Robot& robot, Diagnostics* diag) {
-  using urdf_internal::unique_name;
+namespace {
+
+// URDF names for one kind (links or joints), in robot order. A name URDF can hold as it is keeps
+// it, whatever comes before it: a controller's configuration, an SRDF or a JOINT_COMMAND that
+// names "elbow_joint" must reach the joint called so, not one called "elbow joint" that sanitises
+// alike and happens to come first. The others become valid and take the first free suffix.
+std::vector<std::string> choose_names(const std::vector<std::pair<const std::string*, int>>& items, const char* what,
+                                      Diagnostics* diag) {
   using urdf_internal::valid_urdf_name;
-  UrdfNames names;
-  std::vector<std::string> taken_links, taken_joints;
-  auto choose = [&](const std::string& name, int node, const char* what, std::vector<std::string>& taken) {
-    const std::string chosen = unique_name(valid_urdf_name(name, what), taken);
-    if (diag != nullptr && chosen != name) {
+  std::vector<std::string> chosen(items.size());
+  std::unordered_set<std::string> taken;
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    const std::string& name = *items[i].first;
+    if (valid_urdf_name(name, what) == name && taken.insert(name).second) chosen[i] = name;
+  }
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    if (!chosen[i].empty()) continue;
+    const std::string& name = *items[i].first;
+    const std::string valid = valid_urdf_name(name, what);
+    std::string candidate = valid;
+    for (int n = 2; taken.count(candidate) != 0; ++n) candidate = valid + "_" + std::to_string(n);
+    taken.insert(candidate);
+    chosen[i] = candidate;
+    if (diag != nullptr) {
+      const int node = items[i].second;
       diag->warning(codes::URDF_NAME_CHANGED, node >= 0 ? json_pointer("/nodes", static_cast<std::size_t>(node)) : "",
-                    std::string(what) + " '" + name + "' is named '" + chosen +
-                        "' in the URDF (URDF names here are unique and use letters, digits, '_', "
+                    std::string(what) + " '" + name + "' is named '" + candidate +
+                        "' in the URDF (URDF names here are unique and use ASCII letters, digits, '_', "
                         "'-' and '.')");
     }
-    return chosen;
-  };
-  names.links.reserve(robot.links.size());
-  for (const Link& link : robot.links) names.links.push_back(choose(link.name, link.node, "link", taken_links));
-  names.joints.reserve(robot.joints.size());
-  for (const Joint& joint : robot.joints) names.joints.push_back(choose(joint.name, joint.node, "joint", taken_joints));
+  }
+  return chosen;
+}
+
+}  // namespace
+
+UrdfNames urdf_names(const Robot& robot, Diagnostics* diag) {
+  std::vector<std::pair<const std::string*, int>> links, joints;
+  for (const Link& link : robot.links) links.emplace_back(&link.name, link.node);
+  for (const Joint& joint : robot.joints) joints.emplace_back(&joint.name, joint.node);
+  UrdfNames names;
+  names.links = choose_names(links, "link", diag);
+  names.joints = choose_names(joints, "joint", diag);
   return names;
 }
 

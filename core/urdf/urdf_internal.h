@@ -32,8 +32,8 @@ Eigen::Matrix3d rotation_from_rpy(const Eigen::Vector3d& rpy);
 // written as 0.
 std::string exact_number(double value);
 
-// A URDF name from any text: letters, digits, '_', '-' and '.' kept, anything else '_'; never
-// empty (`fallback`).
+// A URDF name from any text: ASCII letters, digits, '_', '-' and '.' kept, any other character
+// (a UTF-8 sequence counts once) '_'; never empty (`fallback`).
 std::string valid_urdf_name(const std::string& text, const std::string& fallback);
 
 // Makes `name` unique among `taken` (appending _2, _3, ...) and records it.

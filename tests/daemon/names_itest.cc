@@ -16,8 +16,8 @@ namespace {
 
 // arm3's links base_link, upper_arm, forearm and joints shoulder (base_link -> upper_arm) and
 // elbow (upper_arm -> forearm), renamed: "upper arm" and "upper_arm" are both "upper_arm" once
-// sanitised, and so are "shoulder joint" and "shoulder_joint". The first of each keeps the name
-// (URDF names are given in the order of the description), the second gets "_2".
+// sanitised, and so are "shoulder joint" and "shoulder_joint". The one valid as it is keeps it
+// (though it comes second in the description), the other gets "_2".
 const std::map<std::string, std::string> kRenamed = {{"base_link", "base link"},
                                                      {"upper_arm", "upper arm"},
                                                      {"forearm", "upper_arm"},
@@ -58,14 +58,14 @@ TEST(RosNames, StatesAndInertiaCarryTheUrdfNamesAndCommandsUseThem) {
   std::set<std::string> urdf_links, urdf_joints;
   for (const auto& [name, link] : urdf->links_) urdf_links.insert(name);
   for (const auto& [name, joint] : urdf->joints_) urdf_joints.insert(name);
-  EXPECT_EQ(urdf_links, (std::set<std::string>{"base_link", "upper_arm", "upper_arm_2"}));
-  EXPECT_EQ(urdf_joints, (std::set<std::string>{"shoulder_joint", "shoulder_joint_2"}));
+  EXPECT_EQ(urdf_links, (std::set<std::string>{"base_link", "upper_arm_2", "upper_arm"}));
+  EXPECT_EQ(urdf_joints, (std::set<std::string>{"shoulder_joint_2", "shoulder_joint"}));
 
   const rdtf::joint_state_t joints = *last_state(s.messages(), 1);
-  EXPECT_EQ(joints.name, (std::vector<std::string>{"shoulder_joint", "shoulder_joint_2"}));
+  EXPECT_EQ(joints.name, (std::vector<std::string>{"shoulder_joint_2", "shoulder_joint"}));
   EXPECT_EQ(joints.gltf_name, (std::vector<std::string>{"shoulder joint", "shoulder_joint"}));
   const auto links = decoded<rdtf::link_state_t>(s.messages(), "LINK_STATE", kArm).back();
-  EXPECT_EQ(links.name, (std::vector<std::string>{"base_link", "upper_arm", "upper_arm_2"}));
+  EXPECT_EQ(links.name, (std::vector<std::string>{"base_link", "upper_arm_2", "upper_arm"}));
   EXPECT_EQ(links.gltf_name, (std::vector<std::string>{"base link", "upper arm", "upper_arm"}));
   // Each state name is the URDF's, and the joints join the links the states name: the second
   // joint (the elbow) holds the second link (the upper arm) and the third (the forearm).
@@ -89,15 +89,15 @@ TEST(RosNames, StatesAndInertiaCarryTheUrdfNamesAndCommandsUseThem) {
     EXPECT_EQ(urdf_link->inertial->mass, inertia->links[l].mass) << inertia->links[l].name;
   }
 
-  // A torque on the elbow by its URDF name: the elbow turns, its effort is the torque, the
-  // shoulder's none. ("shoulder_joint", the elbow's glTF name, is the shoulder's URDF name.)
+  // A torque on the elbow by its URDF name, which is its glTF name too: the elbow turns, its
+  // effort is the torque, the shoulder's none.
   const double tau = 0.1;
   s.subscriber.publish("RDTF/arm3.gltf/JOINT_COMMAND",
-                       make_command(kArm, 1, hash, {{"shoulder_joint_2", rdtf::joint_command_t::TORQUE, tau}}));
+                       make_command(kArm, 1, hash, {{"shoulder_joint", rdtf::joint_command_t::TORQUE, tau}}));
   ASSERT_TRUE(s.wait_for(
       [](const auto& all) {
         const auto last = last_state(all, 1);
-        return last && *position_of(*last, "shoulder_joint_2") > 0.05;
+        return last && *position_of(*last, "shoulder_joint") > 0.05;
       },
       5s))
       << "the elbow did not turn";
@@ -130,10 +130,10 @@ TEST(RosNames, WithoutAUrdfTheStatesCarryTheSameNames) {
   ASSERT_TRUE(description);
   EXPECT_EQ(description->urdf_size, 0);
   const rdtf::joint_state_t joints = *last_state(s.messages(), 1);
-  EXPECT_EQ(joints.name, (std::vector<std::string>{"shoulder_joint", "shoulder_joint_2"}));
+  EXPECT_EQ(joints.name, (std::vector<std::string>{"shoulder_joint_2", "shoulder_joint"}));
   EXPECT_EQ(joints.gltf_name, (std::vector<std::string>{"shoulder joint", "shoulder_joint"}));
   const auto links = decoded<rdtf::link_state_t>(s.messages(), "LINK_STATE", kArm).back();
-  EXPECT_EQ(links.name, (std::vector<std::string>{"base_link", "upper_arm", "upper_arm_2"}));
+  EXPECT_EQ(links.name, (std::vector<std::string>{"base_link", "upper_arm_2", "upper_arm"}));
   EXPECT_EQ(links.gltf_name, (std::vector<std::string>{"base link", "upper arm", "upper_arm"}));
   const auto inertia = last_inertia(s.messages(), kArm);
   ASSERT_TRUE(inertia);

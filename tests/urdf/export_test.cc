@@ -205,22 +205,22 @@ TEST(UrdfExport, NamesAreMadeValidAndUniqueAndEveryChangeIsReported) {
   Diagnostics export_diag;
   const auto exported = export_urdf(conversion, UrdfOptions{}, export_diag);
   ASSERT_TRUE(exported);
-  EXPECT_EQ(exported->link_names, (std::vector<std::string>{"base_link", "arm_link", "arm_link_2"}));
+  EXPECT_EQ(exported->link_names, (std::vector<std::string>{"base_link", "arm_link_2", "arm_link"}));
   EXPECT_EQ(exported->joint_names,
             (std::vector<std::string>{"base_link_arm_link_joint", "base_link_arm_link_joint_2"}));
   const auto changed = with_code(export_diag, "URDF_NAME_CHANGED");
-  ASSERT_EQ(changed.size(), 5u);  // Three links (the third collides) and both joints.
+  ASSERT_EQ(changed.size(), 4u);  // Two links ('arm_link' keeps its valid name) and both joints.
   EXPECT_EQ(changed[0].severity, Severity::kWarning);
   EXPECT_EQ(changed[0].pointer, "/nodes/0");
   EXPECT_NE(changed[0].message.find("'base/link' is named 'base_link'"), std::string::npos) << changed[0].message;
-  EXPECT_EQ(changed[2].pointer, "/nodes/2");
-  EXPECT_NE(changed[2].message.find("'arm_link' is named 'arm_link_2'"), std::string::npos) << changed[2].message;
+  EXPECT_EQ(changed[1].pointer, "/nodes/1");
+  EXPECT_NE(changed[1].message.find("'arm link' is named 'arm_link_2'"), std::string::npos) << changed[1].message;
   const auto model = parse_with_urdfdom(exported->text);
   EXPECT_EQ(model->links_.size(), 3u);
   EXPECT_EQ(model->getRoot()->name, "base_link");
   // Each mesh file carries its link's URDF name.
   ASSERT_EQ(exported->meshes.size(), 3u);
-  EXPECT_EQ(exported->meshes[2].path, "meshes/arm_link_2.stl");
+  EXPECT_EQ(exported->meshes[1].path, "meshes/arm_link_2.stl");
 }
 
 // Each link's STL holds its solids in the link frame with URDF's axes: their volume is the link's

@@ -312,6 +312,66 @@ TEST(UrdfImportErrors, MeshThatIsNoStlOfALinkWithAnInertialIsAWarning) {
   });
 }
 
+// A camera frame without <inertial> on a fixed joint is massless, as URDF reads it: its missing
+// mesh is only its look, a warning, not the error of a link whose mass would come from it (which
+// contradicted the info beside it, "it is massless").
+TEST(UrdfImportErrors, MissingMeshOfAMasslessFixedLinkIsAWarning) {
+  TempDir dir;
+  const fs::path urdf = dir / "robot.urdf";
+  testing::write_file(urdf, "<robot name=\"r\">\n<link name=\"a\">" + inertial("2.5") + visual("<box size=\"0.1 0.1 0.1\"/>") +
+                                "</link>\n<link name=\"camera\">" +
+                                visual("<mesh filename=\"package://cam/meshes/camera.stl\"/>") +
+                                "</link>\n<joint name=\"cam_joint\" type=\"fixed\"><parent link=\"a\"/><child "
+                                "link=\"camera\"/></joint>\n</robot>\n");
+  Diagnostics diag;
+  const auto conversion = import_urdf(urdf, UrdfImportOptions{}, diag);
+  ASSERT_TRUE(conversion) << (diag.all().empty() ? std::string() : format(diag.all().front()));
+  const Diagnostic* found = nullptr;
+  for (const Diagnostic& d : diag.all()) {
+    if (d.code == "URDF_MESH_NOT_FOUND") found = &d;
+  }
+  ASSERT_NE(found, nullptr);
+  EXPECT_EQ(found->severity, Severity::kWarning);
+  EXPECT_EQ(found->pointer, "/robot/link[@name='camera']/visual[1]");
+  EXPECT_NE(found->message.find("massless on its fixed joint"), std::string::npos) << found->message;
+}
+
+// UR, Fetch and TIAGo descriptions give COLLADA visuals and STL collision meshes. A link whose
+// mass comes from its geometry takes its <collision> where a <visual> cannot be read (it came out
+// massless, and the gate refused the robot); one with an <inertial> shows its <collision> where no
+// <visual> can be read (it showed nothing).
+TEST(UrdfImportErrors, UnreadableVisualsGiveWayToTheCollisionGeometry) {
+  TempDir dir;
+  const fs::path urdf = dir / "robot.urdf";
+  const std::string collision = "<collision><geometry><box size=\"0.1 0.2 0.3\"/></geometry></collision>";
+  testing::write_file(urdf, "<robot name=\"r\">\n<link name=\"a\">" + inertial("2.5") +
+                                visual("<mesh filename=\"package://arm/meshes/base.dae\"/>") + collision +
+                                "</link>\n<link name=\"b\">" + visual("<mesh filename=\"package://arm/meshes/upper.dae\"/>") +
+                                collision + "</link>\n<joint name=\"j\" type=\"revolute\"><parent link=\"a\"/><child "
+                                "link=\"b\"/>" + kLimit + "</joint>\n</robot>\n");
+  Diagnostics diag;
+  const auto conversion = import_urdf(urdf, UrdfImportOptions{}, diag);
+  ASSERT_TRUE(conversion) << (diag.all().empty() ? std::string() : format(diag.all().front()));
+  std::vector<const Diagnostic*> found;
+  for (const Diagnostic& d : diag.all()) {
+    if (d.code == "URDF_COLLISION_AS_VISUAL") found.push_back(&d);
+    EXPECT_NE(d.code, "URDF_MESH_FORMAT_UNSUPPORTED") << d.message;
+  }
+  ASSERT_EQ(found.size(), 2u);
+  EXPECT_EQ(found[0]->pointer, "/robot/link[@name='a']");
+  EXPECT_NE(found[0]->message.find("<visual> 1 ('package://arm/meshes/base.dae')"), std::string::npos) << found[0]->message;
+  EXPECT_NE(found[0]->message.find("nor any other <visual>"), std::string::npos) << found[0]->message;
+  EXPECT_EQ(found[1]->pointer, "/robot/link[@name='b']");
+  EXPECT_NE(found[1]->message.find("the link's mass comes from its geometry"), std::string::npos) << found[1]->message;
+  const Robot& robot = conversion->robot;
+  ASSERT_EQ(robot.links.size(), 2u);
+  EXPECT_EQ(robot.links[0].inertial.mass, 2.5);  // Its <inertial>: the box only shows it.
+  EXPECT_EQ(conversion->asset.document["meshes"].size(), 2u);
+  // The box at the default 1000 kg/m^3: 6 kg, to the float32 rounding of its three edges (each
+  // within 2^-24 relative, so the volume within 3 * 2^-24 < 2e-7).
+  EXPECT_NEAR(robot.links[1].inertial.mass, 6.0, 6.0 * 2e-7);
+}
+
 // Why the URDF cannot be read, in the user's terms: missing, a folder, unreadable (it used to say
 // "not a regular file" for all of them).
 void expect_read_failure(const fs::path& urdf, const std::string& why) {

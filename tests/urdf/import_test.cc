@@ -469,6 +469,31 @@ TEST(UrdfImport, RoundTripOfEveryJointKindAndRotatedInertial) {
   round_trip(dir / "rich.urdf");
 }
 
+// Joint origins near gimbal lock (pitch within 1e-11 of 90 degrees, as a URDF's rounded pi/2
+// gives): the export's roll and yaw used to carry rounding of 1e-16 / cos(pitch), 6e-6 rad here,
+// which turned every link below the joint.
+TEST(UrdfImport, RoundTripOfOriginsAtAndNearGimbalLock) {
+  std::string urdf = R"(<?xml version="1.0"?>
+<robot name="gimbal">
+  <link name="base"><inertial><mass value="1"/><inertia ixx="0.1" iyy="0.1" izz="0.1" ixy="0" ixz="0" iyz="0"/></inertial></link>)";
+  const char* pitches[] = {"1.5707963267920", "1.57079632679", "-1.5707963267949", "1.5707963267948966", "-1.5707963267948966",
+                           "1.5707963", "0.7"};
+  std::string parent = "base";
+  for (std::size_t i = 0; i < std::size(pitches); ++i) {
+    const std::string link = "l" + std::to_string(i);
+    urdf += "<link name=\"" + link +
+            "\"><inertial><mass value=\"1\"/><inertia ixx=\"0.1\" iyy=\"0.2\" izz=\"0.25\" ixy=\"0\" ixz=\"0\" "
+            "iyz=\"0\"/></inertial></link><joint name=\"j" + std::to_string(i) + "\" type=\"revolute\"><parent link=\"" +
+            parent + "\"/><child link=\"" + link + "\"/><origin xyz=\"0 0 0.1\" rpy=\"0.3 " + pitches[i] +
+            " 0.2\"/><axis xyz=\"0 0 1\"/><limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/></joint>";
+    parent = link;
+  }
+  urdf += "</robot>";
+  TempDir dir;
+  testing::write_file(dir / "gimbal.urdf", urdf);
+  round_trip(dir / "gimbal.urdf");
+}
+
 TEST(UrdfImport, ZUpOptionKeepsUrdfAxes) {
   TempDir dir;
   testing::write_file(dir / "rich.urdf", kRichUrdf);

@@ -1,7 +1,7 @@
 // urdf_names (rdtf/urdf_names.h): the URDF names of links and joints, which rdtfd's states and
 // inertia tables carry too. Written out by hand here from docs/urdf.md's rule (other characters
-// become '_', empty names the kind's name, a taken name "_2", "_3", ...), and checked to be the
-// names urdfdom reads in the exported URDF.
+// become '_', empty names the kind's name, a name valid as it is kept, a taken one "_2", "_3", ...),
+// and checked to be the names urdfdom reads in the exported URDF.
 #include "rdtf/urdf_names.h"
 
 #include <algorithm>
@@ -40,22 +40,27 @@ TEST(UrdfNames, ValidNamesAreKept) {
 }
 
 TEST(UrdfNames, SpacesAndOtherCharactersBecomeUnderscores) {
-  // "ä" is two bytes in UTF-8: each becomes '_'.
-  const Robot robot = named({"upper arm", "base/link", "Gelenk\xc3\xa4", "a:b<c>"}, {"elbow joint"});
+  // A character is one '_' however many bytes UTF-8 gives it: "ä" two, "手" three, "🦾" four.
+  const Robot robot = named({"upper arm", "base/link", "Gelenk\xc3\xa4", "a:b<c>", "\xe6\x89\x8b\xe9\xa6\x96",
+                             "arm\xf0\x9f\xa6\xbe"},
+                            {"elbow joint"});
   const UrdfNames names = urdf_names(robot);
-  EXPECT_EQ(names.links, (std::vector<std::string>{"upper_arm", "base_link", "Gelenk__", "a_b_c_"}));
+  EXPECT_EQ(names.links,
+            (std::vector<std::string>{"upper_arm", "base_link", "Gelenk_", "a_b_c_", "__", "arm_"}));
   EXPECT_EQ(names.joints, (std::vector<std::string>{"elbow_joint"}));
 }
 
-TEST(UrdfNames, DuplicatesAfterSanitisingGetSuffixesInRobotOrder) {
-  // "arm link" and "arm_link" are one URDF name: the first keeps it. A suffix that is itself
-  // taken ("arm_link_2" authored) goes on counting from the name it was made from.
+TEST(UrdfNames, ValidNamesKeepThemselvesAndTheOthersTakeTheFirstFreeSuffix) {
+  // "arm link" and "arm_link" are one URDF name: "arm_link", valid as it is, keeps it though it
+  // comes second (a controller or an SRDF that names "arm_link" means it), as do "arm_link_2" and
+  // "arm.link"; the renamed ones take the first suffix nobody has. Of two equal valid names the
+  // first keeps it.
   const Robot robot = named({"arm link", "arm_link", "arm_link_2", "arm.link", "arm link"},
                             {"j", "j", "j "});
   Diagnostics diag;
   const UrdfNames names = urdf_names(robot, &diag);
   EXPECT_EQ(names.links,
-            (std::vector<std::string>{"arm_link", "arm_link_2", "arm_link_2_2", "arm.link", "arm_link_3"}));
+            (std::vector<std::string>{"arm_link_3", "arm_link", "arm_link_2", "arm.link", "arm_link_4"}));
   EXPECT_EQ(names.joints, (std::vector<std::string>{"j", "j_2", "j_"}));
   // One warning per changed name, pointing at its node and naming both names.
   std::vector<std::string> pointers;
@@ -64,11 +69,10 @@ TEST(UrdfNames, DuplicatesAfterSanitisingGetSuffixesInRobotOrder) {
     EXPECT_EQ(d.severity, Severity::kWarning);
     pointers.push_back(d.pointer);
   }
-  EXPECT_EQ(pointers, (std::vector<std::string>{"/nodes/0", "/nodes/1", "/nodes/2", "/nodes/4", "/nodes/101",
-                                                "/nodes/102"}));
-  EXPECT_NE(diag.all()[2].message.find("link 'arm_link_2' is named 'arm_link_2_2'"), std::string::npos)
-      << diag.all()[2].message;
-  EXPECT_NE(diag.all()[5].message.find("joint 'j ' is named 'j_'"), std::string::npos) << diag.all()[5].message;
+  EXPECT_EQ(pointers, (std::vector<std::string>{"/nodes/0", "/nodes/4", "/nodes/101", "/nodes/102"}));
+  EXPECT_NE(diag.all()[0].message.find("link 'arm link' is named 'arm_link_3'"), std::string::npos)
+      << diag.all()[0].message;
+  EXPECT_NE(diag.all()[3].message.find("joint 'j ' is named 'j_'"), std::string::npos) << diag.all()[3].message;
 }
 
 TEST(UrdfNames, EmptyNamesGetTheKindsNameAndLinksAndJointsAreSeparate) {
@@ -77,7 +81,8 @@ TEST(UrdfNames, EmptyNamesGetTheKindsNameAndLinksAndJointsAreSeparate) {
   const Robot robot = named({"link", "", "", "shared"}, {"", "shared", "joint"});
   const UrdfNames names = urdf_names(robot);
   EXPECT_EQ(names.links, (std::vector<std::string>{"link", "link_2", "link_3", "shared"}));
-  EXPECT_EQ(names.joints, (std::vector<std::string>{"joint", "shared", "joint_2"}));
+  // The joint authored as "joint" keeps it, though an empty name comes first.
+  EXPECT_EQ(names.joints, (std::vector<std::string>{"joint_2", "shared", "joint"}));
 }
 
 TEST(UrdfNames, AreTheNamesTheExportedUrdfHas) {
@@ -99,7 +104,8 @@ TEST(UrdfNames, AreTheNamesTheExportedUrdfHas) {
   EXPECT_EQ(exported->joint_names, names.joints);
   ASSERT_EQ(conversion.robot.joints.size(), 2u);
   EXPECT_EQ(conversion.robot.joints[0].name, "elbow joint");
-  EXPECT_EQ(names.joints, (std::vector<std::string>{"elbow_joint", "elbow_joint_2"}));
+  // "elbow_joint" keeps its name; "elbow joint", first in the robot, takes the suffix.
+  EXPECT_EQ(names.joints, (std::vector<std::string>{"elbow_joint_2", "elbow_joint"}));
   // urdfdom reads exactly these names back, with each joint between the links it joins.
   const auto model = parse_with_urdfdom(exported->text);
   ASSERT_TRUE(model);

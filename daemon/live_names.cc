@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "rdtf/diagnostics.h"
 #include "rdtf/urdf_names.h"
 #include "safe_decode.h"
 
@@ -88,16 +89,18 @@ std::string joint_commands_of(const rdtf::joint_command_t& command, const LiveNa
         return "unknown mode " + std::to_string(command.mode[i]) + " for joint '" + name + "'";
     }
     // Checked here too (set_command checks them again) so that a bad value for the last joint
-    // leaves the others' commands unapplied.
-    for (double v : {c.effort, c.position, c.velocity, c.kp, c.kd}) {
-      if (!std::isfinite(v)) {
+    // leaves the others' commands unapplied. The reason names the field and its value as sent.
+    const std::pair<const char*, double> sent[] = {{"value", command.value[i]}, {"kp", command.kp[i]}, {"kd", command.kd[i]}};
+    for (const auto& [field, v] : sent) {
+      // A torque command reads no gains, a velocity command no kp.
+      const std::string_view f = field;
+      const bool read = f == "value" || c.mode == CommandMode::kPosition || (f == "kd" && c.mode == CommandMode::kVelocity);
+      if (!read) continue;
+      if (!std::isfinite(v) || (std::string_view(field) != "value" && v < 0)) {
         commands.clear();
-        return "command for '" + name + "' rejected: values must be finite";
+        return "command for '" + name + "' rejected: " + field + " " + format_number(v) +
+               (std::isfinite(v) ? " is negative (gains must not be)" : " is not finite");
       }
-    }
-    if (c.kp < 0 || c.kd < 0) {
-      commands.clear();
-      return "command for '" + name + "' rejected: gains must not be negative";
     }
     commands.push_back(c);
   }

@@ -126,14 +126,19 @@ std::string SimulationHost::command(const rdtf::joint_command_t& command) {
     ++dropped_commands_;
     return "joint_command_t for model '" + lcm_safe::printable(command.model_id, 80) + "', which is not simulated";
   }
-  if (command.num_joints < 0 || static_cast<std::size_t>(command.num_joints) > joints->second) {
-    ++dropped_commands_;
-    return "joint_command_t with " + std::to_string(command.num_joints) + " joints for model '" +
-           lcm_safe::printable(command.model_id, 80) + "', which has " + std::to_string(joints->second);
-  }
-  if (inbox_.commands.size() >= kMaxPendingCommands) {
+  if (inbox_.commands.size() + inbox_.rejections.size() >= kMaxPendingCommands) {
     ++dropped_commands_;
     return "joint_command_t dropped: " + std::to_string(kMaxPendingCommands) + " commands already wait";
+  }
+  if (command.num_joints < 0 || static_cast<std::size_t>(command.num_joints) > joints->second) {
+    // A controller that kept its joint list across a reload that removed a joint must hear why
+    // its robot went passive, as for any other joint it names that is not there.
+    const std::size_t count = joints->second;
+    inbox_.rejections.emplace_back(
+        command.model_id, "command names " + std::to_string(command.num_joints) + " joints, but the model has " +
+                              std::to_string(count) + " joint" + (count == 1 ? "" : "s") +
+                              " (a joint no longer in the live revision, or a joint named twice)");
+    return "";
   }
   inbox_.commands.push_back(command);
   return "";
@@ -185,6 +190,11 @@ void SimulationHost::apply_inbox() {
   }
   const auto now = Clock::now();
   for (const auto& command : inbox.commands) apply_command(command, now);
+  for (const auto& [model_id, why] : inbox.rejections) {
+    rdtf::joint_command_t stub;
+    stub.model_id = model_id;
+    reject(stub, why);
+  }
   std::lock_guard lock(mutex_);
   model_count_ = models_.size();
   if (models_.empty()) timing_ = LiveTiming{0, 0, failures_};

@@ -181,9 +181,11 @@ class SimulationHost {
             const Robot& robot);
   void remove(const std::string& model_id);
   // A controller's command; rejected (reported on <prefix>/<model>/ERROR) when its revision or
-  // content hash is not the live one or it names unknown joints. Not even queued (the reason is
-  // returned, for the caller to count) when the queue is full or it has more joints than the
-  // model loaded last: a queued command then costs at most that model's joints.
+  // content hash is not the live one or it names unknown joints. One with more joints than the
+  // model loaded last (a joint a reload removed, a name repeated) is rejected as well, but not
+  // queued: only its reason is, so a queued command costs at most that model's joints. Dropped
+  // (the reason is returned, for the caller to count) when the queue is full or the model is not
+  // simulated.
   std::string command(const rdtf::joint_command_t& command);
 
   std::size_t model_count() const;
@@ -201,6 +203,7 @@ class SimulationHost {
     std::vector<std::pair<std::string, std::unique_ptr<LiveModel>>> loads;
     std::vector<std::string> removals;
     std::vector<rdtf::joint_command_t> commands;
+    std::vector<std::pair<std::string, std::string>> rejections;  // (model id, why)
   };
 
   void run();

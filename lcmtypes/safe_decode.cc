@@ -294,9 +294,13 @@ std::optional<std::string> DropCounter::drop(std::string_view channel, std::stri
   ++unreported_;
   if (now < next_line_) return std::nullopt;
   next_line_ = now + period_;
-  std::string line = "dropped " + std::to_string(unreported_) + " undecodable message" + (unreported_ == 1 ? "" : "s") +
-                     " (" + std::to_string(total_) + " since start); latest on " + printable(channel, 80) + ": " +
-                     printable(why, 200);
+  const auto shown = [&](std::string_view text, std::size_t max_bytes) {
+    if (escape_) return printable(text, max_bytes);
+    return std::string(text.substr(0, max_bytes)) + (text.size() > max_bytes ? "...(" + std::to_string(text.size()) + " bytes)" : "");
+  };
+  std::string line = "dropped " + std::to_string(unreported_) + " message" + (unreported_ == 1 ? "" : "s") +
+                     " from the bus (" + std::to_string(total_) + " since start); latest on " + shown(channel, 80) +
+                     ": " + shown(why, 200);
   unreported_ = 0;
   return line;
 }

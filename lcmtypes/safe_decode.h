@@ -61,11 +61,14 @@ std::optional<Message> decode(const void* data, std::size_t size, std::string& w
 std::string printable(std::string_view text, std::size_t max_bytes = 200);
 
 // Counts dropped datagrams and says when to log: the first drop at once, then at most one line
-// per `period` with the number dropped since the last line.
+// per `period` with the number dropped since the last line. The line holds the channel and the
+// reason made printable(), unless `escape` is false: for a log that escapes every line itself
+// (rdtfd's), where a second escape would show a bus byte 0xff as "\\xff".
 class DropCounter {
  public:
   using Clock = std::chrono::steady_clock;
-  explicit DropCounter(Clock::duration period = std::chrono::seconds(1)) : period_(period) {}
+  explicit DropCounter(Clock::duration period = std::chrono::seconds(1), bool escape = true)
+      : period_(period), escape_(escape) {}
 
   // Notes one drop on `channel` for `why`; returns the line to log now, if one is due.
   std::optional<std::string> drop(std::string_view channel, std::string_view why, Clock::time_point now);
@@ -73,6 +76,7 @@ class DropCounter {
 
  private:
   Clock::duration period_;
+  bool escape_;
   Clock::time_point next_line_{};
   std::uint64_t total_ = 0;
   std::uint64_t unreported_ = 0;

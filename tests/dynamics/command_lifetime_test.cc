@@ -4,6 +4,7 @@
 // and the names a live model answers to (its URDF names, and glTF names where unambiguous).
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -124,7 +125,7 @@ TEST_F(CommandLifetime, ARefusedCommandRenewsNothing) {
 }
 
 // Three joints whose glTF names sanitise to one URDF name: "a b", "a b" and "a_b" are the URDF's
-// "a_b", "a_b_2" and "a_b_3".
+// "a_b_2", "a_b_3" and "a_b" (a name valid as it is keeps it).
 Robot three_joints() {
   dynamics_test::RobotBuilder b;
   const auto box = dynamics_test::box_inertial(1.0, {0.1, 0.1, 0.1});
@@ -142,18 +143,19 @@ TEST(LiveNames, CommandsNameJointsByUrdfNameOrByAnUnambiguousGltfName) {
   std::vector<std::string> joints, links;
   for (const Joint& j : robot.joints) joints.push_back(j.name);
   for (const Link& l : robot.links) links.push_back(l.name);
-  EXPECT_EQ(joints, (std::vector<std::string>{"a_b", "a_b_2", "a_b_3"}));
+  EXPECT_EQ(joints, (std::vector<std::string>{"a_b_2", "a_b_3", "a_b"}));
   EXPECT_EQ(links, (std::vector<std::string>{"base_link", "link", "link_2", "link_3"}));
   EXPECT_EQ(names.link_gltf, (std::vector<std::string>{"base link", "link", "link", "link"}));
   EXPECT_EQ(names.joint_gltf.at("a_b_2"), "a b");
-  EXPECT_EQ(names.joint_gltf.at("a_b_3"), "a_b");
+  EXPECT_EQ(names.joint_gltf.at("a_b_3"), "a b");
+  EXPECT_EQ(names.joint_gltf.at("a_b"), "a_b");
   std::string why;
-  // A URDF name means its joint, even where it is another joint's glTF name ("a_b" is joint 2's).
+  // A URDF name means its joint: "a_b" the joint whose glTF name it is too.
   EXPECT_EQ(names.joint("a_b", why), "a_b");
   EXPECT_EQ(names.joint("a_b_3", why), "a_b_3");
   // "a b" is two joints' glTF name: refused, naming both.
   EXPECT_FALSE(names.joint("a b", why));
-  EXPECT_EQ(why, "joint name 'a b' is the glTF name of 2 joints (URDF names 'a_b', 'a_b_2'): name the joint by its URDF name");
+  EXPECT_EQ(why, "joint name 'a b' is the glTF name of 2 joints (URDF names 'a_b_2', 'a_b_3'): name the joint by its URDF name");
   EXPECT_FALSE(names.joint("wrist\n", why));
   EXPECT_EQ(why, "unknown joint 'wrist\\x0a' (neither a joint's URDF name nor its glTF name)");
 
@@ -172,6 +174,20 @@ TEST(LiveNames, CommandsNameJointsByUrdfNameOrByAnUnambiguousGltfName) {
   ASSERT_EQ(commands.size(), 2u);
   EXPECT_EQ(commands[0].joint, "elbow_joint");
   EXPECT_EQ(commands[1].joint, "elbow_joint");
+
+  // A value or gain refused names the field and what was sent; a field the mode does not read
+  // (a torque's gains) is not looked at.
+  auto nan_target = hold({"elbow_joint"}, std::numeric_limits<double>::quiet_NaN());
+  EXPECT_EQ(joint_commands_of(nan_target, spaced_names, *simulation, commands),
+            "command for 'elbow_joint' rejected: value nan is not finite");
+  auto negative_kd = hold({"elbow_joint"}, 0.1);
+  negative_kd.kd[0] = -2.5;
+  EXPECT_EQ(joint_commands_of(negative_kd, spaced_names, *simulation, commands),
+            "command for 'elbow_joint' rejected: kd -2.5 is negative (gains must not be)");
+  auto torque = hold({"elbow_joint"}, 0.1);
+  torque.mode[0] = rdtf::joint_command_t::TORQUE;
+  torque.kp[0] = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(joint_commands_of(torque, spaced_names, *simulation, commands), "");
 }
 
 }  // namespace

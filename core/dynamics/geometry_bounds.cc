@@ -1,6 +1,9 @@
 // Bounds of each link's geometry in its link frame, for the centre-of-mass check.
+#include <algorithm>
+
 #include "rdtf/dynamics.h"
 #include "rdtf/geometry.h"
+#include "rdtf/instancing.h"
 
 namespace rdtf {
 namespace {
@@ -11,9 +14,9 @@ bool is_triangle_mode(const Json& primitive) {
 }
 
 // Grows `box` by the triangle primitives' positions of `mesh`, morphed by `weights` (morph_weights
-// of the node drawing it) and mapped by X.
+// of the node drawing it) and mapped by each of `placements` (one per instance of the node).
 void add_mesh(const GltfAsset& asset, std::size_t mesh, std::span<const double> weights,
-              const Eigen::Affine3d& X, Eigen::AlignedBox3d& box) {
+              std::span<const Eigen::Affine3d> placements, Eigen::AlignedBox3d& box) {
   const Json& meshes = asset.document["meshes"];
   if (mesh >= meshes.size()) return;
   for (const Json& primitive : meshes[mesh].value("primitives", Json::array())) {
@@ -28,7 +31,9 @@ void add_mesh(const GltfAsset& asset, std::size_t mesh, std::span<const double> 
       positions[i] = Eigen::Vector3d(values[3 * i], values[3 * i + 1], values[3 * i + 2]);
     }
     add_morph_displacements(asset, primitive, weights, positions);
-    for (const Eigen::Vector3d& p : positions) box.extend(X * p);
+    for (const Eigen::Affine3d& X : placements) {
+      for (const Eigen::Vector3d& p : positions) box.extend(X * p);
+    }
   }
 }
 
@@ -66,8 +71,11 @@ LinkBounds link_geometry_bounds(const GltfAsset& asset, const Robot& robot) {
     const Link& link = robot.links[l];
     const Eigen::Affine3d X_LS(link.X_SL.inverse().matrix());
     Eigen::AlignedBox3d box;  // empty
+    std::vector<int> done;  // A node with N instances is N of the link's meshes: bound it once.
     for (const LinkMesh& mesh : link.meshes) {
       if (mesh.node < 0 || mesh.node >= node_count) continue;
+      if (std::find(done.begin(), done.end(), mesh.node) != done.end()) continue;
+      done.push_back(mesh.node);
       const Json& node = document["nodes"][mesh.node];
       if (!node.contains("mesh")) continue;
       const auto mesh_index = node["mesh"].get<std::size_t>();
@@ -77,9 +85,21 @@ LinkBounds link_geometry_bounds(const GltfAsset& asset, const Robot& robot) {
         if (link.node < 0 || link.node >= node_count) continue;
         const auto ibm = inverse_bind(asset, node, link.node);
         if (!ibm) continue;
-        add_mesh(asset, mesh_index, weights, X_LS * world[link.node] * *ibm, box);
+        const Eigen::Affine3d X = X_LS * world[link.node] * *ibm;
+        add_mesh(asset, mesh_index, weights, std::span(&X, 1), box);
       } else {
-        add_mesh(asset, mesh_index, weights, X_LS * world[mesh.node], box);
+        // Every instance of EXT_mesh_gpu_instancing is a solid of the link (its mass counts them
+        // all), so the bounds hold each where it is drawn. The conversion checked the instances:
+        // a failure here leaves the mesh out, as one the conversion refused.
+        Diagnostics scratch;
+        const auto instances =
+            instance_transforms(asset, static_cast<std::size_t>(mesh.node), asset.limits.max_triangles, scratch,
+                                static_cast<std::size_t>(mesh.node));
+        if (!instances) continue;
+        std::vector<Eigen::Affine3d> placements;
+        placements.reserve(instances->size());
+        for (const Eigen::Affine3d& X_NI : *instances) placements.push_back(X_LS * world[mesh.node] * X_NI);
+        add_mesh(asset, mesh_index, weights, placements, box);
       }
     }
     if (!box.isEmpty()) bounds[l] = box;

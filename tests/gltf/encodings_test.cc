@@ -8,6 +8,7 @@
 
 #include "../../fuzz/fuzz_pipeline.h"
 #include "rdtf/convert.h"
+#include "rdtf/dynamics.h"
 #include "support/test_support.h"
 
 namespace rdtf {
@@ -123,6 +124,17 @@ TEST(GpuInstancing, EveryInstanceIsASolidOfTheLink) {
   EXPECT_NEAR(a.robot.links[0].inertial.mass, 3.5 * cube, 1e-6 * cube);
   EXPECT_EQ(a.robot.links[0].meshes.size(), 3u);
   expect_same_mass(a.robot.links[0].inertial, b.robot.links[0].inertial);
+  // The gate's bounds hold every instance where it is drawn, as the twin's three nodes: they
+  // held the first instance only (0.05 m about the origin), so the centre of mass, at (0.17,
+  // 0.07, 0) m, lay outside them and rdtf validate refused the model.
+  const auto bounds_a = link_geometry_bounds(a.asset, a.robot);
+  const auto bounds_b = link_geometry_bounds(b.asset, b.robot);
+  ASSERT_TRUE(bounds_a[0] && bounds_b[0]);
+  EXPECT_TRUE(bounds_a[0]->min().isApprox(bounds_b[0]->min(), 1e-7)) << bounds_a[0]->min().transpose();
+  EXPECT_TRUE(bounds_a[0]->max().isApprox(bounds_b[0]->max(), 1e-7)) << bounds_a[0]->max().transpose();
+  // The part stretched twice along its x and turned 90 degrees about z reaches 0.1 m along y.
+  EXPECT_NEAR(bounds_a[0]->max().y(), 0.55, 1e-7);
+  EXPECT_NEAR(bounds_a[0]->max().x(), 0.35, 1e-7);
 }
 
 // On a link node that also has children (Blender's layout), the instances move with the mesh to

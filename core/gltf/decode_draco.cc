@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstring>
 #include <map>
+#include <set>
 #include <optional>
 #include <string>
 
@@ -33,6 +34,7 @@ struct Output {
   std::size_t accessor = 0;
   const draco::PointAttribute* attribute = nullptr;  // Null: the indices.
   std::uint64_t offset = 0, stride = 0, length = 0;
+  std::string name;  // The primitive's attribute ("POSITION"); empty for the indices.
 };
 
 // The attribute's values in the accessor's component type, and their per-component bounds:
@@ -123,6 +125,8 @@ class DracoDecoder {
   Diagnostics& diag_;
   std::map<std::size_t, std::size_t> done_;  // Accessor -> the Draco buffer view that filled it.
   std::uint64_t buffer_total_ = 0;
+  // Accessors a primitive without Draco reads: decoding must not replace what they hold.
+  std::set<std::size_t> read_plain_;
 };
 
 std::optional<std::span<const std::uint8_t>> DracoDecoder::compressed_bytes(const Json& extension,
@@ -166,12 +170,12 @@ bool DracoDecoder::plan(const Json& primitive, const Json& extension, const std:
     diag_.error(codes::DRACO_INVALID, pointer + "/attributes", "'attributes' must be an object of Draco attribute ids");
     return false;
   }
-  auto add = [&](std::size_t accessor, bool vertex) {
+  auto add = [&](std::size_t accessor, bool vertex, const std::string& name = {}) {
     const Json& a = doc_["accessors"][accessor];
     const std::uint64_t element = element_bytes(a);
     const std::uint64_t stride = vertex ? round_up4(element) : element;
     const std::uint64_t count = a["count"].get<std::uint64_t>();
-    outputs.push_back({accessor, nullptr, total, stride, stride * count});
+    outputs.push_back({accessor, nullptr, total, stride, stride * count, name});
     total = saturating_add(total, round_up4(stride * count));
     return element != 0;
   };
@@ -185,7 +189,7 @@ bool DracoDecoder::plan(const Json& primitive, const Json& extension, const std:
                   "'" + quote(name) + "' must be an attribute of the primitive with a Draco id, found " + describe(id));
       return false;
     }
-    if (!add(primitive["attributes"][name].get<std::size_t>(), true)) {
+    if (!add(primitive["attributes"][name].get<std::size_t>(), true, name)) {
       diag_.error(codes::DRACO_INVALID, pointer + "/attributes/" + name, "a Draco attribute must be a SCALAR or VEC2-4 accessor");
       return false;
     }
@@ -306,9 +310,24 @@ bool DracoDecoder::decode_primitive(std::size_t m, std::size_t p) {
   std::uint64_t total = 0;
   if (!plan(primitive, extension, pointer, outputs, total)) return false;
   for (const Output& output : outputs) {
-    if (done_.count(output.accessor) > 0 || doc_["accessors"][output.accessor].contains("bufferView")) {
+    // An accessor with a bufferView is the uncompressed fallback for readers without Draco
+    // (gltf-pipeline --draco.uncompressedFallback): the decoded data replaces it. One that
+    // another primitive reads too cannot hold this one's decoded values (Draco orders each mesh's
+    // vertices its own way), and such files are wrong already: gltf-pipeline 4.3's fallback
+    // writes one mesh's Draco-ordered indices into an index list meshes share, then encodes the
+    // next mesh from them (tests/data/encoded/make.sh: 3 kg of an 8 kg base went missing).
+    if (done_.count(output.accessor) > 0 || read_plain_.count(output.accessor) > 0) {
+      const bool fallback = doc_["accessors"][output.accessor].contains("bufferView");
       diag_.error(codes::DRACO_INVALID, json_pointer("/accessors", output.accessor),
-                  "an accessor of a Draco-compressed primitive must have no bufferView and belong to one Draco primitive");
+                  "accessor " + std::to_string(output.accessor) + " (the " +
+                      (output.name.empty() ? std::string("indices") : output.name) + " of mesh " + std::to_string(m) +
+                      " " + describe(doc_["meshes"][m].value("name", Json(""))) +
+                      ", Draco-compressed) is read by another primitive too: a Draco primitive's accessors must be "
+                      "its own" +
+                      (fallback ? std::string(". Its uncompressed fallback data cannot be trusted either: "
+                                              "gltf-pipeline's --draco.uncompressedFallback encodes meshes that share "
+                                              "an accessor wrongly. Compress without the fallback")
+                                : std::string()));
       return false;
     }
   }
@@ -353,6 +372,26 @@ bool DracoDecoder::decode_primitive(std::size_t m, std::size_t p) {
 
 bool DracoDecoder::run(bool& decoded) {
   if (!doc_.contains("meshes")) return true;
+  for (const Json& mesh : doc_["meshes"]) {
+    for (const Json& primitive : mesh.value("primitives", Json::array())) {
+      if (primitive.contains("extensions") && primitive["extensions"].is_object() &&
+          primitive["extensions"].contains(kDracoExtension)) {
+        continue;
+      }
+      if (primitive.contains("indices") && primitive["indices"].is_number_unsigned()) {
+        read_plain_.insert(primitive["indices"].get<std::size_t>());
+      }
+      const Json attributes = primitive.value("attributes", Json::object());
+      for (const auto& [name, accessor] : attributes.items()) {
+        if (accessor.is_number_unsigned()) read_plain_.insert(accessor.get<std::size_t>());
+      }
+      for (const Json& target : primitive.value("targets", Json::array())) {
+        for (const auto& [name, accessor] : target.items()) {
+          if (accessor.is_number_unsigned()) read_plain_.insert(accessor.get<std::size_t>());
+        }
+      }
+    }
+  }
   for (const auto& buffer : doc_.value("buffers", Json::array())) {
     buffer_total_ = saturating_add(buffer_total_, buffer["byteLength"].get<std::uint64_t>());
   }

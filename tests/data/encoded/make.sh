@@ -37,6 +37,15 @@ source_of modelled_arm arm_source
 "$bin/gltfpack" -i arm_source.gltf -o arm_meshopt.glb -kn -ke -cc
 # gltf-pipeline's Draco (default quantization: 11 bits for positions), buffers embedded.
 "$bin/gltf-pipeline" -i arm_source.gltf -o arm_draco.gltf -d
+# The same with the uncompressed data kept beside it for readers without Draco (the extension is
+# then used, not required, and each accessor keeps a bufferView). gltf-pipeline 4.3.1 writes this
+# wrong where meshes share an accessor (arm_source's forearm and upper_arm share their index
+# list): arm_draco_fallback_shared.gltf, which rdtf refuses. arm_unshared_source.gltf is
+# arm_source.gltf with that accessor copied for the second mesh (python3 -c 'import json;
+# d=json.load(open("arm_source.gltf")); ... append a copy of accessor 3 and point
+# meshes[1].primitives[0].indices at it'), the same robot.
+"$bin/gltf-pipeline" -i arm_unshared_source.gltf -o arm_draco_fallback.gltf -d --draco.uncompressedFallback
+"$bin/gltf-pipeline" -i arm_source.gltf -o arm_draco_fallback_shared.gltf -d --draco.uncompressedFallback
 # draco_transcoder (Debian draco), default quantization (11 bits for positions); it drops extras.
 draco_transcoder -i arm_source.gltf -o arm_draco_transcoder.gltf
 # arm3: parts as named leaf mesh nodes under empties (Blender's "empty holding meshes" link).

@@ -120,6 +120,7 @@ class DocumentCheck {
   bool check_primitive(const Json& primitive, const std::string& pointer, MeshFacts& mesh);
   std::map<std::string, std::size_t> check_attributes(const Json& attributes,
                                                       const std::string& pointer, bool target);
+  void check_attribute_alignment(const std::string& name, std::size_t accessor, const std::string& pointer);
   void check_attribute_format(const std::string& name, std::size_t accessor,
                               const std::string& pointer);
   void check_indices(std::size_t accessor, const std::string& pointer);

@@ -106,7 +106,16 @@ const Json* DocumentCheck::read_array(const Json& object, const char* key,
                                       const std::string& pointer, bool required) {
   const Json* array = read_typed(object, key, pointer, required, &Json::is_array, "an array");
   if (array == nullptr || !array->empty()) return array;
-  diag_.error(codes::EMPTY_ENTITY, json_pointer(pointer, key), "the array is empty; leave it out");
+  // Named by the object that holds it (a node's name) and, for children, by the likely cause.
+  const bool named = object.contains("name") && object["name"].is_string();
+  const bool children = std::string_view(key) == "children";
+  diag_.error(codes::EMPTY_ENTITY, json_pointer(pointer, key),
+              (named ? "'" + quote(object["name"].get<std::string>()) + "': '" : std::string("'")) + key +
+                  "' is an empty array, which glTF does not allow (an array holds at least one element); leave it out" +
+                  (children ? std::string(". A tool that removed this node's children leaves it so: gltf-pipeline "
+                                          "removes nodes nothing refers to (KHR_physics_rigid_bodies frames among "
+                                          "them) unless given --keepUnusedElements")
+                            : std::string()));
   return nullptr;
 }
 

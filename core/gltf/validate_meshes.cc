@@ -4,6 +4,7 @@
 #include "document_check.h"
 #include "validate_util.h"
 #include "rdtf/diagnostic_codes.h"
+#include "rdtf/geometry.h"
 
 namespace rdtf::internal {
 namespace {
@@ -126,6 +127,7 @@ std::map<std::string, std::size_t> DocumentCheck::check_attributes(const Json& a
     if (!accessors_[accessor].valid) continue;
     resolved[name] = accessor;
     check_attribute_format(name, accessor, here);
+    check_attribute_alignment(name, accessor, here);
     use_view(accessors_[accessor].view, kArrayBuffer, here);
     if (count != 0 && accessors_[accessor].count != count) {
       diag_.error(codes::MESH_PRIMITIVE_UNEQUAL_ACCESSOR_COUNT, here,
@@ -150,6 +152,35 @@ std::map<std::string, std::size_t> DocumentCheck::check_attributes(const Json& a
                     std::to_string(sets["WEIGHTS"].size()) + " WEIGHTS_n; they come in pairs");
   }
   return resolved;
+}
+
+// glTF 2.0 (3.6.2.4): each element of a vertex attribute starts at a multiple of 4 bytes, so the
+// accessor's start in its buffer and its stride (byteStride, else the element's size) are
+// multiples of 4. A file that breaks it is refused: its data would be read right, but the output,
+// which keeps the layout, would be no valid glTF (the Khronos validator's error of this name).
+void DocumentCheck::check_attribute_alignment(const std::string& name, std::size_t accessor, const std::string& pointer) {
+  const AccessorFacts& facts = accessors_[accessor];
+  if (facts.view == kNone || facts.view >= views_.size() || !views_[facts.view].valid) return;  // Sparse only: no layout.
+  const ViewFacts& view = views_[facts.view];
+  const Json& json = doc_["accessors"][accessor];
+  const std::uint64_t offset =
+      json.contains("byteOffset") && json["byteOffset"].is_number_unsigned() ? json["byteOffset"].get<std::uint64_t>() : 0;
+  const std::uint64_t start = view.byte_offset + offset;
+  // (Vertex attributes are SCALAR or VECn: no matrix padding.)
+  const std::uint64_t stride = view.byte_stride != 0
+                                   ? view.byte_stride
+                                   : static_cast<std::uint64_t>(std::max(component_count(facts.type), 0)) *
+                                         component_size(facts.component_type);
+  if (start % 4 == 0 && stride % 4 == 0) return;
+  diag_.error(codes::MESH_PRIMITIVE_ACCESSOR_UNALIGNED, pointer,
+              "attribute " + name + " reads accessor " + std::to_string(accessor) + ", whose elements " +
+                  (start % 4 != 0 ? "start at byte " + std::to_string(start) + " of its buffer"
+                                  : std::string("are ") + std::to_string(stride) + " bytes apart (" + facts.type +
+                                        " of " + std::to_string(component_size(facts.component_type)) +
+                                        "-byte components, no byteStride)") +
+                  ": glTF requires every vertex attribute element to start at a multiple of 4 bytes. Give the "
+                  "buffer view a byteStride that is a multiple of 4 (8 for 16-bit VEC3), as gltfpack and Blender "
+                  "write them");
 }
 
 // The formats of the attributes the converter reads: POSITION, JOINTS_n and WEIGHTS_n.

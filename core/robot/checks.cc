@@ -37,12 +37,13 @@ constexpr double kFullTurn = 2 * 3.14159265358979323846;  // rad
 // A slide longer than a hundred times the robot (and 10 m) is a length typed in millimetres.
 constexpr double kSlideReach = 100.0;
 
-std::string short_number(double value) {
-  std::ostringstream out;
-  out.precision(3);
-  out << value;
-  return out.str();
-}
+std::string short_number(double value) { return format_number(value, 3); }
+
+// What a packer's options do to a robot, for the warnings that meet a packed file.
+constexpr const char* kPackerAdvice =
+    "drops node extras (custom properties: joints, masses, densities) unless told to keep them, and merges or "
+    "renames nodes (parts, joint empties) unless told to keep them: pack with gltfpack -kn -ke (gltf-transform: "
+    "keep extras and nodes), or pack rdtf's own output (rdtf convert first)";
 
 bool has_rdtf_keys(const Json& document) {
   if (document.contains("extras") && document["extras"].is_object() &&
@@ -59,17 +60,33 @@ bool has_rdtf_keys(const Json& document) {
 }
 
 // How large the robot is: the diagonal of the box around its link frames and centres of mass, or
-// the edge of a cube of its largest link's volume if that is more (a robot of one link).
-double robot_extent(const Robot& robot) {
+// the edge of a cube of its largest link's volume if that is more (a robot of one link). The
+// volume stands in for the parts' own sizes: their bounds would need a pass over every vertex.
+struct RobotSize {
+  double span = 0;       // m: the box's diagonal
+  double part_edge = 0;  // m: the cube's edge
+  double extent() const { return std::max(span, part_edge); }
+  // The size as the message should state it, saying which of the two it is.
+  std::string text() const {
+    if (span >= part_edge) return "spans " + short_number(span) + " m (link frames and centres of mass)";
+    return "has a part of " + short_number(part_edge * part_edge * part_edge) + " m^3 (a cube " +
+           short_number(part_edge) + " m on a side)";
+  }
+};
+
+RobotSize robot_size(const Robot& robot) {
   Eigen::AlignedBox3d box;
-  double largest_part = 0;  // m
+  RobotSize size;
   for (const Link& link : robot.links) {
     box.extend(link.X_SL.translation());
     if (link.inertial.mass > 0) box.extend(link.X_SL * link.inertial.center_of_mass);
-    largest_part = std::max(largest_part, std::cbrt(std::max(0.0, link.inertial.volume)));
+    size.part_edge = std::max(size.part_edge, std::cbrt(std::max(0.0, link.inertial.volume)));
   }
-  return std::max(box.isEmpty() ? 0.0 : box.diagonal().norm(), largest_part);
+  size.span = box.isEmpty() ? 0.0 : box.diagonal().norm();
+  return size;
 }
+
+double robot_extent(const Robot& robot) { return robot_size(robot).extent(); }
 
 void check_units_of(const Json& document, const Robot& robot, Diagnostics& diag) {
   if (robot.links.empty()) return;
@@ -82,15 +99,15 @@ void check_units_of(const Json& document, const Robot& robot, Diagnostics& diag)
     volume += std::max(0.0, link.inertial.volume);
     if (link.inertial.mass > robot.links[heaviest].inertial.mass) heaviest = static_cast<int>(l);
   }
-  const double extent = robot_extent(robot);
+  const RobotSize size = robot_size(robot);
+  const double extent = size.extent();
   const Link& link = robot.links[heaviest];
   // Large or heavy beyond any robot, or both large and heavy beyond a mobile one (a hand-sized
   // part drawn in millimetres: a 25 mm gripper becomes 25 m and hundreds of tonnes).
   const bool too_large = extent > kMaxExtent || mass > kMaxMass || (extent > kLargeExtent && mass > kLargeMass);
   if (too_large) {
     diag.warning(codes::UNITS_IMPLAUSIBLE, json_pointer("/nodes", link.node),
-                 "the robot is " + short_number(extent) + " m across and weighs " +
-                     short_number(mass) + " kg (" + node_label(document, link.node) + " alone " +
+                 "the robot " + size.text() + " and weighs " + short_number(mass) + " kg (" + node_label(document, link.node) + " alone " +
                      short_number(link.inertial.mass) +
                      " kg): implausible in metres. glTF lengths are metres; the model was likely "
                      "drawn in millimetres: scale it by 0.001 (in Blender: select all, scale by "
@@ -99,7 +116,7 @@ void check_units_of(const Json& document, const Robot& robot, Diagnostics& diag)
     // (Only with geometry to measure: a robot of one link without meshes, as URDFs without their
     // mesh files give, has no size at all.)
     diag.warning(codes::UNITS_IMPLAUSIBLE, json_pointer("/nodes", link.node),
-                 "the robot is " + short_number(extent) + " m across and weighs " + short_number(mass) +
+                 "the robot " + size.text() + " and weighs " + short_number(mass) +
                      " kg: implausibly small in metres. glTF lengths are metres: was the model scaled "
                      "down twice, or drawn in kilometres?");
   }
@@ -355,6 +372,7 @@ void check_extras_keys(const Json& document, Diagnostics& diag) {
 void check_missing_properties(const Json& document, const std::vector<NodeType>& types,
                               Diagnostics& diag) {
   if (!document.contains("nodes") || has_rdtf_keys(document)) return;
+  const auto packer = repacked_by(document);
   std::vector<char> is_child(document["nodes"].size(), 0);
   for (const Json& node : document["nodes"]) {
     for (const Json& child : node.value("children", Json::array())) {
@@ -389,7 +407,8 @@ void check_missing_properties(const Json& document, const std::vector<NodeType>&
   }
   // Parts parented to parts and nothing else, from Blender: the joint empties were probably left
   // out (Limit to > Selected Objects with only the meshes selected).
-  const bool parts_only = empties.empty() && !bones && links > 1 && written_by_blender(document);
+  // Blender's exports, and packed files (which may be Blender's without their properties).
+  const bool parts_only = empties.empty() && !bones && links > 1 && (written_by_blender(document) || packer);
   if (empties.empty() && !bones && !parts_only) return;
   std::string names;
   for (std::size_t k = 0; k < empties.size() && k < 4; ++k) {
@@ -402,14 +421,17 @@ void check_missing_properties(const Json& document, const std::vector<NodeType>&
                    (names.empty() ? std::string() : "; these empties look like joints: " + names) +
                    (bones ? std::string("; the model has an armature") : std::string()) +
                    (parts_only ? "; its " + std::to_string(links) +
-                                     " parts are parented to one another with no empty between them (were the "
-                                     "joint empties left out of the export, by Include > Limit to > Selected "
-                                     "Objects with only the meshes selected?)"
+                                     " parts are parented to one another with no empty between them" +
+                                     (packer ? std::string()
+                                             : std::string(" (were the joint empties left out of the export, by "
+                                                           "Include > Limit to > Selected Objects with only the "
+                                                           "meshes selected?)"))
                                : std::string()) +
-                   ". In Blender, tick File > Export > glTF 2.0 > Include > Custom Properties "
-                   "(export_extras=True): it is off by default; on an armature set the "
-                   "properties on the Bone (Bone tab, edit or object mode), not on the pose bone, "
-                   "whose properties are never exported");
+                   (packer ? std::string(". The file was packed by '") + *packer + "', which " + kPackerAdvice
+                           : std::string(". In Blender, tick File > Export > glTF 2.0 > Include > Custom Properties "
+                                         "(export_extras=True): it is off by default; on an armature set the "
+                                         "properties on the Bone (Bone tab, edit or object mode), not on the pose "
+                                         "bone, whose properties are never exported")));
 }
 
 void check_units(const Json& document, const Robot& robot, Diagnostics& diag) {
@@ -430,7 +452,10 @@ void check_units(const Json& document, const Robot& robot, Diagnostics& diag) {
                      "this; a URDF export holds them all by fixed joints). Parent them to the robot, or "
                      "leave them out of the export: Blender exports hidden objects, and the objects of "
                      "a collection excluded from the view layer, unless Include > Limit to > Visible "
-                     "Objects is ticked");
+                     "Objects is ticked" +
+                     (repacked_by(document) ? ". The file was packed by '" + *repacked_by(document) + "', which " +
+                                                  kPackerAdvice
+                                            : std::string()));
   }
   check_units_of(document, robot, diag);
   check_densities(document, robot, diag);

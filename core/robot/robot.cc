@@ -97,6 +97,20 @@ bool is_skin_joint(const Json& document, std::size_t node) {
 bool reads_blender_axes(const Json& document, std::size_t node, Diagnostics& diag) {
   const Json* extras = node_extras(document, node);
   bool blender = written_by_blender(document);
+  const bool typed_axis = extras != nullptr && extras->contains("rdtf_axis");
+  if (typed_axis && !extras->contains("rdtf_axes") && !is_skin_joint(document, node)) {
+    // A packer that replaces asset.generator hides which tool wrote the axis: gltfpack's output of
+    // a Blender export turned every typed axis by 90 degrees, without a word.
+    if (const auto packer = repacked_by(document)) {
+      diag.warning(codes::RDTF_AXES_ASSUMED, json_pointer("/nodes", node) + "/extras/rdtf_axis",
+                   node_label(document, node) + ": rdtf_axis " + value_text((*extras)["rdtf_axis"]) +
+                       " is read in glTF's axes, since asset.generator is '" + *packer +
+                       "', which replaced the generator of the file it packed: rdtf cannot tell whether "
+                       "Blender wrote it, where a typed axis is in Blender's axes (Z up). If it came from "
+                       "Blender, add \"rdtf_axes\": \"blender\" beside rdtf_axis, or pack rdtf's own output "
+                       "instead (rdtf convert, then gltfpack -kn -ke), which says its axes");
+    }
+  }
   if (extras != nullptr && extras->contains("rdtf_axes")) {
     const Json& value = (*extras)["rdtf_axes"];
     if (value == "blender" || value == "gltf") {
@@ -325,6 +339,17 @@ std::vector<int> carried_links(const Json& document, const std::vector<NodeType>
 }
 
 }  // namespace
+
+std::optional<std::string> repacked_by(const Json& document) {
+  if (!document.contains("asset") || !document["asset"].is_object()) return std::nullopt;
+  const Json& asset = document["asset"];
+  if (!asset.contains("generator") || !asset["generator"].is_string()) return std::nullopt;
+  const std::string generator = asset["generator"].get<std::string>();
+  for (const char* packer : {"gltfpack", "glTF-Transform", "draco_transcoder"}) {
+    if (generator.rfind(packer, 0) == 0) return generator.substr(0, 80);
+  }
+  return std::nullopt;
+}
 
 bool written_by_blender(const Json& document) {
   if (!document.contains("asset") || !document["asset"].is_object()) return false;

@@ -95,6 +95,21 @@ std::vector<BadCase> cases() {
   all.push_back({"NumberBeyondDouble",
                  raw_file("model.gltf", "{\"asset\": {\"version\": \"2.0\"},\n \"nodes\": [{\"translation\": [1e400, 0, 0]}]}"),
                  "error INVALID_JSON: unusable JSON value at line 2, column 29 (byte 59)"});
+  // 16-bit texture coordinates starting 2 bytes into their view: aligned to their component size,
+  // not to the 4 bytes glTF requires of vertex attributes (the output kept the layout, which the
+  // Khronos validator refused).
+  all.push_back({"VertexAttributeOffTheFourByteGrid", edited_arm3([](Json& d) {
+                   d["accessors"][1]["componentType"] = 5123;
+                   d["accessors"][1]["normalized"] = true;
+                   d["accessors"][1]["byteOffset"] = 2;
+                 }),
+                 "/meshes/0/primitives/0/attributes/TEXCOORD_0: error MESH_PRIMITIVE_ACCESSOR_UNALIGNED: attribute "
+                 "TEXCOORD_0 reads accessor 1, whose elements start at byte 2306 of its buffer"});
+  // gltf-pipeline removes the nodes nothing refers to and leaves their parent's children empty:
+  // the error names the node and that cause (it said only "the array is empty").
+  all.push_back({"EmptyChildrenNameTheNodeAndTheLikelyCause",
+                 edited_arm3([](Json& d) { d["nodes"][2]["children"] = Json::array(); }),
+                 "/nodes/2/children: error EMPTY_ENTITY: 'forearm': 'children' is an empty array"});
   all.push_back({"AccessorOutOfItsBufferView",
                  edited_arm3([](Json& d) { d["accessors"][0]["byteOffset"] = 4096; }), "/accessors/0"});
   all.push_back({"AbsurdCount",

@@ -135,13 +135,24 @@ TEST(Plausibility, TooLargeAndHeavyForAMachineAndScaledToAMillimetre) {
   // 1000 t but beyond a 10 m, 100 t machine.
   json doc = arm();
   doc["nodes"][0]["scale"] = {30.0, 30.0, 30.0};
-  expect_one(convert_and_find(doc, codes::UNITS_IMPLAUSIBLE), "/nodes/2", {"implausible in metres", "0.001"});
+  expect_one(convert_and_find(doc, codes::UNITS_IMPLAUSIBLE), "/nodes/2",
+             {"the robot spans ", " m (link frames and centres of mass)", "implausible in metres", "0.001"});
   // A thousandth: the arm's authored inertial (its centre of mass 0.2 m out) goes, so that its
   // mass comes from its scaled mesh as the others' do.
   doc["nodes"][0]["scale"] = {0.001, 0.001, 0.001};
   doc["nodes"].erase(3);
   doc["nodes"][1]["children"] = json::array({2});
   expect_one(convert_and_find(doc, codes::UNITS_IMPLAUSIBLE), "/nodes/0", {"implausibly small in metres"});
+}
+
+// A robot of one link has no span between frames: its size is its part's volume, and the message
+// says so rather than quoting the cube's edge as the robot's breadth.
+TEST(Plausibility, OneLinkTooLargeIsSizedByItsPartsVolume) {
+  json doc = arm();
+  doc["nodes"][0].erase("children");
+  doc["nodes"][0]["scale"] = {500.0, 500.0, 500.0};  // 0.016 m^3 -> 2.0e6 m^3, a cube 126 m on a side
+  expect_one(convert_and_find(doc, codes::UNITS_IMPLAUSIBLE), "/nodes/0",
+             {"the robot has a part of 2e+06 m^3 (a cube 126 m on a side)", "implausible in metres"});
 }
 
 // Blender exports the Object Data tab's custom properties on the mesh, where rdtf reads nothing.
@@ -164,6 +175,34 @@ TEST(Plausibility, PartsParentedToPartsFromBlenderWithoutPropertiesAreNamed) {
   // From another tool, a model of parts alone is not judged (a fixed assembly is a model too).
   doc["asset"]["generator"] = "some CAD exporter";
   EXPECT_TRUE(convert_and_find(doc, codes::NO_RDTF_PROPERTIES).empty());
+}
+
+// gltfpack replaces asset.generator: behind it rdtf cannot tell that Blender wrote the axes the
+// modeller typed, so it reads them in glTF's axes, and says so at each typed axis. gltfpack's
+// output of a Blender export turned every joint axis by 90 degrees without a word.
+TEST(Plausibility, AxesBehindAPackersGeneratorAreNamedAsAssumed) {
+  json doc = arm();
+  doc["asset"]["generator"] = "gltfpack 1.3";
+  const auto found = convert_and_find(doc, codes::RDTF_AXES_ASSUMED);
+  ASSERT_EQ(found.size(), 2u);
+  EXPECT_EQ(found[0].pointer, "/nodes/1/extras/rdtf_axis");
+  EXPECT_EQ(found[1].pointer, "/nodes/2/extras/rdtf_axis");
+  for (const char* phrase : {"node 1 'arm': rdtf_axis [0,0,1] is read in glTF's axes", "'gltfpack 1.3'",
+                             "\"rdtf_axes\": \"blender\"", "gltfpack -kn -ke"}) {
+    EXPECT_NE(found[0].message.find(phrase), std::string::npos) << phrase << " not in: " << found[0].message;
+  }
+  // Saying which axes it typed answers it; so does any generator that is no packer.
+  doc["nodes"][1]["extras"]["rdtf_axes"] = "blender";
+  doc["nodes"][2]["extras"]["rdtf_axes"] = "gltf";
+  EXPECT_TRUE(convert_and_find(doc, codes::RDTF_AXES_ASSUMED).empty());
+  doc = arm();
+  doc["asset"]["generator"] = "some CAD exporter";
+  EXPECT_TRUE(convert_and_find(doc, codes::RDTF_AXES_ASSUMED).empty());
+  // Without any property (gltfpack without -ke), the warning says what the packer drops.
+  for (json& node : doc["nodes"]) node.erase("extras");
+  doc["asset"]["generator"] = "gltfpack 1.3";
+  expect_one(convert_and_find(doc, codes::NO_RDTF_PROPERTIES), "/nodes",
+             {"packed by 'gltfpack 1.3'", "drops node extras", "gltfpack -kn -ke"});
 }
 
 }  // namespace

@@ -75,6 +75,7 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(MESHOPT_INVALID, kSeverityError, "glTF") \
   X(MESH_INVALID_WEIGHTS_COUNT, kSeverityError, "glTF") \
   X(MESH_PRIMITIVES_UNEQUAL_TARGETS_COUNT, kSeverityError, "glTF") \
+  X(MESH_PRIMITIVE_ACCESSOR_UNALIGNED, kSeverityError, "glTF") \
   X(MESH_PRIMITIVE_ATTRIBUTES_ACCESSOR_INVALID_FORMAT, kSeverityError, "glTF") \
   X(MESH_PRIMITIVE_INDEXED_SEMANTIC_CONTINUITY, kSeverityError, "glTF") \
   X(MESH_PRIMITIVE_INDICES_ACCESSOR_INVALID_FORMAT, kSeverityError, "glTF") \
@@ -139,6 +140,7 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(NO_SCENE, kSeverityError, "model") \
   X(NODE_SHEARED, kSeverityWarning, "model") \
   X(PRIMITIVE_SKIPPED, kSeverityInfo, "model") \
+  X(RDTF_AXES_ASSUMED, kSeverityWarning, "model") \
   X(RDTF_INVALID_JOINT_TYPE, kSeverityError, "model") \
   X(RDTF_INVALID_NODE_ENTRY, kSeverityError, "model") \
   X(RDTF_INVALID_TYPE, kSeverityError, "model") \

@@ -114,6 +114,11 @@ inline constexpr const char* kJointExtrasKeys[] = {
 // ..."): its custom-property vectors were typed in Blender's axes.
 bool written_by_blender(const Json& document);
 
+// The asset.generator of a packer that replaces the generator of the file it packs (gltfpack,
+// glTF-Transform, draco_transcoder), cut to 80 bytes; nothing for any other tool. Behind it, the
+// tool that wrote the model (Blender's axes, its export options) cannot be told.
+std::optional<std::string> repacked_by(const Json& document);
+
 // Whether the node's extras vectors (rdtf_axis) are read in Blender's axes: as its rdtf_axes says,
 // else when Blender's exporter wrote the document; never for a bone (a skin joint), whose node
 // Blender writes in the bone's own axes. An invalid rdtf_axes counts as absent here (build_robot

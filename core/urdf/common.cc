@@ -28,12 +28,17 @@ Eigen::Vector3d rpy_from_rotation(const Eigen::Matrix3d& R) {
   // R = Rz(y) Ry(p) Rx(r): R(2,0) = -sin p, R(1,0) = sin y cos p, R(0,0) = cos y cos p.
   const double cos_pitch = std::hypot(R(0, 0), R(1, 0));
   const double pitch = std::atan2(-R(2, 0), cos_pitch);
-  // Near gimbal lock (pitch near +-90 degrees) yaw and roll are each ill-conditioned: entries of
-  // size cos p carry rounding of 1e-16 / cos p in the angles, 6e-6 rad at 1e-11 from the lock,
-  // which the URDF then turns every link below by. So only yaw is read from those entries (at
-  // the lock itself any yaw will do: 0), and roll from Rz(y)^T R = Ry(p) Rx(r), whose middle row
+  // At the lock itself (cos p at rounding level: 6e-17 for the double nearest pi/2) only
+  // roll - yaw (pitch +90) or roll + yaw (pitch -90) is defined: yaw is 0 and roll holds it, as a
+  // modeller would write it. Forcing 0 any further out would drop cos p's share of R.
+  const double yaw = cos_pitch > 1e-15 ? std::atan2(R(1, 0), R(0, 0)) : 0.0;
+  // Away from gimbal lock roll comes from R(2,1) = cos p sin r and R(2,2) = cos p cos r, to
+  // rounding over cos p: at most twice the rounding while pitch is within 60 degrees.
+  if (cos_pitch >= 0.5) return {std::atan2(R(2, 1), R(2, 2)), pitch, yaw};
+  // Nearer the lock (pitch near +-90 degrees) those entries are small, and roll and yaw each
+  // carry rounding of 1e-16 / cos p: 6e-6 rad at 1e-11 from the lock, which the URDF then turned
+  // every link below by. So roll comes from Rz(y)^T R = Ry(p) Rx(r), whose middle row
   // (0, cos r, -sin r) has full-size entries: the angles give R back to rounding, lock or not.
-  const double yaw = std::atan2(R(1, 0), R(0, 0));
   const double c = std::cos(yaw);
   const double s = std::sin(yaw);
   const double cos_roll = c * R(1, 1) - s * R(0, 1);

@@ -460,7 +460,9 @@ TEST(View, RefusesHostileMessagesAndSurvivesClientsThatVanish) {
     return {sent, seconds: (performance.now() - start) / 1000, answered: answers.length, unanswered: unanswered(),
             too_many: answers.filter((m) => m.reason.startsWith('too many')).length};
   })())"));
-  EXPECT_GT(flood["sent"].get<int>(), 1000) << flood.dump();
+  // (No probe is needed when an answer within the first 1.5 s already accounts for the whole
+  // flood: the CI saw 31 answers and 969 counted unanswered of 1000 so. It asked for one before.)
+  EXPECT_GE(flood["sent"].get<int>(), 1000) << flood.dump();
   EXPECT_EQ(flood["answered"].get<int>() + flood["unanswered"].get<int>(), flood["sent"].get<int>()) << flood.dump();
   // At most 20 answers in each second of the server's clock the flood spanned.
   EXPECT_LE(flood["answered"].get<int>(), 20 * (static_cast<int>(flood["seconds"].get<double>()) + 2)) << flood.dump();

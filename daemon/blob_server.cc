@@ -89,11 +89,7 @@ UniqueFd open_below(const std::filesystem::path& root, const std::filesystem::pa
   return file;
 }
 
-// Bus text in a log line: cut, not escaped, since rdtfd's log escapes every line it writes (a
-// second escape would show a byte 0xff as "\\xff").
-std::string cut(const std::string& text) {
-  return text.size() <= 80 ? text : text.substr(0, 80) + "...(" + std::to_string(text.size()) + " bytes)";
-}
+std::string cut(const std::string& text) { return lcm_safe::printable(text, 80); }
 
 }  // namespace
 

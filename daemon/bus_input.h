@@ -55,8 +55,7 @@ class BusInput {
   std::optional<Message> decode(const std::string& channel, const void* data, std::size_t size);
 
   Handlers handlers_;
-  // Unescaped: the log handler (rdtfd's log_line) escapes every line it writes.
-  lcm_safe::DropCounter drops_{std::chrono::seconds(1), false};
+  lcm_safe::DropCounter drops_;
   std::uint64_t blob_requests_undecodable_ = 0;
 };
 

@@ -42,7 +42,11 @@ std::string Daemon::since(Clock::time_point start) const {
 
 std::string escape_for_log(std::string_view text) { return escape_for_terminal(text); }
 
-void log_line(const std::string& text) {
+namespace {
+
+// One line on stderr, stamped, in one write, so that a worker's line (a result not cached) never
+// interleaves with the loop's. `safe_text` must be safe for a terminal already.
+void write_log_line(const std::string& safe_text) {
   const auto now = std::chrono::system_clock::now();
   const std::time_t seconds = std::chrono::system_clock::to_time_t(now);
   const auto millis = std::chrono::duration_cast<std::chrono::milliseconds>(now.time_since_epoch()).count() % 1000;
@@ -52,12 +56,30 @@ void log_line(const std::string& text) {
   std::strftime(stamp, sizeof(stamp), "%Y-%m-%dT%H:%M:%S", &utc);
   char full[40];
   std::snprintf(full, sizeof(full), "%s.%03lldZ", stamp, static_cast<long long>(millis));
-  // One event, one line: a file name (or any other text from outside) with a newline or a
-  // terminal escape in it cannot forge a line or rewrite the terminal. The line goes out in one
-  // write, so that a worker's line (a result not cached) never interleaves with the loop's.
-  const std::string line = std::string(full) + " " + escape_for_log(text) + "\n";
+  const std::string line = std::string(full) + " " + safe_text + "\n";
   std::cerr.write(line.data(), static_cast<std::streamsize>(line.size()));
   std::cerr.flush();
+}
+
+}  // namespace
+
+void log_line(const std::string& text) {
+  // One event, one line: a file name (or any other text from outside) with a newline or a
+  // terminal escape in it cannot forge a line or rewrite the terminal.
+  write_log_line(escape_for_log(text));
+}
+
+void log_bus_line(const std::string& text) {
+  const bool printable_ascii = std::all_of(text.begin(), text.end(), [](char c) {
+    return static_cast<unsigned char>(c) >= 0x20 && static_cast<unsigned char>(c) < 0x7f;
+  });
+  // Its bus text is escaped already (lcm_safe::printable): escaped again, a byte 0xff showed as
+  // "\\\\xff". Anything else in it is escaped as in any line.
+  if (printable_ascii) {
+    write_log_line(text);
+  } else {
+    log_line(text);
+  }
 }
 
 Daemon::Daemon(DaemonConfig config, ConfigLoader reload, DaemonPorts ports)
@@ -72,11 +94,11 @@ Daemon::Daemon(DaemonConfig config, ConfigLoader reload, DaemonPorts ports)
                                 // Without live simulations (--no-simulate) commands go unheard.
                                 return simulation_ ? simulation_->command(command) : std::string();
                               },
-                              [](const std::string& line) { log_line(line); },
+                              [](const std::string& line) { log_bus_line(line); },
                               [this](const rdtf::blob_request_t& request) {
                                 return blobs_.request(request, clock_->now(), *publisher_, config_.channel_prefix);
                               }}),
-      blobs_([](const std::string& line) { log_line(line); }),
+      blobs_([](const std::string& line) { log_bus_line(line); }),
       request_throttle_(kRequestAnswerPeriod),
       started_(clock_->now()),
       read_budget_(std::make_shared<ReadBudget>(config_.max_read_bytes_in_flight)) {

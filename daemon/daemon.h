@@ -179,7 +179,10 @@ inline ModelActions Daemon::transition(ModelRecord& record, Event&& event) {
   return actions;
 }
 
-// One log line on stderr with a UTC timestamp.
+// One log line on stderr with a UTC timestamp; the text escaped for a terminal.
 void log_line(const std::string& text);
+// The same for a line BusInput or the blob server made, whose bus text lcm_safe::printable
+// escaped already: printable ASCII is written as it is (anything else is escaped as above).
+void log_bus_line(const std::string& text);
 
 }  // namespace rdtf::daemon

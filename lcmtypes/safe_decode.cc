@@ -268,14 +268,16 @@ std::string check_known(const void* data, std::size_t size) {
   return check_encoded(type, read_big_endian(static_cast<const std::uint8_t*>(data), 8), data, size);
 }
 
-std::string printable(std::string_view text, std::size_t max_bytes) {
+namespace {
+
+std::string escaped(std::string_view text, std::size_t max_bytes, bool double_backslashes) {
   static constexpr char kHex[] = "0123456789abcdef";
   std::string out;
   const std::size_t shown = std::min(text.size(), max_bytes);
   out.reserve(shown + 16);
   for (std::size_t k = 0; k < shown; ++k) {
     const auto c = static_cast<unsigned char>(text[k]);
-    if (c == '\\') {
+    if (c == '\\' && double_backslashes) {
       out += "\\\\";
     } else if (c >= 0x20 && c < 0x7f) {
       out += static_cast<char>(c);
@@ -289,18 +291,20 @@ std::string printable(std::string_view text, std::size_t max_bytes) {
   return out;
 }
 
+}  // namespace
+
+std::string printable(std::string_view text, std::size_t max_bytes) { return escaped(text, max_bytes, true); }
+
+std::string printable_kept(std::string_view text, std::size_t max_bytes) { return escaped(text, max_bytes, false); }
+
 std::optional<std::string> DropCounter::drop(std::string_view channel, std::string_view why, Clock::time_point now) {
   ++total_;
   ++unreported_;
   if (now < next_line_) return std::nullopt;
   next_line_ = now + period_;
-  const auto shown = [&](std::string_view text, std::size_t max_bytes) {
-    if (escape_) return printable(text, max_bytes);
-    return std::string(text.substr(0, max_bytes)) + (text.size() > max_bytes ? "...(" + std::to_string(text.size()) + " bytes)" : "");
-  };
   std::string line = "dropped " + std::to_string(unreported_) + " message" + (unreported_ == 1 ? "" : "s") +
-                     " from the bus (" + std::to_string(total_) + " since start); latest on " + shown(channel, 80) +
-                     ": " + shown(why, 200);
+                     " from the bus (" + std::to_string(total_) + " since start); latest on " + printable(channel, 80) +
+                     ": " + printable_kept(why, 200);
   unreported_ = 0;
   return line;
 }

@@ -60,15 +60,18 @@ std::optional<Message> decode(const void* data, std::size_t size, std::string& w
 // every other byte as \xNN, at most `max_bytes` of the input (then "...(N bytes)").
 std::string printable(std::string_view text, std::size_t max_bytes = 200);
 
+// printable(), but a backslash is kept as it is: for text made of pieces printable() made already
+// (a second pass would show a bus byte 0xff as "\\\\xff"); any other byte is still escaped.
+std::string printable_kept(std::string_view text, std::size_t max_bytes = 200);
+
 // Counts dropped datagrams and says when to log: the first drop at once, then at most one line
-// per `period` with the number dropped since the last line. The line holds the channel and the
-// reason made printable(), unless `escape` is false: for a log that escapes every line itself
-// (rdtfd's), where a second escape would show a bus byte 0xff as "\\xff".
+// per `period` with the number dropped since the last line. The line is printable ASCII: the
+// channel made printable(), the reason (the caller's text, bus text in it printable() already)
+// printable_kept().
 class DropCounter {
  public:
   using Clock = std::chrono::steady_clock;
-  explicit DropCounter(Clock::duration period = std::chrono::seconds(1), bool escape = true)
-      : period_(period), escape_(escape) {}
+  explicit DropCounter(Clock::duration period = std::chrono::seconds(1)) : period_(period) {}
 
   // Notes one drop on `channel` for `why`; returns the line to log now, if one is due.
   std::optional<std::string> drop(std::string_view channel, std::string_view why, Clock::time_point now);
@@ -76,7 +79,6 @@ class DropCounter {
 
  private:
   Clock::duration period_;
-  bool escape_;
   Clock::time_point next_line_{};
   std::uint64_t total_ = 0;
   std::uint64_t unreported_ = 0;

@@ -446,6 +446,7 @@ void check_units(const Json& document, const Robot& robot, Diagnostics& diag) {
       names += (k ? ", '" : "'") + robot.links[robot.root_links[k]].name + "'";
     }
     const Link& second = robot.links[robot.root_links[1]];
+    const auto packer = repacked_by(document);
     diag.warning(codes::MULTIPLE_ROOT_LINKS, json_pointer("/nodes", second.node),
                  std::to_string(robot.root_links.size()) + " root links (" + names +
                      "): a robot has one, so the others are bodies of their own (rdtf validate refuses "
@@ -453,9 +454,7 @@ void check_units(const Json& document, const Robot& robot, Diagnostics& diag) {
                      "leave them out of the export: Blender exports hidden objects, and the objects of "
                      "a collection excluded from the view layer, unless Include > Limit to > Visible "
                      "Objects is ticked" +
-                     (repacked_by(document) ? ". The file was packed by '" + *repacked_by(document) + "', which " +
-                                                  kPackerAdvice
-                                            : std::string()));
+                     (packer ? ". The file was packed by '" + *packer + "', which " + kPackerAdvice : std::string()));
   }
   check_units_of(document, robot, diag);
   check_densities(document, robot, diag);

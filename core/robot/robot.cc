@@ -340,11 +340,20 @@ std::vector<int> carried_links(const Json& document, const std::vector<NodeType>
 
 }  // namespace
 
-std::optional<std::string> repacked_by(const Json& document) {
-  if (!document.contains("asset") || !document["asset"].is_object()) return std::nullopt;
+namespace {
+
+// asset.generator, or "" when there is none.
+std::string generator_of(const Json& document) {
+  if (!document.contains("asset") || !document["asset"].is_object()) return {};
   const Json& asset = document["asset"];
-  if (!asset.contains("generator") || !asset["generator"].is_string()) return std::nullopt;
-  const std::string generator = asset["generator"].get<std::string>();
+  if (!asset.contains("generator") || !asset["generator"].is_string()) return {};
+  return asset["generator"].get<std::string>();
+}
+
+}  // namespace
+
+std::optional<std::string> repacked_by(const Json& document) {
+  const std::string generator = generator_of(document);
   for (const char* packer : {"gltfpack", "glTF-Transform", "draco_transcoder"}) {
     if (generator.rfind(packer, 0) == 0) return generator.substr(0, 80);
   }
@@ -352,10 +361,7 @@ std::optional<std::string> repacked_by(const Json& document) {
 }
 
 bool written_by_blender(const Json& document) {
-  if (!document.contains("asset") || !document["asset"].is_object()) return false;
-  const Json& asset = document["asset"];
-  if (!asset.contains("generator") || !asset["generator"].is_string()) return false;
-  return asset["generator"].get<std::string>().rfind("Khronos glTF Blender I/O", 0) == 0;
+  return generator_of(document).rfind("Khronos glTF Blender I/O", 0) == 0;
 }
 
 Eigen::Matrix3d blender_to_gltf_axes() {

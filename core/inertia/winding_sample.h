@@ -1,0 +1,51 @@
+// Where a link's solids count volume twice, or subtract it. The mass kernel integrates each closed
+// surface by the divergence theorem, which gives the integral of the surfaces' winding number over
+// space: a region inside two parts at once (objects joined with Ctrl+J where they overlap, a
+// motor sunk into a plate, a shell inside another wound the same way) is counted twice, and a
+// shell wound inward outside any solid is subtracted. Neither is visible to the surface check
+// (every edge is used twice, in opposite directions) and the result is a mass off by that volume
+// without a word. This samples the winding number along parallel rays to find and size such
+// regions. It is an estimate (the rays are a grid), so it decides a warning, never a mass.
+#pragma once
+
+#include <cstddef>
+#include <span>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "rdtf/triangle_mesh.h"
+
+namespace rdtf::internal {
+
+// One closed, consistently wound solid of a link: a mesh's triangles placed in the link frame L.
+struct PlacedSolid {
+  std::span<const TriangleMeshView> pieces;
+  Eigen::Affine3d X_LM = Eigen::Affine3d::Identity();  // the mesh frame M in the link frame L
+  // -1 where the whole mesh winds clockwise (its signed volume is negative): the mass kernel
+  // turns it right (MESH_INSIDE_OUT), and so does this.
+  int orientation = 1;
+};
+
+struct WindingSample {
+  // Estimates, m^3: the volume counted more than once (a region inside k solids counts k - 1
+  // times here), and the volume counted negative (where the winding number is below 0).
+  double excess = 0;
+  double deficit = 0;
+  // The two solids whose common region holds most of the excess (equal where one solid overlaps
+  // itself), and the solid whose inward shell holds most of the deficit; -1 where there is none.
+  int excess_a = -1;
+  int excess_b = -1;
+  int deficit_solid = -1;
+  std::size_t rays = 0;               // Rays cast.
+  std::size_t inconsistent_rays = 0;  // Left out: the winding did not come back to 0 along them.
+};
+
+// Casts about `rays` rays parallel to the link frame's x axis, on a grid spread evenly over the
+// solids' bounding box seen along x, and sums the winding number's excess and deficit along them.
+// A ray whose winding does not return to 0 past the solids (one that met the surface exactly at an
+// edge in a way the tie rule could not settle, or an open surface) adds nothing. The error is that
+// of the grid: about the solids' outline crossed by one ray's cell, relative to their area.
+WindingSample sample_winding(std::span<const PlacedSolid> solids, std::size_t rays = 16384);
+
+}  // namespace rdtf::internal

@@ -14,6 +14,7 @@
 #include "rdtf/instancing.h"
 #include "rdtf/mesh_checks.h"
 #include "skinning.h"
+#include "winding_sample.h"
 #include "rdtf/diagnostic_codes.h"
 
 namespace rdtf {
@@ -72,6 +73,21 @@ struct MeshGeometry {
   // Declared after `pieces`, so destroyed before them: a future of std::async waits for its
   // thread when destroyed, so a check still running never outlives the views it reads.
   mutable std::future<SurfaceTopology> pending_;
+};
+
+// Counted twice or subtracted, from this fraction of a link's volume on, is reported: the
+// winding sample's grid error is far below it (docs/diagnostics.md, LINK_PARTS_OVERLAP), and a
+// smaller share moves the mass less than a modeller's own rounding of a density does.
+constexpr double kReportedVolumeFraction = 0.005;
+
+// One closed, consistently wound solid of a link, kept to look for overlaps once the link has
+// all of them: a mesh node's mesh, or one of its EXT_mesh_gpu_instancing instances.
+struct LinkSolid {
+  const MeshGeometry* geometry = nullptr;
+  Eigen::Affine3d X_LM = Eigen::Affine3d::Identity();
+  int orientation = 1;   // -1: the mesh winds clockwise as a whole (MESH_INSIDE_OUT)
+  std::size_t node = 0;  // as reported: the input's node
+  int instance = -1;     // -1: not instanced
 };
 
 // A mesh as drawn with morph weights (none: as stored); every node drawing it so shares one.
@@ -259,11 +275,28 @@ bool warn_if_extras_differ(const Json& node, const std::optional<MassProperties>
   return true;
 }
 
+std::string solid_label(const Json& document, const LinkSolid& solid) {
+  std::string label = node_label(document, solid.node);
+  if (solid.instance >= 0) label += " (instance " + std::to_string(solid.instance) + ")";
+  return label;
+}
+
 }  // namespace
+
+struct LinkSolids::State {
+  // Declared first, so destroyed last: the solids point into it.
+  std::map<GeometryKey, MeshGeometry> cache;
+  std::vector<std::vector<LinkSolid>> by_link;
+};
+
+LinkSolids::LinkSolids() : state_(std::make_unique<State>()) {}
+LinkSolids::~LinkSolids() = default;
+LinkSolids::LinkSolids(LinkSolids&&) noexcept = default;
+LinkSolids& LinkSolids::operator=(LinkSolids&&) noexcept = default;
 
 void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& types,
                           double default_density, Robot& robot, Diagnostics& diag,
-                          const std::vector<int>& carried_by) {
+                          const std::vector<int>& carried_by, LinkSolids* solids_out) {
   const Json& document = asset.document;
   if (!document.contains("nodes")) return;
   const auto parents = node_parents(document);
@@ -272,10 +305,14 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
   for (std::size_t l = 0; l < robot.links.size(); ++l) link_of_node[robot.links[l].node] = static_cast<int>(l);
   const std::vector<int> owners = owning_link_nodes(document, types);
 
-  std::map<GeometryKey, MeshGeometry> cache;
   std::vector<std::vector<MassPiece>> pieces(robot.links.size());
   // Mesh nodes whose own rdtf_mass set their density, by link: a link's rdtf_mass rescales them.
   std::vector<std::vector<std::pair<std::size_t, double>>> mesh_masses(robot.links.size());
+  LinkSolids own_solids;
+  LinkSolids::State& kept = (solids_out != nullptr ? *solids_out : own_solids).state();
+  std::map<GeometryKey, MeshGeometry>& cache = kept.cache;
+  std::vector<std::vector<LinkSolid>>& link_solids = kept.by_link;
+  link_solids.assign(robot.links.size(), {});
 
   for (std::size_t node = 0; node < types.size(); ++node) {
     // A mesh on a node typed otherwise by its author (a link typed "joint" in extras.RDTF): its
@@ -349,7 +386,9 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
     diag.append(after_check);
     if (!instances) continue;
     double volume = 0;
+    std::vector<int> signs;
     for (VolumeIntegrals& integrals : solids) {
+      signs.push_back(integrals.volume < 0 ? -1 : 1);
       integrals = oriented(integrals, pointer, name, diag);
       volume += integrals.volume;
     }
@@ -361,6 +400,15 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
     for (const VolumeIntegrals& integrals : solids) {
       pieces[link].push_back({integrals, mesh_density});
       robot.links[link].meshes.push_back({static_cast<int>(node), integrals.volume, mesh_density});
+    }
+    // Only surfaces the check found closed and consistently wound have a winding number to
+    // sample; the others are warned about already (MESH_OPEN, MESH_INCONSISTENT_WINDING).
+    const SurfaceTopology& topology = geometry.topology();
+    if (topology.closed() && topology.consistently_oriented()) {
+      for (std::size_t k = 0; k < instances->size(); ++k) {
+        link_solids[link].push_back({&geometry, X_LN * (*instances)[k], signs[k], reported,
+                                     instances->size() > 1 ? static_cast<int>(k) : -1});
+      }
     }
   }
 
@@ -417,6 +465,87 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
     if (link.inertial.volume <= 0) {
       diag.warning(codes::LINK_NO_VOLUME, pointer,
                    "link '" + link.name + "' has no volume (no closed mesh): its mass is zero");
+    }
+  }
+  if (solids_out == nullptr) report_part_overlaps(document, robot, own_solids, diag);
+}
+
+namespace {
+
+// The links of each rigid body: joined by fixed joints (union-find), in link order.
+std::vector<std::vector<std::size_t>> rigid_bodies(const Robot& robot) {
+  std::vector<std::size_t> up(robot.links.size());
+  std::iota(up.begin(), up.end(), std::size_t{0});
+  const auto find = [&](std::size_t l) {
+    while (up[l] != l) l = up[l] = up[up[l]];
+    return l;
+  };
+  for (const Joint& joint : robot.joints) {
+    if (joint.kind != JointKind::kFixed || joint.parent_link < 0 || joint.child_link < 0) continue;
+    const std::size_t a = find(static_cast<std::size_t>(joint.parent_link));
+    const std::size_t b = find(static_cast<std::size_t>(joint.child_link));
+    up[std::max(a, b)] = std::min(a, b);
+  }
+  std::map<std::size_t, std::vector<std::size_t>> bodies;
+  for (std::size_t l = 0; l < robot.links.size(); ++l) bodies[find(l)].push_back(l);
+  std::vector<std::vector<std::size_t>> result;
+  for (auto& [root, links] : bodies) result.push_back(std::move(links));
+  return result;
+}
+
+}  // namespace
+
+void report_part_overlaps(const Json& document, const Robot& robot, const LinkSolids& solids, Diagnostics& diag) {
+  const auto& by_link = solids.state().by_link;
+  for (const std::vector<std::size_t>& body : rigid_bodies(robot)) {
+    // Every solid in the frame of the body's first link B.
+    std::vector<internal::PlacedSolid> placed;
+    std::vector<const LinkSolid*> owners;
+    std::vector<std::size_t> owner_links;
+    double volume = 0;
+    for (std::size_t l : body) {
+      const Link& link = robot.links[l];
+      if (l >= by_link.size() || link.inertial_source == InertialSource::kAuthored) continue;
+      const Eigen::Affine3d X_BL(robot.links[body.front()].X_SL.inverse() * link.X_SL);
+      for (const LinkSolid& solid : by_link[l]) {
+        placed.push_back({solid.geometry->pieces, X_BL * solid.X_LM, solid.orientation});
+        owners.push_back(&solid);
+        owner_links.push_back(l);
+      }
+      if (!by_link[l].empty()) volume += link.inertial.volume;
+    }
+    if (placed.empty() || !(volume > 0)) continue;
+    const internal::WindingSample sample = internal::sample_winding(placed);
+    const auto share = [&](double part) {
+      return "about " + format_number(part, 2) + " m^3, " + format_number(100 * part / volume, 2) + "% of its volume,";
+    };
+    const auto body_of = [&](std::size_t a, std::size_t b) {
+      const std::string& first = robot.links[owner_links[a]].name;
+      const std::string& second = robot.links[owner_links[b]].name;
+      if (first == second) return "link '" + first + "'";
+      return "links '" + first + "' and '" + second + "' (one body: fixed joints join them)";
+    };
+    if (sample.excess > kReportedVolumeFraction * volume && sample.excess_a >= 0) {
+      const auto a = static_cast<std::size_t>(sample.excess_a), b = static_cast<std::size_t>(sample.excess_b);
+      const std::string where =
+          a == b ? "the mesh of " + solid_label(document, *owners[a]) +
+                       " overlaps itself (parts joined into one object where they overlap, or a shell inside another "
+                       "wound the same way)"
+                 : "the meshes of " + solid_label(document, *owners[a]) + " and " + solid_label(document, *owners[b]) +
+                       " overlap";
+      diag.warning(codes::LINK_PARTS_OVERLAP, json_pointer("/nodes", owners[a]->node),
+                   body_of(a, b) + ": " + where + ": " + share(sample.excess) +
+                       " is counted twice, and its mass and inertia with it; unite the parts (a Boolean Union "
+                       "modifier, exported with Apply Modifiers), trim one to the other's surface, or flip an inner "
+                       "shell's faces to make it a cavity");
+    }
+    if (sample.deficit > kReportedVolumeFraction * volume && sample.deficit_solid >= 0) {
+      const auto a = static_cast<std::size_t>(sample.deficit_solid);
+      diag.warning(codes::MESH_SHELL_INSIDE_OUT, json_pointer("/nodes", owners[a]->node),
+                   body_of(a, a) + ": the mesh of " + solid_label(document, *owners[a]) +
+                       " has a shell wound inside out that lies outside any solid: " + share(sample.deficit) +
+                       " is subtracted instead of added; recalculate its normals outside "
+                       "(Blender: Mesh > Normals > Recalculate Outside)");
     }
   }
 }

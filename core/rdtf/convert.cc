@@ -83,9 +83,11 @@ std::optional<Conversion> convert(GltfAsset asset, const ConvertOptions& options
   complete_nodes(asset.document, types, diag, &carried_by);
   Robot robot = build_robot(asset.document, types, *scene, diag);
   robot.name = robot_name(asset);
-  compute_link_inertia(asset, types, options.default_density, robot, diag, carried_by);
+  LinkSolids solids;
+  compute_link_inertia(asset, types, options.default_density, robot, diag, carried_by, &solids);
   if (diag.has_errors()) return std::nullopt;
   read_khr_physics(asset.document, types, robot, diag);
+  if (!diag.has_errors()) report_part_overlaps(asset.document, robot, solids, diag);
   // After KHR motion, which may replace an inertial that overflowed or overflow one itself.
   if (diag.has_errors() || !check_finite_inertials(asset.document, robot, diag)) return std::nullopt;
   check_units(asset.document, robot, diag);

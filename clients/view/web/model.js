@@ -202,13 +202,16 @@ export class ModelView {
     this.overlays.update(com);
   }
 
-  // Diagnostics to red (errors and warnings; infos are no fault): each names a link or joint by the names quoted in its message, else by
-  // the node of its JSON pointer (/nodes/N: a link node, or a joint node between two links).
+  // Diagnostics to red (infos are no fault; where there are errors, only they: a rejected save's culprit must not hide among
+  // the warnings the model had before): each names a link or joint by the names quoted in its message, else by the node of its
+  // JSON pointer (/nodes/N: a link node, or a joint node between two links).
   highlight(diagnostics) {
     for (const link of this.links) for (const m of link.meshes) m.material.color.copy(link.color);
     for (const j of this.joints) j.highlighted = false;
     const links = new Set(), joints = new Set();
-    for (const d of (diagnostics || []).filter((x) => x.severity !== 'info')) {
+    const faults = (diagnostics || []).filter((x) => x.severity !== 'info');
+    const errors = faults.filter((x) => x.severity === 'error');
+    for (const d of errors.length > 0 ? errors : faults) {
       const names = [...(d.message || '').matchAll(/'([^']+)'/g)].map((m) => m[1]);
       const node = /^\/nodes\/(\d+)/.exec(d.pointer || '');
       const nodeIndex = node ? Number(node[1]) : -1;

@@ -128,11 +128,13 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(KHR_PHYSICS_UNSUPPORTED, kSeverityWarning, "model") \
   X(LINK_MESH_SPLIT, kSeverityInfo, "model") \
   X(LINK_NO_VOLUME, kSeverityWarning, "model") \
+  X(LINK_PARTS_OVERLAP, kSeverityWarning, "model") \
   X(MESH_INCONSISTENT_WINDING, kSeverityWarning, "model") \
   X(MESH_INSIDE_OUT, kSeverityWarning, "model") \
   X(MESH_OPEN, kSeverityWarning, "model") \
   X(MESH_PRIMITIVE_INCOMPATIBLE_MODE, kSeverityWarning, "model") \
   X(MESH_SCALED_TO_NOTHING, kSeverityWarning, "model") \
+  X(MESH_SHELL_INSIDE_OUT, kSeverityWarning, "model") \
   X(MESH_WITHOUT_LINK, kSeverityWarning, "model") \
   X(MULTIPLE_ROOT_LINKS, kSeverityWarning, "model") \
   X(NO_LINKS, kSeverityWarning, "model") \

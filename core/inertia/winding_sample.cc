@@ -36,6 +36,7 @@ struct Grid {
                                                         double fraction, std::size_t n) {
     const double first = std::ceil((lo - origin) * per_h - fraction);
     const double last = std::floor((hi - origin) * per_h - fraction);
+    if (!(first <= last)) return {1, 0};  // Also where a coordinate is not a number.
     const double top = static_cast<double>(n) - 1;
     return {static_cast<std::ptrdiff_t>(std::clamp(first, 0.0, top + 1)),
             static_cast<std::ptrdiff_t>(std::clamp(last, -1.0, top))};
@@ -123,6 +124,11 @@ bool add_crossings(const PlacedSolid& solid, std::int32_t index, const Grid& gri
                                                   kFractionZ, grid.nz);
         if (j_first > j_last) continue;
         for (int k = 0; k < 3; ++k) c[k][0] = L(0, 0) * p[k][0] + L(0, 1) * p[k][1] + L(0, 2) * p[k][2] + t[0];
+        // A corner that is not a finite number (the loader refuses them; this never trusts it) has
+        // no place along a ray, and a NaN would break the sort below.
+        bool finite = true;
+        for (int k = 0; k < 3; ++k) finite = finite && std::isfinite(c[k][0] + c[k][1] + c[k][2]);
+        if (!finite) continue;
         // Twice the triangle's area seen along x: the x component of its normal (b - a) x (c - a).
         const double area2 = (c[1][1] - c[0][1]) * (c[2][2] - c[0][2]) - (c[1][2] - c[0][2]) * (c[2][1] - c[0][1]);
         if (area2 == 0) continue;  // Edge on: no ray passes through it.

@@ -6,6 +6,10 @@ void BusInput::drop(const std::string& channel, const std::string& why) {
   if (auto line = drops_.drop(channel, why, Clock::now()); line && handlers_.log) handlers_.log(*line);
 }
 
+void BusInput::flush_drops() {
+  if (auto line = drops_.flush(Clock::now()); line && handlers_.log) handlers_.log(*line);
+}
+
 template <typename Message>
 std::optional<Message> BusInput::decode(const std::string& channel, const void* data, std::size_t size) {
   if (size > kMaxInputBytes) {

@@ -41,6 +41,8 @@ class BusInput {
   void blob_request_datagram(const std::string& channel, const void* data, std::size_t size);
 
   std::uint64_t dropped() const { return drops_.total(); }
+  // Logs the drops of a burst not logged yet once their period is over (DropCounter::flush).
+  void flush_drops();
   // Blob requests that did not decode (in dropped() too).
   std::uint64_t blob_requests_undecodable() const { return blob_requests_undecodable_; }
 

@@ -377,6 +377,7 @@ void Daemon::trim_after_burst() {
 }
 
 void Daemon::periodic(Clock::time_point now) {
+  bus_.flush_drops();
   if (config_.republish_period.count() > 0 && now >= next_republish_) {
     const auto start = clock_->now();
     const std::size_t count = publish_all();

@@ -300,13 +300,30 @@ std::string printable_kept(std::string_view text, std::size_t max_bytes) { retur
 std::optional<std::string> DropCounter::drop(std::string_view channel, std::string_view why, Clock::time_point now) {
   ++total_;
   ++unreported_;
-  if (now < next_line_) return std::nullopt;
+  if (now < next_line_) {
+    // Kept for the line that flush() writes if this burst ends here. Bounded: escaped, at most
+    // 80 and 200 bytes shown.
+    latest_channel_ = printable(channel, 80);
+    latest_why_ = printable_kept(why, 200);
+    return std::nullopt;
+  }
+  latest_channel_ = printable(channel, 80);
+  latest_why_ = printable_kept(why, 200);
+  return line(now);
+}
+
+std::optional<std::string> DropCounter::flush(Clock::time_point now) {
+  if (unreported_ == 0 || now < next_line_) return std::nullopt;
+  return line(now);
+}
+
+std::string DropCounter::line(Clock::time_point now) {
   next_line_ = now + period_;
-  std::string line = "dropped " + std::to_string(unreported_) + " message" + (unreported_ == 1 ? "" : "s") +
-                     " from the bus (" + std::to_string(total_) + " since start); latest on " + printable(channel, 80) +
-                     ": " + printable_kept(why, 200);
+  std::string text = "dropped " + std::to_string(unreported_) + " message" + (unreported_ == 1 ? "" : "s") +
+                     " from the bus (" + std::to_string(total_) + " since start); latest on " + latest_channel_ + ": " +
+                     latest_why_;
   unreported_ = 0;
-  return line;
+  return text;
 }
 
 }  // namespace rdtf::lcm_safe

@@ -75,13 +75,21 @@ class DropCounter {
 
   // Notes one drop on `channel` for `why`; returns the line to log now, if one is due.
   std::optional<std::string> drop(std::string_view channel, std::string_view why, Clock::time_point now);
+  // The line for drops not yet logged, once their period is over: without it the end of a burst
+  // would be logged only when the next drop came, perhaps never. Call it now and then (rdtfd:
+  // each turn of its loop).
+  std::optional<std::string> flush(Clock::time_point now);
   std::uint64_t total() const { return total_; }
 
  private:
+  std::string line(Clock::time_point now);
+
   Clock::duration period_;
   Clock::time_point next_line_{};
   std::uint64_t total_ = 0;
   std::uint64_t unreported_ = 0;
+  std::string latest_channel_;  // printable() already
+  std::string latest_why_;      // printable_kept() already
 };
 
 // Runs `handler` for one datagram of `channel`. An exception from it must never unwind through

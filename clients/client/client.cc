@@ -449,6 +449,11 @@ struct Client::State {
   }
 
   void tick(Clock::time_point now) {
+    // The end of a burst of drops, logged once its period is over (no on_drop: that callback
+    // hears every drop itself).
+    if (!callbacks.on_drop) {
+      if (auto line = drops.flush(now)) std::cerr << "rdtf_client: " << *line << "\n";
+    }
     // Blobs the caller stopped holding since (an older snapshot dropped) go now if over capacity,
     // not only when the next blob arrives.
     store.trim();

@@ -164,6 +164,27 @@ TEST(SafeDecode, DropsAreLoggedAtMostOnceAPeriodWithTheirCount) {
   EXPECT_TRUE(std::all_of(kept->begin(), kept->end(), [](char c) { return c >= 0x20 && c < 0x7f; })) << *kept;
 }
 
+// A burst that ends within its period is logged once the period is over, not only when the next
+// drop comes (which may be never): flush() gives its line, with the latest drop's channel and reason.
+TEST(SafeDecode, TheEndOfABurstIsLoggedOnceItsPeriodIsOver) {
+  lcm_safe::DropCounter drops(1s);
+  const auto t0 = std::chrono::steady_clock::now();
+  EXPECT_FALSE(drops.flush(t0));  // nothing dropped
+  ASSERT_TRUE(drops.drop("RDTF/REQUEST", "first", t0));
+  EXPECT_FALSE(drops.flush(t0 + 2s));  // the first drop was logged at once: nothing left
+  const auto at_once = drops.drop("RDTF/REQUEST", "burst", t0 + 2s);  // a new period: logged at once
+  ASSERT_TRUE(at_once);
+  EXPECT_NE(at_once->find("dropped 1 message from the bus (2 since start)"), std::string::npos) << *at_once;
+  for (int k = 0; k < 40; ++k) EXPECT_FALSE(drops.drop("RDTF/REQUEST", "burst", t0 + 2s + 5ms));
+  for (int k = 0; k < 7; ++k) EXPECT_FALSE(drops.drop("RDTF/x.gltf/JOINT_COMMAND", "end\\xff", t0 + 2s + 10ms));
+  EXPECT_FALSE(drops.flush(t0 + 2s + 999ms));  // its period is not over
+  const auto end = drops.flush(t0 + 3s);
+  ASSERT_TRUE(end);
+  EXPECT_EQ(*end, "dropped 47 messages from the bus (49 since start); latest on RDTF/x.gltf/JOINT_COMMAND: end\\xff");
+  EXPECT_FALSE(drops.flush(t0 + 5s));  // said once
+  EXPECT_EQ(drops.total(), 49u);
+}
+
 TEST(BusInput, MalformedDatagramsNeverReachTheHandlers) {
   int requests = 0, commands = 0;
   std::vector<std::string> lines;

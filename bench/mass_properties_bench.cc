@@ -20,6 +20,7 @@
 #include <utility>
 #include <vector>
 
+#include "../core/inertia/winding_sample.h"
 #include "mass_properties_bench_fma.h"
 #include "rdtf/mass_properties.h"
 #include "side_by_side.h"
@@ -209,6 +210,22 @@ void BM_RdtfKernelFloatInPlace(benchmark::State& state) {
   report_differences(state, result, Eigen::Vector3d::Zero(), Storage::kFloat);
 }
 
+// The overlap check's winding sample (core/inertia/winding_sample.h, LINK_PARTS_OVERLAP) on the
+// same float sphere read in place: what the check adds to a link of this many triangles, beside
+// the kernel that integrates it.
+void BM_WindingSample(benchmark::State& state) {
+  const TriangleMeshView view = float_buffers(state.range(0)).view();
+  const rdtf::internal::PlacedSolid solid{std::span<const TriangleMeshView>(&view, 1), Eigen::Affine3d::Identity(), 1};
+  rdtf::internal::WindingSample result;
+  for (auto _ : state) {
+    result = rdtf::internal::sample_winding(std::span<const rdtf::internal::PlacedSolid>(&solid, 1));
+    benchmark::DoNotOptimize(result);
+  }
+  set_triangles(state, view.triangle_count);
+  state.counters["excess_m3"] = result.excess;  // 0: a sphere overlaps nothing
+  state.counters["inconsistent_rays"] = static_cast<double>(result.inconsistent_rays);
+}
+
 // What fused multiply-adds would give (mass_properties_bench_fma.cc; rdtf does not run it): the
 // kernel's loop compiled for AVX2 + FMA, about the origin (the sphere's centre), timed, and its
 // differences from the reference reported like the others'.
@@ -341,6 +358,7 @@ void print_summary(const rdtf::bench::SideBySide& runs) {
     line("rdtf kernel, sphere 10 km from the origin", "BM_RdtfKernelFar");
     line("rdtf kernel, float32 + uint32 read in place (GLB)", "BM_RdtfKernelFloatInPlace");
     line("streaming read of the same bytes (memory bound)", "BM_StreamingRead");
+    line("winding sample of the overlap check, float32 in place", "BM_WindingSample");
     line("kernel with FMA (AVX2 + FMA; experiment, not used)", "BM_RdtfKernelFmaExperiment");
     line("plain scalar reference (about the origin)", "BM_ScalarReference");
     line("plain scalar reference, 10 km away", "BM_ScalarReferenceFar");
@@ -357,6 +375,7 @@ BENCHMARK(BM_RdtfKernelAvx)->Arg(kSizes[0])->Arg(kSizes[1])->Unit(benchmark::kMi
 BENCHMARK(BM_RdtfKernelFar)->Arg(kSizes[0])->Arg(kSizes[1])->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_RdtfKernelFloatInPlace)->Arg(kSizes[0])->Arg(kSizes[1])->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_StreamingRead)->Arg(kSizes[0])->Arg(kSizes[1])->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_WindingSample)->Arg(kSizes[0])->Arg(kSizes[1])->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_RdtfKernelFmaExperiment)->Arg(kSizes[0])->Arg(kSizes[1])->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ScalarReference)->Arg(kSizes[0])->Arg(kSizes[1])->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ScalarReferenceFar)->Arg(kSizes[0])->Arg(kSizes[1])->Unit(benchmark::kMillisecond);

@@ -1,6 +1,7 @@
 #include "winding_sample.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -29,18 +30,6 @@ struct Grid {
   std::size_t ny = 0, nz = 0;
   double y(std::size_t i) const { return y0 + (static_cast<double>(i) + kFractionY) * hy; }
   double z(std::size_t j) const { return z0 + (static_cast<double>(j) + kFractionZ) * hz; }
-  // The rays whose coordinate lies in [lo, hi], clamped to the grid; empty when first > last. (A
-  // ray within rounding of the bounds passes a triangle's extreme vertex, which the irrational
-  // fractions make as rare as a ray through any vertex.)
-  static std::pair<std::ptrdiff_t, std::ptrdiff_t> span(double lo, double hi, double origin, double per_h,
-                                                        double fraction, std::size_t n) {
-    const double first = std::ceil((lo - origin) * per_h - fraction);
-    const double last = std::floor((hi - origin) * per_h - fraction);
-    if (!(first <= last)) return {1, 0};  // Also where a coordinate is not a number.
-    const double top = static_cast<double>(n) - 1;
-    return {static_cast<std::ptrdiff_t>(std::clamp(first, 0.0, top + 1)),
-            static_cast<std::ptrdiff_t>(std::clamp(last, -1.0, top))};
-  }
 };
 
 struct Crossing {
@@ -71,27 +60,61 @@ int edge_side(const double p[3], const double r[3], double qy, double qz, double
   return swapped ? -side : side;
 }
 
+// A box around the solids in L: each piece's box in its own frame, its corners placed. (Larger
+// than the placed vertices' box for a turned piece, which only spreads the rays a little wider,
+// and a pass of comparisons instead of a transform per vertex.)
 void bound(std::span<const PlacedSolid> solids, Eigen::Vector3d& lo, Eigen::Vector3d& hi) {
   constexpr double kInf = std::numeric_limits<double>::infinity();
   lo.setConstant(kInf);
   hi.setConstant(-kInf);
   for (const PlacedSolid& solid : solids) {
     for (const TriangleMeshView& piece : solid.pieces) {
+      Eigen::Vector3d lo_M = Eigen::Vector3d::Constant(kInf), hi_M = Eigen::Vector3d::Constant(-kInf);
       with_typed_view(piece, [&](const auto& view) {
         for (std::size_t v = 0; v < view.vertex_count; ++v) {
           Eigen::Vector3d p_M;
           view.vertex(static_cast<std::uint32_t>(v), p_M.data());
-          const Eigen::Vector3d p_L = solid.X_LM * p_M;
-          lo = lo.cwiseMin(p_L);
-          hi = hi.cwiseMax(p_L);
+          lo_M = lo_M.cwiseMin(p_M);
+          hi_M = hi_M.cwiseMax(p_M);
         }
       });
+      if (!(lo_M.array() <= hi_M.array()).all()) continue;  // no vertices
+      for (int corner = 0; corner < 8; ++corner) {
+        const Eigen::Vector3d p_M((corner & 1) ? hi_M.x() : lo_M.x(), (corner & 2) ? hi_M.y() : lo_M.y(),
+                                  (corner & 4) ? hi_M.z() : lo_M.z());
+        const Eigen::Vector3d p_L = solid.X_LM * p_M;
+        lo = lo.cwiseMin(p_L);
+        hi = hi.cwiseMax(p_L);
+      }
     }
   }
 }
 
+// Where a coordinate lies among the rays of one axis, `u` = (coordinate - origin) / h - fraction
+// (ray k at u = k), doubled so that it is an integer: 2k on ray k exactly, 2k + 1 strictly between
+// rays k and k + 1. Clamped to just past the grid's ends; not a number counts as before them.
+std::int32_t doubled_place(double u, std::size_t n) {
+  const double top = static_cast<double>(n);
+  if (!(u >= -1)) return -2;
+  if (u > top) return static_cast<std::int32_t>(2 * n);
+  const double k = std::floor(u);
+  return 2 * static_cast<std::int32_t>(k) + (u != k ? 1 : 0);
+}
+
+// The rays (clamped to the grid) whose doubled places lie in [lo, hi]; empty when first > last.
+std::pair<std::ptrdiff_t, std::ptrdiff_t> rays_between(std::int32_t lo, std::int32_t hi, std::size_t n) {
+  // ceil(lo / 2) and floor(hi / 2), with arithmetic shifts (exact for negative values too).
+  const std::ptrdiff_t first = std::max<std::ptrdiff_t>((lo + 1) >> 1, 0);
+  const std::ptrdiff_t last = std::min<std::ptrdiff_t>(hi >> 1, static_cast<std::ptrdiff_t>(n) - 1);
+  return {first, last};
+}
+
 // Adds the crossings of one solid's triangles with the grid's rays; false past kMaxCrossings.
-bool add_crossings(const PlacedSolid& solid, std::int32_t index, const Grid& grid, std::vector<Crossing>& out) {
+// Each vertex is placed among the rays once (most are shared by six triangles), so that a
+// triangle between two rays, as most of a large mesh's are, is passed over with integer
+// comparisons; only the others are placed in full and tested edge by edge.
+bool add_crossings(const PlacedSolid& solid, std::int32_t index, const Grid& grid, std::vector<Crossing>& out,
+                   std::vector<std::array<std::int32_t, 2>>& places) {
   const Eigen::Matrix3d L = solid.X_LM.linear();
   const Eigen::Vector3d t = solid.X_LM.translation();
   // A mirroring placement turns the winding over, as an inside-out mesh does.
@@ -100,30 +123,34 @@ bool add_crossings(const PlacedSolid& solid, std::int32_t index, const Grid& gri
   for (const TriangleMeshView& piece : solid.pieces) {
     if (!within) break;
     with_typed_view(piece, [&](const auto& view) {
+      places.resize(view.vertex_count);
+      for (std::size_t v = 0; v < view.vertex_count; ++v) {
+        double p[3];
+        view.vertex(static_cast<std::uint32_t>(v), p);
+        const double y = L(1, 0) * p[0] + L(1, 1) * p[1] + L(1, 2) * p[2] + t[1];
+        const double z = L(2, 0) * p[0] + L(2, 1) * p[1] + L(2, 2) * p[2] + t[2];
+        places[v] = {doubled_place((y - grid.y0) * grid.per_hy - kFractionY, grid.ny),
+                     doubled_place((z - grid.z0) * grid.per_hz - kFractionZ, grid.nz)};
+      }
       double c[3][3];
-      double p[3][3];
       for (std::size_t tri = 0; tri < view.triangle_count && within; ++tri) {
-        bool valid = true;
-        // y and z first: most triangles of a large mesh lie between rays and are done with here.
-        for (int k = 0; k < 3; ++k) {
-          const std::uint32_t v = view.index(3 * tri + k);
-          if (v >= view.vertex_count) {
-            valid = false;
-            break;
-          }
-          view.vertex(v, p[k]);
-          for (int r = 1; r < 3; ++r) c[k][r] = L(r, 0) * p[k][0] + L(r, 1) * p[k][1] + L(r, 2) * p[k][2] + t[r];
-        }
-        if (!valid) continue;
-        const auto [i_first, i_last] = Grid::span(std::min({c[0][1], c[1][1], c[2][1]}),
-                                                  std::max({c[0][1], c[1][1], c[2][1]}), grid.y0, grid.per_hy,
-                                                  kFractionY, grid.ny);
+        const std::uint32_t v0 = view.index(3 * tri), v1 = view.index(3 * tri + 1), v2 = view.index(3 * tri + 2);
+        if (v0 >= view.vertex_count || v1 >= view.vertex_count || v2 >= view.vertex_count) continue;
+        const auto& a = places[v0];
+        const auto& b = places[v1];
+        const auto& d = places[v2];
+        const auto [i_first, i_last] =
+            rays_between(std::min({a[0], b[0], d[0]}), std::max({a[0], b[0], d[0]}), grid.ny);
         if (i_first > i_last) continue;
-        const auto [j_first, j_last] = Grid::span(std::min({c[0][2], c[1][2], c[2][2]}),
-                                                  std::max({c[0][2], c[1][2], c[2][2]}), grid.z0, grid.per_hz,
-                                                  kFractionZ, grid.nz);
+        const auto [j_first, j_last] =
+            rays_between(std::min({a[1], b[1], d[1]}), std::max({a[1], b[1], d[1]}), grid.nz);
         if (j_first > j_last) continue;
-        for (int k = 0; k < 3; ++k) c[k][0] = L(0, 0) * p[k][0] + L(0, 1) * p[k][1] + L(0, 2) * p[k][2] + t[0];
+        const std::uint32_t corners[3] = {v0, v1, v2};
+        for (int k = 0; k < 3; ++k) {
+          double p[3];
+          view.vertex(corners[k], p);
+          for (int r = 0; r < 3; ++r) c[k][r] = L(r, 0) * p[0] + L(r, 1) * p[1] + L(r, 2) * p[2] + t[r];
+        }
         // A corner that is not a finite number (the loader refuses them; this never trusts it) has
         // no place along a ray, and a NaN would break the sort below.
         bool finite = true;
@@ -185,8 +212,9 @@ WindingSample sample_winding(std::span<const PlacedSolid> solids, std::size_t ra
   result.rays = grid.ny * grid.nz;
 
   std::vector<Crossing> crossings;
+  std::vector<std::array<std::int32_t, 2>> places;  // per vertex of the piece at hand, reused
   for (std::size_t s = 0; s < solids.size(); ++s) {
-    if (!add_crossings(solids[s], static_cast<std::int32_t>(s), grid, crossings)) return WindingSample{};
+    if (!add_crossings(solids[s], static_cast<std::int32_t>(s), grid, crossings, places)) return WindingSample{};
   }
   std::sort(crossings.begin(), crossings.end(), [](const Crossing& a, const Crossing& b) {
     return a.ray != b.ray ? a.ray < b.ray : a.x < b.x;

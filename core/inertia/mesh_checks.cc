@@ -211,7 +211,7 @@ void classify(std::size_t forward, std::size_t backward, SurfaceTopology& topolo
   if (uses == 1) {
     ++topology.boundary_edges;
   } else if (uses > 2) {
-    ++topology.nonmanifold_edges;
+    ++(forward == backward ? topology.shared_edges : topology.nonmanifold_edges);
   } else if (forward != 1) {
     ++topology.misoriented_edges;  // Both uses go the same way.
   }
@@ -414,6 +414,7 @@ void classify_surface(const Pieces& pieces, unsigned shares, SurfaceTopology& to
   for (const SurfaceTopology& part : found) {
     topology.boundary_edges += part.boundary_edges;
     topology.nonmanifold_edges += part.nonmanifold_edges;
+    topology.shared_edges += part.shared_edges;
     topology.misoriented_edges += part.misoriented_edges;
   }
 }

@@ -671,13 +671,30 @@ TEST(SurfaceTopology, DegenerateTriangles) {
   EXPECT_TRUE(topology.consistently_oriented());
 }
 
-// Two cubes sharing one edge: that edge has four triangles.
-TEST(SurfaceTopology, NonManifoldEdge) {
+// Two cubes sharing one edge: that edge has four triangles, two each way. The surface is closed
+// (as a chain: every edge cancels), and its volume the two cubes'.
+TEST(SurfaceTopology, EdgeSharedByTwoPartsKeepsTheSurfaceClosed) {
   const std::vector<TriangleMesh> pieces{make_box(Vector3d(0, 0, 0), Vector3d(1, 1, 1)),
                                          make_box(Vector3d(1, 1, 0), Vector3d(2, 2, 1))};
   const auto topology = analyze_surface(pieces);
-  EXPECT_EQ(topology.nonmanifold_edges, 1u);
+  EXPECT_EQ(topology.shared_edges, 1u);
+  EXPECT_EQ(topology.nonmanifold_edges, 0u);
   EXPECT_EQ(topology.boundary_edges, 0u);
+  EXPECT_TRUE(topology.closed());
+  EXPECT_TRUE(topology.consistently_oriented());
+  EXPECT_NEAR(integrate_solid(pieces, Affine3d::Identity()).volume, 2.0, 1e-12);
+}
+
+// A fin on a cube: one more triangle on a cube's edge gives it three uses, which no set of solids
+// has: non-manifold, and the surface open.
+TEST(SurfaceTopology, NonManifoldEdge) {
+  TriangleMesh box = make_box(Vector3d(0, 0, 0), Vector3d(1, 1, 1));
+  box.positions.emplace_back(2, 0, 0.5);
+  box.triangles.push_back({1, 5, static_cast<std::uint32_t>(box.positions.size() - 1)});  // on the edge x = 1, y = 0
+  const auto topology = analyze_surface(std::vector<TriangleMesh>{box});
+  EXPECT_EQ(topology.nonmanifold_edges, 1u);
+  EXPECT_EQ(topology.shared_edges, 0u);
+  EXPECT_EQ(topology.boundary_edges, 2u);
   EXPECT_FALSE(topology.closed());
 }
 

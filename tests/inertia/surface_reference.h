@@ -49,7 +49,7 @@ inline SurfaceTopology reference_topology(const std::vector<TriangleMesh>& piece
     if (total == 1) {
       ++topology.boundary_edges;
     } else if (total > 2) {
-      ++topology.nonmanifold_edges;
+      ++(counts.first == counts.second ? topology.shared_edges : topology.nonmanifold_edges);
     } else if (counts.first != 1) {
       ++topology.misoriented_edges;
     }
@@ -77,6 +77,7 @@ inline void expect_equal(const SurfaceTopology& got, const SurfaceTopology& want
   EXPECT_EQ(got.boundary_edges, want.boundary_edges);
   EXPECT_EQ(got.misoriented_edges, want.misoriented_edges);
   EXPECT_EQ(got.nonmanifold_edges, want.nonmanifold_edges);
+  EXPECT_EQ(got.shared_edges, want.shared_edges);
   EXPECT_EQ(got.closed(), want.closed());
   EXPECT_EQ(got.consistently_oriented(), want.consistently_oriented());
 }

@@ -15,7 +15,11 @@ struct SurfaceTopology {
   std::size_t degenerate_triangles = 0;  // Two corners at the same position.
   std::size_t boundary_edges = 0;        // Used by one triangle only: the surface is open.
   std::size_t misoriented_edges = 0;     // Used twice in the same direction: winding flips.
-  std::size_t nonmanifold_edges = 0;     // Used by more than two triangles.
+  std::size_t nonmanifold_edges = 0;     // Used by more than two triangles, not as many each way.
+  // Used by four or more triangles, as many each way: parts that touch along the edge (the copies
+  // of an Array modifier, boxes joined where they meet). The surface is still closed (its edges
+  // cancel as a chain's do), so the divergence theorem gives each part's volume, summed.
+  std::size_t shared_edges = 0;
   bool closed() const { return boundary_edges == 0 && nonmanifold_edges == 0; }
   bool consistently_oriented() const { return misoriented_edges == 0; }
 };

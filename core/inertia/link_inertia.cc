@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <deque>
 #include <future>
 #include <map>
 #include <numeric>
@@ -83,7 +84,7 @@ constexpr double kReportedVolumeFraction = 0.005;
 // One closed, consistently wound solid of a link, kept to look for overlaps once the link has
 // all of them: a mesh node's mesh, or one of its EXT_mesh_gpu_instancing instances.
 struct LinkSolid {
-  const MeshGeometry* geometry = nullptr;
+  std::span<const TriangleMeshView> pieces;  // into the geometry cache, or a bone's kept pieces
   Eigen::Affine3d X_LM = Eigen::Affine3d::Identity();
   int orientation = 1;   // -1: the mesh winds clockwise as a whole (MESH_INSIDE_OUT)
   std::size_t node = 0;  // as reported: the input's node
@@ -284,8 +285,11 @@ std::string solid_label(const Json& document, const LinkSolid& solid) {
 }  // namespace
 
 struct LinkSolids::State {
-  // Declared first, so destroyed last: the solids point into it.
+  // Declared first, so destroyed last: the solids point into them. Deques: an element stays where
+  // it is as more are added.
   std::map<GeometryKey, MeshGeometry> cache;
+  std::deque<std::vector<TriangleMesh>> bone_meshes;      // skinned parts, in their bind pose
+  std::deque<std::vector<TriangleMeshView>> bone_views;  // views of them
   std::vector<std::vector<LinkSolid>> by_link;
 };
 
@@ -349,12 +353,21 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
     if (skinned) {
       diag.append(after_check);
       // Skinned: each bone gets the parts of the mesh bound to it, in its bind pose.
-      for (const BoneGeometry& bone : split_by_bone(asset, node, geometry.meshes(), geometry.primitive_index, diag)) {
+      const SurfaceTopology& topology = geometry.topology();
+      for (BoneGeometry& bone : split_by_bone(asset, node, geometry.meshes(), geometry.primitive_index, diag)) {
         const int link = link_of_node[bone.joint_node];
         const Eigen::Affine3d X_LV = robot.links[link].X_SL.inverse() * world[bone.joint_node] * bone.inverse_bind;
-        auto integrals = oriented(integrate_solid(bone.pieces, X_LV), pointer, name, diag);
+        const VolumeIntegrals signed_integrals = integrate_solid(bone.pieces, X_LV);
+        auto integrals = oriented(signed_integrals, pointer, name, diag);
         pieces[link].push_back({integrals, density});
         robot.links[link].meshes.push_back({static_cast<int>(node), integrals.volume, density});
+        if (!topology.closed() || !topology.consistently_oriented()) continue;
+        // The bone's part, kept for the overlap check (parts of one bone can overlap as any
+        // link's can).
+        std::vector<TriangleMeshView>& views = kept.bone_views.emplace_back();
+        const std::vector<TriangleMesh>& meshes = kept.bone_meshes.emplace_back(std::move(bone.pieces));
+        for (const TriangleMesh& part : meshes) views.push_back(TriangleMeshView::of(part));
+        link_solids[link].push_back({views, X_LV, signed_integrals.volume < 0 ? -1 : 1, reported, -1});
       }
       continue;
     }
@@ -406,7 +419,7 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
     const SurfaceTopology& topology = geometry.topology();
     if (topology.closed() && topology.consistently_oriented()) {
       for (std::size_t k = 0; k < instances->size(); ++k) {
-        link_solids[link].push_back({&geometry, X_LN * (*instances)[k], signs[k], reported,
+        link_solids[link].push_back({geometry.pieces, X_LN * (*instances)[k], signs[k], reported,
                                      instances->size() > 1 ? static_cast<int>(k) : -1});
       }
     }
@@ -508,7 +521,7 @@ void report_part_overlaps(const Json& document, const Robot& robot, const LinkSo
       if (l >= by_link.size() || link.inertial_source == InertialSource::kAuthored) continue;
       const Eigen::Affine3d X_BL(robot.links[body.front()].X_SL.inverse() * link.X_SL);
       for (const LinkSolid& solid : by_link[l]) {
-        placed.push_back({solid.geometry->pieces, X_BL * solid.X_LM, solid.orientation});
+        placed.push_back({solid.pieces, X_BL * solid.X_LM, solid.orientation});
         owners.push_back(&solid);
         owner_links.push_back(l);
       }
@@ -543,7 +556,7 @@ void report_part_overlaps(const Json& document, const Robot& robot, const LinkSo
       const auto a = static_cast<std::size_t>(sample.deficit_solid);
       diag.warning(codes::MESH_SHELL_INSIDE_OUT, json_pointer("/nodes", owners[a]->node),
                    body_of(a, a) + ": the mesh of " + solid_label(document, *owners[a]) +
-                       " has a shell wound inside out that lies outside any solid: " + share(sample.deficit) +
+                       " has a shell wound inside out that lies outside its own solid: " + share(sample.deficit) +
                        " is subtracted instead of added; recalculate its normals outside "
                        "(Blender: Mesh > Normals > Recalculate Outside)");
     }

@@ -29,7 +29,8 @@ struct PlacedSolid {
 
 struct WindingSample {
   // Estimates, m^3: the volume counted more than once (a region inside k solids counts k - 1
-  // times here), and the volume counted negative (where the winding number is below 0).
+  // times here), and the volume a solid counts negative (where its own winding number is below 0,
+  // even where another solid fills the place).
   double excess = 0;
   double deficit = 0;
   // The two solids whose common region holds most of the excess (equal where one solid overlaps
@@ -37,15 +38,23 @@ struct WindingSample {
   int excess_a = -1;
   int excess_b = -1;
   int deficit_solid = -1;
-  std::size_t rays = 0;               // Rays cast.
+  // The direction (0: x, 1: y, 2: z of the link frame) whose rays gave each estimate.
+  int excess_axis = 0;
+  int deficit_axis = 0;
+  std::size_t rays = 0;               // Rays cast, in the three directions together.
   std::size_t inconsistent_rays = 0;  // Left out: the winding did not come back to 0 along them.
 };
 
-// Casts about `rays` rays parallel to the link frame's x axis, on a grid spread evenly over the
-// solids' bounding box seen along x, and sums the winding number's excess and deficit along them.
+// Casts about `rays` rays parallel to each axis of the link frame, on grids spread evenly over the
+// solids' bounding box seen along that axis, and sums the winding number's excess and deficit
+// along them. Each direction measures a region exactly along its rays and samples it across them;
+// the direction whose rays met the region most often gives the estimate, so that a region thin
+// across one direction (two plates overlapping by a millimetre) is measured along its thickness.
 // A ray whose winding does not return to 0 past the solids (one that met the surface exactly at an
 // edge in a way the tie rule could not settle, or an open surface) adds nothing. The error is that
-// of the grid: about the solids' outline crossed by one ray's cell, relative to their area.
-WindingSample sample_winding(std::span<const PlacedSolid> solids, std::size_t rays = 16384);
+// of the grid: the cells the region's outline passes through, seen along the chosen direction.
+// A body of so many layers that the crossings would pass 4 Mi is cast again with a quarter of the
+// rays (down to 256 a direction; below, nothing is found).
+WindingSample sample_winding(std::span<const PlacedSolid> solids, std::size_t rays = 4096);
 
 }  // namespace rdtf::internal

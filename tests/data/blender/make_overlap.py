@@ -11,6 +11,9 @@
 #                       into its lower end
 #   overlap_union.glb   the same parts united with Boolean modifiers (Union, the Exact solver),
 #                       applied, the cutters removed: what docs/blender.md asks for
+#   overlap_skinned.glb two bones (a revolute joint between them); the lower bone's part is a box
+#                       0.2 x 0.2 x 0.3 and a box 0.3 x 0.1 x 0.1 through it, joined, both wholly
+#                       bound to that bone: a skinned mesh whose part overlaps itself
 #   overlap.json        what Blender itself says of each link: the volume of the parts as exported
 #                       (bmesh.calc_volume over the world-placed meshes, which counts the shared
 #                       region twice as any signed-volume sum does) and of the Boolean union
@@ -110,6 +113,53 @@ def build(united):
     return {"base": [base], "arm": [arm, motor]}
 
 
+def build_skinned():
+    """Two bones; the lower one's part, joined from two boxes that cross, skinned to it."""
+    clear_scene()
+    bpy.ops.object.armature_add(enter_editmode=True, location=(0, 0, 0))
+    rig = bpy.context.active_object
+    rig.name = "rig"
+    bones = rig.data.edit_bones
+    lower = bones[0]
+    lower.name = "lower"
+    lower.head = (0, 0, 0)
+    lower.tail = (0, 0, 0.3)
+    upper = bones.new("upper")
+    upper.head = (0, 0, 0.3)
+    upper.tail = (0, 0, 0.6)
+    upper.parent = lower
+    upper.use_connect = True
+    bpy.ops.object.mode_set(mode="OBJECT")
+    bone = rig.data.bones["upper"]
+    bone["rdtf_joint"] = "revolute"
+    bone["rdtf_axis"] = "x"
+    bone["rdtf_lower"] = -1.0
+    bone["rdtf_upper"] = 1.0
+    parts = [("lower", add("cube", "post", T((0, 0, 0.15)), scale=(0.2, 0.2, 0.3))),
+             ("lower", add("cube", "bar", T((0, 0, 0.15)), scale=(0.3, 0.1, 0.1))),
+             ("upper", add("cube", "top", T((0, 0, 0.45)), scale=(0.1, 0.1, 0.3)))]
+    for bone_name, obj in parts:
+        group = obj.vertex_groups.new(name=bone_name)
+        group.add(list(range(len(obj.data.vertices))), 1.0, "REPLACE")
+    objects = [obj for _, obj in parts]
+    lower_parts = volume(objects[:2])
+    select_only(objects, objects[0])
+    bpy.ops.object.join()
+    body = bpy.context.active_object
+    body.name = "body"
+    body.parent = rig
+    modifier = body.modifiers.new("Armature", "ARMATURE")
+    modifier.object = rig
+    bpy.context.view_layer.update()
+    # The union of the lower bone's two boxes, by the Exact Boolean solver as for the others.
+    post = add("cube", "post_u", T((0, 0, 0.15)), scale=(0.2, 0.2, 0.3))
+    bar = add("cube", "bar_u", T((0, 0, 0.15)), scale=(0.3, 0.1, 0.1))
+    unite(post, bar)
+    united = volume([post])
+    bpy.data.objects.remove(post, do_unlink=True)
+    return {"lower": lower_parts}, {"lower": united}
+
+
 def export(name):
     bpy.ops.export_scene.gltf(filepath=os.path.join(HERE, name), export_format="GLB", export_extras=True,
                               export_apply=True, export_animations=False)
@@ -123,6 +173,8 @@ def main():
     united = build(united=True)
     record["union"] = {link: volume(objects) for link, objects in united.items()}
     export("overlap_union.glb")
+    record["skinned_joined"], record["skinned_union"] = build_skinned()
+    export("overlap_skinned.glb")
     with open(os.path.join(HERE, "overlap.json"), "w") as out:
         json.dump(record, out, indent=1, sort_keys=True)
         out.write("\n")

@@ -81,6 +81,11 @@ struct MeshGeometry {
 // smaller share moves the mass less than a modeller's own rounding of a density does.
 constexpr double kReportedVolumeFraction = 0.005;
 
+// A closed mesh whose volume is below this fraction of the cube on its extent encloses nothing:
+// rounding of faces that cancel (a double-sided export) leaves about 1e-16 of it, and a sheet
+// 1 mm thick across 1 m is 1e-3 / 1.7^3, far above.
+constexpr double kNoVolume = 1e-9;
+
 // One closed, consistently wound solid of a link, kept to look for overlaps once the link has
 // all of them: a mesh node's mesh, or one of its EXT_mesh_gpu_instancing instances.
 struct LinkSolid {
@@ -399,6 +404,19 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
     diag.append(after_check);
     if (!instances) continue;
     double volume = 0;
+    // A closed, consistently wound surface that encloses nothing: every face has a twin wound the
+    // other way (a double-sided export), or inward shells cancel the others. Its edges all pair
+    // up, so nothing else would say that the mesh adds no mass.
+    if (!solids.empty() && geometry.topology().closed() && geometry.topology().consistently_oriented() &&
+        solids.front().extent > 0 &&
+        std::abs(solids.front().volume) <= kNoVolume * std::pow(solids.front().extent, 3)) {
+      diag.warning(codes::MESH_ENCLOSES_NO_VOLUME, pointer,
+                   "mesh of '" + name + "' is closed but encloses no volume (" + format_number(solids.front().volume, 2) +
+                       " m^3 across " + format_number(solids.front().extent, 3) +
+                       " m): every face has a twin wound the other way (a mesh exported double-sided), or shells "
+                       "wound inward cancel the others; it adds no mass. Export it single-sided, or remove the "
+                       "reversed copies of its faces");
+    }
     std::vector<int> signs;
     for (VolumeIntegrals& integrals : solids) {
       signs.push_back(integrals.volume < 0 ? -1 : 1);
@@ -477,7 +495,11 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
     }
     if (link.inertial.volume <= 0) {
       diag.warning(codes::LINK_NO_VOLUME, pointer,
-                   "link '" + link.name + "' has no volume (no closed mesh): its mass is zero");
+                   "link '" + link.name + "' has no volume (" +
+                       (link_solids[l].empty() ? std::string("no closed mesh")
+                                               : std::string("its closed meshes enclose none: faces doubled back to "
+                                                             "back, or shells wound inward that cancel the others")) +
+                       "): its mass is zero");
     }
   }
   if (solids_out == nullptr) report_part_overlaps(document, robot, own_solids, diag);
@@ -527,10 +549,19 @@ void report_part_overlaps(const Json& document, const Robot& robot, const LinkSo
       }
       if (!by_link[l].empty()) volume += link.inertial.volume;
     }
-    if (placed.empty() || !(volume > 0)) continue;
+    if (placed.empty()) continue;
     const internal::WindingSample sample = internal::sample_winding(placed);
-    const auto share = [&](double part) {
-      return "about " + format_number(part, 2) + " m^3, " + format_number(100 * part / volume, 2) + "% of its volume,";
+    // Judged against the body's volume, or where its solids' signed volumes cancel (an inward
+    // shell as large as the rest), against the volume inside any of them.
+    const double scale = std::max(volume, sample.covered);
+    const double deficit_scale = std::max(volume, sample.deficit_covered);
+    bool one_link = true;
+    for (std::size_t k = 1; k < owner_links.size(); ++k) one_link = one_link && owner_links[k] == owner_links[0];
+    const auto share = [&](double part, double of) {
+      const double percent = 100 * part / of;
+      return "about " + format_number(part, 2) + " m^3, " +
+             (percent >= 10 ? std::to_string(static_cast<long long>(std::llround(percent))) : format_number(percent, 2)) +
+             (one_link ? "% of its volume," : "% of its body's volume (the links fixed joints join),");
     };
     const auto body_of = [&](std::size_t a, std::size_t b) {
       const std::string& first = robot.links[owner_links[a]].name;
@@ -538,7 +569,7 @@ void report_part_overlaps(const Json& document, const Robot& robot, const LinkSo
       if (first == second) return "link '" + first + "'";
       return "links '" + first + "' and '" + second + "' (one body: fixed joints join them)";
     };
-    if (sample.excess > kReportedVolumeFraction * volume && sample.excess_a >= 0) {
+    if (scale > 0 && sample.excess > kReportedVolumeFraction * scale && sample.excess_a >= 0) {
       const auto a = static_cast<std::size_t>(sample.excess_a), b = static_cast<std::size_t>(sample.excess_b);
       const std::string where =
           a == b ? "the mesh of " + solid_label(document, *owners[a]) +
@@ -547,16 +578,16 @@ void report_part_overlaps(const Json& document, const Robot& robot, const LinkSo
                  : "the meshes of " + solid_label(document, *owners[a]) + " and " + solid_label(document, *owners[b]) +
                        " overlap";
       diag.warning(codes::LINK_PARTS_OVERLAP, json_pointer("/nodes", owners[a]->node),
-                   body_of(a, b) + ": " + where + ": " + share(sample.excess) +
+                   body_of(a, b) + ": " + where + ": " + share(sample.excess, scale) +
                        " is counted twice, and its mass and inertia with it; unite the parts (a Boolean Union "
                        "modifier, exported with Apply Modifiers), trim one to the other's surface, or flip an inner "
                        "shell's faces to make it a cavity");
     }
-    if (sample.deficit > kReportedVolumeFraction * volume && sample.deficit_solid >= 0) {
+    if (deficit_scale > 0 && sample.deficit > kReportedVolumeFraction * deficit_scale && sample.deficit_solid >= 0) {
       const auto a = static_cast<std::size_t>(sample.deficit_solid);
       diag.warning(codes::MESH_SHELL_INSIDE_OUT, json_pointer("/nodes", owners[a]->node),
                    body_of(a, a) + ": the mesh of " + solid_label(document, *owners[a]) +
-                       " has a shell wound inside out that lies outside its own solid: " + share(sample.deficit) +
+                       " has a shell wound inside out that lies outside its own solid: " + share(sample.deficit, deficit_scale) +
                        " is subtracted instead of added; recalculate its normals outside "
                        "(Blender: Mesh > Normals > Recalculate Outside)");
     }

@@ -20,10 +20,11 @@ constexpr double kFraction[3] = {0.23606797749978969,   // sqrt(5) - 2
                                  0.41421356237309503,   // sqrt(2) - 1
                                  0.73205080756887719};  // sqrt(3) - 1
 
-// Past this many crossings (all three directions together) a sample is cast again with a quarter
-// of the rays, down to kFewestRays a direction: a body of many layers (a stack of 150 plates, a
-// finned heat sink) is sampled more coarsely rather than not at all. 12 bytes a crossing: 48 MB.
-constexpr std::size_t kMaxCrossings = std::size_t{4} << 20;
+// Past this many crossings a direction is left out: a body of many layers along it (a stack of
+// plates, a finned heat sink) is measured by the other two, across its layers. Where all three
+// are left out, the sample is cast again with a quarter of the rays, down to kFewestRays a
+// direction. 12 bytes a crossing: at most 48 MB in all.
+constexpr std::size_t kMaxCrossingsPerAxis = (std::size_t{4} << 20) / 3;
 constexpr std::size_t kFewestRays = 256;
 
 // A place among the rays is kept in 16 bits (doubled_place): at most this many rays a row.
@@ -166,20 +167,19 @@ void for_each_candidate(const Grid& g, const double c[3][3], std::ptrdiff_t i_fi
   }
 }
 
-// Adds the crossings of one solid's triangles with the rays of the three grids; false past
-// kMaxCrossings. Each vertex is placed among the rows of rays once (most are shared by six
+// Adds the crossings of one solid's triangles with the rays of the grids not yet `full`; a grid
+// past kMaxCrossingsPerAxis is marked full and its crossings dropped. Each vertex is placed among the rows of rays once (most are shared by six
 // triangles), so that a triangle between two rows, as most of a large mesh's are, is passed over
 // with integer comparisons; only the others are placed in full and tested edge by edge.
-bool add_crossings(const PlacedSolid& solid, std::int32_t index, const std::array<Grid, 3>& grids,
-                   std::array<std::vector<Crossing>, 3>& out, std::size_t& count,
+void add_crossings(const PlacedSolid& solid, std::int32_t index, const std::array<Grid, 3>& grids,
+                   std::array<std::vector<Crossing>, 3>& out, std::array<bool, 3>& full,
                    std::vector<std::array<std::int16_t, 6>>& places) {
   const Eigen::Matrix3d L = solid.X_LM.linear();
   const Eigen::Vector3d t = solid.X_LM.translation();
   // A mirroring placement turns the winding over, as an inside-out mesh does.
   const int orientation = solid.orientation * (L.determinant() < 0 ? -1 : 1);
-  bool within = true;
   for (const TriangleMeshView& piece : solid.pieces) {
-    if (!within) break;
+    if (full[0] && full[1] && full[2]) break;
     with_typed_view(piece, [&](const auto& view) {
       places.resize(view.vertex_count);
       for (std::size_t v = 0; v < view.vertex_count; ++v) {
@@ -194,14 +194,15 @@ bool add_crossings(const PlacedSolid& solid, std::int32_t index, const std::arra
         }
       }
       double c[3][3];
-      for (std::size_t tri = 0; tri < view.triangle_count && within; ++tri) {
+      for (std::size_t tri = 0; tri < view.triangle_count; ++tri) {
         const std::uint32_t v0 = view.index(3 * tri), v1 = view.index(3 * tri + 1), v2 = view.index(3 * tri + 2);
         if (v0 >= view.vertex_count || v1 >= view.vertex_count || v2 >= view.vertex_count) continue;
         const auto& p0 = places[v0];
         const auto& p1 = places[v1];
         const auto& p2 = places[v2];
         bool placed = false;
-        for (int g = 0; g < 3 && within; ++g) {
+        for (int g = 0; g < 3; ++g) {
+          if (full[g]) continue;
           const Grid& grid = grids[g];
           const auto [i_first, i_last] = rays_between(std::min({p0[2 * g], p1[2 * g], p2[2 * g]}),
                                                       std::max({p0[2 * g], p1[2 * g], p2[2 * g]}), grid.nb);
@@ -232,7 +233,7 @@ bool add_crossings(const PlacedSolid& solid, std::int32_t index, const std::arra
           const std::int32_t enters = (area2 < 0) == (orientation > 0) ? 1 : 0;
           for_each_candidate(grid, c, i_first, i_last, j_first, j_last,
                              [&](std::ptrdiff_t i, std::ptrdiff_t j, double qb, double qc) {
-                               if (!within) return;
+                               if (full[g]) return;
                                double w_2, w_0, w_1;
                                if (edge_side(c[0], c[1], b, cc, qb, qc, w_2) != facing ||
                                    edge_side(c[1], c[2], b, cc, qb, qc, w_0) != facing ||
@@ -242,11 +243,11 @@ bool add_crossings(const PlacedSolid& solid, std::int32_t index, const std::arra
                                const double sum = w_0 + w_1 + w_2;
                                const double along = sum != 0 ? (w_0 * c[0][a] + w_1 * c[1][a] + w_2 * c[2][a]) / sum
                                                              : (c[0][a] + c[1][a] + c[2][a]) / 3;
-                               if (count == kMaxCrossings) {
-                                 within = false;
+                               if (out[g].size() == kMaxCrossingsPerAxis) {
+                                 full[g] = true;
+                                 out[g] = {};
                                  return;
                                }
-                               ++count;
                                out[g].push_back({static_cast<std::uint32_t>(static_cast<std::size_t>(i) * grid.nc +
                                                                             static_cast<std::size_t>(j)),
                                                  static_cast<float>(along), index * 2 + enters});
@@ -255,13 +256,13 @@ bool add_crossings(const PlacedSolid& solid, std::int32_t index, const std::arra
       }
     });
   }
-  return within;
 }
 
 // What the rays of one grid found.
 struct AxisSample {
   std::map<std::pair<int, int>, double> excess_by_pair;
   std::map<int, double> deficit_by_solid;
+  double covered = 0;            // m^3 inside at least one solid
   std::size_t excess_rays = 0;   // Rays that found some excess.
   std::size_t deficit_rays = 0;  // Rays that found some deficit.
   std::size_t inconsistent_rays = 0;
@@ -288,6 +289,7 @@ AxisSample walk(std::vector<Crossing>& crossings, const Grid& grid, std::size_t 
     int negative = 0;  // sum over solids of max(-w, 0)
     ray_excess.clear();
     ray_deficit.clear();
+    double ray_covered = 0;
     for (std::size_t k = begin; k < end; ++k) {
       const int solid = crossings[k].tag >> 1;
       const int delta = (crossings[k].tag & 1) != 0 ? 1 : -1;
@@ -301,6 +303,7 @@ AxisSample walk(std::vector<Crossing>& crossings, const Grid& grid, std::size_t 
       if (k + 1 == end) break;
       const double length = static_cast<double>(crossings[k + 1].along) - static_cast<double>(crossings[k].along);
       if (length <= 0) continue;
+      if (inside >= 1) ray_covered += length;
       if (inside >= 2) {
         // The solid inside itself twice, else the first two that hold this stretch.
         int first = -1, second = -1;
@@ -340,6 +343,7 @@ AxisSample walk(std::vector<Crossing>& crossings, const Grid& grid, std::size_t 
     if (consistent) {
       for (const auto& [pair, volume] : ray_excess) sample.excess_by_pair[pair] += volume * cell;
       for (const auto& [solid, volume] : ray_deficit) sample.deficit_by_solid[solid] += volume * cell;
+      sample.covered += ray_covered * cell;
       sample.excess_rays += ray_excess.empty() ? 0 : 1;
       sample.deficit_rays += ray_deficit.empty() ? 0 : 1;
     } else {
@@ -362,13 +366,12 @@ WindingSample sample_winding(std::span<const PlacedSolid> solids, std::size_t ra
       if (!grids[axis].cover(axis, lo, hi, tried)) return {};  // flat: no volume to count
     }
     std::array<std::vector<Crossing>, 3> crossings;
+    std::array<bool, 3> full{};
     std::vector<std::array<std::int16_t, 6>> places;  // per vertex of the piece at hand, reused
-    std::size_t count = 0;
-    bool complete = true;
-    for (std::size_t s = 0; s < solids.size() && complete; ++s) {
-      complete = add_crossings(solids[s], static_cast<std::int32_t>(s), grids, crossings, count, places);
+    for (std::size_t s = 0; s < solids.size(); ++s) {
+      add_crossings(solids[s], static_cast<std::int32_t>(s), grids, crossings, full, places);
     }
-    if (!complete) {
+    if (full[0] && full[1] && full[2]) {
       if (tried / 4 < kFewestRays) return {};
       continue;
     }
@@ -378,16 +381,17 @@ WindingSample sample_winding(std::span<const PlacedSolid> solids, std::size_t ra
     // region most often is taken, for the excess and for the deficit each.
     WindingSample result;
     std::array<AxisSample, 3> samples;
+    int best_excess = -1, best_deficit = -1;
     for (int axis = 0; axis < 3; ++axis) {
+      if (full[axis]) continue;
       samples[axis] = walk(crossings[axis], grids[axis], solids.size());
       result.rays += grids[axis].nb * grids[axis].nc;
       result.inconsistent_rays += samples[axis].inconsistent_rays;
+      if (best_excess < 0 || samples[axis].excess_rays > samples[best_excess].excess_rays) best_excess = axis;
+      if (best_deficit < 0 || samples[axis].deficit_rays > samples[best_deficit].deficit_rays) best_deficit = axis;
     }
-    int best_excess = 0, best_deficit = 0;
-    for (int axis = 1; axis < 3; ++axis) {
-      if (samples[axis].excess_rays > samples[best_excess].excess_rays) best_excess = axis;
-      if (samples[axis].deficit_rays > samples[best_deficit].deficit_rays) best_deficit = axis;
-    }
+    result.covered = samples[best_excess].covered;
+    result.deficit_covered = samples[best_deficit].covered;
     result.excess_axis = best_excess;
     result.deficit_axis = best_deficit;
     double largest = 0;

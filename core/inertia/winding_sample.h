@@ -33,6 +33,10 @@ struct WindingSample {
   // even where another solid fills the place).
   double excess = 0;
   double deficit = 0;
+  // m^3 inside at least one solid, by the direction that gave the excess and by the one that gave
+  // the deficit: the scale each is judged against where the solids' signed volumes cancel.
+  double covered = 0;
+  double deficit_covered = 0;
   // The two solids whose common region holds most of the excess (equal where one solid overlaps
   // itself), and the solid whose inward shell holds most of the deficit; -1 where there is none.
   int excess_a = -1;
@@ -53,8 +57,9 @@ struct WindingSample {
 // A ray whose winding does not return to 0 past the solids (one that met the surface exactly at an
 // edge in a way the tie rule could not settle, or an open surface) adds nothing. The error is that
 // of the grid: the cells the region's outline passes through, seen along the chosen direction.
-// A body of so many layers that the crossings would pass 4 Mi is cast again with a quarter of the
-// rays (down to 256 a direction; below, nothing is found).
+// A direction whose crossings would pass 1.4 Mi (a stack of many layers along it) is left out and
+// the others give the estimate; where all three are, the sample is cast again with a quarter of
+// the rays (down to 256 a direction; below, nothing is found).
 WindingSample sample_winding(std::span<const PlacedSolid> solids, std::size_t rays = 4096);
 
 }  // namespace rdtf::internal

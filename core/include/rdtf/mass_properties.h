@@ -21,6 +21,9 @@ struct VolumeIntegrals {
   double volume = 0;                                     // m^3, signed: < 0 for inside-out
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();    // m
   Eigen::Matrix3d second_central = Eigen::Matrix3d::Zero();  // m^5: integral of (r-c)(r-c)^T dV
+  // m: a length the solid spans, for judging whether its volume is 0 in earnest: the diagonal of
+  // the box of the vertices sampled for the apex, times |det X|^(1/3). 0 without vertices.
+  double extent = 0;
 };
 
 // Integrals over the solid bounded by the triangles of `pieces` (together one closed surface, as

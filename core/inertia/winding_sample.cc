@@ -27,6 +27,10 @@ constexpr double kFraction[3] = {0.23606797749978969,   // sqrt(5) - 2
 constexpr std::size_t kMaxCrossingsPerAxis = (std::size_t{4} << 20) / 3;
 constexpr std::size_t kFewestRays = 256;
 
+// Corners farther than this from the link frame's origin are not sampled: crossings are kept as
+// floats.
+constexpr double kFarthest = 1e30;
+
 // A place among the rays is kept in 16 bits (doubled_place): at most this many rays a row.
 constexpr std::size_t kMaxRaysPerRow = 16383;
 
@@ -158,11 +162,17 @@ void for_each_candidate(const Grid& g, const double c[3][3], std::ptrdiff_t i_fi
       hi = std::max(hi, at);
     }
     if (!(lo <= hi)) continue;
-    const double first = std::ceil((lo - g.c0) * g.per_hc - kFraction[g.c]) - 1;
-    const double last = std::floor((hi - g.c0) * g.per_hc - kFraction[g.c]) + 1;
-    const std::ptrdiff_t j0 = std::max<std::ptrdiff_t>(j_first, static_cast<std::ptrdiff_t>(std::max(first, -1.0)));
-    const std::ptrdiff_t j1 =
-        std::min<std::ptrdiff_t>(j_last, static_cast<std::ptrdiff_t>(std::min(last, static_cast<double>(g.nc))));
+    double first = std::ceil((lo - g.c0) * g.per_hc - kFraction[g.c]) - 1;
+    double last = std::floor((hi - g.c0) * g.per_hc - kFraction[g.c]) + 1;
+    // Clamped before they become integers (a cell of denormal size makes them infinite, or NaN):
+    // where they say nothing, every ray of the span is a candidate and the edge test decides.
+    if (std::isnan(first) || std::isnan(last)) {
+      first = -1;
+      last = static_cast<double>(g.nc);
+    }
+    const double top = static_cast<double>(g.nc);
+    const std::ptrdiff_t j0 = std::max<std::ptrdiff_t>(j_first, static_cast<std::ptrdiff_t>(std::clamp(first, -1.0, top)));
+    const std::ptrdiff_t j1 = std::min<std::ptrdiff_t>(j_last, static_cast<std::ptrdiff_t>(std::clamp(last, -1.0, top)));
     for (std::ptrdiff_t j = j0; j <= j1; ++j) f(i, j, qb, g.at_c(static_cast<std::size_t>(j)));
   }
 }
@@ -218,8 +228,10 @@ void add_crossings(const PlacedSolid& solid, std::int32_t index, const std::arra
               view.vertex(corners[k], p);
               for (int r = 0; r < 3; ++r) c[k][r] = L(r, 0) * p[0] + L(r, 1) * p[1] + L(r, 2) * p[2] + t[r];
               // A corner that is not a finite number (the loader refuses them; this never trusts
-              // it) has no place along a ray, and a NaN would break the sort below.
-              finite = finite && std::isfinite(c[k][0] + c[k][1] + c[k][2]);
+              // it) has no place along a ray, and a NaN would break the sort below; one beyond
+              // float's range (a model 1e30 m across, refused later for its inertia) has no float
+              // to be kept in.
+              for (int r = 0; r < 3; ++r) finite = finite && std::abs(c[k][r]) < kFarthest;
             }
             if (!finite) break;
             placed = true;

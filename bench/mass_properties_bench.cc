@@ -375,7 +375,7 @@ BENCHMARK(BM_RdtfKernelAvx)->Arg(kSizes[0])->Arg(kSizes[1])->Unit(benchmark::kMi
 BENCHMARK(BM_RdtfKernelFar)->Arg(kSizes[0])->Arg(kSizes[1])->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_RdtfKernelFloatInPlace)->Arg(kSizes[0])->Arg(kSizes[1])->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_StreamingRead)->Arg(kSizes[0])->Arg(kSizes[1])->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_WindingSample)->Arg(kSizes[0])->Arg(kSizes[1])->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_WindingSample)->Arg(1000)->Arg(kSizes[0])->Arg(kSizes[1])->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_RdtfKernelFmaExperiment)->Arg(kSizes[0])->Arg(kSizes[1])->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ScalarReference)->Arg(kSizes[0])->Arg(kSizes[1])->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ScalarReferenceFar)->Arg(kSizes[0])->Arg(kSizes[1])->Unit(benchmark::kMillisecond);

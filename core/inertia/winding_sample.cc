@@ -63,11 +63,23 @@ struct Grid {
   }
 };
 
-struct Crossing {
+}  // namespace
+
+// Outside the anonymous namespace: WindingScratch::Buffers, which the header names, holds them.
+struct WindingCrossing {
   std::uint32_t ray;
   float along;       // The coordinate along the ray, in the link frame.
   std::int32_t tag;  // solid * 2 + (1 where the ray enters the solid, 0 where it leaves)
 };
+using Crossing = WindingCrossing;
+
+struct WindingScratch::Buffers {
+  std::array<std::vector<Crossing>, 3> crossings;
+  std::vector<std::uint32_t> start, next;           // order_by_ray's counts
+  std::vector<std::array<std::int16_t, 6>> places;  // per vertex of the piece at hand
+};
+
+namespace {
 
 // The side of the point q on which the directed edge p -> r passes, in the (b, c) plane, never 0:
 // the edge is evaluated from its lexicographically smaller end, so both triangles that share it
@@ -257,7 +269,7 @@ void add_crossings(const PlacedSolid& solid, std::int32_t index, const std::arra
                                                              : (c[0][a] + c[1][a] + c[2][a]) / 3;
                                if (out[g].size() == kMaxCrossingsPerAxis) {
                                  full[g] = true;
-                                 out[g] = {};
+                                 out[g].clear();
                                  return;
                                }
                                out[g].push_back({static_cast<std::uint32_t>(static_cast<std::size_t>(i) * grid.nc +
@@ -280,14 +292,43 @@ struct AxisSample {
   std::size_t inconsistent_rays = 0;
 };
 
+// Puts the crossings in ray order, and each ray's in order along it (ties by tag, so that the
+// order is the same on every run): a counting sort on the ray, whose number is below the grid's
+// nb * nc, in place (each crossing is swapped into the next free place of its ray's range), then
+// a sort of each ray's few crossings. One sort of them all by (ray, along) took a third of a
+// small model's check, and a second array for the counting sort cost as many fresh pages.
+void order_by_ray(std::vector<Crossing>& crossings, const Grid& grid, std::vector<std::uint32_t>& start,
+                  std::vector<std::uint32_t>& next) {
+  const std::size_t rays = grid.nb * grid.nc;
+  start.assign(rays + 1, 0);
+  for (const Crossing& x : crossings) ++start[x.ray + 1];
+  for (std::size_t r = 0; r < rays; ++r) start[r + 1] += start[r];
+  next.assign(start.begin(), start.end() - 1);
+  for (std::size_t r = 0; r < rays; ++r) {
+    while (next[r] < start[r + 1]) {
+      Crossing& x = crossings[next[r]];
+      if (x.ray == r) {
+        ++next[r];
+      } else {
+        std::swap(x, crossings[next[x.ray]++]);
+      }
+    }
+  }
+  for (std::size_t r = 0; r < rays; ++r) {
+    if (start[r + 1] - start[r] < 2) continue;
+    std::sort(crossings.begin() + start[r], crossings.begin() + start[r + 1], [](const Crossing& a, const Crossing& b) {
+      return a.along != b.along ? a.along < b.along : a.tag < b.tag;
+    });
+  }
+}
+
 // Walks each ray's crossings in order, keeping every solid's winding number: where the solids
 // holding a stretch number two or more (counting each solid as often as it winds there) the
 // stretch is excess; where a solid's own winding is below 0 (a shell wound inward outside that
 // solid, even where another part's material fills it), deficit.
-AxisSample walk(std::vector<Crossing>& crossings, const Grid& grid, std::size_t solids) {
-  std::sort(crossings.begin(), crossings.end(), [](const Crossing& a, const Crossing& b) {
-    return a.ray != b.ray ? a.ray < b.ray : a.along < b.along;
-  });
+AxisSample walk(std::vector<Crossing>& crossings, const Grid& grid, std::size_t solids,
+                WindingScratch::Buffers& scratch) {
+  order_by_ray(crossings, grid, scratch.start, scratch.next);
   AxisSample sample;
   const double cell = grid.hb * grid.hc;
   std::vector<int> winding(solids, 0);
@@ -368,8 +409,13 @@ AxisSample walk(std::vector<Crossing>& crossings, const Grid& grid, std::size_t 
 
 }  // namespace
 
-WindingSample sample_winding(std::span<const PlacedSolid> solids, std::size_t rays) {
+WindingScratch::WindingScratch() : buffers(std::make_unique<Buffers>()) {}
+WindingScratch::~WindingScratch() = default;
+
+WindingSample sample_winding(std::span<const PlacedSolid> solids, std::size_t rays, WindingScratch* scratch) {
   if (solids.empty() || rays == 0) return {};
+  WindingScratch own;
+  WindingScratch::Buffers& memory = *(scratch != nullptr ? scratch : &own)->buffers;
   Eigen::Vector3d lo, hi;
   bound(solids, lo, hi);
   for (std::size_t tried = rays;; tried /= 4) {
@@ -377,11 +423,16 @@ WindingSample sample_winding(std::span<const PlacedSolid> solids, std::size_t ra
     for (int axis = 0; axis < 3; ++axis) {
       if (!grids[axis].cover(axis, lo, hi, tried)) return {};  // flat: no volume to count
     }
-    std::array<std::vector<Crossing>, 3> crossings;
+    std::array<std::vector<Crossing>, 3>& crossings = memory.crossings;
+    for (int axis = 0; axis < 3; ++axis) {
+      // A closed surface crosses each ray that meets it at least twice: room for that from the
+      // start, instead of growing (and copying) by doubling.
+      crossings[axis].clear();
+      crossings[axis].reserve(std::min(2 * grids[axis].nb * grids[axis].nc + 64, kMaxCrossingsPerAxis));
+    }
     std::array<bool, 3> full{};
-    std::vector<std::array<std::int16_t, 6>> places;  // per vertex of the piece at hand, reused
     for (std::size_t s = 0; s < solids.size(); ++s) {
-      add_crossings(solids[s], static_cast<std::int32_t>(s), grids, crossings, full, places);
+      add_crossings(solids[s], static_cast<std::int32_t>(s), grids, crossings, full, memory.places);
     }
     if (full[0] && full[1] && full[2]) {
       if (tried / 4 < kFewestRays) return {};
@@ -396,7 +447,7 @@ WindingSample sample_winding(std::span<const PlacedSolid> solids, std::size_t ra
     int best_excess = -1, best_deficit = -1;
     for (int axis = 0; axis < 3; ++axis) {
       if (full[axis]) continue;
-      samples[axis] = walk(crossings[axis], grids[axis], solids.size());
+      samples[axis] = walk(crossings[axis], grids[axis], solids.size(), memory);
       result.rays += grids[axis].nb * grids[axis].nc;
       result.inconsistent_rays += samples[axis].inconsistent_rays;
       if (best_excess < 0 || samples[axis].excess_rays > samples[best_excess].excess_rays) best_excess = axis;

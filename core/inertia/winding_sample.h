@@ -9,6 +9,7 @@
 #pragma once
 
 #include <cstddef>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -60,6 +61,22 @@ struct WindingSample {
 // A direction whose crossings would pass 1.4 Mi (a stack of many layers along it) is left out and
 // the others give the estimate; where all three are, the sample is cast again with a quarter of
 // the rays (down to 256 a direction; below, nothing is found).
-WindingSample sample_winding(std::span<const PlacedSolid> solids, std::size_t rays = 4096);
+//
+// `scratch`, where given, holds the crossings and their sorting space from one call to the next,
+// so that the bodies of one model reuse the pages the first one touched: a fresh page costs a
+// fault, and on a small model the faults were as much as the arithmetic. Null: memory of its own.
+struct WindingScratch;
+WindingSample sample_winding(std::span<const PlacedSolid> solids, std::size_t rays = 4096,
+                             WindingScratch* scratch = nullptr);
+
+// The memory sample_winding may reuse; it holds nothing a result depends on.
+struct WindingScratch {
+  WindingScratch();
+  ~WindingScratch();
+  WindingScratch(const WindingScratch&) = delete;
+  WindingScratch& operator=(const WindingScratch&) = delete;
+  struct Buffers;
+  std::unique_ptr<Buffers> buffers;
+};
 
 }  // namespace rdtf::internal

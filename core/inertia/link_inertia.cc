@@ -287,6 +287,28 @@ std::string solid_label(const Json& document, const LinkSolid& solid) {
   return label;
 }
 
+// The links of each rigid body: joined by fixed joints (union-find), in link order.
+std::vector<std::vector<std::size_t>> rigid_bodies(const Robot& robot) {
+  std::vector<std::size_t> up(robot.links.size());
+  std::iota(up.begin(), up.end(), std::size_t{0});
+  const auto find = [&](std::size_t l) {
+    while (up[l] != l) l = up[l] = up[up[l]];
+    return l;
+  };
+  for (const Joint& joint : robot.joints) {
+    if (joint.kind != JointKind::kFixed || joint.parent_link < 0 || joint.child_link < 0) continue;
+    const std::size_t a = find(static_cast<std::size_t>(joint.parent_link));
+    const std::size_t b = find(static_cast<std::size_t>(joint.child_link));
+    up[std::max(a, b)] = std::min(a, b);
+  }
+  std::map<std::size_t, std::vector<std::size_t>> bodies;
+  for (std::size_t l = 0; l < robot.links.size(); ++l) bodies[find(l)].push_back(l);
+  std::vector<std::vector<std::size_t>> result;
+  for (auto& [root, links] : bodies) result.push_back(std::move(links));
+  return result;
+}
+
+
 }  // namespace
 
 struct LinkSolids::State {
@@ -445,6 +467,7 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
 
   std::vector<std::string> entry_pointers;
   const auto entries = rdtf_entries(document, entry_pointers);
+  std::vector<std::size_t> no_volume;  // links without volume, in order
   for (std::size_t l = 0; l < robot.links.size(); ++l) {
     Link& link = robot.links[l];
     const std::string pointer = json_pointer("/nodes", link.node);
@@ -493,8 +516,23 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
         }
       }
     }
-    if (link.inertial.volume <= 0) {
-      diag.warning(codes::LINK_NO_VOLUME, pointer,
+    if (link.inertial.volume <= 0) no_volume.push_back(l);
+  }
+  // A link without volume is worth a word where it was meant to have some (it has meshes, and
+  // none encloses any) or where its whole rigid body weighs nothing. A frame welded to a body that
+  // has mass weighs nothing by design: an armature's own object, which holds the root bone by a
+  // fixed joint (docs/blender.md), or a sensor frame.
+  if (!no_volume.empty()) {
+    std::vector<bool> body_has_mass(robot.links.size(), false);
+    for (const std::vector<std::size_t>& body : rigid_bodies(robot)) {
+      bool mass = false;
+      for (std::size_t l : body) mass = mass || robot.links[l].inertial.mass > 0;
+      for (std::size_t l : body) body_has_mass[l] = mass;
+    }
+    for (std::size_t l : no_volume) {
+      const Link& link = robot.links[l];
+      if (link.meshes.empty() && body_has_mass[l]) continue;
+      diag.warning(codes::LINK_NO_VOLUME, json_pointer("/nodes", link.node),
                    "link '" + link.name + "' has no volume (" +
                        (link_solids[l].empty() ? std::string("no closed mesh")
                                                : std::string("its closed meshes enclose none: faces doubled back to "
@@ -505,33 +543,10 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
   if (solids_out == nullptr) report_part_overlaps(document, robot, own_solids, diag);
 }
 
-namespace {
-
-// The links of each rigid body: joined by fixed joints (union-find), in link order.
-std::vector<std::vector<std::size_t>> rigid_bodies(const Robot& robot) {
-  std::vector<std::size_t> up(robot.links.size());
-  std::iota(up.begin(), up.end(), std::size_t{0});
-  const auto find = [&](std::size_t l) {
-    while (up[l] != l) l = up[l] = up[up[l]];
-    return l;
-  };
-  for (const Joint& joint : robot.joints) {
-    if (joint.kind != JointKind::kFixed || joint.parent_link < 0 || joint.child_link < 0) continue;
-    const std::size_t a = find(static_cast<std::size_t>(joint.parent_link));
-    const std::size_t b = find(static_cast<std::size_t>(joint.child_link));
-    up[std::max(a, b)] = std::min(a, b);
-  }
-  std::map<std::size_t, std::vector<std::size_t>> bodies;
-  for (std::size_t l = 0; l < robot.links.size(); ++l) bodies[find(l)].push_back(l);
-  std::vector<std::vector<std::size_t>> result;
-  for (auto& [root, links] : bodies) result.push_back(std::move(links));
-  return result;
-}
-
-}  // namespace
 
 void report_part_overlaps(const Json& document, const Robot& robot, const LinkSolids& solids, Diagnostics& diag) {
   const auto& by_link = solids.state().by_link;
+  internal::WindingScratch scratch;  // one model's bodies share the pages of their crossings
   for (const std::vector<std::size_t>& body : rigid_bodies(robot)) {
     // Every solid in the frame of the body's first link B.
     std::vector<internal::PlacedSolid> placed;
@@ -550,7 +565,7 @@ void report_part_overlaps(const Json& document, const Robot& robot, const LinkSo
       if (!by_link[l].empty()) volume += link.inertial.volume;
     }
     if (placed.empty()) continue;
-    const internal::WindingSample sample = internal::sample_winding(placed);
+    const internal::WindingSample sample = internal::sample_winding(placed, 4096, &scratch);
     // Judged against the body's volume, or where its solids' signed volumes cancel (an inward
     // shell as large as the rest), against the volume inside any of them.
     const double scale = std::max(volume, sample.covered);

@@ -444,6 +444,7 @@ Robot build_robot(const Json& document, const std::vector<NodeType>& types, std:
     if (carried_link[node] >= 0) stack.push_back(static_cast<std::size_t>(carried_link[node]));
   }
 
+  std::vector<char> joint_node_used(types.size(), 0);  // passed on the way up from a link
   for (std::size_t c = 0; c < robot.links.size(); ++c) {
     Link& child = robot.links[c];
     // Walk up to the parent link, remembering the joint-typed nodes passed on the way; a joint
@@ -572,9 +573,21 @@ Robot build_robot(const Json& document, const std::vector<NodeType>& types, std:
       }
       break;
     }
+    for (int node : joint_nodes) joint_node_used[static_cast<std::size_t>(node)] = 1;
     child.parent_joint = static_cast<int>(robot.joints.size());
     robot.links[joint.parent_link].child_joints.push_back(child.parent_joint);
     robot.joints.push_back(std::move(joint));
+  }
+  // A joint node with joint properties that no link hangs below (a joint empty whose part was
+  // parented elsewhere, or left out of the export) makes no joint: say so, or the joint the
+  // modeller set up is simply missing from the robot.
+  for (std::size_t node = 0; node < types.size(); ++node) {
+    if (types[node] != NodeType::kJoint || !seen[node] || joint_node_used[node]) continue;
+    if (entry_joint(node) == nullptr && !has_joint_keys(node_extras(document, node))) continue;
+    diag.warning(codes::JOINT_MOVES_NOTHING, json_pointer("/nodes", node),
+                 "joint " + node_label(document, node) +
+                     " has joint properties but no part hangs below it, so it makes no joint: parent the part "
+                     "it turns to it (in Blender, select the part, then the empty, Ctrl+P > Object)");
   }
   if (robot.links.empty()) {
     diag.warning(codes::NO_LINKS, json_pointer("/scenes", scene),

@@ -205,7 +205,15 @@ NodeType mesh_or_visual(const Json& nodes, const MeshOwnership& meshes, int pare
     }
     return NodeType::kMesh;
   }
-  if (has_extra(node, "rdtf_joint")) return NodeType::kJoint;
+  if (has_extra(node, "rdtf_joint")) {
+    // A leaf empty fixed where it is, with nothing below, is a frame the modeller placed (a
+    // camera's, a tool's centre point): a massless link of its own on that fixed joint, as URDF
+    // keeps sensor frames. A moving joint with nothing below stays a joint node, and the robot
+    // says it moves nothing (JOINT_MOVES_NOTHING).
+    const Json& kind = (*node_extras(node))["rdtf_joint"];
+    if (children.empty() && kind.is_string() && kind.get<std::string>() == "fixed") return NodeType::kLink;
+    return NodeType::kJoint;
+  }
   if (children.empty()) {
     bool sibling_has_mesh = false;
     if (parent != nullptr) {

@@ -1,3 +1,5 @@
+// Links and joints that add nothing, and what is said of them.
+//
 // A closed, consistently wound mesh that encloses nothing: every face with a twin wound the other
 // way, as a double-sided export writes a mesh. Each edge is used as often one way as the other,
 // so the surface check finds it closed, and its volume is 0: MESH_ENCLOSES_NO_VOLUME says so, and
@@ -83,6 +85,110 @@ TEST(NoVolume, TheSingleSidedCubeIsSilent) {
     EXPECT_NE(d.code, codes::MESH_ENCLOSES_NO_VOLUME) << d.message;
     EXPECT_NE(d.code, codes::LINK_NO_VOLUME) << d.message;
   }
+}
+
+// The cube as the base, with `children` (nodes without meshes) under it.
+std::vector<Diagnostic> convert_cube_with(const Json& children) {
+  Json document = cube(false);
+  for (const Json& child : children) {
+    document["nodes"][0]["children"].push_back(document["nodes"].size());
+    document["nodes"].push_back(child);
+  }
+  testing::TempDir dir;
+  testing::write_file(dir / "cube.gltf", document.dump());
+  Diagnostics diag;
+  EXPECT_TRUE(convert_file(dir / "cube.gltf", {}, diag).has_value());
+  return diag.all();
+}
+
+std::vector<std::string> no_volume_messages(const std::vector<Diagnostic>& diagnostics) {
+  std::vector<std::string> messages;
+  for (const Diagnostic& d : diagnostics) {
+    if (d.code == codes::LINK_NO_VOLUME) messages.push_back(d.pointer + ": " + d.message);
+  }
+  return messages;
+}
+
+// A frame welded to a body that has mass weighs nothing by design: the armature's own object of a
+// skinned robot built as docs/blender.md says (it holds the root bone by a fixed joint), or a
+// sensor frame. LINK_NO_VOLUME said "its mass is zero" of every such link.
+TEST(NoVolume, AFrameWeldedToABodyWithMassIsSilent) {
+  Diagnostics diag;
+  ASSERT_TRUE(convert_file(testing::data_dir() / "blender" / "modelled_bones.gltf", {}, diag).has_value());
+  EXPECT_EQ(no_volume_messages(diag.all()), std::vector<std::string>{});
+  EXPECT_EQ(no_volume_messages(convert_cube_with(
+                {{{"name", "camera"}, {"translation", {0.5, 1, 0.5}}, {"extras", {{"rdtf_joint", "fixed"}}}}})),
+            std::vector<std::string>{});
+}
+
+// An empty fixed where the modeller put it, with nothing below (a camera's frame, a tool's centre
+// point), is a massless link on a fixed joint, placed by the empty, as URDF keeps sensor frames.
+// Before, it was typed a joint node that moved nothing, and left out without a word.
+TEST(NoVolume, AFixedLeafEmptyIsAFrameLink) {
+  Json document = cube(false);
+  document["nodes"][0]["children"] = {1};
+  document["nodes"].push_back({{"name", "camera"},
+                               {"translation", {0.5, 1, 0.25}},
+                               {"rotation", {0, 0.70710678118654752, 0, 0.70710678118654752}},
+                               {"extras", {{"rdtf_joint", "fixed"}}}});
+  testing::TempDir dir;
+  testing::write_file(dir / "frame.gltf", document.dump());
+  Diagnostics diag;
+  const auto conversion = convert_file(dir / "frame.gltf", {}, diag);
+  ASSERT_TRUE(conversion.has_value());
+  for (const Diagnostic& d : diag.all()) EXPECT_NE(d.severity, Severity::kWarning) << d.code << ": " << d.message;
+  const Robot& robot = conversion->robot;
+  ASSERT_EQ(robot.links.size(), 2u);
+  EXPECT_EQ(robot.links[1].name, "camera");
+  EXPECT_EQ(robot.links[1].inertial.mass, 0.0);
+  ASSERT_EQ(robot.joints.size(), 1u);
+  EXPECT_EQ(robot.joints[0].kind, JointKind::kFixed);
+  EXPECT_EQ(robot.joints[0].parent_link, 0);
+  EXPECT_EQ(robot.joints[0].child_link, 1);
+  // The frame is the empty's: 0.5, 1, 0.25 from the cube's corner, turned 90 degrees about y.
+  const Eigen::Isometry3d X_PJ = robot.joints[0].X_PJ;
+  EXPECT_LT((X_PJ.translation() - Eigen::Vector3d(0.5, 1, 0.25)).norm(), 1e-12);
+  EXPECT_LT((X_PJ.linear() * Eigen::Vector3d::UnitX() - Eigen::Vector3d(0, 0, -1)).norm(), 1e-12);
+}
+
+// A link that moves with nothing of mass welded to it (a hand whose fingers are empties) is still
+// named: its mass is zero, and the dynamics check refuses it.
+TEST(NoVolume, AMovingLinkWithoutMassIsStillNamed) {
+  const Json wrist = {{"name", "wrist"},
+                      {"translation", {0.5, 1, 0.5}},
+                      {"extras", {{"rdtf_joint", "revolute"}, {"rdtf_axis", "z"}}},
+                      {"children", {2}}};
+  Json document = cube(false);
+  document["nodes"][0]["children"] = {1};
+  document["nodes"].push_back(wrist);
+  document["nodes"].push_back({{"name", "hand"}, {"children", {3, 4}}});
+  document["nodes"].push_back({{"name", "finger_a"}, {"translation", {0, 0.1, 0}}});
+  document["nodes"].push_back({{"name", "finger_b"}, {"translation", {0, 0.2, 0}}});
+  testing::TempDir dir;
+  testing::write_file(dir / "hand.gltf", document.dump());
+  Diagnostics diag;
+  ASSERT_TRUE(convert_file(dir / "hand.gltf", {}, diag).has_value());
+  EXPECT_EQ(no_volume_messages(diag.all()),
+            std::vector<std::string>{"/nodes/2: link 'hand' has no volume (no closed mesh): its mass is zero"});
+}
+
+// A joint empty whose part was parented elsewhere makes no joint; before, it vanished without a
+// word (the robot simply lacked the joint the modeller had set up).
+TEST(NoVolume, AJointEmptyThatMovesNothingIsNamed) {
+  const auto diagnostics = convert_cube_with(
+      {{{"name", "wrist"}, {"translation", {0.5, 1, 0.5}}, {"extras", {{"rdtf_joint", "revolute"}, {"rdtf_axis", "z"}}}},
+       {{"name", "plain"}, {"translation", {0.5, 1, 0.5}}}});
+  std::vector<std::string> found;
+  for (const Diagnostic& d : diagnostics) {
+    if (d.code == codes::JOINT_MOVES_NOTHING) {
+      EXPECT_EQ(d.severity, Severity::kWarning);
+      found.push_back(d.pointer + ": " + d.message);
+    }
+  }
+  EXPECT_EQ(found, std::vector<std::string>{
+                       "/nodes/1: joint node 1 'wrist' has joint properties but no part hangs below it, so it makes "
+                       "no joint: parent the part it turns to it (in Blender, select the part, then the empty, "
+                       "Ctrl+P > Object)"});
 }
 
 }  // namespace

@@ -114,6 +114,11 @@ struct JointModel {
   JointKind kind = JointKind::kFixed;
   dJointID id = nullptr;  // Nothing for a floating joint or one inside a body (massless link)
   dJointID friction_motor = nullptr;
+  // Commands in position and velocity mode: a one-axis motor (angular on a hinge, linear on a
+  // slider) through which the solver applies the PD law implicitly (Simulation::step), made at
+  // the first such command; its feedback gives the effort it applied.
+  dJointID command_motor = nullptr;
+  dJointFeedback command_feedback{};
   // A hinge range not inside (-pi, pi): a user-mode angular motor whose stops act on the
   // unwrapped position (set before every step). Ranges inside it use the hinge's own stops.
   dJointID limit_motor = nullptr;
@@ -154,6 +159,7 @@ struct JointModel {
   double stiffness = 0;
   std::optional<JointCommand> command;
   double effort = 0;  // actuator effort applied in the last step
+  double motor_fmax = 0;  // the command motor's force bound in the last step (0: idle)
   // Within a step: the position before it and the damping effort applied in it (for the work).
   double q_before = 0;
   double damping_effort = 0;

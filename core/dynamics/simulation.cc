@@ -20,20 +20,113 @@ Eigen::Vector3d vec(const dReal* v) { return {v[0], v[1], v[2]}; }
 // The bound of a joint's commanded effort: its authored effort limit, else kDefaultEffortLimit.
 double effort_bound(const JointModel& jm) { return jm.effort_limit > 0 ? jm.effort_limit : kDefaultEffortLimit; }
 
-// The commanded effort, within the joint's bound. Each term is bounded before the sum, so finite
-// commands whose products overflow (kp 1e308 times an error of 1) give the bound, never inf or
-// NaN (inf - inf).
-double command_effort(const JointModel& jm) {
-  if (!jm.command) return 0;
+// What a command does over one step of h. The feed-forward effort is applied as it is. The PD
+// law, tau = kp (q* - q) + kd (v* - qdot), goes to the solver as a motor row, implicitly: with
+// q' = q + h qdot' at the step's end, tau = kp (q* - q) + kd v* - (kp h + kd) qdot', which is the
+// force of a velocity motor whose target is (kp (q* - q) + kd v*) / (kp h + kd) and whose
+// constraint force mixing is 1 / (kp h + kd) (ODE's manual, "How do I make a spring"). Applied
+// from the state before the step instead, as it was, the law is unstable once kd h / I > 2 or
+// kp h^2 / I > 4 for the inertia I the joint moves: arm3's shoulder turns the arm about its own
+// length (I about 0.02 kg m^2) and the default kd of 10 made it swing by 2 rad within 10 ms. The
+// motor's force is at most the joint's effort bound less the feed-forward, so their sum stays
+// within it, as each term did before.
+constexpr double kFastestTarget = 1e30;  // m/s or rad/s; far below the state bound (1e100)
+
+struct Drive {
+  double feed_forward = 0;
+  bool motor = false;
+  double velocity = 0;  // the motor's target, rad/s or m/s
+  double cfm = 0;
+  double fmax = 0;
+};
+
+Drive command_drive(const JointModel& jm, double h) {
+  Drive d;
+  if (!jm.command) return d;
   const JointCommand& c = *jm.command;
   const double bound = effort_bound(jm);
-  const auto bounded = [bound](double term) { return std::isnan(term) ? 0.0 : std::clamp(term, -bound, bound); };
-  double effort = bounded(c.effort);
+  d.feed_forward = std::isnan(c.effort) ? 0.0 : std::clamp(c.effort, -bound, bound);
+  double kp = 0;
+  double kd = 0;
   if (c.mode == CommandMode::kPosition) {
-    effort += bounded(c.kp * (c.position - jm.q)) + bounded(c.kd * (c.velocity - jm.qdot));
+    kp = c.kp;
+    kd = c.kd;
+  } else if (c.mode == CommandMode::kVelocity) {
+    kd = c.kd;
+  } else {
+    return d;
   }
-  if (c.mode == CommandMode::kVelocity) effort += bounded(c.kd * (c.velocity - jm.qdot));
-  return bounded(effort);
+  const double stiffness = kp * h + kd;
+  if (!(stiffness > 0) || !std::isfinite(stiffness)) return d;
+  // Weighed, not multiplied out; a target beyond any speed (a gain of 1e308 on an error of 1e308)
+  // only says which way the motor pushes, with all its force.
+  const double velocity = (kp / stiffness) * (c.position - jm.q) + (kd / stiffness) * c.velocity;
+  const double fmax = bound - std::abs(d.feed_forward);
+  if (std::isnan(velocity) || !(fmax > 0)) return d;
+  d.motor = true;
+  d.velocity = std::clamp(velocity, -kFastestTarget, kFastestTarget);
+  d.cfm = 1 / stiffness;
+  d.fmax = fmax;
+  return d;
+}
+
+// Sets the joint's command motor to `drive`, made on first use; an idle motor (fmax 0) adds no
+// row to the solver.
+void set_command_motor(Simulation::Model& m, JointModel& jm, const Drive& drive) {
+  const bool hinge = jm.kind != JointKind::kPrismatic;
+  if (!drive.motor) {
+    if (jm.command_motor == nullptr) return;
+    if (hinge) {
+      dJointSetAMotorParam(jm.command_motor, dParamFMax, 0);
+    } else {
+      dJointSetLMotorParam(jm.command_motor, dParamFMax, 0);
+    }
+    return;
+  }
+  if (jm.command_motor == nullptr) {
+    dBodyID child = m.bodies[static_cast<std::size_t>(jm.child_body)].id;
+    dBodyID parent = jm.parent_body == kWorld ? nullptr : m.bodies[static_cast<std::size_t>(jm.parent_body)].id;
+    dVector3 axis;
+    if (hinge) {
+      dJointGetHingeAxis(jm.id, axis);
+      jm.command_motor = dJointCreateAMotor(m.world, nullptr);
+      dJointAttach(jm.command_motor, child, parent);
+      dJointSetAMotorNumAxes(jm.command_motor, 1);
+      dJointSetAMotorAxis(jm.command_motor, 0, 1, axis[0], axis[1], axis[2]);  // fixed in the child
+    } else {
+      dJointGetSliderAxis(jm.id, axis);
+      jm.command_motor = dJointCreateLMotor(m.world, nullptr);
+      dJointAttach(jm.command_motor, child, parent);
+      dJointSetLMotorNumAxes(jm.command_motor, 1);
+      dJointSetLMotorAxis(jm.command_motor, 0, 1, axis[0], axis[1], axis[2]);
+    }
+    dJointSetFeedback(jm.command_motor, &jm.command_feedback);
+  }
+  if (hinge) {
+    dJointSetAMotorParam(jm.command_motor, dParamVel, drive.velocity);
+    dJointSetAMotorParam(jm.command_motor, dParamCFM, drive.cfm);
+    dJointSetAMotorParam(jm.command_motor, dParamFMax, drive.fmax);
+  } else {
+    dJointSetLMotorParam(jm.command_motor, dParamVel, drive.velocity);
+    dJointSetLMotorParam(jm.command_motor, dParamCFM, drive.cfm);
+    dJointSetLMotorParam(jm.command_motor, dParamFMax, drive.fmax);
+  }
+}
+
+// The effort the command motor applied in the last step, along the joint's axis (on the child):
+// the solver's force, at most `fmax` (the projection's rounding never reports more).
+double command_motor_effort(const JointModel& jm, double fmax) {
+  dVector3 axis;
+  const dReal* load = jm.command_feedback.t1;
+  if (jm.kind != JointKind::kPrismatic) {
+    dJointGetAMotorAxis(jm.command_motor, 0, axis);
+  } else {
+    dJointGetLMotorAxis(jm.command_motor, 0, axis);
+    load = jm.command_feedback.f1;
+  }
+  const double along = load[0] * axis[0] + load[1] * axis[1] + load[2] * axis[2];
+  const double length2 = axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2];
+  return std::clamp(along / length2, -fmax, fmax);
 }
 
 Eigen::Vector3d angular_velocity(const Simulation::Model& model, int body) {
@@ -137,7 +230,10 @@ void Simulation::step(double dt) {
   for (JointModel& jm : m.joints) {
     if (!jm.id) continue;
     if (jm.dof) {
-      jm.effort = command_effort(jm);
+      const Drive drive = command_drive(jm, dt);
+      set_command_motor(m, jm, drive);
+      jm.motor_fmax = drive.motor ? drive.fmax : 0.0;
+      jm.effort = drive.feed_forward;
       jm.damping_effort = -jm.damping * jm.qdot;
       const double total = jm.effort + jm.damping_effort - jm.stiffness * jm.q;
       if (jm.kind == JointKind::kPrismatic) {
@@ -185,6 +281,7 @@ void Simulation::step(double dt) {
         jm.ode_angle = angle;
         jm.qdot = dJointGetHingeAngleRate(jm.id);
       }
+      if (jm.motor_fmax > 0) jm.effort += command_motor_effort(jm, jm.motor_fmax);
       const double dq = jm.q - jm.q_before;
       // A stop acts once the joint is past it: the step that crosses it can carry the joint its
       // whole travel beyond, and the stop's ERP (the world's) then takes back erp of the excess per

@@ -127,6 +127,12 @@ std::string RevisionParts::add_inertia(const rdtf::inertia_table_t& table, const
   } else if (table.total_mass != inertia_->total_mass) {
     inertia_.reset();
     return "an INERTIA part whose total_mass differs from the earlier parts'";
+  } else if (!table.links.empty()) {
+    // A part of this publication already here (a datagram the network duplicated): each link
+    // comes in one part, so its first link's node is among those held.
+    for (const rdtf::link_inertia_t& held : inertia_->links) {
+      if (held.node == table.links.front().node) return "";
+    }
   }
   if (inertia_->num_links + table.num_links > expected) {
     inertia_.reset();
@@ -169,6 +175,36 @@ std::optional<std::string> RevisionParts::document(const ChunkedDocument& chunks
     why = std::string(what) + " chunks do not match the announced SHA-256";
     return std::nullopt;
   }
+  return text;
+}
+
+std::string RevisionParts::missing(bool need_manifest) const {
+  std::vector<std::string> out;
+  const auto of = [](std::size_t have, std::int64_t all, const char* what) {
+    return " (" + str(static_cast<std::int64_t>(have)) + " of " + str(all) + " " + what + ")";
+  };
+  if (!description_) {
+    out.push_back("DESCRIPTION");
+  } else {
+    const auto& d = *description_;
+    if (d.num_chunks > 0 && !(json_.complete() && json_.count == d.num_chunks)) {
+      out.push_back("DESCRIPTION_CHUNK" + of(json_.chunks.size(), d.num_chunks, "chunks of the RDTF JSON"));
+    }
+    if (!d.urdf_sha256.empty() && d.num_urdf_chunks > 0 && !(urdf_.complete() && urdf_.count == d.num_urdf_chunks)) {
+      out.push_back("URDF_CHUNK" + of(urdf_.chunks.size(), d.num_urdf_chunks, "chunks"));
+    }
+    if (!inertia_ || inertia_->num_links != d.num_links) {
+      out.push_back("INERTIA" + of(inertia_ ? inertia_->links.size() : 0, d.num_links, "links"));
+    }
+    if (d.validated && !validation_) out.push_back("VALIDATION");
+  }
+  if (need_manifest && !(manifest_num_parts_ >= 0 &&
+                         manifest_parts_.size() == static_cast<std::size_t>(manifest_num_parts_))) {
+    out.push_back(manifest_num_parts_ < 0 ? std::string("MANIFEST")
+                                          : "MANIFEST" + of(manifest_parts_.size(), manifest_num_parts_, "parts"));
+  }
+  std::string text;
+  for (const std::string& part : out) text += (text.empty() ? "" : ", ") + part;
   return text;
 }
 

@@ -54,6 +54,10 @@ class RevisionParts {
   // `why` then says what failed.
   std::optional<Snapshot> assemble(bool need_manifest, std::string& why);
 
+  // What assemble() still waits for, for a message ("INERTIA (2 of 5 links), VALIDATION"); ""
+  // when every part is here.
+  std::string missing(bool need_manifest) const;
+
   std::int64_t revision() const { return revision_; }
   const std::string& content_hash() const { return content_hash_; }
   // Bytes held, for the bound on incomplete revisions.

@@ -9,6 +9,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <optional>
 #include <set>
 #include <string>
 #include <vector>
@@ -56,6 +57,8 @@ class BlobFetcher {
   // `waiter` needs none of its blobs any more (a newer revision, the model removed).
   void release(const std::string& waiter);
   bool fetching(const std::string& sha256) const { return fetches_.count(sha256) > 0; }
+  // How far the fetch of `sha256` is, for a message: "1200 of 4720 chunks", "not answered yet".
+  std::string progress(const std::string& sha256) const;
   // Inside a Done callback: the blob that just completed (the store may already have evicted it).
   std::shared_ptr<const std::string> just_completed(const std::string& sha256) const;
 
@@ -80,6 +83,7 @@ class BlobFetcher {
     bool requested_once = false;
     Clock::time_point due{};       // when to ask (again)
     Clock::duration backoff{};
+    std::int32_t resume = 0;       // where a round of asking, cut short by the pacing, goes on
     int hash_failures = 0;
   };
   void reset(Fetch& fetch);
@@ -93,6 +97,8 @@ class BlobFetcher {
   std::map<std::string, Fetch> fetches_;
   std::int64_t active_bytes_ = 0;
   Clock::time_point last_chunk_{};
+  double tokens_ = 0;  // requests that may be sent now (paced: blob_fetch.cc)
+  std::optional<Clock::time_point> refilled_;
   std::map<std::string, std::shared_ptr<const std::string>> held_;
 };
 

@@ -554,6 +554,25 @@ std::shared_ptr<const Snapshot> Client::snapshot(const std::string& model_id) co
   return it == state_->models.end() ? nullptr : it->second.current;
 }
 
+std::string Client::waiting_for(const std::string& model_id) const {
+  const auto it = state_->models.find(model_id);
+  if (it == state_->models.end() || it->second.pending.empty()) return "";
+  const Pending* newest = nullptr;
+  for (const auto& [key, pending] : it->second.pending) {
+    if (newest == nullptr || pending.parts.revision() >= newest->parts.revision()) newest = &pending;
+  }
+  const std::string revision = "revision " + std::to_string(newest->parts.revision()) + ": ";
+  if (!newest->assembled) return revision + newest->parts.missing(state_->options.blobs != Blobs::kNone);
+  std::string files;
+  for (const rdtf::file_t& file : newest->assembled->manifest) {
+    if (newest->missing.count(file.sha256) == 0) continue;
+    files += (files.empty() ? "" : "; ") + file.path + " (" + file.sha256.substr(0, 12) +
+             "): " + state_->fetcher.progress(file.sha256);
+  }
+  return revision + std::to_string(newest->missing.size()) + " of " +
+         std::to_string(newest->assembled->manifest.size()) + " files not complete: " + files;
+}
+
 std::set<std::string> Client::models_seen() const { return state_->seen; }
 
 std::vector<std::string> Client::channels() const {

@@ -147,10 +147,18 @@ int run_pull(const PullArguments& args) {
                 << " s; models seen: " << joined(seen) << "\n";
       return kExitInvalidInput;
     }
-    std::cerr << "rdtf pull: " << args.model_id << ": no complete revision within " << args.timeout << " s ("
+    const std::string missing = client.waiting_for(args.model_id);
+    std::cerr << "rdtf pull: " << args.model_id << ": no complete revision within " << args.timeout << " s; "
+              << (missing.empty() ? std::string("no part of a revision arrived") : "missing " + missing) << " ("
               << stats.blobs_fetched << " blobs received; " << stats.blob_chunks << " chunks used, "
               << stats.blob_chunks_ignored << " ignored, " << stats.blob_chunks_reasked << " asked for again in "
               << stats.blob_retries << " re-requests; " << stats.dropped << " datagrams dropped)\n";
+    if (stats.blob_retries > 0) {
+      // Chunks were lost and asked for again: on a lossy link (Wi-Fi) a chunk of 60,000 bytes is
+      // about 41 IP fragments and arrives only when all of them do.
+      std::cerr << "rdtf pull: chunks were lost on the way; on a lossy network set rdtfd's max_chunk_bytes to 1400, "
+                   "so that each chunk is one packet (docs/lcm.md, \"Lossy links\")\n";
+    }
     return kExitInternalError;
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -178,6 +178,10 @@ class Client {
 
   // The current snapshot of a model, or nullptr.
   std::shared_ptr<const Snapshot> snapshot(const std::string& model_id) const;
+  // What the newest incomplete revision of a model still lacks, for a message ("revision 3:
+  // INERTIA (2 of 5 links); blob 1f2e3d4c5b6a (arm.bin): 1200 of 4720 chunks"); "" when none of
+  // its revisions is incomplete.
+  std::string waiting_for(const std::string& model_id) const;
   // Every model id heard of: on the subscribed channels and in rdtfd's STATUS (live models).
   std::set<std::string> models_seen() const;
   // The channels (LCM regular expressions) the client subscribes to.

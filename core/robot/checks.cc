@@ -216,8 +216,8 @@ double shear_of(const Eigen::Matrix3d& A) {
 }
 
 // Nodes whose shape or placement is skewed by a rotation inside an ancestor's non-uniform scale,
-// where the skew starts (the parent is not skewed), in the converted scene, with a mesh at or below
-// them. Such a file is valid glTF, but rarely meant: Blender cannot write a child of an object with
+// where the skew starts (the parent is not skewed), in the converted scene, with a mesh or joint
+// properties at or below them. Such a file is valid glTF, but rarely meant: Blender cannot write a child of an object with
 // unapplied non-uniform scale as its scene shows it (glTF has no parent inverse and no shear in a
 // TRS), so it writes one askew, and the masses, pivots and axes of all below follow.
 void check_shear(const Json& document, Diagnostics& diag) {
@@ -237,9 +237,12 @@ void check_shear(const Json& document, Diagnostics& diag) {
     in_scene[node] = 1;
     for (const Json& child : nodes[node].value("children", Json::array())) stack.push_back(child.get<std::size_t>());
   }
+  // A mesh, or joint properties (a pivot, or a frame of its own: a camera's empty), at or below.
   std::vector<char> mesh_below(nodes.size(), 0);
   for (std::size_t i = 0; i < nodes.size(); ++i) {
-    if (!in_scene[i] || !nodes[i].contains("mesh")) continue;
+    const bool pivot = nodes[i].contains("extras") && nodes[i]["extras"].is_object() &&
+                       nodes[i]["extras"].contains("rdtf_joint");
+    if (!in_scene[i] || !(nodes[i].contains("mesh") || pivot)) continue;
     for (int up = static_cast<int>(i); up >= 0 && !mesh_below[up]; up = parents[up]) mesh_below[up] = 1;
   }
   const auto skewed = [&](int node) {

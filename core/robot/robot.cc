@@ -445,6 +445,15 @@ Robot build_robot(const Json& document, const std::vector<NodeType>& types, std:
   }
 
   std::vector<char> joint_node_used(types.size(), 0);  // passed on the way up from a link
+  const auto is_frame_link = [&](int node) {
+    const Json& json = document["nodes"][node];
+    if (json.contains("mesh")) return false;
+    for (const Json& c : json.value("children", Json::array())) {
+      const NodeType type = types[c.get<std::size_t>()];
+      if (type != NodeType::kInertial && type != NodeType::kVisual && type != NodeType::kNone) return false;
+    }
+    return true;
+  };
   for (std::size_t c = 0; c < robot.links.size(); ++c) {
     Link& child = robot.links[c];
     // Walk up to the parent link, remembering the joint-typed nodes passed on the way; a joint
@@ -511,8 +520,18 @@ Robot build_robot(const Json& document, const std::vector<NodeType>& types, std:
     // modeller placed: the joint node nearest the child that has a transform of its own or joint
     // properties. Without one (rdtf's inserted joint nodes, URDF import's) it is the child link
     // node's frame. The geometry stays where it is: visuals and inertial are expressed in it.
+    // A child that carries the joint properties itself, below joint nodes that carry none (a
+    // camera's empty, fixed, under a plain mount empty), is its own pivot: the nodes between only
+    // place it.
     joint.frame_node = child.node;
+    bool properties_between = false;
     for (int node : joint_nodes) {
+      properties_between = properties_between || has_joint_keys(node_extras(document, node)) ||
+                           entry_joint(static_cast<std::size_t>(node)) != nullptr;
+    }
+    const bool own_pivot = !properties_between && has_joint_keys(node_extras(document, child.node));
+    for (std::size_t k = 0; !own_pivot && k < joint_nodes.size(); ++k) {
+      const int node = joint_nodes[k];
       if (has_own_transform(document["nodes"][node]) || has_joint_keys(node_extras(document, node))) {
         joint.frame_node = node;
         break;
@@ -544,6 +563,14 @@ Robot build_robot(const Json& document, const std::vector<NodeType>& types, std:
     joint.source_node = source ? source->frame_node : -1;
     joint.source_is_entry = source && source->rdtf_entry;
     if (source) read_joint_properties(*source, world[source->frame_node], child.X_SL, joint, diag);
+    // A frame link (no mesh, nothing below it but its inertial or visual nodes: a camera's empty)
+    // on a fixed joint is its own frame, wherever the joint's properties sit (a fixed mount empty
+    // above holding two cameras): a fixed joint turns about nothing, and the frame is the link.
+    if (joint.kind == JointKind::kFixed && joint.frame_node != child.node && is_frame_link(child.node)) {
+      joint.frame_node = child.node;
+      child.X_SL = rigid_part(world[child.node]);
+      joint.X_PJ = parent.X_SL.inverse() * child.X_SL;
+    }
     // The entry wins over node extras. A tool that keeps node extras only (Blender's importer)
     // would read the node extras instead, so say where they disagree.
     for (std::size_t i = 0; joint.source_is_entry && i < extras_nodes.size(); ++i) {

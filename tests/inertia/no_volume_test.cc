@@ -6,6 +6,7 @@
 // LINK_NO_VOLUME does not claim there is no closed mesh.
 #include <cstdint>
 #include <cstring>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -149,6 +150,63 @@ TEST(NoVolume, AFixedLeafEmptyIsAFrameLink) {
   const Eigen::Isometry3d X_PJ = robot.joints[0].X_PJ;
   EXPECT_LT((X_PJ.translation() - Eigen::Vector3d(0.5, 1, 0.25)).norm(), 1e-12);
   EXPECT_LT((X_PJ.linear() * Eigen::Vector3d::UnitX() - Eigen::Vector3d(0, 0, -1)).norm(), 1e-12);
+}
+
+// A frame that hangs from empties rather than from a part keeps its own place: under a plain
+// mount empty (typed a joint node), and under a mount empty that is fixed itself and holds two
+// cameras. Its link frame was the empty's above it, and the 3 cm to each camera were lost in the
+// URDF and on the bus (a helper's sweep of Blender exports).
+TEST(NoVolume, AFrameUnderMountEmptiesKeepsItsOwnPlace) {
+  for (const bool fixed_mount : {false, true}) {
+    Json document = cube(false);
+    document["nodes"][0]["children"] = {1};
+    Json mount = {{"name", "mount"}, {"translation", {0.5, 1.1, 0.4}}, {"children", {2}}};
+    if (fixed_mount) {
+      mount["extras"] = {{"rdtf_joint", "fixed"}};
+      mount["children"] = {2, 3};
+    }
+    document["nodes"].push_back(mount);
+    document["nodes"].push_back({{"name", "cam_left"}, {"translation", {0.03, 0, 0}}, {"extras", {{"rdtf_joint", "fixed"}}}});
+    if (fixed_mount) {
+      document["nodes"].push_back({{"name", "cam_right"}, {"translation", {-0.03, 0, 0}}, {"extras", {{"rdtf_joint", "fixed"}}}});
+    }
+    testing::TempDir dir;
+    testing::write_file(dir / "mount.gltf", document.dump());
+    Diagnostics diag;
+    const auto conversion = convert_file(dir / "mount.gltf", {}, diag);
+    ASSERT_TRUE(conversion.has_value());
+    std::map<std::string, Eigen::Vector3d> expected{{"cam_left", {0.53, 1.1, 0.4}}};
+    if (fixed_mount) expected["cam_right"] = {0.47, 1.1, 0.4};
+    for (const Link& link : conversion->robot.links) {
+      if (!expected.count(link.name)) continue;
+      EXPECT_LT((link.X_SL.translation() - expected[link.name]).norm(), 1e-12)
+          << link.name << (fixed_mount ? " under a fixed mount" : " under a plain mount") << ": "
+          << link.X_SL.translation().transpose();
+      expected.erase(link.name);
+    }
+    EXPECT_TRUE(expected.empty()) << expected.size() << " camera links missing";
+  }
+}
+
+// A frame turned inside a parent's non-uniform scale is skewed like a mesh would be: NODE_SHEARED
+// says so (it was said only where a mesh was at or below the node).
+TEST(NoVolume, ASkewedFrameIsNamed) {
+  Json document = cube(false);
+  document["nodes"][0]["children"] = {1};
+  document["nodes"][0]["scale"] = {1, 2, 1};
+  document["nodes"].push_back({{"name", "tip"},
+                               {"translation", {0.5, 1, 0.5}},
+                               {"rotation", {0, 0, 0.17364817766693033, 0.98480775301220802}},
+                               {"extras", {{"rdtf_joint", "fixed"}}}});
+  testing::TempDir dir;
+  testing::write_file(dir / "skew.gltf", document.dump());
+  Diagnostics diag;
+  ASSERT_TRUE(convert_file(dir / "skew.gltf", {}, diag).has_value());
+  std::vector<std::string> sheared;
+  for (const Diagnostic& d : diag.all()) {
+    if (d.code == codes::NODE_SHEARED) sheared.push_back(d.pointer);
+  }
+  EXPECT_EQ(sheared, std::vector<std::string>{"/nodes/1"});
 }
 
 // A link that moves with nothing of mass welded to it (a hand whose fingers are empties) is still

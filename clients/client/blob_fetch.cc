@@ -15,9 +15,10 @@ namespace {
 constexpr std::size_t kMaxRequestBytes = 1200;
 constexpr std::size_t kRangeBytes = 4 + 64 + 1 + 4 + 4;
 // Requests are paced below rdtfd's limit of 50 a second per requester (daemon/blob_server.h),
-// beyond which it drops them: a client that lost much asks for it over several ticks.
-constexpr double kRequestsPerSecond = 25;
-constexpr double kRequestBurst = 25;
+// beyond which it drops them: a client that lost much asks for it over several ticks (560 ranges
+// a second).
+constexpr double kRequestsPerSecond = 40;
+constexpr double kRequestBurst = 40;
 // A chunk fits one datagram; anything claiming more is not rdtfd's.
 constexpr std::int64_t kMaxChunkBytes = 4 << 20;
 constexpr int kMaxHashFailures = 3;
@@ -138,6 +139,7 @@ std::string BlobFetcher::on_chunk(const rdtf::blob_chunk_t& c, Clock::time_point
   ++f.received;
   ++stats_.blob_chunks;
   stats_.blob_bytes += static_cast<std::uint64_t>(c.size);
+  stats_.blob_chunk_size = std::max<std::int64_t>(stats_.blob_chunk_size, c.chunk_size);
   last_chunk_ = now;
   f.due = now + options_.chunk_gap;
   f.backoff = options_.retry_initial;

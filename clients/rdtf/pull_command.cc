@@ -153,7 +153,7 @@ int run_pull(const PullArguments& args) {
               << stats.blobs_fetched << " blobs received; " << stats.blob_chunks << " chunks used, "
               << stats.blob_chunks_ignored << " ignored, " << stats.blob_chunks_reasked << " asked for again in "
               << stats.blob_retries << " re-requests; " << stats.dropped << " datagrams dropped)\n";
-    if (stats.blob_retries > 0) {
+    if (stats.blob_retries > 0 && stats.blob_chunk_size > 1400) {
       // Chunks were lost and asked for again: on a lossy link (Wi-Fi) a chunk of 60,000 bytes is
       // about 41 IP fragments and arrives only when all of them do.
       std::cerr << "rdtf pull: chunks were lost on the way; on a lossy network set rdtfd's max_chunk_bytes to 1400, "

@@ -152,6 +152,7 @@ struct Stats {
   std::uint64_t blob_requests_sent = 0; // blob_request_t
   std::uint64_t blob_retries = 0;       // blob_request_t ranges for chunks already asked for once
   std::uint64_t blob_chunks_reasked = 0;  // chunks in those ranges (lost ones, or not yet sent)
+  std::int64_t blob_chunk_size = 0;     // the largest chunk_size of the chunks used (bytes)
   std::uint64_t revisions = 0;          // snapshots handed over
 };
 

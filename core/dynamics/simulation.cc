@@ -31,6 +31,7 @@ double effort_bound(const JointModel& jm) { return jm.effort_limit > 0 ? jm.effo
 // motor's force is at most the joint's effort bound less the feed-forward, so their sum stays
 // within it, as each term did before.
 constexpr double kFastestTarget = 1e30;  // m/s or rad/s; far below the state bound (1e100)
+constexpr double kSoftestMotor = 1e-12;  // kp h + kd below this: the law is applied as a torque
 
 struct Drive {
   double feed_forward = 0;
@@ -57,7 +58,14 @@ Drive command_drive(const JointModel& jm, double h) {
     return d;
   }
   const double stiffness = kp * h + kd;
-  if (!(stiffness > 0) || !std::isfinite(stiffness)) return d;
+  if (!std::isfinite(stiffness)) return d;
+  if (stiffness < kSoftestMotor) {
+    // Gains this soft are stable applied as a torque (kd h / I > 2 would need I below 5e-13
+    // kg m^2), and a motor of CFM 1 / stiffness would not be a number the solver can use.
+    const auto bounded = [bound](double term) { return std::isnan(term) ? 0.0 : std::clamp(term, -bound, bound); };
+    d.feed_forward = bounded(d.feed_forward + bounded(kp * (c.position - jm.q)) + bounded(kd * (c.velocity - jm.qdot)));
+    return d;
+  }
   // Weighed, not multiplied out; a target beyond any speed (a gain of 1e308 on an error of 1e308)
   // only says which way the motor pushes, with all its force.
   const double velocity = (kp / stiffness) * (c.position - jm.q) + (kd / stiffness) * c.velocity;

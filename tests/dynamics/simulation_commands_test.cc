@@ -131,6 +131,18 @@ TEST(DynamicsCommands, PositionModeIsStableOnASmallInertiaWithStiffGains) {
   EXPECT_LE(largest, target);  // overdamped: never past the target
 }
 
+// Gains so soft that kp h + kd is below 1e-12 are applied as a torque from the state before the
+// step (a motor of CFM 1 / (kp h + kd) would not be a number the solver can use): the first step's
+// effort is kp (q* - q) exactly, and the state stays finite.
+TEST(DynamicsCommands, TinyGainsAreAppliedAsATorque) {
+  auto sim = weightless(bar_builder().robot());
+  ASSERT_TRUE(sim->set_command({"pivot", CommandMode::kPosition, 0.0, 1e300, 0.0, 1e-320, 0.0}));
+  sim->step();
+  EXPECT_EQ(sim->joint_state("pivot")->effort, 1e-320 * 1e300);
+  for (int n = 0; n < 100; ++n) sim->step();
+  EXPECT_TRUE(sim->health().finite);
+}
+
 // Critically damped (kd = 2 sqrt(kp I)): the error decays as (1 + w t) exp(-w t), w = sqrt(kp / I)
 // = 7.7 rad/s, below 1e-12 of the step after 5 s.
 TEST(DynamicsCommands, PositionModeReachesTheTarget) {

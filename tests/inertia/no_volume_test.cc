@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <cstring>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -50,11 +51,16 @@ Json cube(bool doubled) {
             {{"bufferView", 1}, {"componentType", 5123}, {"count", indices.size()}, {"type", "SCALAR"}}}}};
 }
 
-std::vector<Diagnostic> convert_cube(bool doubled) {
+// Converts `document` as a file of its own (convert_file, as the CLI and rdtfd read one).
+std::optional<Conversion> convert(const Json& document, Diagnostics& diag) {
   testing::TempDir dir;
-  testing::write_file(dir / "cube.gltf", cube(doubled).dump());
+  testing::write_file(dir / "model.gltf", document.dump());
+  return convert_file(dir / "model.gltf", {}, diag);
+}
+
+std::vector<Diagnostic> convert_cube(bool doubled) {
   Diagnostics diag;
-  EXPECT_TRUE(convert_file(dir / "cube.gltf", {}, diag).has_value());
+  EXPECT_TRUE(convert(cube(doubled), diag).has_value());
   return diag.all();
 }
 
@@ -95,10 +101,8 @@ std::vector<Diagnostic> convert_cube_with(const Json& children) {
     document["nodes"][0]["children"].push_back(document["nodes"].size());
     document["nodes"].push_back(child);
   }
-  testing::TempDir dir;
-  testing::write_file(dir / "cube.gltf", document.dump());
   Diagnostics diag;
-  EXPECT_TRUE(convert_file(dir / "cube.gltf", {}, diag).has_value());
+  EXPECT_TRUE(convert(document, diag).has_value());
   return diag.all();
 }
 
@@ -132,10 +136,8 @@ TEST(NoVolume, AFixedLeafEmptyIsAFrameLink) {
                                {"translation", {0.5, 1, 0.25}},
                                {"rotation", {0, 0.70710678118654752, 0, 0.70710678118654752}},
                                {"extras", {{"rdtf_joint", "fixed"}}}});
-  testing::TempDir dir;
-  testing::write_file(dir / "frame.gltf", document.dump());
   Diagnostics diag;
-  const auto conversion = convert_file(dir / "frame.gltf", {}, diag);
+  const auto conversion = convert(document, diag);
   ASSERT_TRUE(conversion.has_value());
   for (const Diagnostic& d : diag.all()) EXPECT_NE(d.severity, Severity::kWarning) << d.code << ": " << d.message;
   const Robot& robot = conversion->robot;
@@ -170,10 +172,8 @@ TEST(NoVolume, AFrameUnderMountEmptiesKeepsItsOwnPlace) {
     if (fixed_mount) {
       document["nodes"].push_back({{"name", "cam_right"}, {"translation", {-0.03, 0, 0}}, {"extras", {{"rdtf_joint", "fixed"}}}});
     }
-    testing::TempDir dir;
-    testing::write_file(dir / "mount.gltf", document.dump());
     Diagnostics diag;
-    const auto conversion = convert_file(dir / "mount.gltf", {}, diag);
+    const auto conversion = convert(document, diag);
     ASSERT_TRUE(conversion.has_value());
     std::map<std::string, Eigen::Vector3d> expected{{"cam_left", {0.53, 1.1, 0.4}}};
     if (fixed_mount) expected["cam_right"] = {0.47, 1.1, 0.4};
@@ -198,10 +198,8 @@ TEST(NoVolume, ASkewedFrameIsNamed) {
                                {"translation", {0.5, 1, 0.5}},
                                {"rotation", {0, 0, 0.17364817766693033, 0.98480775301220802}},
                                {"extras", {{"rdtf_joint", "fixed"}}}});
-  testing::TempDir dir;
-  testing::write_file(dir / "skew.gltf", document.dump());
   Diagnostics diag;
-  ASSERT_TRUE(convert_file(dir / "skew.gltf", {}, diag).has_value());
+  ASSERT_TRUE(convert(document, diag).has_value());
   std::vector<std::string> sheared;
   for (const Diagnostic& d : diag.all()) {
     if (d.code == codes::NODE_SHEARED) sheared.push_back(d.pointer);
@@ -222,10 +220,8 @@ TEST(NoVolume, AMovingLinkWithoutMassIsStillNamed) {
   document["nodes"].push_back({{"name", "hand"}, {"children", {3, 4}}});
   document["nodes"].push_back({{"name", "finger_a"}, {"translation", {0, 0.1, 0}}});
   document["nodes"].push_back({{"name", "finger_b"}, {"translation", {0, 0.2, 0}}});
-  testing::TempDir dir;
-  testing::write_file(dir / "hand.gltf", document.dump());
   Diagnostics diag;
-  ASSERT_TRUE(convert_file(dir / "hand.gltf", {}, diag).has_value());
+  ASSERT_TRUE(convert(document, diag).has_value());
   EXPECT_EQ(no_volume_messages(diag.all()),
             std::vector<std::string>{"/nodes/2: link 'hand' has no volume (no closed mesh): its mass is zero"});
 }

@@ -308,7 +308,6 @@ std::vector<std::vector<std::size_t>> rigid_bodies(const Robot& robot) {
   return result;
 }
 
-
 }  // namespace
 
 struct LinkSolids::State {
@@ -542,7 +541,6 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
   }
   if (solids_out == nullptr) report_part_overlaps(document, robot, own_solids, diag);
 }
-
 
 void report_part_overlaps(const Json& document, const Robot& robot, const LinkSolids& solids, Diagnostics& diag) {
   const auto& by_link = solids.state().by_link;

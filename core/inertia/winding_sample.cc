@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <limits>
 #include <map>
+#include <optional>
 #include <utility>
 
 #include "../geometry/typed_view.h"
@@ -414,8 +415,8 @@ WindingScratch::~WindingScratch() = default;
 
 WindingSample sample_winding(std::span<const PlacedSolid> solids, std::size_t rays, WindingScratch* scratch) {
   if (solids.empty() || rays == 0) return {};
-  WindingScratch own;
-  WindingScratch::Buffers& memory = *(scratch != nullptr ? scratch : &own)->buffers;
+  std::optional<WindingScratch> own;
+  WindingScratch::Buffers& memory = *(scratch != nullptr ? scratch : &own.emplace())->buffers;
   Eigen::Vector3d lo, hi;
   bound(solids, lo, hi);
   for (std::size_t tried = rays;; tried /= 4) {

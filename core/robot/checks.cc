@@ -217,9 +217,10 @@ double shear_of(const Eigen::Matrix3d& A) {
 
 // Nodes whose shape or placement is skewed by a rotation inside an ancestor's non-uniform scale,
 // where the skew starts (the parent is not skewed), in the converted scene, with a mesh or joint
-// properties at or below them. Such a file is valid glTF, but rarely meant: Blender cannot write a child of an object with
-// unapplied non-uniform scale as its scene shows it (glTF has no parent inverse and no shear in a
-// TRS), so it writes one askew, and the masses, pivots and axes of all below follow.
+// properties at or below them. Such a file is valid glTF, but rarely meant: Blender cannot write
+// a child of an object with unapplied non-uniform scale as its scene shows it (glTF has no parent
+// inverse and no shear in a TRS), so it writes one askew, and the masses, pivots and axes of all
+// below follow.
 void check_shear(const Json& document, Diagnostics& diag) {
   const Json& nodes = document["nodes"];
   if (!document.contains("scenes") || document["scenes"].empty()) return;

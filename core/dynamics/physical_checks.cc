@@ -149,6 +149,13 @@ bool principal_moments_check(const Eigen::Matrix3d& I, const std::string& name, 
     report(codes::LINK_INERTIA_NOT_POSITIVE_DEFINITE, name + "inertia is not positive definite: " + principal);
     return false;
   }
+  if (!(a > options.positive_definite_tolerance * c)) {
+    report(codes::LINK_INERTIA_NOT_POSITIVE_DEFINITE,
+           name + "inertia is singular to within rounding: " + principal + ", the smallest " + number(a / c) +
+               " of the largest, at most positive_definite_tolerance " + number(options.positive_definite_tolerance) +
+               " (an ideal rod's; no real part is that thin)");
+    return false;
+  }
   if (a + b < c - options.triangle_tolerance * (a + b + c)) {
     report(codes::LINK_INERTIA_TRIANGLE_INEQUALITY, name + "inertia breaks the triangle inequality A + B >= C of a real body: " +
                                                         principal + ", A + B = " + number(a + b) + " < C = " + number(c));

@@ -84,6 +84,36 @@ TEST(PhysicsChecks, InertiaNotPositiveDefinite) {
   EXPECT_EQ(diag.error_count(), 1u) << dynamics_test::all_text(diag);
 }
 
+// Tensors singular in decimal, as pybullet's biped2d publishes them (an ideal thin rod each:
+// determinant exactly 0 in exact arithmetic). Rounded to doubles, their smallest eigenvalue comes
+// out as 2.2e-18, -6.9e-18 and 8.7e-19 (numpy): by chance on either side of 0. Each must be named,
+// whichever side its rounding fell on; a thin but real rod (A / C = 1e-10) must not be.
+TEST(PhysicsChecks, TensorsSingularWithinRoundingAreNotPositiveDefinite) {
+  struct Case {
+    const char* what;
+    double ixx, ixy, ixz, iyy, iyz, izz;
+  };
+  for (const Case& c : {Case{"leg", 0.2125, -0.005, 0.0225, 0.205, 0.045, 0.0125},
+                        Case{"torso", 0.2404, -0.01, -0.048, 0.2404, -0.048, 0.02},
+                        Case{"foot", 0.0416, -0.01, -0.002, 0.0041, -0.008, 0.0425}}) {
+    SCOPED_TRACE(c.what);
+    RobotBuilder b = arm_builder();
+    Eigen::Matrix3d I;
+    I << c.ixx, c.ixy, c.ixz, c.ixy, c.iyy, c.iyz, c.ixz, c.iyz, c.izz;
+    b.link(kUpperArm).inertial.inertia = I;
+    const Diagnostics diag = checked(b.robot());
+    expect_one_error(diag, "LINK_INERTIA_NOT_POSITIVE_DEFINITE", kUpperArmNode, "upper_arm");
+    EXPECT_EQ(diag.error_count(), 1u) << dynamics_test::all_text(diag);
+  }
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  for (const double ratio : {1e-10, 1e-14}) {
+    const Eigen::Matrix3d I = R * Eigen::Vector3d(ratio * 0.05, 0.05, 0.05).asDiagonal() * R.transpose();
+    RobotBuilder b = arm_builder();
+    b.link(kUpperArm).inertial.inertia = 0.5 * (I + I.transpose());
+    EXPECT_EQ(checked(b.robot()).contains("LINK_INERTIA_NOT_POSITIVE_DEFINITE"), ratio < 1e-12) << ratio;
+  }
+}
+
 // Principal moments 0.001, 0.001, 0.01: positive definite, but no body has A + B < C. Rotated so
 // that the check has to find the principal moments.
 TEST(PhysicsChecks, TriangleInequalityViolatedThoughPositiveDefinite) {

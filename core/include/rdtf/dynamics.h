@@ -41,6 +41,12 @@ struct PhysicalCheckOptions {
   double symmetry_tolerance = 1e-9;
   // Principal moments A, B, C must satisfy A + B >= C - triangle_tolerance * (A + B + C).
   double triangle_tolerance = 1e-6;
+  // The smallest principal moment A must exceed positive_definite_tolerance * C. A tensor that is
+  // singular in decimal (an ideal rod's, as published) is stored with entries rounded by u = 1.1e-16
+  // and its eigenvalues found to within a few u C, so its A comes out as +-1e-17 C by chance; this
+  // is far above that noise and far below any real part (a rod of A / C = 1e-12 would be 0.8 um
+  // thick per metre of length).
+  double positive_definite_tolerance = 1e-12;
   // Computed inertials: half the trace (the polar moment) may fall this much (relative) below the
   // smallest any solid of the link's volumes and densities can have (that of balls).
   double solid_bound_tolerance = 1e-6;

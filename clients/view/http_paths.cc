@@ -149,4 +149,14 @@ std::string content_type(std::string_view path) {
   return "application/octet-stream";
 }
 
+std::string model_file_content_type(std::string_view path) {
+  if (ends_with(path, ".gltf")) return "model/gltf+json";
+  if (ends_with(path, ".glb")) return "model/gltf-binary";
+  if (ends_with(path, ".png")) return "image/png";
+  if (ends_with(path, ".jpg") || ends_with(path, ".jpeg")) return "image/jpeg";
+  if (ends_with(path, ".webp")) return "image/webp";
+  if (ends_with(path, ".ktx2")) return "image/ktx2";
+  return "application/octet-stream";
+}
+
 }  // namespace rdtf::view

@@ -47,7 +47,13 @@ std::string model_file_url(const std::string& model_id, std::int64_t revision, c
 std::string check_socket_origin(std::string_view host, std::string_view origin, bool loopback_only,
                                 std::uint16_t port);
 
-// Content-Type by file name.
+// Content-Type by file name, for the page's own files.
 std::string content_type(std::string_view path);
+
+// Content-Type of a model's file: whoever can write into rdtfd's folder names them, so a name
+// never makes one active content (a buffer called payload.html served as text/html would run as
+// this page's origin and command joints): glTF and the image types glTF allows, else
+// application/octet-stream.
+std::string model_file_content_type(std::string_view path);
 
 }  // namespace rdtf::view

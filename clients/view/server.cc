@@ -40,6 +40,8 @@ double seconds_now() {
 }
 
 std::optional<std::string> read_file(const std::filesystem::path& path) {
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(path, error)) return std::nullopt;  // A folder opens, and reads as empty.
   std::ifstream in(path, std::ios::binary);
   if (!in) return std::nullopt;
   std::ostringstream bytes;
@@ -280,7 +282,9 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
           return reply_text(request, http::status::not_found,
                             "no file '" + r.path + "' in the recent revisions of model '" + r.model_id + "'\n");
         }
-        return reply_bytes(request, std::move(bytes), content_type(r.path), "max-age=3600, immutable");
+        // And sandboxed, should a browser still render one as a document: no script, no origin.
+        return reply_bytes(request, std::move(bytes), model_file_content_type(r.path), "max-age=3600, immutable",
+                           http::status::ok, "sandbox; default-src 'none'");
       }
       case Route::Kind::kSocket:
         return reply_text(request, http::status::upgrade_required, "WebSocket only\n");
@@ -301,10 +305,12 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   }
 
   void reply_bytes(const http::request<http::string_body>& request, std::shared_ptr<const std::string> bytes,
-                   const std::string& type, const std::string& cache, http::status status = http::status::ok) {
+                   const std::string& type, const std::string& cache, http::status status = http::status::ok,
+                   const char* content_security_policy = nullptr) {
     auto response = std::make_shared<http::response<http::span_body<const char>>>(status, request.version());
     response->set(http::field::server, "rdtf-view");
     response->set(http::field::content_type, type);
+    if (content_security_policy) response->set("Content-Security-Policy", content_security_policy);
     response->set(http::field::cache_control, cache);
     response->set("X-Content-Type-Options", "nosniff");
     response->body() = http::span_body<const char>::value_type(bytes->data(), bytes->size());

@@ -335,9 +335,10 @@ TEST(View, DrawsATexturedModelAndOneWithTwoBuffers) {
   // Two buffers: the second holds arm3's bytes after 16 of its own, and every other buffer view
   // reads from it (at offsets 16 further on), so a view read from the wrong buffer is garbage.
   const std::string bin = read(s.watch / "arm3.bin");  // copy_fixture keeps the .bin's name
-  write_in_place(s.watch / "second.bin", std::string(16, '\xee') + bin);
+  // Named like a page, as anyone who can write into the folder may name a file.
+  write_in_place(s.watch / "second.html", std::string(16, '\xee') + bin);
   Json two = Json::parse(read(s.watch / "two_buffers.gltf"));
-  two["buffers"].push_back(Json{{"uri", "second.bin"}, {"byteLength", bin.size() + 16}});
+  two["buffers"].push_back(Json{{"uri", "second.html"}, {"byteLength", bin.size() + 16}});
   for (std::size_t i = 1; i < two["bufferViews"].size(); i += 2) {
     two["bufferViews"][i]["buffer"] = 1;
     two["bufferViews"][i]["byteOffset"] = two["bufferViews"][i].value("byteOffset", 0) + 16;
@@ -359,6 +360,13 @@ TEST(View, DrawsATexturedModelAndOneWithTwoBuffers) {
   // rdtfd kept the two buffers, and the page drew from each what arm3 draws from its one.
   const Json written = Json::parse(read(s.output / "two_buffers.gltf" / "two_buffers.rdtf.gltf"));
   EXPECT_EQ(written["buffers"].size(), 2u) << written["buffers"].dump();
+  // That buffer is served as bytes in a sandbox, never as a document of the viewer's origin (whose
+  // script could open the viewer's WebSocket and command joints).
+  const Json served = page.eval("fetch('/model/two_buffers.gltf/1/' + encodeURIComponent(" +
+                                written["buffers"][1]["uri"].dump() +
+                                ")).then((r) => [r.status, r.headers.get('content-type'), "
+                                "r.headers.get('content-security-policy')])");
+  EXPECT_EQ(served, Json::array({200, "application/octet-stream", "sandbox; default-src 'none'"})) << written["buffers"];
   for (const auto& link : drawn["textured.gltf"]["links"]) {
     const auto other = std::find_if(drawn["two_buffers.gltf"]["links"].begin(), drawn["two_buffers.gltf"]["links"].end(),
                                     [&](const Json& l) { return l["name"] == link["name"]; });
@@ -386,6 +394,10 @@ TEST(View, RefusesHostileMessagesAndSurvivesClientsThatVanish) {
   ViewProcess view(s.root.path());
   Page page(view.url(), s.root / "page.log");
   ASSERT_FALSE(wait_drawn(page, kArm, 1).is_null()) << page.driver_log();
+  // A folder is no file (it opens, and read as one it was an empty 200).
+  EXPECT_EQ(page.eval("Promise.all(['/app/node_modules', '/three/examples', '/app/'].map((u) => "
+                      "fetch(u).then((r) => r.status)))"),
+            Json::array({404, 404, 404}));
 
   // Page-side waits stretch like the test's own deadlines (RDTF_TEST_DEADLINE_SCALE: slower under a
   // sanitizer); each loop ends as soon as what it waits for has come.

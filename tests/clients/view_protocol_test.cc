@@ -117,6 +117,20 @@ TEST(ViewHttpPaths, RoutesThePageThreeAndModelFiles) {
   EXPECT_EQ(route("/model/a.gltf/2/urdf/meshes/base.stl").path, "urdf/meshes/base.stl");
 }
 
+// A model's files are named by whoever writes into rdtfd's folder: no name makes one a document
+// or a script of the viewer's origin.
+TEST(ViewHttpPaths, AModelFileIsNeverServedAsActiveContent) {
+  for (const char* name : {"payload.0123abcd.html", "img.htm", "x.js", "x.mjs", "x.svg", "x.css", "x.xml", "x.urdf",
+                           "x.xhtml", "x.bin", "noextension"}) {
+    EXPECT_EQ(model_file_content_type(name), "application/octet-stream") << name;
+  }
+  EXPECT_EQ(model_file_content_type("arm.rdtf.gltf"), "model/gltf+json");
+  EXPECT_EQ(model_file_content_type("arm.glb"), "model/gltf-binary");
+  EXPECT_EQ(model_file_content_type("checker.0a1b.png"), "image/png");
+  EXPECT_EQ(model_file_content_type("photo.jpeg"), "image/jpeg");
+  EXPECT_EQ(content_type("index.html"), "text/html; charset=utf-8");  // The page's own, from its folder.
+}
+
 TEST(ViewHttpPaths, RefusesPathsOutsideTheirFolders) {
   for (const char* bad : {"/app/../main.cc", "/app/%2e%2e", "/app/a/b.js", "/app/x%2fy.js", "/three/../../etc/passwd",
                           "/three/build/../../../x.js", "/three/src/Three.js", "/three/build/three.module.js%00",

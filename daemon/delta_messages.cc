@@ -1,5 +1,7 @@
 #include "delta_messages.h"
 
+#include "diagnostic_message.h"
+
 namespace rdtf::daemon {
 
 std::vector<rdtf::delta_t> make_deltas(const DeltaHeader& header, const std::vector<ElementChange>& changes,
@@ -23,7 +25,7 @@ std::vector<rdtf::delta_t> make_deltas(const DeltaHeader& header, const std::vec
     rdtf::delta_change_t row;
     row.element = to_string(change.element);
     row.change = to_string(change.kind);
-    row.name = change.name;
+    row.name = lcm_text(change.name);  // As LINK_STATE and JOINT_STATE carry it.
     row.urdf_name = change.urdf_name;
     row.aspects = aspect_names(change.aspects);
     row.num_aspects = static_cast<std::int32_t>(row.aspects.size());

@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "diagnostic_message.h"
 #include "rdtf/diagnostics.h"
 #include "rdtf/urdf_names.h"
 #include "safe_decode.h"
@@ -13,12 +14,13 @@ Robot with_urdf_names(const Robot& robot, LiveNames& names) {
   Robot renamed = robot;
   names = LiveNames{};
   for (std::size_t l = 0; l < robot.links.size(); ++l) {
-    names.link_gltf.push_back(robot.links[l].name);
+    // As the states carry them: a NUL (a name written \u0000 in the glTF) as \x00 (lcm_text).
+    names.link_gltf.push_back(lcm_text(robot.links[l].name));
     renamed.links[l].name = urdf.links[l];
   }
   for (std::size_t j = 0; j < robot.joints.size(); ++j) {
-    names.joint_gltf[urdf.joints[j]] = robot.joints[j].name;
-    names.joints_by_gltf[robot.joints[j].name].push_back(urdf.joints[j]);
+    names.joint_gltf[urdf.joints[j]] = lcm_text(robot.joints[j].name);
+    names.joints_by_gltf[lcm_text(robot.joints[j].name)].push_back(urdf.joints[j]);
     renamed.joints[j].name = urdf.joints[j];
   }
   return renamed;

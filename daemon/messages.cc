@@ -124,7 +124,7 @@ std::vector<rdtf::inertia_table_t> make_inertia_tables(const ModelRecord& record
     const Link& link = model.robot.links[l];
     rdtf::link_inertia_t row;
     row.name = names.links[l];
-    row.gltf_name = link.name;
+    row.gltf_name = lcm_text(link.name);
     row.node = link.node;
     row.mass = link.inertial.mass;
     row.volume = link.inertial.volume;

@@ -35,7 +35,7 @@ namespace rdtf::daemon {
 using SendFunction = std::function<int(const std::string& channel, const std::uint8_t* data, unsigned int size)>;
 
 struct PublisherEvent {
-  enum class Kind { kSendFailing, kSendRecovered, kDropped };
+  enum class Kind { kSendFailing, kSendRecovered, kDropped, kUnencodable };
   Kind kind;
   std::string text;  // One line for the log, naming the channel and the error.
 };
@@ -62,7 +62,14 @@ class Publisher {
   void publish(const std::string& channel, Message message, Priority priority = Priority::kNormal) {
     set_counts(message);
     std::vector<std::uint8_t> bytes(static_cast<std::size_t>(message.getEncodedSize()));
-    message.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+    // LCM writes a string up to its first NUL but sizes it whole (lcm_coretypes.h): a NUL would
+    // leave bytes that no subscriber decodes. Texts from models are escaped before (lcm_text);
+    // should one still hold a NUL, nothing undecodable goes out, and the log says what was not sent.
+    if (message.encode(bytes.data(), 0, static_cast<int>(bytes.size())) != static_cast<int>(bytes.size())) {
+      report(PublisherEvent::Kind::kUnencodable,
+             "not sent on " + channel + ": a text field of the message holds a NUL byte, which LCM cannot carry");
+      return;
+    }
     enqueue(channel, std::move(bytes), priority);
   }
 

@@ -12,17 +12,27 @@
 
 namespace rdtf {
 
+// `text` for an LCM string field. LCM ends a string at its first NUL while sizing it whole, so
+// one NUL makes the whole message undecodable; a NUL from a model (a name or URI written
+// \u0000 in its JSON) is sent as the four characters \x00, as the log shows it.
+inline std::string lcm_text(std::string text) {
+  for (std::size_t at = text.find('\0'); at != std::string::npos; at = text.find('\0', at + 4)) {
+    text.replace(at, 1, "\\x00");
+  }
+  return text;
+}
+
 inline diagnostic_t to_message(const Diagnostic& d) {
   diagnostic_t m;
   m.severity = d.severity == Severity::kError     ? diagnostic_t::ERROR
                : d.severity == Severity::kWarning ? diagnostic_t::WARNING
                                                   : diagnostic_t::INFO;
-  m.code = d.code;
-  m.file = d.file;
-  m.pointer = d.pointer;
+  m.code = lcm_text(d.code);
+  m.file = lcm_text(d.file);
+  m.pointer = lcm_text(d.pointer);
   m.line = d.line > 0 ? static_cast<std::int32_t>(d.line) : 0;
   m.byte_offset = d.byte_offset ? static_cast<std::int64_t>(*d.byte_offset) : -1;
-  m.message = d.message;
+  m.message = lcm_text(d.message);
   return m;
 }
 

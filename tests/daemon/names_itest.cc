@@ -8,6 +8,10 @@
 #include <urdf_parser/urdf_parser.h>
 
 #include <rdtf/link_state_t.hpp>
+#include <rdtf/model_error_t.hpp>
+#include <rdtf/validation_report_t.hpp>
+
+#include "safe_decode.h"
 
 #include "clients/live_arm.h"
 
@@ -142,6 +146,49 @@ TEST(RosNames, WithoutAUrdfTheStatesCarryTheSameNames) {
     EXPECT_EQ(inertia->links[l].name, links.name[l]);
     EXPECT_EQ(inertia->links[l].gltf_name, links.gltf_name[l]);
   }
+}
+
+// A NUL in a name or a URI, which JSON allows (\u0000): LCM ends a string at its first NUL while
+// sizing it whole, so quoted raw it left every message that carries it undecodable by every
+// subscriber (VALIDATION, the states, the inertia table, an ERROR): the model stayed "pending" in
+// rdtf-view and a refusal was never seen. Each message arrives whole, the NUL as "\x00".
+TEST(RosNames, ANulInANameOrAUriReachesTheBusAsBackslashX00) {
+  Session s;
+  copy_fixture(s.watch, "arm3");
+  Json document = Json::parse(read(s.watch / "arm3.gltf"));
+  for (auto& node : document["nodes"]) {
+    if (node.value("name", "") == "elbow") node["name"] = std::string("el\0bow", 6);
+  }
+  const std::string gltf = document.dump(1);
+  ASSERT_NE(gltf.find("el\\u0000bow"), std::string::npos);
+  write_in_place(s.watch / "arm3.gltf", gltf);
+  const std::string hash = content_hash(gltf, {read(s.watch / "arm3.bin")});
+  document["buffers"][0]["uri"] = std::string("arm3.bin\0../x", 13);
+  write_in_place(s.watch / "nul_uri.gltf", document.dump(1));
+  s.start(DaemonOptions().with("simulate", true).with("state_rate_hz", 100).with("validate", true).with(
+      "validation_seconds", 0.5));
+  ASSERT_TRUE(s.wait_revision(kArm, 1, hash));
+  ASSERT_TRUE(s.wait_for([](const auto& all) {
+    return last_state(all, 1).has_value() && !on_kind(all, "LINK_STATE", kArm).empty() &&
+           !on_kind(all, "VALIDATION", kArm).empty() && !on_kind(all, "DELTA", kArm).empty() &&
+           !on_kind(all, "ERROR", "nul_uri.gltf").empty();
+  })) << ::testing::PrintToString(model_events(s.messages()));
+  for (const Message& m : s.messages()) {
+    EXPECT_EQ(lcm_safe::check_known(m.bytes.data(), m.bytes.size()), "") << m.channel;
+  }
+  const rdtf::joint_state_t joints = *last_state(s.messages(), 1);
+  EXPECT_EQ(joints.name, (std::vector<std::string>{"shoulder", "el_bow"}));
+  EXPECT_EQ(joints.gltf_name, (std::vector<std::string>{"shoulder", "el\\x00bow"}));
+  const auto validation = decoded<rdtf::validation_report_t>(s.messages(), "VALIDATION", kArm).back();
+  EXPECT_TRUE(validation.passed);
+  const auto renamed = std::find_if(validation.diagnostics.begin(), validation.diagnostics.end(),
+                                    [](const rdtf::diagnostic_t& d) { return d.code == "URDF_NAME_CHANGED"; });
+  ASSERT_NE(renamed, validation.diagnostics.end());
+  EXPECT_NE(renamed->message.find("'el\\x00bow' is named 'el_bow'"), std::string::npos) << renamed->message;
+  const auto error = decoded<rdtf::model_error_t>(s.messages(), "ERROR", "nul_uri.gltf").back();
+  ASSERT_FALSE(error.diagnostics.empty());
+  EXPECT_EQ(error.diagnostics[0].pointer, "/buffers/0/uri");
+  EXPECT_NE(error.diagnostics[0].message.find("arm3.bin\\x00../x"), std::string::npos) << error.diagnostics[0].message;
 }
 
 }  // namespace

@@ -78,6 +78,23 @@ TEST(Publisher, RefusedMessagesAreKeptAndSentInOrderWhenLcmAcceptsAgain) {
             "LCM sending works again after 2 failed attempts over 60 ms; every queued message is being sent");
 }
 
+// LCM writes a string up to its first NUL but sizes it whole: sent, such a message would be bytes
+// no subscriber decodes. It is not sent, the log says so, and what comes after goes as usual.
+TEST(Publisher, AMessageWithANulInAStringIsNotSentAndIsReported) {
+  FakeLcm lcm;
+  Publisher publisher([&](const std::string& c, const std::uint8_t* d, unsigned int n) { return lcm.send(c, d, n); },
+                      1e9, 1 << 20);
+  std::vector<PublisherEvent> events;
+  publisher.on_event([&](const PublisherEvent& e) { events.push_back(e); });
+  publisher.publish("A", request(std::string("x\0y", 3)));
+  publisher.publish("B", request("2"));
+  EXPECT_EQ(publisher.drain(Clock::time_point{} + 1h), std::nullopt);
+  EXPECT_EQ(lcm.sent, (std::vector<std::string>{"B 2"}));
+  ASSERT_EQ(events.size(), 1u);
+  EXPECT_EQ(events[0].kind, PublisherEvent::Kind::kUnencodable);
+  EXPECT_EQ(events[0].text, "not sent on A: a text field of the message holds a NUL byte, which LCM cannot carry");
+}
+
 TEST(Publisher, BackOffStopsGrowingAtHalfASecond) {
   FakeLcm lcm;
   lcm.refuse = true;

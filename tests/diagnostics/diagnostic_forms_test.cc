@@ -106,6 +106,19 @@ TEST(DiagnosticForms, LcmMessageCarriesEveryFieldBothWays) {
   EXPECT_EQ(own.file, "");
 }
 
+// A NUL quoted from a model (JSON allows \u0000 in names and URIs) would end an LCM string early
+// and leave the message undecodable: it goes as the four characters \x00, every other byte as is.
+TEST(DiagnosticForms, LcmMessageCarriesANulAsBackslashX00) {
+  Diagnostics diag("a.gltf");
+  using namespace std::string_literals;
+  diag.error("URI_REFUSED", "/nodes/0/extras/a\0b"s, "'a\0\0b\xff\\x00'"s);
+  const diagnostic_t m = to_message(diag.all().front());
+  EXPECT_EQ(m.pointer, "/nodes/0/extras/a\\x00b");
+  EXPECT_EQ(m.message, "'a\\x00\\x00b\xff\\x00'");
+  EXPECT_EQ(lcm_text("no nul"), "no nul");
+  EXPECT_EQ(lcm_text(std::string("\0", 1)), "\\x00");
+}
+
 // rdtf-echo prints a received diagnostic as the CLI prints it.
 TEST(DiagnosticForms, EchoPrintsTheCliJson) {
   model_error_t error{};

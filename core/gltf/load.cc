@@ -336,8 +336,15 @@ std::optional<Json> prepare_buffers(const Json& document, bool binary, const Loa
       if (!path) {
         diag.error(codes::URI_REFUSED, pointer, "'" + uri + "': " + why);
       } else if (source_file(reads, *path, why) == nullptr) {
-        diag.warning(codes::IO_ERROR, pointer,
-                     "image '" + uri + "' " + why + "; it will be missing from the output");
+        // A texture not there (moved away since the export) costs only its look: a warning. One
+        // that is there but refused (a symbolic link out of the folder, a hard link, a device,
+        // over max_file_bytes) is refused as a buffer would be (docs/daemon.md, "Confinement").
+        std::error_code error;
+        if (std::filesystem::symlink_status(*path, error).type() == std::filesystem::file_type::not_found) {
+          diag.warning(codes::IO_ERROR, pointer, "image '" + uri + "' " + why + "; it will be missing from the output");
+        } else {
+          diag.error(codes::URI_REFUSED, pointer, "image '" + uri + "' " + why);
+        }
       }
     }
   }

@@ -17,9 +17,17 @@ std::string model_with_buffer(const std::string& uri, std::uint64_t byte_length)
   return document.dump(1);
 }
 
+// A box model with an image of `uri` besides its own buffer.
+std::string model_with_image(const std::string& uri) {
+  Json document = Json::parse(box_model("picture", 0.1).gltf);
+  document["images"] = Json::array({{{"uri", uri}}});
+  return document.dump(1);
+}
+
 struct Escape {
-  std::string file;  // Model file name in the watched folder.
-  std::string uri;   // What its buffer refers to.
+  std::string file;    // Model file name in the watched folder.
+  std::string uri;     // What its buffer (or image) refers to.
+  bool image = false;  // An image's URI, not the buffer's.
 };
 
 // Every byte sequence that would betray that /etc/passwd was read: its lines of 8+ characters.
@@ -70,9 +78,20 @@ TEST(DaemonConfinement, EveryEscapeIsRejectedWithItsPlaceAndNothingLeaks) {
       {"dev_zero.gltf", "/dev/zero"},
       {"dev_zero_link.gltf", "zero_link.bin"},
       {"fifo.gltf", "pipe.bin"},
+      // An image is confined as a buffer is (only a missing one is a warning, below).
+      {"image_symlink_file.gltf", "passwd_link.bin", true},
+      {"image_symlink_folder.gltf", "etc_link/passwd", true},
+      {"image_absolute.gltf", "/etc/passwd", true},
+      {"image_dev_zero_link.gltf", "zero_link.bin", true},
   };
   // byteLength as /etc/passwd's own size: only the confinement can stop these.
-  for (const auto& escape : escapes) write_in_place(s.watch / escape.file, model_with_buffer(escape.uri, passwd_size));
+  for (const auto& escape : escapes) {
+    write_in_place(s.watch / escape.file,
+                   escape.image ? model_with_image(escape.uri) : model_with_buffer(escape.uri, passwd_size));
+  }
+  // A texture moved away since the export costs only its look: the model is published, warned.
+  const std::string missing_image = model_with_image("moved_away.png");
+  write_in_place(s.watch / "missing_image.gltf", missing_image);
   // An embedded buffer over the cap (max_buffer_bytes, above /etc/passwd's size so that only the
   // confinement stops the others): 3,000 bytes more than the cap, in base64.
   const std::uint64_t cap = passwd_size + 4096;
@@ -92,10 +111,13 @@ TEST(DaemonConfinement, EveryEscapeIsRejectedWithItsPlaceAndNothingLeaks) {
     for (const auto& id : rejected) {
       if (on_kind(all, "ERROR", id).empty()) return false;
     }
-    return has_revision(all, "good.gltf", 1, content_hash(good));
+    return has_revision(all, "good.gltf", 1, content_hash(good)) &&
+           has_revision(all, "missing_image.gltf", 1, content_hash(missing_image, {""}));
   }, 10s)) << ::testing::PrintToString(model_events(s.messages()));
 
-  for (const auto& id : rejected) {
+  for (std::size_t k = 0; k < rejected.size(); ++k) {
+    const std::string& id = rejected[k];
+    const std::string place = k < escapes.size() && escapes[k].image ? "/images/0" : "/buffers/0";
     SCOPED_TRACE(id);
     const auto errors = decoded<rdtf::model_error_t>(s.messages(), "ERROR", id);
     ASSERT_EQ(errors.size(), 1u);
@@ -107,11 +129,11 @@ TEST(DaemonConfinement, EveryEscapeIsRejectedWithItsPlaceAndNothingLeaks) {
     for (const auto& d : error.diagnostics) {
       all_text += d.code + " " + d.pointer + " " + d.message + "\n";
       if (d.severity == rdtf::diagnostic_t::ERROR && d.file == error.source_path &&
-          d.pointer.rfind("/buffers/0", 0) == 0) {
+          d.pointer.rfind(place, 0) == 0) {
         placed = true;
       }
     }
-    EXPECT_TRUE(placed) << "no ERROR naming " << error.source_path << " and /buffers/0:\n" << all_text;
+    EXPECT_TRUE(placed) << "no ERROR naming " << error.source_path << " and " << place << ":\n" << all_text;
     EXPECT_TRUE(s.daemon->log().find("rejected " + id) != std::string::npos);
   }
 
@@ -121,7 +143,7 @@ TEST(DaemonConfinement, EveryEscapeIsRejectedWithItsPlaceAndNothingLeaks) {
   ASSERT_TRUE(s.wait_revision("later.gltf", 1, content_hash(later)));
   const auto idle = s.wait_idle();
   ASSERT_TRUE(idle);
-  EXPECT_EQ(idle->conversions, 2);
+  EXPECT_EQ(idle->conversions, 3);
   EXPECT_EQ(idle->rejections, static_cast<std::int64_t>(rejected.size()));
   EXPECT_TRUE(s.daemon->running());
 

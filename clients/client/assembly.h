@@ -49,6 +49,12 @@ class RevisionParts {
   std::string add_validation(const rdtf::validation_report_t& report);
 
   bool has_description() const { return description_.has_value(); }
+  // Only a failed VALIDATION came: a revision the gate refused, of which rdtfd publishes nothing
+  // more (unless publish_failed); asked again, it only republishes the refusal.
+  bool refused_only() const {
+    return validation_ && !validation_->passed && !description_ && json_.bytes == 0 && urdf_.bytes == 0 &&
+           !inertia_ && manifest_parts_.empty();
+  }
   // The snapshot (blobs not filled in) once every part needed is here and checks out. A part
   // that fails its check (a hash, a size) is cleared so that the next publication refills it;
   // `why` then says what failed.

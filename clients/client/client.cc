@@ -4,6 +4,7 @@
 
 #include <openssl/evp.h>
 
+#include <algorithm>
 #include <iostream>
 #include <regex>
 
@@ -80,6 +81,7 @@ struct Pending {
 
 struct ModelState {
   std::shared_ptr<const Snapshot> current;
+  int unlisted = 0;  // STATUS messages in a row that did not list it as live
   std::map<Key, Pending> pending;
   Clock::time_point next_request{};
   Clock::duration backoff{};
@@ -191,6 +193,9 @@ struct Client::State {
     if (rest == "STATUS") {
       if (auto s = decode<rdtf::status_t>(channel, data, size)) {
         for (const auto& id : s->model_ids) note_seen(id);
+        followed_live = std::any_of(s->model_ids.begin(), s->model_ids.end(),
+                                    [&](const std::string& id) { return follows(id); });
+        forget_models_not_live(*s);
       }
       return;
     }
@@ -368,6 +373,32 @@ struct Client::State {
     }
   }
 
+  // A model rdtfd no longer lists as live is gone as if REMOVED had come: one deleted while
+  // rdtfd was down never gets a REMOVED, and stayed "live" here and in every viewer. After two
+  // STATUS in a row, so that one sent as its first revision went out cannot drop it.
+  void forget_models_not_live(const rdtf::status_t& status) {
+    const std::set<std::string> live(status.model_ids.begin(), status.model_ids.end());
+    std::vector<rdtf::model_removed_t> gone;
+    for (auto& [model_id, m] : models) {
+      if (!m.current || live.count(model_id) != 0) {
+        m.unlisted = 0;
+        continue;
+      }
+      if (++m.unlisted < 2) continue;
+      rdtf::model_removed_t removed;
+      removed.utime = status.utime;
+      removed.model_id = model_id;
+      removed.source_path = "";
+      removed.last_revision = m.current->revision();
+      gone.push_back(std::move(removed));
+    }
+    for (const auto& removed : gone) {
+      forget(removed.model_id);
+      seen.erase(removed.model_id);
+      if (callbacks.on_removed) callbacks.on_removed(removed);
+    }
+  }
+
   void forget(const std::string& model_id) {
     const auto model = models.find(model_id);
     if (model == models.end()) return;
@@ -459,7 +490,9 @@ struct Client::State {
     store.trim();
     // Until the first description of a followed model, ask again with back-off: the first
     // answer may have been lost, or rdtfd started after this client.
-    if (!described_any() && now >= next_start_request) {
+    // Not once a STATUS has listed no live model this client follows: rdtfd publishes each when
+    // it goes live, and asked meanwhile it only republishes refusals.
+    if (!described_any() && followed_live.value_or(true) && now >= next_start_request) {
       request(options.model);
       next_start_request = now + start_backoff;
       start_backoff = std::min<Clock::duration>(start_backoff * 2, options.retry_max);
@@ -467,7 +500,9 @@ struct Client::State {
     // A revision whose parts stay incomplete: ask for the model's publication again.
     for (auto& [model_id, m] : models) {
       bool stalled = false;
-      for (const auto& [key, p] : m.pending) stalled |= !p.assembled && now - p.first_seen >= m.backoff;
+      for (const auto& [key, p] : m.pending) {
+        stalled |= !p.assembled && !p.parts.refused_only() && now - p.first_seen >= m.backoff;
+      }
       if (stalled && now >= m.next_request) {
         request(model_id);
         m.next_request = now + m.backoff;
@@ -498,6 +533,7 @@ struct Client::State {
   BlobStore store;
   BlobFetcher fetcher;
   Clock::time_point next_start_request{};
+  std::optional<bool> followed_live;  // Whether rdtfd's latest STATUS listed a followed model.
   Clock::duration start_backoff{};
   std::int64_t pending_bytes = 0;  // chunk bytes held by incomplete revisions of every model
 };

@@ -278,10 +278,14 @@ std::string ModelHub::apply(const Release& request) {
 
 std::vector<std::shared_ptr<const std::string>> ModelHub::welcome() const {
   std::vector<std::shared_ptr<const std::string>> out;
+  Json ids = Json::array();
   for (const auto& [id, m] : models_) {
     out.push_back(model_message(id, m));
     if (!m.targets.empty()) out.push_back(targets_message(id, m));
+    ids.push_back(id);
   }
+  // Last, every model it knows: a page that outlived a restart of rdtf-view drops the others.
+  out.push_back(to_text({{"type", "known"}, {"ids", std::move(ids)}}));
   return out;
 }
 

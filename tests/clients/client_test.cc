@@ -12,6 +12,8 @@
 
 #include <rdtf/joint_state_t.hpp>
 #include <rdtf/request_t.hpp>
+#include <rdtf/status_t.hpp>
+#include <rdtf/validation_report_t.hpp>
 
 #include "clients/fake_rdtfd.h"
 #include "safe_decode.h"
@@ -69,6 +71,7 @@ struct Bench {
       problems.push_back(model_id + ": " + text);
     };
     callbacks.on_joint_state = [this](const Snapshot&, const rdtf::joint_state_t& s) { states.push_back(s); };
+    callbacks.on_removed = [this](const rdtf::model_removed_t& r) { removed.push_back(r.model_id); };
     client = std::make_unique<Client>(
         [this](const std::string& channel, const std::vector<std::uint8_t>& bytes) { sent.emplace_back(channel, bytes); },
         options, callbacks);
@@ -136,7 +139,31 @@ struct Bench {
   std::vector<std::string> drops;
   std::vector<std::string> problems;
   std::vector<rdtf::joint_state_t> states;
+  std::vector<std::string> removed;
 };
+
+// rdtfd's heartbeat, listing `live` as its live models.
+Datagram status_listing(std::vector<std::string> live) {
+  rdtf::status_t s{};
+  s.utime = 1;
+  s.version = "test";
+  s.model_ids = std::move(live);
+  s.num_model_ids = static_cast<std::int32_t>(s.model_ids.size());
+  s.num_models = s.num_model_ids;
+  return datagram("RDTF/STATUS", s);
+}
+
+// A revision the gate refused: its failed VALIDATION, and nothing more of it.
+Datagram refused_validation(const std::string& model_id) {
+  rdtf::validation_report_t v{};
+  v.utime = 1;
+  v.model_id = model_id;
+  v.revision = 1;
+  v.content_hash = std::string(64, 'b');
+  v.passed = false;
+  v.num_diagnostics = 0;
+  return datagram("RDTF/" + model_id + "/VALIDATION", v);
+}
 
 // The snapshot is the revision, every part of it.
 void expect_snapshot(const Snapshot& s, const FakeRevision& r, bool with_blobs = true) {
@@ -176,6 +203,50 @@ TEST(Client, SendsARequestAtStartAndAgainWithBackOffUntilAnswered) {
   const int answered = b.requests;
   for (int i = 0; i < 100; ++i) b.round();
   EXPECT_EQ(b.requests, answered) << "a client with its model asks no more";
+}
+
+// A model deleted while rdtfd was down never gets a REMOVED: once two STATUS in a row no longer
+// list it as live, the client drops it as if REMOVED had come (one STATUS alone may have been
+// composed as its first revision went out).
+TEST(Client, AModelTheStatusNoLongerListsIsRemoved) {
+  Bench b(Blobs::kNone);
+  FakeRevision other = arm();
+  other.model_id = "other.gltf";
+  b.feed(publication(arm()));
+  b.feed(publication(other));
+  ASSERT_TRUE(b.client->snapshot("arm.gltf"));
+  b.feed({status_listing({"arm.gltf", "other.gltf"})});
+  b.feed({status_listing({"other.gltf"})});
+  EXPECT_TRUE(b.client->snapshot("arm.gltf")) << "dropped after one STATUS";
+  b.feed({status_listing({"arm.gltf", "other.gltf"})});
+  b.feed({status_listing({"other.gltf"})});
+  EXPECT_TRUE(b.client->snapshot("arm.gltf")) << "two STATUS that were not in a row";
+  b.feed({status_listing({"other.gltf"})});
+  EXPECT_FALSE(b.client->snapshot("arm.gltf"));
+  EXPECT_TRUE(b.client->snapshot("other.gltf"));
+  EXPECT_EQ(b.removed, (std::vector<std::string>{"arm.gltf"}));
+  EXPECT_EQ(b.client->models_seen(), (std::set<std::string>{"other.gltf"}));
+}
+
+// A model whose revision the gate refused: asked again, rdtfd only republishes the refusal, so a
+// client that asked on every retry made it republish every 2 s for ever. Neither the stalled
+// revision nor the start request asks again once rdtfd's STATUS lists no followed model as live.
+TEST(Client, NeverAsksAgainForARevisionTheGateRefused) {
+  Bench b(Blobs::kNone, "broken.gltf");
+  b.client->tick(b.now);
+  ASSERT_EQ(b.sent.size(), 1u);  // The start request.
+  b.feed({refused_validation("broken.gltf"), status_listing({"arm.gltf"})});
+  const int asked = static_cast<int>(b.sent.size());
+  for (int i = 0; i < 200; ++i) {  // 10 s
+    b.now += 50ms;
+    b.client->tick(b.now);
+  }
+  EXPECT_EQ(static_cast<int>(b.sent.size()), asked);
+  // It goes live: published as any save is, and taken.
+  FakeRevision fixed = arm();
+  fixed.model_id = "broken.gltf";
+  b.feed(publication(fixed));
+  EXPECT_TRUE(b.client->snapshot("broken.gltf"));
 }
 
 TEST(Client, ReassemblesEveryPartInAnyOrder) {

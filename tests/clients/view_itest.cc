@@ -289,8 +289,8 @@ TEST(View, ShowsTwoModelsAndOneRemoved) {
   copy_fixture(s.watch, "arm3");
   copy_fixture(s.watch, "two_cylinder");
   s.start(simulating());
-  ViewProcess view(s.root.path());
-  Page page(view.url(), s.root / "page.log");
+  std::optional<ViewProcess> view(std::in_place, s.root.path());
+  Page page(view->url(), s.root / "page.log");
   ASSERT_FALSE(wait_drawn(page, kArm, 1).is_null()) << page.driver_log();
   const Json cylinder = wait_drawn(page, "two_cylinder.gltf", 1);
   ASSERT_FALSE(cylinder.is_null()) << page.state().dump();
@@ -308,6 +308,18 @@ TEST(View, ShowsTwoModelsAndOneRemoved) {
   EXPECT_TRUE(removed["revision"].is_null());
   EXPECT_EQ(model_in(st, kArm)["status"], "live");
   page.screenshot("two_models_cylinder_removed.png");
+
+  // The page outlives a restart of rdtf-view on the same port: it reconnects, and keeps only what
+  // the new rdtf-view knows (before, a model the new one never heard of stayed listed for ever).
+  const std::string url = view->url();
+  const std::string port = url.substr(url.rfind(':') + 1, url.find('/', url.rfind(':')) - url.rfind(':') - 1);
+  view.reset();
+  fs::create_directories(s.root / "second");
+  view.emplace(s.root / "second", std::vector<std::string>{"--port", port});
+  ASSERT_TRUE(page.wait_state([&](const Json& state) {
+    return model_in(state, "two_cylinder.gltf").is_null() && model_in(state, kArm)["status"] == "live";
+  }, 20s, &st)) << st.dump();
+  EXPECT_EQ(st["selected"], kArm);
 }
 
 // The encodings Blender and glTF tools write besides arm3's one buffer: a base colour texture (a

@@ -36,7 +36,8 @@ class ViewProcess {
 
  private:
   static std::vector<std::string> args(std::vector<std::string> extra) {
-    std::vector<std::string> out = {RDTF_VIEW_PATH, "--port", "0"};
+    std::vector<std::string> out = {RDTF_VIEW_PATH};
+    if (std::find(extra.begin(), extra.end(), "--port") == extra.end()) out.insert(out.end(), {"--port", "0"});
     out.insert(out.end(), extra.begin(), extra.end());
     return out;
   }

@@ -291,7 +291,7 @@ function refreshPanel() {
     li.className = m.info.id === selected ? 'selected' : '';
     li.innerHTML = `<span></span> <span class="status-${m.info.status}">${m.info.status}</span>`;
     li.firstChild.textContent = `${m.info.id}${m.info.revision ? ` r${m.info.revision}` : ''}`;
-    li.addEventListener('click', () => { selected = m.info.id; refreshPanel(); });
+    li.addEventListener('click', () => selectModel(m.info.id));
     return li;
   }));
   const m = models.get(selected);
@@ -411,12 +411,36 @@ function connect() {
         settle(() => true, message.reason);
         refreshPanel();
         break;
+      case 'known': forgetAllBut(new Set(message.ids)); break;
       case 'notice':
         notices.push(`${message.id}: ${message.diagnostics.map((d) => d.message).join('; ')}`);
         refreshPanel();
         break;
     }
   };
+}
+// The models rdtf-view knows, sent as the socket opens: a page that outlived a restart of
+// rdtf-view drops the ones the new one does not know (a model deleted meanwhile stayed drawn as
+// "live" and took slider targets nobody applied).
+function forgetAllBut(ids) {
+  for (const [id, m] of models) {
+    if (ids.has(id)) continue;
+    if (m.view) {
+      world.remove(m.view.root);
+      m.view.dispose();
+    }
+    m.loading = null;  // A load in flight sees it was dropped and disposes what it made.
+    releaseMotion(id);
+    models.delete(id);
+    if (selected === id) selected = null;
+  }
+  if (selected === null && models.size > 0) selectModel(models.keys().next().value);
+  refreshPanel();
+}
+function selectModel(id) {
+  selected = id;
+  refreshPanel();
+  if (models.get(id)?.view) fitCamera(models.get(id).view);
 }
 function settle(match, reason) {
   const i = waiters.findIndex(match);
@@ -459,7 +483,7 @@ window.rdtfView = {
   },
   // What the slider does; resolves to "" when rdtf-view took it, else the reason it refused.
   setJoint,
-  select(id) { selected = id; refreshPanel(); if (models.get(id)?.view) fitCamera(models.get(id).view); },
+  select(id) { selectModel(id); },
   setUp,
   show(parts) {
     for (const [k, id] of [['frames', 'show-frames'], ['com', 'show-com'], ['inertia', 'show-inertia']]) {

@@ -35,8 +35,10 @@ const char* severity_name(std::int8_t severity) {
 Json diagnostics_json(const std::vector<rdtf::diagnostic_t>& diagnostics) {
   Json out = Json::array();
   for (const auto& d : diagnostics) {
-    out.push_back({{"severity", severity_name(d.severity)}, {"code", d.code}, {"file", d.file},
-                   {"pointer", d.pointer}, {"line", d.line}, {"message", d.message}});
+    Json one = {{"severity", severity_name(d.severity)}, {"code", d.code}, {"file", d.file},
+                {"pointer", d.pointer}, {"line", d.line}, {"message", d.message}};
+    if (d.byte_offset >= 0) one["byte_offset"] = d.byte_offset;  // A GLB's container, where no pointer reaches.
+    out.push_back(std::move(one));
   }
   return out;
 }

@@ -10,6 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "diagnostic_message.h"
 #include "http_paths.h"
 #include "model_hub.h"
 #include "page_protocol.h"
@@ -274,6 +275,27 @@ TEST(ViewHub, ASavingOfTheDrawnRevisionIsToldToThePagesAndOthersAreNot) {
   saving.model_id = "other.gltf";
   hub.on_saving(saving);
   EXPECT_EQ(sent.size(), 1u);
+}
+
+// A GLB's container error has no JSON pointer: its place is the byte offset, which the page shows.
+TEST(ViewHub, AnErrorKeepsItsByteOffset) {
+  std::vector<nlohmann::json> sent;
+  ModelHub hub(GainRule{}, [&](std::shared_ptr<const std::string> json) { sent.push_back(nlohmann::json::parse(*json)); },
+               [](const std::string&, rdtf::joint_command_t&) {});
+  rdtf::model_error_t error;
+  error.model_id = "chain.glb";
+  error.live_revision = 0;
+  Diagnostics diag("/models/chain.glb");
+  diag.error_at_offset("GLB_LENGTH_MISMATCH", 8, "header says 1948 bytes but the file has 500");
+  diag.error("URI_REFUSED", "/buffers/0/uri", "no offset here");
+  for (const Diagnostic& d : diag.all()) error.diagnostics.push_back(to_message(d));
+  error.num_diagnostics = static_cast<std::int32_t>(error.diagnostics.size());
+  hub.on_error(error);
+  ASSERT_FALSE(sent.empty());
+  const auto& diagnostics = sent.back()["error"]["diagnostics"];
+  ASSERT_EQ(diagnostics.size(), 2u) << sent.back().dump();
+  EXPECT_EQ(diagnostics[0]["byte_offset"], 8);
+  EXPECT_FALSE(diagnostics[1].contains("byte_offset"));
 }
 
 }  // namespace

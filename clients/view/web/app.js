@@ -321,7 +321,8 @@ function refreshPanel() {
     code.textContent = `${d.severity} ${d.code} `;
     const place = document.createElement('span');
     place.className = 'place';
-    place.textContent = `${d.file}${d.pointer ? `:${d.pointer}` : ''}${d.line ? `:${d.line}` : ''} `;
+    place.textContent = `${d.file}${d.pointer ? `:${d.pointer}` : ''}${d.line ? `:${d.line}` : ''}` +
+      `${d.byte_offset !== undefined ? `:@${d.byte_offset}` : ''} `;
     div.append(code, place, document.createTextNode(d.message));
     diagnostics.appendChild(div);
   }

@@ -520,7 +520,8 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
   // A link without volume is worth a word where it was meant to have some (it has meshes, and
   // none encloses any) or where its whole rigid body weighs nothing. A frame welded to a body that
   // has mass weighs nothing by design: an armature's own object, which holds the root bone by a
-  // fixed joint (docs/blender.md), or a sensor frame.
+  // fixed joint (docs/blender.md), or a sensor frame. So does a root without meshes: the world's
+  // frame (URDF's usual empty `world` link), which the gate holds fixed.
   if (!no_volume.empty()) {
     std::vector<bool> body_has_mass(robot.links.size(), false);
     for (const std::vector<std::size_t>& body : rigid_bodies(robot)) {
@@ -528,9 +529,13 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
       for (std::size_t l : body) mass = mass || robot.links[l].inertial.mass > 0;
       for (std::size_t l : body) body_has_mass[l] = mass;
     }
+    std::vector<bool> is_root(robot.links.size(), true);
+    for (const Joint& joint : robot.joints) {
+      if (joint.child_link >= 0) is_root[static_cast<std::size_t>(joint.child_link)] = false;
+    }
     for (std::size_t l : no_volume) {
       const Link& link = robot.links[l];
-      if (link.meshes.empty() && body_has_mass[l]) continue;
+      if (link.meshes.empty() && (body_has_mass[l] || is_root[l])) continue;
       diag.warning(codes::LINK_NO_VOLUME, json_pointer("/nodes", link.node),
                    "link '" + link.name + "' has no volume (" +
                        (link_solids[l].empty() ? std::string("no closed mesh")

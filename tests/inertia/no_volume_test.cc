@@ -226,6 +226,26 @@ TEST(NoVolume, AMovingLinkWithoutMassIsStillNamed) {
             std::vector<std::string>{"/nodes/2: link 'hand' has no volume (no closed mesh): its mass is zero"});
 }
 
+// An empty root with the robot below it on a moving joint: the world's frame, as URDF's usual
+// empty `world` link is (pybullet's pendulum5, imported), which the gate holds fixed. Before, it
+// was warned of as a link without volume on every import, validate and export.
+TEST(NoVolume, AnEmptyRootIsTheWorldsFrameAndSilent) {
+  Json document = cube(false);
+  const Json shell = document["nodes"][0];
+  document["nodes"] = Json::array({{{"name", "world"}, {"extras", {{"rdtf_type", "link"}}}, {"children", {1}}},
+                                   {{"name", "hinge"},
+                                    {"translation", {0, 0, 2}},
+                                    {"extras", {{"rdtf_joint", "revolute"}, {"rdtf_axis", "x"}}},
+                                    {"children", {2}}},
+                                   shell});
+  Diagnostics diag;
+  const auto converted = convert(document, diag);
+  ASSERT_TRUE(converted.has_value());
+  ASSERT_EQ(converted->robot.links.size(), 2u);
+  EXPECT_EQ(converted->robot.links[0].name, "world");
+  EXPECT_EQ(no_volume_messages(diag.all()), std::vector<std::string>{});
+}
+
 // A joint empty whose part was parented elsewhere makes no joint; before, it vanished without a
 // word (the robot simply lacked the joint the modeller had set up).
 TEST(NoVolume, AJointEmptyThatMovesNothingIsNamed) {

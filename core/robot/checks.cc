@@ -102,10 +102,17 @@ void check_units_of(const Json& document, const Robot& robot, Diagnostics& diag)
   const RobotSize size = robot_size(robot);
   const double extent = size.extent();
   const Link& link = robot.links[heaviest];
-  // Large or heavy beyond any robot, or both large and heavy beyond a mobile one (a hand-sized
-  // part drawn in millimetres: a 25 mm gripper becomes 25 m and hundreds of tonnes).
-  const bool too_large = extent > kMaxExtent || mass > kMaxMass || (extent > kLargeExtent && mass > kLargeMass);
-  if (too_large) {
+  // Large beyond any robot, or both large and heavy beyond a mobile one (a hand-sized part drawn
+  // in millimetres: a 25 mm gripper becomes 25 m and hundreds of tonnes): the lengths are off.
+  // Heavy beyond any robot at a plausible size: the masses are (authored ones, as a URDF brings).
+  const bool too_large = extent > kMaxExtent || (extent > kLargeExtent && mass > kLargeMass);
+  if (!too_large && mass > kMaxMass) {
+    diag.warning(codes::UNITS_IMPLAUSIBLE, json_pointer("/nodes", link.node),
+                 "the robot " + size.text() + " and weighs " + short_number(mass) + " kg (" +
+                     node_label(document, link.node) + " alone " + short_number(link.inertial.mass) +
+                     " kg): its size is plausible in metres but its mass is not. Masses are kilograms and "
+                     "densities kg/m^3 (one typed in grams, or g/cm^3 as kg/m^3, is 1000 times too large)");
+  } else if (too_large) {
     diag.warning(codes::UNITS_IMPLAUSIBLE, json_pointer("/nodes", link.node),
                  "the robot " + size.text() + " and weighs " + short_number(mass) + " kg (" + node_label(document, link.node) + " alone " +
                      short_number(link.inertial.mass) +

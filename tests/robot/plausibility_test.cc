@@ -145,6 +145,16 @@ TEST(Plausibility, TooLargeAndHeavyForAMachineAndScaledToAMillimetre) {
   expect_one(convert_and_find(doc, codes::UNITS_IMPLAUSIBLE), "/nodes/0", {"implausibly small in metres"});
 }
 
+// Heavy beyond any robot at a size plausible in metres: the masses are off, not the lengths (a URDF
+// whose masses were typed in grams). Scaling the model, as the millimetre advice says, would not help.
+TEST(Plausibility, HeavyAtAPlausibleSizeBlamesTheMassesNotTheLengths) {
+  json doc = arm();
+  doc["nodes"][0]["extras"]["rdtf_mass"] = 5e6;
+  const auto found = convert_and_find(doc, codes::UNITS_IMPLAUSIBLE);
+  expect_one(found, "/nodes/0", {"its size is plausible in metres but its mass is not", "grams"});
+  EXPECT_EQ(found.front().message.find("millimetres"), std::string::npos) << found.front().message;
+}
+
 // A robot of one link has no span between frames: its size is its part's volume, and the message
 // says so rather than quoting the cube's edge as the robot's breadth.
 TEST(Plausibility, OneLinkTooLargeIsSizedByItsPartsVolume) {

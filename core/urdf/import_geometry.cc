@@ -1,4 +1,5 @@
 // Geometry for URDF import: generated primitives, mesh file lookup, and the glTF buffer.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -163,8 +164,19 @@ std::optional<std::filesystem::path> resolve_mesh_path(const std::string& filena
     why = "mesh file '" + filename + "': " + not_a_file + ", not a file rdtf reads";
     return std::nullopt;
   }
-  why = "mesh file '" + filename + "' not found (looked for " + candidates.front().string() +
-        (candidates.size() > 1 ? " and " + std::to_string(candidates.size() - 1) + " other places" : "") + ")";
+  // Every place looked in, so that the user sees which folder to put it in (or which to pass).
+  std::vector<std::string> shown;
+  for (const fs::path& candidate : candidates) {
+    std::error_code error;
+    const fs::path absolute = fs::absolute(candidate, error);
+    const std::string text = (error ? candidate : absolute.lexically_normal()).string();
+    if (std::find(shown.begin(), shown.end(), text) == shown.end()) shown.push_back(text);
+  }
+  std::string places;
+  for (std::size_t i = 0; i < shown.size(); ++i) {
+    places += (i == 0 ? "" : i + 1 == shown.size() ? " and " : ", ") + shown[i];
+  }
+  why = "mesh file '" + filename + "' not found (looked for " + places + ")";
   return std::nullopt;
 }
 

@@ -334,6 +334,11 @@ TEST(UrdfImportErrors, MissingMeshOfAMasslessFixedLinkIsAWarning) {
   EXPECT_EQ(found->severity, Severity::kWarning);
   EXPECT_EQ(found->pointer, "/robot/link[@name='camera']/visual[1]");
   EXPECT_NE(found->message.find("massless on its fixed joint"), std::string::npos) << found->message;
+  // Every place looked in, whole (it said "looked for ./cam/meshes/camera.stl and 1 other places").
+  EXPECT_NE(found->message.find("(looked for " + fs::absolute(dir / "cam" / "meshes" / "camera.stl").lexically_normal().string()),
+            std::string::npos)
+      << found->message;
+  EXPECT_EQ(found->message.find("other places"), std::string::npos) << found->message;
 }
 
 // UR, Fetch and TIAGo descriptions give COLLADA visuals and STL collision meshes. A link whose

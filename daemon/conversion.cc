@@ -175,6 +175,26 @@ bool name_too_long(const Diagnostics& diag) {
   return false;
 }
 
+// `from` appended to `to`, naming the files where they will be (`final_folder`) rather than in the
+// stage folder they were written to, whose random name is gone after the commit or the failure.
+void append_unstaged(Diagnostics& to, const Diagnostics& from, const std::filesystem::path& stage_folder,
+                     const std::filesystem::path& final_folder) {
+  const std::string staged = stage_folder.string();
+  const std::string final = final_folder.string();
+  const auto unstaged = [&](std::string text) {
+    for (std::size_t at = text.find(staged); at != std::string::npos; at = text.find(staged, at + final.size())) {
+      text.replace(at, staged.size(), final);
+    }
+    return text;
+  };
+  const std::string file = to.file();
+  for (const Diagnostic& d : from.all()) {
+    to.set_file(unstaged(d.file));
+    to.add(d.severity, d.code, d.pointer, unstaged(d.message));
+  }
+  to.set_file(file);
+}
+
 // A failed write: retried later when the environment may change (disk full, unwritable folder),
 // refused for good when a name is too long.
 void write_failed(const std::filesystem::path& output_dir, Diagnostics& diagnostics, bool& retry) {
@@ -274,11 +294,11 @@ std::unique_ptr<StagedOutputs> stage_outputs(const ConversionJob& job, const Con
   write_options.content_digest = written.digest();
   write_options.staged_for = job.output_dir;
   if (!write_rdtf(conversion.asset, stage->folder() / name, write_options, write_diag, &converted.rdtf_json)) {
-    diagnostics.append(write_diag);
+    append_unstaged(diagnostics, write_diag, stage->folder(), job.output_dir);
     if (has_code(write_diag, codes::WRITE_FAILED)) write_failed(job.output_dir, diagnostics, retry);
     return nullptr;
   }
-  diagnostics.append(write_diag);
+  append_unstaged(diagnostics, write_diag, stage->folder(), job.output_dir);
   std::vector<std::filesystem::path> primaries{name};
   if (job.urdf) {
     // URDF is a second output: a model URDF cannot express (a ball joint) still converts.
@@ -289,10 +309,10 @@ std::unique_ptr<StagedOutputs> stage_outputs(const ConversionJob& job, const Con
     if (write_urdf(conversion, stage->folder() / "urdf", urdf_options, urdf_diag, &converted.urdf)) {
       converted.urdf_path = (job.output_dir / "urdf" / "robot.urdf").native();
       primaries.emplace_back("urdf/robot.urdf");
-      diagnostics.append(urdf_diag);  // Its warnings (URDF_NAME_CHANGED, ...).
+      append_unstaged(diagnostics, urdf_diag, stage->folder(), job.output_dir);  // Its warnings (URDF_NAME_CHANGED, ...).
     } else if (has_code(urdf_diag, codes::WRITE_FAILED)) {
       // The disk, not the model: fail the revision and try again; nothing was moved into place.
-      diagnostics.append(urdf_diag);
+      append_unstaged(diagnostics, urdf_diag, stage->folder(), job.output_dir);
       write_failed(job.output_dir, diagnostics, retry);
       return nullptr;
     } else {

@@ -191,6 +191,10 @@ rdtf::model_error_t make_model_error(const ModelRecord& record, const std::strin
   message.live_revision = record.live ? record.revisions : 0;
   message.content_hash = content_hash;
   message.diagnostics = to_messages(diagnostics);
+  // Errors first: what refused the save is what a viewer shows first, and what a message cut to
+  // size keeps (fit_diagnostics keeps the first).
+  std::stable_sort(message.diagnostics.begin(), message.diagnostics.end(),
+                   [](const rdtf::diagnostic_t& a, const rdtf::diagnostic_t& b) { return a.severity > b.severity; });
   set_counts(message);
   fit_diagnostics(message, max_message_bytes);
   return message;

@@ -50,6 +50,9 @@ TEST(DaemonFault, DiskFullOnTheOutputIsReportedAndConvertsOnceSpaceReturns) {
   EXPECT_TRUE(has_code(error, "WRITE_FAILED")) << diagnostics_text(error);
   EXPECT_NE(diagnostics_text(error).find("No space left on device"), std::string::npos) << diagnostics_text(error);
   EXPECT_NE(diagnostics_text(error).find(s.output.string()), std::string::npos) << diagnostics_text(error);
+  // Named where the outputs go, not in the stage folder (a random name, gone by now); and first.
+  EXPECT_EQ(diagnostics_text(error).find(".stage."), std::string::npos) << diagnostics_text(error);
+  EXPECT_EQ(error.diagnostics.front().severity, rdtf::diagnostic_t::ERROR) << diagnostics_text(error);
   ASSERT_TRUE(s.daemon->wait_log("could not write the outputs of arm.gltf"));
   // Still pending (the daemon retries), nothing published, no half-written file.
   ASSERT_TRUE(s.daemon->wait_log("(attempt 2)"));

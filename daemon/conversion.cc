@@ -603,7 +603,12 @@ ConversionOutcome run_conversion(const ConversionJob& job) {
     }
   }
   lap(outcome.stages.read);
-  if (outcome.content_hash == job.previous_hash) {
+  // A file refused or unreadable counts as no bytes in the hash: a state not read whole is never
+  // "unchanged" (a .bin linked out of the folder, then hard-linked, hashed alike, and the second
+  // refusal went unreported).
+  const bool read_whole =
+      std::all_of(files.begin(), files.end(), [](const auto& file) { return file.second.size.has_value(); });
+  if (read_whole && outcome.content_hash == job.previous_hash) {
     outcome.kind = ConversionOutcome::Kind::kUnchanged;
     return finish();
   }

@@ -100,6 +100,30 @@ TEST(ConversionReads, EachFileOnceAndTheHashIsOfTheBytesConvertedEvenWhenRewritt
   EXPECT_EQ(reads.at(folders.watch() / "arm3.bin"), 2);
 }
 
+// A refused file counts as no bytes in the hash, so two different refusals hash alike: a state not
+// read whole is converted again, and its refusal reported, never skipped as unchanged.
+TEST(ConversionReads, AStateNotReadWholeIsNeverUnchanged) {
+  Folders folders;
+  testing::write_file(folders.root / "arm.gltf", testing::read_file(testing::data_dir() / "blender" / "arm3.gltf"));
+  testing::write_file(folders.root / "arm3.bin", testing::read_file(testing::data_dir() / "blender" / "arm3.bin"));
+  ConversionJob job = job_for(folders, "arm.gltf");
+  std::string refusal = "leads outside the model's folder through a symbolic link";
+  job.read_file = [&](const fs::path&, const fs::path&, std::uint64_t, std::vector<std::uint8_t>&,
+                      std::string& why) -> std::optional<std::uint64_t> {
+    why = refusal;
+    return std::nullopt;
+  };
+  const ConversionOutcome first = run_conversion(job);
+  ASSERT_EQ(first.kind, ConversionOutcome::Kind::kRejected);
+  EXPECT_NE(messages(first.diagnostics).find(refusal), std::string::npos) << messages(first.diagnostics);
+  job.previous_hash = first.content_hash;
+  refusal = "has 2 hard links";
+  const ConversionOutcome second = run_conversion(job);
+  EXPECT_EQ(second.content_hash, first.content_hash);
+  ASSERT_EQ(second.kind, ConversionOutcome::Kind::kRejected);
+  EXPECT_NE(messages(second.diagnostics).find(refusal), std::string::npos) << messages(second.diagnostics);
+}
+
 TEST(ConversionReads, AFileNamedTwiceIsReadOnceAndHashedAsOftenAsNamed) {
   Folders folders;
   Json document = Json::parse(testing::read_file(testing::data_dir() / "blender" / "arm3.gltf"));

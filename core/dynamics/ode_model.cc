@@ -47,8 +47,11 @@ void set_body_pose(dBodyID body, const Eigen::Isometry3d& X_SB) {
 
 std::string mass_text(const MassProperties& in) {
   const Eigen::Matrix3d& I = in.inertia;
-  return "mass " + number(in.mass) + " kg with inertia [" + number(I(0, 0)) + ", " + number(I(0, 1)) + ", " +
-         number(I(0, 2)) + ", " + number(I(1, 1)) + ", " + number(I(1, 2)) + ", " + number(I(2, 2)) + "] kg m^2";
+  // Named entry by entry, in the frame they are in: the link's glTF frame (y up), which a URDF's
+  // ixx .. izz (z up) differ from by a turn, so that its values are found as what they are.
+  return "mass " + number(in.mass) + " kg with inertia (link frame, glTF axes: y up) Ixx " + number(I(0, 0)) +
+         ", Ixy " + number(I(0, 1)) + ", Ixz " + number(I(0, 2)) + ", Iyy " + number(I(1, 1)) + ", Iyz " +
+         number(I(1, 2)) + ", Izz " + number(I(2, 2)) + " kg m^2";
 }
 
 bool mass_checks(const MassProperties& in) {

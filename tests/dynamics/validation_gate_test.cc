@@ -130,6 +130,9 @@ TEST(DynamicsGate, DMassCheckRefusalIsAnError) {
   ASSERT_EQ(refused.size(), 1u) << all_text(report.diagnostics);
   EXPECT_EQ(refused[0].pointer, "/nodes/4");
   EXPECT_NE(refused[0].message.find("'forearm'"), std::string::npos);
+  // Each entry named, and the frame said: a URDF's ixx .. izz are z up, the link's glTF frame y up.
+  EXPECT_NE(refused[0].message.find("mass -0.5 kg with inertia (link frame, glTF axes: y up) Ixx "), std::string::npos)
+      << refused[0].message;
 }
 
 // facts.md: arm3 with one link's inertia scaled by 1e-6 blows up in ODE without a NaN, and

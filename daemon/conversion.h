@@ -93,7 +93,13 @@ struct ConversionJob {
   bool prepare = false;
   // This job only moves a prepared outcome's staged outputs into place and hands it on.
   std::shared_ptr<ConversionOutcome> commit;
+  // Small (the model and the files it named last time hold at most kExpressBytes, or a commit):
+  // the express worker may take it, so that a save of a small model never waits behind large
+  // conversions that hold every worker (ThreadJobRunner).
+  bool express = false;
 };
+
+inline constexpr std::uint64_t kExpressBytes = std::uint64_t{16} << 20;
 
 // The dynamics check of a revision, without the ODE world.
 struct ValidationSummary {

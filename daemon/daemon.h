@@ -88,6 +88,7 @@ class Daemon {
   void unfile_timer(ModelRecord& record);
   void fire_timers(Clock::time_point now);
   ConversionJob make_job(const ModelRecord& record) const;
+  bool is_small(const ModelRecord& record) const;
   void start_job(ModelRecord& record);
   // Converting while settling: what a file event's or a prepared job's transition asks for, and
   // a prepared job started when the model may have one.

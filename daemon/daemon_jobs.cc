@@ -145,7 +145,22 @@ ConversionJob Daemon::make_job(const ModelRecord& record) const {
     urdf.y_up = config_.urdf_y_up;
     job.urdf = urdf;
   }
+  job.express = is_small(record);
   return job;
+}
+
+// Whether the model and the files it named when last converted hold at most kExpressBytes. A .gltf
+// never converted is not: the .bin beside it is not known yet, and may be large.
+bool Daemon::is_small(const ModelRecord& record) const {
+  if (record.dependencies.empty() && record.source.extension() != ".glb") return false;
+  std::uint64_t bytes = 0;
+  std::error_code error;
+  for (const std::filesystem::path& file : record.dependencies) {
+    bytes += std::filesystem::file_size(file, error);
+    if (error) return false;
+  }
+  bytes += std::filesystem::file_size(record.source, error);
+  return !error && bytes <= kExpressBytes;
 }
 
 void Daemon::use_prepared(ModelRecord& record, ConversionOutcome outcome) {
@@ -153,6 +168,7 @@ void Daemon::use_prepared(ModelRecord& record, ConversionOutcome outcome) {
     // Its outputs are staged: a worker moves them into place (fsyncs) and hands it back.
     ConversionJob job = make_job(record);
     job.commit = std::make_shared<ConversionOutcome>(std::move(outcome));
+    job.express = true;  // Renames and fsyncs only.
     runner_->submit(std::move(job));
     return;
   }

@@ -1,5 +1,6 @@
 #include "ports.h"
 
+#include <algorithm>
 #include <sys/eventfd.h>
 #include <unistd.h>
 
@@ -42,8 +43,10 @@ void run_after_handover(const std::function<void()>& after) noexcept {
   }
 }
 
-ThreadJobRunner::ThreadJobRunner(int workers) : wake_fd_(::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC)) {
-  for (int i = 0; i < workers; ++i) workers_.emplace_back([this] { worker_loop(); });
+ThreadJobRunner::ThreadJobRunner(int workers, bool express_worker)
+    : wake_fd_(::eventfd(0, EFD_NONBLOCK | EFD_CLOEXEC)) {
+  for (int i = 0; i < workers; ++i) workers_.emplace_back([this] { worker_loop(false); });
+  if (express_worker) workers_.emplace_back([this] { worker_loop(true); });
 }
 
 ThreadJobRunner::~ThreadJobRunner() {
@@ -63,7 +66,13 @@ void ThreadJobRunner::submit(ConversionJob job) {
       jobs_.push_back(std::move(job));
     }
   }
-  work_ready_.notify_one();
+  // Every worker: the one woken by notify_one might be the express one, which may not take it.
+  work_ready_.notify_all();
+}
+
+std::deque<ConversionJob>::iterator ThreadJobRunner::next_job(bool express_only) {
+  if (!express_only) return jobs_.begin();
+  return std::find_if(jobs_.begin(), jobs_.end(), [](const ConversionJob& job) { return job.express; });
 }
 
 void ThreadJobRunner::wake() {
@@ -99,15 +108,16 @@ void ThreadJobRunner::stop() {
   workers_.clear();
 }
 
-void ThreadJobRunner::worker_loop() {
+void ThreadJobRunner::worker_loop(bool express_only) {
   for (;;) {
     ConversionJob job;
     {
       std::unique_lock lock(mutex_);
-      work_ready_.wait(lock, [this] { return stopping_ || !jobs_.empty(); });
-      if (jobs_.empty()) return;  // Stopping, and nothing left to finish.
-      job = std::move(jobs_.front());
-      jobs_.pop_front();
+      work_ready_.wait(lock, [&] { return stopping_ || next_job(express_only) != jobs_.end(); });
+      const auto next = next_job(express_only);
+      if (next == jobs_.end()) return;  // Stopping, and nothing left it may finish.
+      job = std::move(*next);
+      jobs_.erase(next);
     }
     ConversionOutcome outcome = run_job(job);
     std::function<void()> after = std::move(outcome.after_handover);

@@ -53,10 +53,13 @@ class JobRunner {
   virtual void stop() = 0;
 };
 
-// `workers` threads running run_conversion; an eventfd wakes the loop when one finishes.
+// `workers` threads running run_conversion, and one express thread that takes only express jobs
+// (ConversionJob::express: small models, commits), so that two large files dropped in the folder
+// cannot stall every other model's save for as long as they convert; an eventfd wakes the loop
+// when one finishes.
 class ThreadJobRunner final : public JobRunner {
  public:
-  explicit ThreadJobRunner(int workers);
+  explicit ThreadJobRunner(int workers, bool express_worker = true);
   ~ThreadJobRunner() override;
   void submit(ConversionJob job) override;
   std::vector<ConversionOutcome> take(std::size_t max, bool& more) override;
@@ -64,7 +67,9 @@ class ThreadJobRunner final : public JobRunner {
   void stop() override;
 
  private:
-  void worker_loop();
+  void worker_loop(bool express_only);
+  // The next job a worker may take (jobs_.end() if none); with mutex_ held.
+  std::deque<ConversionJob>::iterator next_job(bool express_only);
   void wake();
 
   int wake_fd_ = -1;

@@ -5,6 +5,7 @@
 #include <atomic>
 #include <future>
 #include <set>
+#include <thread>
 
 #include <gtest/gtest.h>
 
@@ -64,6 +65,56 @@ TEST_F(JobRunnerTest, EveryJobComesBackConvertedAndWakesTheLoop) {
     ids.insert(outcome.model_id);
   }
   EXPECT_EQ(ids, (std::set<std::string>{"a.glb", "b.glb", "c.glb"}));
+}
+
+// Two large conversions hold both workers (here: blocked reading their .bin): a small model's save
+// still converts at once, on the express worker, and a large job is never taken by it.
+TEST_F(JobRunnerTest, ASmallJobIsNotHeldBehindLargeOnesThatHoldEveryWorker) {
+  std::atomic<int> reading{0};
+  ThreadJobRunner runner(2);
+  // Declared after the runner, so gone before it: a failed assertion still lets its workers finish.
+  struct Release {
+    std::promise<void> promise;
+    bool done = false;
+    void now() {
+      if (!done) promise.set_value();
+      done = true;
+    }
+    ~Release() { now(); }
+  } release;
+  const std::shared_future<void> released = release.promise.get_future().share();
+  for (const char* name : {"big1.gltf", "big2.gltf", "big3.gltf"}) {
+    rdtf::testing::write_file(root_ / name, rdtf::testing::read_file(rdtf::testing::data_dir() / "blender" / "arm3.gltf"));
+    rdtf::testing::write_file(root_ / "arm3.bin", rdtf::testing::read_file(rdtf::testing::data_dir() / "blender" / "arm3.bin"));
+    ConversionJob big;
+    big.model_id = name;
+    big.root = root_;
+    big.source = root_ / name;
+    big.output_dir = tmp_.path() / "out" / name;
+    big.read_file = [&reading, released](const fs::path&, const fs::path& path, std::uint64_t,
+                                         std::vector<std::uint8_t>& out, std::string&) -> std::optional<std::uint64_t> {
+      ++reading;
+      released.wait();
+      const std::string bytes = rdtf::testing::read_file(path);
+      out.assign(bytes.begin(), bytes.end());
+      return bytes.size();
+    };
+    runner.submit(std::move(big));
+  }
+  for (int i = 0; i < 6000 && reading < 2; ++i) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  ASSERT_EQ(reading, 2) << "both workers should hold a large job, the third waiting";
+  ConversionJob small = job("small.glb");
+  small.express = true;
+  runner.submit(std::move(small));
+  const auto first = collect(runner, 1);
+  ASSERT_EQ(first.size(), 1u);
+  EXPECT_EQ(first[0].model_id, "small.glb");
+  EXPECT_EQ(first[0].kind, ConversionOutcome::Kind::kConverted);
+  EXPECT_EQ(reading, 2) << "the express worker took a large job";
+  release.now();
+  const auto rest = collect(runner, 3);
+  ASSERT_EQ(rest.size(), 3u);
+  for (const auto& outcome : rest) EXPECT_EQ(outcome.kind, ConversionOutcome::Kind::kConverted) << outcome.model_id;
 }
 
 // The cache entry is work for after the hand-over: the outcome reaches the loop without it, and

@@ -374,9 +374,12 @@ struct Client::State {
   }
 
   // A model rdtfd no longer lists as live is gone as if REMOVED had come: one deleted while
-  // rdtfd was down never gets a REMOVED, and stayed "live" here and in every viewer. After two
-  // STATUS in a row, so that one sent as its first revision went out cannot drop it.
+  // rdtfd was down never gets a REMOVED, and stayed "live" here and in every viewer. Only from a
+  // STATUS with nothing pending (a restarted rdtfd lists a model once its first conversion is
+  // done, which may take seconds), and after two in a row, so that one sent as a revision went
+  // out cannot drop it.
   void forget_models_not_live(const rdtf::status_t& status) {
+    if (status.pending != 0) return;
     const std::set<std::string> live(status.model_ids.begin(), status.model_ids.end());
     std::vector<rdtf::model_removed_t> gone;
     for (auto& [model_id, m] : models) {

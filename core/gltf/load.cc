@@ -339,11 +339,12 @@ std::optional<Json> prepare_buffers(const Json& document, bool binary, const Loa
         // A texture not there (moved away since the export) costs only its look: a warning. One
         // that is there but refused (a symbolic link out of the folder, a hard link, a device,
         // over max_file_bytes) is refused as a buffer would be (docs/daemon.md, "Confinement").
+        // (A symbolic link whose target is gone is not there either: status() follows it.)
         std::error_code error;
-        if (std::filesystem::symlink_status(*path, error).type() == std::filesystem::file_type::not_found) {
+        if (std::filesystem::status(*path, error).type() == std::filesystem::file_type::not_found) {
           diag.warning(codes::IO_ERROR, pointer, "image '" + uri + "' " + why + "; it will be missing from the output");
         } else {
-          diag.error(codes::URI_REFUSED, pointer, "image '" + uri + "' " + why);
+          diag.error(codes::URI_REFUSED, pointer, "image '" + uri + "': " + why);
         }
       }
     }

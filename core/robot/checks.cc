@@ -109,9 +109,11 @@ void check_units_of(const Json& document, const Robot& robot, Diagnostics& diag)
   if (!too_large && mass > kMaxMass) {
     diag.warning(codes::UNITS_IMPLAUSIBLE, json_pointer("/nodes", link.node),
                  "the robot " + size.text() + " and weighs " + short_number(mass) + " kg (" +
-                     node_label(document, link.node) + " alone " + short_number(link.inertial.mass) +
-                     " kg): its size is plausible in metres but its mass is not. Masses are kilograms and "
-                     "densities kg/m^3 (one typed in grams, or g/cm^3 as kg/m^3, is 1000 times too large)");
+                     node_label(document, link.node) + " alone " + short_number(link.inertial.mass) + " kg): " +
+                     (extent >= kMinExtent ? "its size is plausible in metres but its mass is not"
+                                           : "heavier than any robot") +
+                     ". Masses are kilograms and densities kg/m^3 (one typed in grams, or g/cm^3 as kg/m^3, is "
+                     "1000 times too large)");
   } else if (too_large) {
     diag.warning(codes::UNITS_IMPLAUSIBLE, json_pointer("/nodes", link.node),
                  "the robot " + size.text() + " and weighs " + short_number(mass) + " kg (" + node_label(document, link.node) + " alone " +

@@ -92,6 +92,10 @@ TEST(DaemonConfinement, EveryEscapeIsRejectedWithItsPlaceAndNothingLeaks) {
   // A texture moved away since the export costs only its look: the model is published, warned.
   const std::string missing_image = model_with_image("moved_away.png");
   write_in_place(s.watch / "missing_image.gltf", missing_image);
+  // So does a symbolic link whose target moved away: it is not there either.
+  fs::create_symlink("gone.png", s.watch / "dangling.png");
+  const std::string dangling_image = model_with_image("dangling.png");
+  write_in_place(s.watch / "dangling_image.gltf", dangling_image);
   // An embedded buffer over the cap (max_buffer_bytes, above /etc/passwd's size so that only the
   // confinement stops the others): 3,000 bytes more than the cap, in base64.
   const std::uint64_t cap = passwd_size + 4096;
@@ -112,7 +116,8 @@ TEST(DaemonConfinement, EveryEscapeIsRejectedWithItsPlaceAndNothingLeaks) {
       if (on_kind(all, "ERROR", id).empty()) return false;
     }
     return has_revision(all, "good.gltf", 1, content_hash(good)) &&
-           has_revision(all, "missing_image.gltf", 1, content_hash(missing_image, {""}));
+           has_revision(all, "missing_image.gltf", 1, content_hash(missing_image, {""})) &&
+           has_revision(all, "dangling_image.gltf", 1, content_hash(dangling_image, {""}));
   }, 10s)) << ::testing::PrintToString(model_events(s.messages()));
 
   for (std::size_t k = 0; k < rejected.size(); ++k) {
@@ -143,7 +148,7 @@ TEST(DaemonConfinement, EveryEscapeIsRejectedWithItsPlaceAndNothingLeaks) {
   ASSERT_TRUE(s.wait_revision("later.gltf", 1, content_hash(later)));
   const auto idle = s.wait_idle();
   ASSERT_TRUE(idle);
-  EXPECT_EQ(idle->conversions, 3);
+  EXPECT_EQ(idle->conversions, 4);
   EXPECT_EQ(idle->rejections, static_cast<std::int64_t>(rejected.size()));
   EXPECT_TRUE(s.daemon->running());
 

@@ -241,7 +241,7 @@ std::vector<ConfigKey> make_registry() {
       key<Millis>({.name = "status_period_ms", .unit = "ms", .min = 10, .max = 60000, .doc = "heartbeat period"},
                   RDTF_FIELD(status_period)),
       plain({.name = "workers", .min = 1, .max = 64, .reload = kNeedsRestart, .flag = "--workers",
-             .flag_help = "Conversion threads (default 2)", .doc = "conversion threads"},
+             .flag_help = "Conversion threads (default 2)", .doc = "conversion threads, besides the express worker for small models (see above)"},
             RDTF_FIELD(workers)),
       plain({.name = "max_chunk_bytes", .unit = "bytes", .min = 1024, .max = 65000,
              .doc = "largest message sent (one UDP datagram): RDTF JSON and URDF that do not fit inline go in "

@@ -235,7 +235,14 @@ void Daemon::apply(ConversionOutcome outcome) {
       }
       result = JobResult::kRejected;
       record->last_hash = outcome.content_hash;
-      record->dependencies = outcome.dependencies;
+      // What it named, and what was named before: a .gltf too broken to name anything (cut short)
+      // names no .bin, and the save that repairs it writes the .bin just after (Blender): that event
+      // must still reach this model, or the repair converted with the old .bin was the last word.
+      for (const auto& file : outcome.dependencies) {
+        if (std::find(record->dependencies.begin(), record->dependencies.end(), file) == record->dependencies.end()) {
+          record->dependencies.push_back(file);
+        }
+      }
       log_line("rejected " + id + " in " + milliseconds(outcome.duration) + ": " +
                first_error(outcome.diagnostics) +
                (record->live ? "; still serving revision " + std::to_string(record->revisions) : ""));

@@ -239,6 +239,32 @@ TEST_F(DaemonLoop, ABinSavedIsAnEventOfItsModel) {
   EXPECT_EQ(events("two_cylinder.gltf"), kRevision1);
 }
 
+// A .gltf cut short names no .bin, so its rejection left the model with no known files; the save
+// that repaired it wrote the .bin just after the .gltf (Blender), and that event reached no model:
+// the repair was converted with the old .bin, found unchanged, and the new .bin never published.
+TEST_F(DaemonLoop, ABinSavedRightAfterTheRepairOfABrokenGltfIsAnEventOfItsModel) {
+  rdtf::testing::write_file(watch_ / "two_cylinder.gltf", fixture("two_cylinder.gltf"));
+  rdtf::testing::write_file(watch_ / "two_cylinder.bin", fixture("two_cylinder.bin"));
+  start();
+  advance(50ms);
+  convert();
+  save("two_cylinder.gltf", fixture("two_cylinder.gltf").substr(0, 100));  // Cut short.
+  advance(50ms);
+  convert();
+  ASSERT_EQ(daemon_->counters().rejections, 1);
+  // The .bin alone (a conversion prepared from the repaired .gltf while it settled has read the
+  // old one: only this event tells the model that it is stale).
+  std::string bin = fixture("two_cylinder.bin");
+  bin[bin.size() / 2] = static_cast<char>(bin[bin.size() / 2] ^ 1);
+  save("two_cylinder.bin", bin);
+  EXPECT_EQ(phase("two_cylinder.gltf"), ModelPhase::kSettling);
+  save("two_cylinder.gltf", fixture("two_cylinder.gltf"));
+  advance(50ms);
+  convert();
+  EXPECT_EQ(events("two_cylinder.gltf"),
+            (std::vector<std::string>{"DESCRIPTION r1", "INERTIA", "ERROR live r1", "DESCRIPTION r2", "INERTIA"}));
+}
+
 TEST_F(DaemonLoop, AFullDiskIsReportedOnceAndRetriedWithABackOffUntilItWorks) {
   start();
   save("arm3.glb", fixture("arm3.glb"));

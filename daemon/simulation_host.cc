@@ -70,6 +70,30 @@ void advance_live_models(StepClock& clock, LiveModels& models, Clock::time_point
   }
 }
 
+std::vector<std::string> timing_change_lines(const std::vector<TimingChange>& changes, const char* what,
+                                             double wanted) {
+  constexpr std::size_t kLinesEach = 3;
+  std::vector<std::string> lines;
+  if (changes.size() <= kLinesEach) {
+    for (const TimingChange& change : changes) lines.push_back(change.line);
+    return lines;
+  }
+  double low = changes.front().factor, high = low;
+  std::string names;
+  for (std::size_t i = 0; i < changes.size(); ++i) {
+    low = std::min(low, changes[i].factor);
+    high = std::max(high, changes[i].factor);
+    if (i < kLinesEach) names += (i ? ", " : "") + changes[i].id;
+  }
+  char text[256];
+  std::snprintf(text, sizeof(text),
+                " and %zu more): %.3g to %.3g simulated s per wall s of %.3g wanted (all at once: the machine's "
+                "load, not one model's cost)",
+                changes.size() - kLinesEach, low, high, wanted);
+  lines.push_back("live simulations of " + std::to_string(changes.size()) + " models " + what + " (" + names + text);
+  return lines;
+}
+
 std::vector<double> budget_step_rates(const std::vector<double>& step_seconds, double budget_seconds) {
   std::vector<double> rates(step_seconds.size(), 1.0);
   std::vector<std::size_t> order(step_seconds.size());
@@ -416,6 +440,7 @@ void SimulationHost::supervise(Clock::time_point now) {
   LiveTiming timing;
   timing.failed = failures_;
   bool first = true;
+  std::vector<TimingChange> went_behind, caught_up;
   for (auto& [id, model] : models_) {
     costs.push_back(model->step_seconds);
     if (model->failed) {  // Waiting for its restart: not behind, measured again after it.
@@ -443,8 +468,12 @@ void SimulationHost::supervise(Clock::time_point now) {
                            : "live simulation of %s keeps time again: %.3g simulated s per wall s of %.3g wanted "
                              "(one step %.3g ms; %.0f%% of the steps)",
                     id.c_str(), factor, options_.real_time_factor, model->step_seconds * 1e3, model->rate * 100);
-      log_line(text);
+      (behind ? went_behind : caught_up).push_back({id, factor, text});
     }
+  }
+  for (const std::string& line : timing_change_lines(went_behind, "are behind", options_.real_time_factor)) log_line(line);
+  for (const std::string& line : timing_change_lines(caught_up, "keep time again", options_.real_time_factor)) {
+    log_line(line);
   }
   // 80% of the thread's time for stepping; the rest publishes and sleeps.
   const auto rates = budget_step_rates(costs, 0.8 * tick);

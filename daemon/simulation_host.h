@@ -135,6 +135,19 @@ void release_expired_commands(LiveModel& model, Clock::time_point now);
 // falls behind real time alone instead of slowing every simulation.
 std::vector<double> budget_step_rates(const std::vector<double>& step_seconds, double budget_seconds);
 
+// A model whose keeping time changed (fell behind, or kept time again) in one window.
+struct TimingChange {
+  std::string id;
+  double factor;     // simulated s per wall s in the window
+  std::string line;  // its own log line
+};
+// The log lines for the changes of one window (`what`: "are behind", "keep time again"): each
+// model's own when at most three changed; else one naming the first three, the count and the
+// range of factors (a starved thread made every model fall behind at once: 38 lines every few
+// seconds on a loaded machine, which said nothing one line does not).
+std::vector<std::string> timing_change_lines(const std::vector<TimingChange>& changes, const char* what,
+                                             double wanted);
+
 // At most `per_second` reports in any one-second window: a flood of bad commands or failures is
 // not answered by a flood of ERRORs. The next report admitted says how many were left out.
 class ReportLimiter {

@@ -333,6 +333,21 @@ TEST(RestartDelay, DoublesFromTheFirstDelayUpToTheMaximum) {
   EXPECT_EQ(restart_delay(1000), Clock::duration(kMaxRestartDelay));
 }
 
+// Up to three models that fall behind in one window are logged a line each; more at once (a
+// starved thread: every model together) in one line with the count and the range of factors.
+TEST(LiveTiming, ManyModelsFallingBehindAtOnceAreOneLine) {
+  std::vector<TimingChange> changes;
+  for (int i = 0; i < 3; ++i) changes.push_back({"m" + std::to_string(i) + ".gltf", 0.5 + 0.1 * i, "line " + std::to_string(i)});
+  EXPECT_EQ(timing_change_lines(changes, "are behind", 1.0), (std::vector<std::string>{"line 0", "line 1", "line 2"}));
+  changes.push_back({"m3.gltf", 0.166, "line 3"});
+  changes.push_back({"m4.gltf", 0.8, "line 4"});
+  EXPECT_EQ(timing_change_lines(changes, "are behind", 1.0),
+            (std::vector<std::string>{"live simulations of 5 models are behind (m0.gltf, m1.gltf, m2.gltf and 2 more): "
+                                      "0.166 to 0.8 simulated s per wall s of 1 wanted (all at once: the machine's "
+                                      "load, not one model's cost)"}));
+  EXPECT_TRUE(timing_change_lines({}, "keep time again", 1.0).empty());
+}
+
 TEST(LiveBudget, ModelsCheaperThanTheirShareRunFullyAndTheCostlyOneTakesTheRest) {
   // Budget 1 ms per step; costs 0.1, 0.2 and 5 ms: the two cheap ones at full rate, the costly one
   // gets what is left (0.7 ms of 5).

@@ -69,7 +69,8 @@ class Page {
     to_ = to_driver[1];
     from_ = from_driver[0];
     if (error != 0) throw std::runtime_error(std::string("cannot start node: ") + std::strerror(error));
-    const Json opened = request({{"open", url}});
+    // Starting Chromium comes first: on a loaded machine it has taken over 30 s.
+    const Json opened = request({{"open", url}}, 150s);
     if (!opened.value("ok", false)) throw std::runtime_error("the page did not open: " + opened.dump() + "\n" + driver_log());
   }
   ~Page() {
@@ -100,7 +101,10 @@ class Page {
         return Json::parse(answer);
       }
       const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now()).count();
-      if (left <= 0) throw std::runtime_error("no answer from the page driver to " + r.dump().substr(0, 200));
+      if (left <= 0) {
+        throw std::runtime_error("no answer from the page driver to " + r.dump().substr(0, 200) + "; its log:\n" +
+                                 driver_log());
+      }
       pollfd p{from_, POLLIN, 0};
       if (::poll(&p, 1, static_cast<int>(std::min<long long>(left, 1000))) > 0) {
         char chunk[65536];

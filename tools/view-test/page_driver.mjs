@@ -16,6 +16,9 @@ const browser = await puppeteer.launch({
   args: ['--no-sandbox', '--use-angle=swiftshader', '--enable-unsafe-swiftshader', '--ignore-gpu-blocklist',
     '--disable-dev-shm-usage', '--no-first-run', '--no-default-browser-check', '--window-size=1280,800'],
   defaultViewport: { width: 1280, height: 800 },
+  // Chromium's start and the first load are the slow steps on a loaded machine (two cores shared
+  // with a build): puppeteer's own 30 s gave up on them while the tests' waits still had time.
+  timeout: 120000,
 });
 const page = await browser.newPage();
 page.on('console', (m) => { if (m.type() === 'error' || m.type() === 'warn') process.stderr.write(`page ${m.type()}: ${m.text()}\n`); });
@@ -29,7 +32,7 @@ for await (const line of lines) {
     request = JSON.parse(line);
     if (request.quit) break;
     if (request.open) {
-      await page.goto(request.open, { waitUntil: 'load' });
+      await page.goto(request.open, { waitUntil: 'load', timeout: 120000 });
       answer({ ok: true });
     } else if (request.eval !== undefined) {
       const value = await page.evaluate(`(async () => (${request.eval}))()`);

@@ -1,8 +1,9 @@
 #include "ports.h"
 
-#include <algorithm>
 #include <sys/eventfd.h>
 #include <unistd.h>
+
+#include <algorithm>
 
 #include <lcm/lcm-cpp.hpp>
 

@@ -272,7 +272,7 @@ class Builder {
     return add_node(Json{{"name", link.name + "_visual"}, {"children", mesh_nodes}}, "visual");
   }
 
-  Json joint_json(const urdf::Joint& joint) {
+  Json joint_json(const urdf::Joint& joint, const XmlJoint& xml) {
     static const std::map<int, const char*> kinds{
         {urdf::Joint::FIXED, "fixed"},         {urdf::Joint::REVOLUTE, "revolute"},
         {urdf::Joint::CONTINUOUS, "continuous"}, {urdf::Joint::PRISMATIC, "prismatic"},
@@ -300,7 +300,7 @@ class Builder {
     // on its own in every simulation, which the user must hear of. The other two change nothing
     // the dynamics see.
     if (joint.mimic) {
-      diag.warning(codes::URDF_MIMIC_IGNORED, joint_pointer(joint.name) + "/mimic",
+      diag.warning_at_line(codes::URDF_MIMIC_IGNORED, joint_pointer(joint.name) + "/mimic", xml.mimic_row,
                    "joint '" + joint.name + "' mimics joint '" + joint.mimic->joint_name + "' (multiplier " +
                        exact_number(joint.mimic->multiplier) + ", offset " + exact_number(joint.mimic->offset) +
                        "): RDTF has no coupled joints, so it is imported as a joint of its own that moves freely");
@@ -309,7 +309,7 @@ class Builder {
       const std::string which = joint.safety && joint.calibration ? "<safety_controller> and <calibration>"
                                 : joint.safety                    ? "<safety_controller>"
                                                                   : "<calibration>";
-      diag.info(codes::URDF_IGNORED, joint_pointer(joint.name),
+      diag.add_at_line(Severity::kInfo, codes::URDF_IGNORED, joint_pointer(joint.name), xml.row,
                 "joint '" + joint.name + "': " + which + " has no RDTF equivalent and is not imported");
     }
     return out;
@@ -446,7 +446,7 @@ std::optional<Conversion> import_urdf(const fs::path& urdf, const UrdfImportOpti
     const auto& joints = child_joints[name];
     for (std::size_t j : joints) {
       const XmlJoint& joint = xml->joints[j];
-      const std::size_t joint_node = b.add_node(Json{{"name", joint.name}}, "joint", b.joint_json(*model->getJoint(joint.name)));
+      const std::size_t joint_node = b.add_node(Json{{"name", joint.name}}, "joint", b.joint_json(*model->getJoint(joint.name), joint));
       children.push_back(joint_node);
       joint_children.emplace_back(joint_node, joint.child);
     }

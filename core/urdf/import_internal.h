@@ -38,6 +38,7 @@ struct XmlLink {
 struct XmlJoint {
   std::string name, type, parent, child;
   int row = 0;
+  int mimic_row = 0;  // The line of its <mimic>, 0 when it has none.
 };
 
 // The robot's structure in document order, checked: a <robot> root; named, unique links and

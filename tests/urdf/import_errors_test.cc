@@ -186,7 +186,14 @@ const BadUrdf kBadUrdfs[] = {
     {"velocity infinite", joint_urdf("<limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"inf\"/>"),
      "URDF_INVALID_NUMBER", "/robot/joint[@name='j']/limit/@velocity", "'inf' is not a finite number"},
     {"limits inverted", joint_urdf("<limit lower=\"1\" upper=\"-1\" effort=\"1\" velocity=\"1\"/>"),
-     "URDF_INVALID_NUMBER", "/robot/joint[@name='j']/limit", "line 5: <limit>: lower 1 is above upper -1"},
+     "URDF_INVALID_NUMBER", "/robot/joint[@name='j']/limit",
+     "line 5: <limit>: lower 1 is above upper -1 (pybullet reads that as no limits; URDF has no such convention: "
+     "make it type=\"continuous\" if it turns freely)"},
+    {"prismatic limits inverted",
+     joint_urdf("<axis xyz=\"1 0 0\"/><limit lower=\"1\" upper=\"-1\" effort=\"1\" velocity=\"1\"/>", "prismatic"),
+     "URDF_INVALID_NUMBER", "/robot/joint[@name='j']/limit",
+     "lower 1 is above upper -1 (pybullet reads that as no limits; URDF has no such convention: give its range of "
+     "travel (URDF requires one))"},
     {"limit without effort", joint_urdf("<limit lower=\"-1\" upper=\"1\" velocity=\"1\"/>"), "URDF_INVALID",
      "/robot/joint[@name='j']/limit", "line 5: <limit> has no effort attribute"},
     {"revolute without limit", joint_urdf("<axis xyz=\"0 0 1\"/>"), "URDF_INVALID", "/robot/joint[@name='j']",

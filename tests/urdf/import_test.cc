@@ -456,8 +456,10 @@ TEST(UrdfImport, MimicJointIsAWarningNamingTheJointItFollows) {
   ASSERT_NE(mimic, nullptr);
   EXPECT_EQ(mimic->severity, Severity::kWarning);
   EXPECT_EQ(mimic->pointer, "/robot/joint[@name='panda_finger_joint2']/mimic");
+  EXPECT_EQ(mimic->line, 173);  // Of <mimic>, where the user's editor goes.
   EXPECT_EQ(mimic->message,
-            "joint 'panda_finger_joint2' mimics joint 'panda_finger_joint1' (multiplier 1, offset 0): RDTF has no "
+            "line 173: joint 'panda_finger_joint2' mimics joint 'panda_finger_joint1' (multiplier 1, offset 0): RDTF "
+            "has no "
             "coupled joints, so it is imported as a joint of its own that moves freely");
 }
 

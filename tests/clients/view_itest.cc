@@ -343,6 +343,10 @@ TEST(View, DrawsATexturedModelAndOneWithTwoBuffers) {
   for (auto& mesh : textured["meshes"]) {
     for (auto& primitive : mesh["primitives"]) primitive["material"] = 0;
   }
+  // A joint named as modellers name them: rdtfd's URDF name for it (states, commands) differs.
+  for (auto& node : textured["nodes"]) {
+    if (node.value("name", "") == "elbow") node["name"] = "elbow joint";
+  }
   write_in_place(s.watch / "textured.gltf", textured.dump());
   // Two buffers: the second holds arm3's bytes after 16 of its own, and every other buffer view
   // reads from it (at offsets 16 further on), so a view read from the wrong buffer is garbage.
@@ -393,6 +397,16 @@ TEST(View, DrawsATexturedModelAndOneWithTwoBuffers) {
     }
   }
   page.eval("window.rdtfView.select('textured.gltf')");
+  // Each slider says both names where they differ (the hover and the diagnostics say the glTF one).
+  Json labels;
+  ASSERT_TRUE(page.wait_state([&](const Json& st) {
+    labels = st["sliders"];
+    return labels.size() == 2;
+  })) << labels.dump();
+  std::vector<std::string> named;  // Each label up to its readout.
+  for (const auto& label : labels) named.push_back(label.get<std::string>().substr(0, label.get<std::string>().find(": ")));
+  std::sort(named.begin(), named.end());
+  EXPECT_EQ(named, (std::vector<std::string>{"elbow joint (URDF elbow_joint)", "shoulder"})) << labels.dump();
   page.screenshot("arm3_textured.png");
 }
 

@@ -349,6 +349,8 @@ function buildSliders(m) {
     input.min = lower; input.max = upper;
     input.value = m.targets[j.name] ?? m.view.jointPositions.get(j.name) ?? 0;
     input.dataset.joint = j.name;
+    input.dataset.label = j.gltf_name === j.name ? j.name : `${j.gltf_name} (URDF ${j.name})`;
+    div.querySelector('label').title = input.dataset.label;
     input.dataset.gains = Number.isFinite(j.kp) ? ` kp ${j.kp.toPrecision(3)} kd ${j.kd.toPrecision(3)}` : '';
     const unit = j.type === 'prismatic' ? ['kg', 'N/m', 'N s/m'] : ['kg m^2', 'N m/rad', 'N m s/rad'];
     div.title = Number.isFinite(j.kp)
@@ -368,7 +370,7 @@ function refreshSliderValues() {
     const name = input.dataset.joint;
     const q = m.view.jointPositions.get(name);
     const target = m.targets[name];
-    const text = `${name}: ${q === undefined ? '-' : q.toFixed(3)}` +
+    const text = `${input.dataset.label}: ${q === undefined ? '-' : q.toFixed(3)}` +
       `${target === undefined ? '' : ` (target ${target.toFixed(3)})`}${input.dataset.gains}`;
     if (input.previousSibling.textContent !== text) input.previousSibling.textContent = text;
   }
@@ -479,6 +481,7 @@ window.rdtfView = {
         ...(m.view ? m.view.state() : {}),
       })),
       refusals: refusals.slice(),
+      sliders: [...$('sliders').querySelectorAll('label')].map((l) => l.textContent),
       motion_hold: { model: motionHeld() ? motionHold.id : null, saves_heard: motionHold.count },
     };
   },

@@ -155,7 +155,11 @@ export class ModelView {
       // turned back from ROS's Z up (docs/urdf.md, "Frames": glTF (x, y, z) is URDF (x, -z, y)).
       const entry = [link.node, ...link.chain].map((n) => this.rdtfNodes.get(n)).find((e) => e && e.joint && e.joint.axis);
       const axis = entry ? entry.joint.axis : [j.axis[0], j.axis[2], -j.axis[1]];
+      // The name the modeller gave it (diagnostics and hovers use it), which rdtfd sanitised into
+      // the URDF name that states and commands carry: "elbow joint" is elbow_joint.
+      const owner = [link.node, ...link.chain].find((n) => { const e = this.rdtfNodes.get(n); return e && e.joint; });
       this.joints.push({ ...j, link, axis: new THREE.Vector3(...axis).normalize(), highlighted: false,
+        gltf_name: owner !== undefined && this.nodeNames[owner] ? this.nodeNames[owner] : j.name,
         gltf_names: link.chain.map((n) => this.nodeNames[n]) });
     }
   }
@@ -251,7 +255,7 @@ export class ModelView {
           com_drawn: this.overlays.comDrawn(l.index), meshes: l.meshes.length,
           bounds: l.bounds.isEmpty() ? null : [l.bounds.min.toArray(), l.bounds.max.toArray()] };
       }),
-      joints: this.joints.map((j) => ({ name: j.name, type: j.type, lower: j.lower, upper: j.upper,
+      joints: this.joints.map((j) => ({ name: j.name, gltf_name: j.gltf_name, type: j.type, lower: j.lower, upper: j.upper,
         position: this.jointPositions.has(j.name) ? this.jointPositions.get(j.name) : null,
         kp: j.kp ?? null, kd: j.kd ?? null, moved_inertia: j.moved_inertia ?? null })),
       total_mass: this.totalMass,

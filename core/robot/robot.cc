@@ -522,13 +522,14 @@ Robot build_robot(const Json& document, const std::vector<NodeType>& types, std:
     // node's frame. The geometry stays where it is: visuals and inertial are expressed in it.
     // A child that carries the joint properties itself, below joint nodes that carry none (a
     // camera's empty, fixed, under a plain mount empty), is its own pivot: the nodes between only
-    // place it.
+    // place it. Only node extras count here: rdtf's output holds every joint's properties in the
+    // entry of its joint node (where the paper's readers look) and its keys on the frame node, so
+    // an entry between is no pivot of its own where the child carries the keys (converting the
+    // output again put the pivot at the mount, 0.1 m off; so did every armature Blender re-exported,
+    // its importer turning the inserted joint node).
     joint.frame_node = child.node;
     bool properties_between = false;
-    for (int node : joint_nodes) {
-      properties_between = properties_between || has_joint_keys(node_extras(document, node)) ||
-                           entry_joint(static_cast<std::size_t>(node)) != nullptr;
-    }
+    for (int node : joint_nodes) properties_between = properties_between || has_joint_keys(node_extras(document, node));
     const bool own_pivot = !properties_between && has_joint_keys(node_extras(document, child.node));
     for (std::size_t k = 0; !own_pivot && k < joint_nodes.size(); ++k) {
       const int node = joint_nodes[k];

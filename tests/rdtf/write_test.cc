@@ -21,9 +21,10 @@ struct Fixture {
 std::vector<Fixture> models() {
   std::vector<Fixture> result;
   for (const char* file : {"two_cylinder.gltf", "arm3.gltf", "arm3.glb", "transforms.gltf",
-                           "skinned_arm.gltf", "modelled_arm.gltf", "modelled_bones.gltf"}) {
+                           "skinned_arm.gltf", "modelled_arm.gltf", "modelled_bones.gltf", "skinned_roundtrip.glb"}) {
     result.push_back({"blender", file});
   }
+  result.push_back({"frames", "mount_empty.gltf"});
   for (const char* file : {"Box.gltf", "Triangle.gltf", "TriangleWithoutIndices.gltf",
                            "SimpleMeshes.gltf", "SimpleSparseAccessor.gltf", "MultipleScenes.gltf",
                            "Cameras.gltf", "SimpleSkin.gltf", "RiggedSimple.gltf",
@@ -88,8 +89,20 @@ TEST_P(WriteRdtf, OutputValidatesAndConvertsBackToItself) {
     }
   }
   ASSERT_EQ(again->robot.links.size(), conversion->robot.links.size());
+  ASSERT_EQ(again->robot.joints.size(), conversion->robot.joints.size());
+  // The same frames: a joint's pivot read again where the first conversion put it.
+  for (std::size_t i = 0; i < again->robot.joints.size(); ++i) {
+    const Joint& a = again->robot.joints[i];
+    const Joint& b = conversion->robot.joints[i];
+    EXPECT_EQ(a.name, b.name);
+    EXPECT_LE((a.X_PJ.matrix() - b.X_PJ.matrix()).cwiseAbs().maxCoeff(), 1e-12)
+        << a.name << ":\n" << a.X_PJ.matrix() << "\nfirst:\n" << b.X_PJ.matrix();
+    EXPECT_LE((a.axis - b.axis).norm(), 1e-12) << a.name;
+  }
   for (std::size_t i = 0; i < again->robot.links.size(); ++i) {
     EXPECT_EQ(again->robot.links[i].name, conversion->robot.links[i].name);
+    EXPECT_LE((again->robot.links[i].X_SL.matrix() - conversion->robot.links[i].X_SL.matrix()).cwiseAbs().maxCoeff(),
+              1e-12) << again->robot.links[i].name;
     EXPECT_EQ(again->robot.links[i].inertial.mass, conversion->robot.links[i].inertial.mass);
     EXPECT_EQ(again->robot.links[i].inertial.center_of_mass,
               conversion->robot.links[i].inertial.center_of_mass);

@@ -14,9 +14,11 @@
 // docs/controller.md: gains, modes, and how to write your own controller.
 #include <CLI/CLI.hpp>
 
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <csignal>
+#include <cstring>
 #include <iostream>
 #include <map>
 #include <memory>
@@ -173,7 +175,9 @@ int main(int argc, char** argv) {
   const auto wait_until = start + std::chrono::duration<double>(wait);
   while (!g_stop && !out_of_time()) {
     if (lcm.handleTimeout(50) < 0) {
-      std::cerr << "rdtf-pd-controller: LCM failed\n";
+      // The wait that SIGINT or SIGTERM cut short ends the loop; that is no failure.
+      if (g_stop || errno == EINTR) continue;
+      std::cerr << "rdtf-pd-controller: LCM failed: " << std::strerror(errno) << "\n";
       return 1;
     }
     node.tick();

@@ -1,14 +1,10 @@
 #include "pd_controller.h"
 
-#include <algorithm>
-
 #include "counts.h"
 
 namespace rdtf::controller {
 
-void PdController::on_description(std::int64_t revision) {
-  newest_described_ = std::max(newest_described_, revision);
-}
+void PdController::on_description(std::int64_t revision) { described_ = revision; }
 
 void PdController::follow(const rdtf::joint_state_t& state) {
   // Targets by name: a given target, else the target this joint had in the previous revision
@@ -35,8 +31,9 @@ void PdController::follow(const rdtf::joint_state_t& state) {
 
 std::optional<rdtf::joint_command_t> PdController::on_state(const rdtf::joint_state_t& state) {
   if (state.model_id != options_.model_id) return std::nullopt;
-  // Revisions only grow: a state older than one already followed or described is stale.
-  if (state.revision < std::max(revision_, newest_described_)) return std::nullopt;
+  // The revision the bus described last is the model's, lower or not: a restarted rdtfd without
+  // its state numbers from 1 again (docs/lcm.md). States of any other are in flight and stale.
+  if (described_ != 0 && state.revision != described_) return std::nullopt;
   if (state.revision != revision_ || state.content_hash != content_hash_) follow(state);
 
   rdtf::joint_command_t command;

@@ -45,7 +45,8 @@ class PdController {
  public:
   explicit PdController(PdOptions options) : options_(std::move(options)) {}
 
-  // A DESCRIPTION: states of older revisions are in flight and are no longer answered.
+  // A complete revision from the client library (its newest described): states of any other
+  // revision are in flight and are no longer answered.
   void on_description(std::int64_t revision);
 
   // The command that answers `state`, or nothing (another model, or an outdated revision).
@@ -61,7 +62,7 @@ class PdController {
   void follow(const rdtf::joint_state_t& state);
 
   PdOptions options_;
-  std::int64_t newest_described_ = 0;
+  std::int64_t described_ = 0;
   std::int64_t revision_ = 0;
   std::string content_hash_;
   std::map<std::string, double> active_targets_;

@@ -6,6 +6,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <chrono>
 #include <cstdlib>
 #include <cstring>
@@ -134,7 +135,8 @@ int run_pull(const PullArguments& args) {
   const auto deadline = start + std::chrono::duration<double>(args.timeout);
   while (!snapshot && std::chrono::steady_clock::now() < deadline) {
     if (lcm.handleTimeout(20) < 0) {
-      std::cerr << "rdtf pull: LCM failed\n";
+      if (errno == EINTR) continue;  // A signal with a handler (a debugger's, a profiler's).
+      std::cerr << "rdtf pull: LCM failed: " << std::strerror(errno) << "\n";
       return kExitInternalError;
     }
     client.tick();

@@ -10,6 +10,7 @@
 // The measured rest pose must also match the computed equilibrium to kEquilibriumTolerance: the
 // PD law runs in rdtfd at every 1 ms step, so only ODE's joint error (ERP, CFM) separates them.
 #include <cmath>
+#include <csignal>
 
 #include "clients/live_arm.h"
 
@@ -128,6 +129,46 @@ TEST(Controller, HoldsTheArmAgainstGravityWhereThePdLawPredicts) {
   EXPECT_TRUE(rejected.empty()) << rejected.front();
   EXPECT_NE(controller.output().find("following arm3.gltf revision 1"), std::string::npos) << controller.output();
   (void)daemon;
+}
+
+// rdtfd restarted over a fresh output folder numbers the model from 1 again (docs/lcm.md): the
+// controller follows the revision the bus now describes, lower or not (it went silent, and the arm
+// passive, once revision 2 had been followed), and stops on SIGINT with exit code 0.
+TEST(Controller, FollowsRevisionsNumberedAgainFromOneAndStopsCleanlyOnSigint) {
+  Session s;
+  write_arm3_across_gravity(s.watch);
+  s.start(live_arm_daemon());
+  ASSERT_TRUE(fs::exists(controller_path())) << controller_path() << " not built";
+  ChildProcess controller(controller_args({{"shoulder", 0.3}, {"elbow", -0.6}}, "position"), s.root / "controller.log");
+  const auto commanded = [&](std::int64_t revision, const std::string& hash) {
+    return s.wait_for([&](const auto& all) {
+      for (const auto& c : decoded<rdtf::joint_command_t>(all, "JOINT_COMMAND", kArm)) {
+        if (c.revision == revision && c.content_hash == hash) return true;
+      }
+      return false;
+    }, 20s);
+  };
+  ASSERT_TRUE(s.wait_for([&](const auto& all) { return !decoded<rdtf::joint_command_t>(all, "JOINT_COMMAND", kArm).empty(); }, 20s))
+      << controller.output();
+  // Revision 2: the elbow's damping changed.
+  Json document = Json::parse(read(s.watch / kArm));
+  for (auto& node : document["nodes"]) {
+    if (node.value("name", "") == "elbow") node["extras"]["rdtf_damping"] = 0.5;
+  }
+  const std::string second = document.dump(1);
+  write_in_place(s.watch / kArm, second);
+  const std::string second_hash = content_hash(second, {read(s.watch / "arm3.bin")});
+  ASSERT_TRUE(commanded(2, second_hash)) << controller.output();
+
+  s.daemon.reset();
+  s.start(live_arm_daemon().with_output(s.root / "fresh_output"));
+  ASSERT_TRUE(commanded(1, second_hash)) << "no command for revision 1 after the restart; controller:\n"
+                                         << controller.output();
+  EXPECT_TRUE(rejections(s.messages()).empty()) << rejections(s.messages()).front();
+
+  controller.signal(SIGINT);
+  EXPECT_EQ(controller.wait_exit(10s), std::optional<int>(0)) << controller.output();
+  EXPECT_EQ(controller.output().find("LCM failed"), std::string::npos) << controller.output();
 }
 
 // The controller takes its model from the bus: one nobody serves is an error naming the models it saw.

@@ -68,8 +68,12 @@ Json robot_summary(const Robot& robot, const Json& document, const Diagnostics& 
                  {"damping", joint.damping},
                  {"friction", joint.friction},
                  {"springStiffness", joint.spring_stiffness}};
-    if (joint.limits) {  // lower and upper only when given (an effort limit alone bounds no motion)
-      Json limits = {{"effort", joint.limits->effort}, {"velocity", joint.limits->velocity}};
+    // Each limit only when given, as in extras.RDTF: a reader cannot tell a 0 written for "none"
+    // from a limit of 0 (lower and upper: an effort limit alone bounds no motion).
+    if (joint.limits) {
+      Json limits = Json::object();
+      if (joint.limits->effort != 0) limits["effort"] = joint.limits->effort;
+      if (joint.limits->velocity != 0) limits["velocity"] = joint.limits->velocity;
       if (joint.limits->position) {
         limits["lower"] = joint.limits->lower;
         limits["upper"] = joint.limits->upper;

@@ -89,6 +89,8 @@ TEST(Cli, InspectJsonIsMachineReadable) {
   EXPECT_EQ(summary["links"][0]["inertia"].size(), 6u);
   EXPECT_EQ(summary["joints"][0]["name"], "shoulder");
   EXPECT_EQ(summary["joints"][0]["type"], "revolute");
+  // Limits as given: arm3's shoulder has a range and no effort or speed limit, which is no 0.
+  EXPECT_EQ(summary["joints"][0]["limits"], (nlohmann::json{{"lower", -1.57}, {"upper", 1.57}}));
 }
 
 TEST(Cli, DensityOptionScalesMass) {

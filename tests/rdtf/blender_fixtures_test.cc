@@ -188,6 +188,31 @@ TEST(BlenderFixtures, TransformsTheSkewedSensorIsNamedWithTheScaleThatSkewsIt) {
   }
 }
 
+// The shoulder empty was keyframed (frames 1 and 30) and exported at frame 30: Blender wrote its
+// frame-1 rotation, which is what the robot is made of. Said once, at the animation's channel,
+// naming the node; the fixtures without animations get nothing.
+TEST(BlenderFixtures, KeyframedJointIsNamedWithItsAnimation) {
+  Diagnostics diag;
+  const Conversion conversion = convert_fixture("keyframed.glb", diag);
+  std::vector<const Diagnostic*> animated;
+  for (const Diagnostic& d : diag.all()) {
+    if (d.code == "NODE_ANIMATED") animated.push_back(&d);
+  }
+  ASSERT_EQ(animated.size(), 1u);
+  EXPECT_EQ(animated[0]->severity, Severity::kWarning);
+  EXPECT_EQ(animated[0]->pointer, "/animations/0/channels/0");
+  EXPECT_EQ(conversion.asset.document["nodes"][10]["name"], "shoulder");
+  EXPECT_NE(animated[0]->message.find("animation 0 'shoulderAction' moves node 10 'shoulder' (rotation): "),
+            std::string::npos)
+      << animated[0]->message;
+  EXPECT_NE(animated[0]->message.find("Clear Keyframes"), std::string::npos) << animated[0]->message;
+  for (const char* name : {"arm3.gltf", "two_cylinder.gltf", "skinned_arm.gltf", "modelled_arm.gltf", "transforms.gltf"}) {
+    Diagnostics other;
+    convert_fixture(name, other);
+    EXPECT_FALSE(other.contains("NODE_ANIMATED")) << name;
+  }
+}
+
 TEST(BlenderFixtures, SkinnedArmBonesAreLinksCarryingTheirPartOfTheMesh) {
   Diagnostics diag;
   const Conversion conversion = convert_fixture("skinned_arm.gltf", diag);

@@ -142,6 +142,7 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(NO_LINKS, kSeverityWarning, "model") \
   X(NO_RDTF_PROPERTIES, kSeverityWarning, "model") \
   X(NO_SCENE, kSeverityError, "model") \
+  X(NODE_ANIMATED, kSeverityWarning, "model") \
   X(NODE_SHEARED, kSeverityWarning, "model") \
   X(PRIMITIVE_SKIPPED, kSeverityInfo, "model") \
   X(RDTF_AXES_ASSUMED, kSeverityWarning, "model") \

@@ -6,10 +6,11 @@ namespace rdtf {
 namespace {
 
 // Nothing an author or a modelling tool gives a node: what gltfpack writes for the node it
-// inserts (mesh, translation/rotation/scale) and, at most, instancing.
+// inserts (mesh, translation/rotation/scale, and the skin of a skinned mesh it moved) and, at
+// most, instancing.
 bool bare_mesh_node(const Json& node) {
   if (!node.contains("mesh")) return false;
-  for (const char* key : {"name", "children", "extras", "skin", "camera", "weights", "matrix"}) {
+  for (const char* key : {"name", "children", "extras", "camera", "weights", "matrix"}) {
     if (node.contains(key)) return false;
   }
   if (node.contains("extensions")) {

@@ -239,6 +239,34 @@ TEST(EncodedFallback, DracoFallbackOverASharedAccessorIsRefusedSayingWhy) {
   }
 }
 
+// gltfpack moves a skinned mesh with its skin into an unnamed carrier under the named node, as it
+// does plain meshes: the named node stays the mesh node of the bones' links. (It became a massless
+// link on a fixed joint of its own, and NO_RDTF_PROPERTIES took it for a joint empty.) Each bone's
+// part is a piece of the skinned mesh whose coordinates moved by at most half gltfpack's step (the
+// carrier's scale), so its mass moves by at most the whole mesh's bound (volume_bound).
+TEST(EncodedSkinned, AGltfpackCarrierOfASkinnedMeshIsItsMeshNode) {
+  const Conversion source = convert_ok(testing::data_dir() / "blender" / "skinned_arm.gltf");
+  const Conversion enc = convert_ok(encoded("skinned_gltfpack.glb"));
+  expect_same_robot(enc.robot, source.robot);
+  double delta = 0;
+  for (const Json& node : enc.asset.document["nodes"]) {
+    if (node.contains("mesh") && node.contains("scale")) delta = std::max(delta, node["scale"][0].get<double>() / 2);
+  }
+  ASSERT_GT(delta, 0);
+  std::size_t skinned = 0;
+  const Json& nodes = source.asset.document["nodes"];
+  for (std::size_t i = 0; i < nodes.size(); ++i) {
+    if (nodes[i].contains("skin")) skinned = i;
+  }
+  const Solid whole = solid_of(source.asset, skinned, Eigen::Affine3d::Identity());
+  for (const Link& link : source.robot.links) {
+    if (link.inertial.volume == 0) continue;
+    const double bound = link.inertial.mass / link.inertial.volume * volume_bound(whole, delta);
+    EXPECT_LE(std::abs(link_named(enc.robot, link.name).inertial.mass - link.inertial.mass), bound) << link.name;
+    EXPECT_LT(bound, 0.05 * link.inertial.mass) << link.name;
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(
     Encoders, EncodedModel,
     ::testing::Values(Case{"arm_gltfpack.gltf", true, Case::kGltfpackScale},

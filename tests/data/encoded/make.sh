@@ -65,3 +65,7 @@ rm arm_rdtf_output.glb
 # defaults: edgebreaker, the portable texture-coordinate prediction); fuzz/make_decoder_seeds.py
 # makes the draco fuzz seed and the regression inputs of the orientation bound from it.
 draco_encoder -i cube_texcoords.obj -o cube_texcoords.drc >/dev/null
+
+# A skinned mesh (Blender's skinned_arm, three bones): gltfpack moves the mesh and its skin into an
+# unnamed carrier under the named node, which must stay the mesh node (no link of its own).
+"$bin/gltfpack" -i "$root/tests/data/blender/skinned_arm.gltf" -o skinned_gltfpack.glb -kn -ke -cc

@@ -1,5 +1,6 @@
 // validate_document (rdtf/validate.h): the order of the checks, the type-checked reading of
 // properties they all use, and the checks of the document as a whole. See document_check.h.
+#include <algorithm>
 #include <cmath>
 #include <unordered_set>
 
@@ -292,6 +293,21 @@ void DocumentCheck::check_extensions() {
                     "the model requires " + quote(name.get<std::string>()) +
                         ", which rdtf cannot read; export the model without it");
       }
+    }
+  }
+  // glTF 2.0: every required extension is also used. One that is not would be kept required by
+  // an output that no longer uses it, which the Khronos validator refuses.
+  const Json* used = read_array(doc_, "extensionsUsed", "");
+  const Json* required = read_array(doc_, "extensionsRequired", "");
+  for (std::size_t k = 0; required != nullptr && k < required->size(); ++k) {
+    const Json& name = (*required)[k];
+    if (!name.is_string()) continue;
+    const bool listed = used != nullptr && std::find(used->begin(), used->end(), name) != used->end();
+    if (!listed) {
+      diag_.error(codes::UNUSED_EXTENSION_REQUIRED, json_pointer("/extensionsRequired", k),
+                  quote(name.get<std::string>()) +
+                      " is required but not in extensionsUsed (glTF 2.0: every required extension is also "
+                      "used): list it in extensionsUsed too, or remove it from extensionsRequired");
     }
   }
 }

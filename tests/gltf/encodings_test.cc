@@ -9,6 +9,7 @@
 #include "../../fuzz/fuzz_pipeline.h"
 #include "rdtf/convert.h"
 #include "rdtf/dynamics.h"
+#include "rdtf/glb.h"
 #include "support/test_support.h"
 
 namespace rdtf {
@@ -211,10 +212,11 @@ TEST(MeshCarriers, TwoBareMeshChildrenAreOrdinaryMeshes) {
   EXPECT_EQ(c.robot.links[0].meshes.size(), 2u);
 }
 
-Diagnostic refusal(const std::optional<std::vector<std::uint8_t>>& glb, LoadLimits limits = {}) {
+Diagnostic refusal(const std::optional<std::vector<std::uint8_t>>& glb, LoadLimits limits = {},
+                   const std::string& name = "model.glb") {
   Diagnostics diag;
   EXPECT_TRUE(glb);
-  EXPECT_FALSE(load_gltf_from_memory(*glb, "model.glb", "", limits, diag));
+  EXPECT_FALSE(load_gltf_from_memory(*glb, name, "", limits, diag));
   for (const Diagnostic& d : diag.all()) {
     if (d.severity == Severity::kError) return d;
   }
@@ -314,6 +316,46 @@ TEST(CompressedData, DracoTextureCoordinateOrientationsBeyondTheCornersAreRefuse
   EXPECT_EQ(d.code, "DRACO_INVALID");
   EXPECT_EQ(d.pointer, "/meshes/0/primitives/0/extensions/KHR_draco_mesh_compression");
   EXPECT_NE(d.message.find("libdraco could not decode the mesh"), std::string::npos) << d.message;
+}
+
+// glTF requires every extension an object uses in extensionsUsed, and every required one there
+// too; the Khronos validator refuses either. Real encoders' files with the lists removed or
+// mismatched are refused, naming the object (a required extension that is not used was kept by
+// the output and made it invalid).
+TEST(CompressedData, ExtensionsMissingFromExtensionsUsedAreRefused) {
+  const auto refused = [](const std::string& name, Json document, std::span<const std::uint8_t> bin) {
+    const std::string json = document.dump();
+    const auto bytes = bin.empty() ? std::vector<std::uint8_t>(json.begin(), json.end()) : make_glb(json, bin);
+    return refusal(bytes, LoadLimits{}, name);
+  };
+  Json draco = Json::parse(testing::read_file(testing::data_dir() / "encoded" / "arm_draco.gltf"));
+  draco.erase("extensionsUsed");
+  draco.erase("extensionsRequired");
+  Diagnostic d = refused("model.gltf", draco, {});
+  EXPECT_EQ(d.code, "UNDECLARED_EXTENSION");
+  EXPECT_EQ(d.pointer, "/meshes/0/primitives/0/extensions/KHR_draco_mesh_compression");
+
+  const auto glb = fuzz::read_bytes(testing::data_dir() / "encoded" / "arm_meshopt.glb");
+  Diagnostics parse_diag;
+  const auto chunks = parse_glb(glb, parse_diag);
+  ASSERT_TRUE(chunks && chunks->bin);
+  Json meshopt = Json::parse(chunks->json);
+  Json used = Json::array();
+  for (const Json& name : meshopt["extensionsUsed"]) {
+    if (name != "EXT_meshopt_compression") used.push_back(name);
+  }
+  meshopt["extensionsUsed"] = used;
+  meshopt.erase("extensionsRequired");
+  d = refused("model.glb", meshopt, *chunks->bin);
+  EXPECT_EQ(d.code, "UNDECLARED_EXTENSION");
+  EXPECT_NE(d.pointer.find("/extensions/EXT_meshopt_compression"), std::string::npos) << d.pointer;
+
+  Json textured = Json::parse(testing::read_file(testing::data_dir() / "encoded" / "arm_draco.gltf"));
+  textured["extensionsRequired"] = {"KHR_draco_mesh_compression", "KHR_texture_transform"};
+  d = refused("model.gltf", textured, {});
+  EXPECT_EQ(d.code, "UNUSED_EXTENSION_REQUIRED");
+  EXPECT_EQ(d.pointer, "/extensionsRequired/1");
+  EXPECT_NE(d.message.find("KHR_texture_transform is required but not in extensionsUsed"), std::string::npos) << d.message;
 }
 
 TEST(CompressedData, MeshoptBytesThatDoNotDecodeAreRefused) {

@@ -457,9 +457,13 @@ TEST(ValidateDocument, BufferDataUrisAndRequiredExtensions) {
   document["extensionsRequired"] =
       Json::array({"KHR_materials_unlit", "EXT_unknown_geometry", "KHR_draco_mesh_compression",
                    "EXT_meshopt_compression", "EXT_mesh_gpu_instancing"});
+  document["extensionsUsed"] = document["extensionsRequired"];
   const Diagnostics diag = check_document(document);
   EXPECT_DIAGNOSTIC(diag, "UNSUPPORTED_EXTENSION", "/extensionsRequired/1");
   EXPECT_EQ(diag.error_count(), 1u) << listing(diag);
+  // Every required extension is also used (glTF 2.0).
+  document["extensionsUsed"].erase(0);
+  EXPECT_DIAGNOSTIC(check_document(document), "UNUSED_EXTENSION_REQUIRED", "/extensionsRequired/0");
 }
 
 TEST(ValidateDocument, SkinsAreTreesInTheirScene) {

@@ -101,12 +101,14 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(SKIN_NO_COMMON_ROOT, kSeverityError, "glTF") \
   X(SKIN_SKELETON_INVALID, kSeverityError, "glTF") \
   X(TYPE_MISMATCH, kSeverityError, "glTF") \
+  X(UNDECLARED_EXTENSION, kSeverityError, "glTF") \
   X(UNDEFINED_PROPERTY, kSeverityError, "glTF") \
   X(UNKNOWN_ASSET_MAJOR_VERSION, kSeverityError, "glTF") \
   X(UNKNOWN_ASSET_MINOR_VERSION, kSeverityWarning, "glTF") \
   X(UNRESOLVED_REFERENCE, kSeverityError, "glTF") \
   X(UNSATISFIED_DEPENDENCY, kSeverityError, "glTF") \
   X(UNSUPPORTED_EXTENSION, kSeverityError, "glTF") \
+  X(UNUSED_EXTENSION_REQUIRED, kSeverityError, "glTF") \
   X(URI_REFUSED, kSeverityError, "glTF") \
   X(VALUE_MULTIPLE_OF, kSeverityError, "glTF") \
   X(VALUE_NOT_IN_LIST, kSeverityError | kSeverityWarning, "glTF") \

@@ -224,15 +224,26 @@ class Builder {
                (mass_authored ? !any_readable(link.visual_array) : !all_readable(link.visual_array))) {
       use_collision = true;
       std::string unread;  // The first visual import cannot read, by its file where it has one.
-      for (std::size_t i = 0; i < link.visual_array.size() && unread.empty(); ++i) {
+      for (std::size_t i = 0; i < link.visual_array.size(); ++i) {
         const urdf::GeometrySharedPtr& g = link.visual_array[i]->geometry;
         if (readable(g)) continue;
+        // A shape of size 0 (pybullet's laikago draws its toes as spheres of radius 0) is said
+        // of itself, with its line, as where the visual is drawn.
+        const auto degenerate = g ? degenerate_shape(*g) : std::nullopt;
+        if (degenerate) {
+          diag.warning_at_line(codes::URDF_SHAPE_DEGENERATE,
+                               link_pointer(link.name) + "/visual[" + std::to_string(i + 1) + "]",
+                               i < xml.visual_rows.size() ? xml.visual_rows[i] : xml.row,
+                               *degenerate + "; this geometry is skipped, the link is kept");
+        }
+        if (!unread.empty()) continue;
         unread = "<visual> " + std::to_string(i + 1);
+        if (degenerate) unread += " (a shape of size 0)";
         if (g && g->type == urdf::Geometry::MESH) unread += " ('" + static_cast<const urdf::Mesh&>(*g).filename + "')";
       }
       diag.info(codes::URDF_COLLISION_AS_VISUAL, link_pointer(link.name),
                 "link '" + link.name + "': import cannot read its " + unread +
-                    " (it reads STL files that are there, and boxes, cylinders and spheres)" +
+                    " (it reads STL files that are there, and boxes, cylinders and spheres with a volume)" +
                     (mass_authored ? std::string(", nor any other <visual>")
                                    : std::string(", and the link's mass comes from its geometry")) +
                     ": its <collision> geometry is its mesh");

@@ -23,6 +23,10 @@ const char* const kRobot = R"(<robot name="degenerate">
 <joint name="knee" type="revolute"><parent link="mount"/><child link="foot"/><origin xyz="0 0 0.2"/><axis xyz="0 1 0"/>
 <limit lower="-1" upper="1" effort="10" velocity="2"/></joint>
 <joint name="plate_joint" type="fixed"><parent link="foot"/><child link="plate"/><origin xyz="0 0 0.05"/></joint>
+<link name="toe"><inertial><mass value="0.05"/><inertia ixx="1e-5" ixy="0" ixz="0" iyy="1e-5" iyz="0" izz="1e-5"/></inertial>
+<visual><geometry><sphere radius="0.0"/></geometry></visual>
+<collision><geometry><sphere radius="0.02"/></geometry></collision></link>
+<joint name="toe_joint" type="fixed"><parent link="foot"/><child link="toe"/><origin xyz="0 0 -0.05"/></joint>
 </robot>
 )";
 
@@ -35,8 +39,8 @@ TEST(UrdfDegenerateShapes, AreSkippedWithAWarningAndTheRobotIsKept) {
   for (const Diagnostic& d : diag.all()) all += format(d) + "\n";
   ASSERT_TRUE(conversion) << all;
   EXPECT_FALSE(diag.has_errors()) << all;
-  ASSERT_EQ(conversion->robot.links.size(), 4u);
-  ASSERT_EQ(conversion->robot.joints.size(), 3u);
+  ASSERT_EQ(conversion->robot.links.size(), 5u);
+  ASSERT_EQ(conversion->robot.joints.size(), 4u);
   struct Expected {
     const char* pointer;
     const char* says;
@@ -45,13 +49,16 @@ TEST(UrdfDegenerateShapes, AreSkippedWithAWarningAndTheRobotIsKept) {
       {"/robot/link[@name='mount']/visual[1]", "line 4: <cylinder> has length 0: it has no volume"},
       {"/robot/link[@name='foot']/collision[1]", "line 6: <sphere> has radius 0: it has no volume"},
       {"/robot/link[@name='plate']/visual[1]", "line 8: <box> has size \"0.1 0 0.1\", a side of 0: it has no volume"},
+      // pybullet's laikago: a toe drawn as a sphere of radius 0 whose collision sphere is drawn
+      // instead (it was only an info, saying import reads spheres).
+      {"/robot/link[@name='toe']/visual[1]", "line 14: <sphere> has radius 0: it has no volume"},
   };
   std::vector<Diagnostic> degenerate;
   for (const Diagnostic& d : diag.all()) {
     if (d.code == "URDF_SHAPE_DEGENERATE") degenerate.push_back(d);
   }
-  ASSERT_EQ(degenerate.size(), 3u) << all;
-  for (std::size_t i = 0; i < 3; ++i) {
+  ASSERT_EQ(degenerate.size(), 4u) << all;
+  for (std::size_t i = 0; i < 4; ++i) {
     EXPECT_EQ(degenerate[i].severity, Severity::kWarning);
     EXPECT_EQ(degenerate[i].pointer, expected[i].pointer);
     EXPECT_EQ(degenerate[i].message.rfind(expected[i].says, 0), 0u) << degenerate[i].message;

@@ -536,12 +536,22 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
     for (std::size_t l : no_volume) {
       const Link& link = robot.links[l];
       if (link.meshes.empty() && (body_has_mass[l] || is_root[l])) continue;
+      // A link of rdtf's own output (its node extras say so) that comes without meshes lost them
+      // on the way: Blender 3.4 exports no children of an object parented to a bone, and in the
+      // output a link's meshes are children of its node (docs/blender.md, section 8).
+      const Json& node = document["nodes"][static_cast<std::size_t>(link.node)];
+      const bool typed_before = node.contains("extras") && node["extras"].is_object() &&
+                                node["extras"].value("rdtf_type", Json()) == "link";
+      const std::string why =
+          link.meshes.empty() ? (typed_before ? "no mesh: it is a link of rdtf's output whose mesh nodes are gone; "
+                                                "Blender 3.4 drops the children of an object parented to a bone "
+                                                "when it exports, so edit the original .blend, not rdtf's output"
+                                              : "no mesh")
+          : link_solids[l].empty() ? "no closed mesh"
+                                   : "its closed meshes enclose none: faces doubled back to back, or shells wound "
+                                     "inward that cancel the others";
       diag.warning(codes::LINK_NO_VOLUME, json_pointer("/nodes", link.node),
-                   "link '" + link.name + "' has no volume (" +
-                       (link_solids[l].empty() ? std::string("no closed mesh")
-                                               : std::string("its closed meshes enclose none: faces doubled back to "
-                                                             "back, or shells wound inward that cancel the others")) +
-                       "): its mass is zero");
+                   "link '" + link.name + "' has no volume (" + why + "): its mass is zero");
     }
   }
   if (solids_out == nullptr) report_part_overlaps(document, robot, own_solids, diag);

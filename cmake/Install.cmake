@@ -54,6 +54,7 @@ set(CPACK_DEBIAN_PACKAGE_SECTION science)
 # Shared-library dependencies from dpkg-shlibdeps (dpkg-dev); the rest by hand: lcm-spy and its
 # Java pieces for rdtf-spy, the -dev packages for find_package(rdtf).
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
+set(CPACK_DEBIAN_PACKAGE_DEPENDS "adduser")  # postinst makes the system user rdtf
 set(CPACK_DEBIAN_PACKAGE_RECOMMENDS "liblcm-bin, liblcm-java, default-jre | java-runtime, libjchart2d-java")
 set(CPACK_DEBIAN_PACKAGE_SUGGESTS "libeigen3-dev, nlohmann-json3-dev, libtinygltf-dev, cmake")
 set(CPACK_DEBIAN_PACKAGE_CONTROL_EXTRA

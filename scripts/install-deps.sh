@@ -21,7 +21,7 @@ PACKAGES=(
   liburdfdom-dev liburdfdom-tools libode-dev libmujoco-dev
   libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev libglib2.0-dev libssl-dev
   clang libclang-rt-14-dev
-  iproute2 util-linux strace
+  iproute2 util-linux strace systemd
   default-jre libjchart2d-java xvfb xauth x11-apps dpkg-dev
   blender python3-numpy
   libboost-dev chromium

@@ -35,6 +35,20 @@ for program in rdtf rdtfd rdtf-echo rdtf-pd-controller rdtf-spy rdtf-view; do
 done
 grep -qx 'ExecStart=/usr/bin/rdtfd --config /etc/rdtf/rdtfd.json' "$work/root/usr/lib/systemd/system/rdtfd.service" ||
   fail "the unit's ExecStart: $(grep ExecStart "$work/root/usr/lib/systemd/system/rdtfd.service")"
+unit=$work/root/usr/lib/systemd/system/rdtfd.service
+grep -qx 'User=rdtf' "$unit" || fail "the unit does not run rdtfd as the user rdtf"
+grep -q 'source checkout\|scripts/run.sh' "$unit" "$work/root/etc/rdtf/rdtfd.json" &&
+  fail "the installed unit or config still speaks of the source checkout"
+dpkg-deb --ctrl-tarfile "$deb" | tar -xO ./postinst | grep -q 'adduser --system --group' ||
+  fail "the postinst does not make the user rdtf"
+# The unit as systemd reads it (ExecStart pointed at the unpacked binary), and its exposure: the
+# sandbox of docs/security.md (9.0 "UNSAFE" before it), at most 2.5 of 10.
+sed "s#/usr/bin/rdtfd#$work/root/usr/bin/rdtfd#" "$unit" > "$work/rdtfd.service"
+verify=$(systemd-analyze verify "$work/rdtfd.service" 2>&1) || fail "systemd-analyze verify: $verify"
+[[ -z $verify ]] || fail "systemd-analyze verify: $verify"
+exposure=$(systemd-analyze security --offline=yes "$work/rdtfd.service" 2>&1 | sed -n 's/.*Overall exposure level for rdtfd.service: \([0-9.]*\).*/\1/p')
+echo "unit exposure (systemd-analyze security): $exposure"
+awk -v e="$exposure" 'BEGIN { exit !(e != "" && e <= 2.5) }' || fail "the unit's exposure is $exposure, above 2.5"
 grep -q '"/var/lib/rdtf/models"' "$work/root/etc/rdtf/rdtfd.json" || fail "the config does not watch /var/lib/rdtf/models"
 grep -q '"output": "/var/lib/rdtf/output"' "$work/root/etc/rdtf/rdtfd.json" || fail "the config's output is not /var/lib/rdtf/output"
 dpkg-deb --ctrl-tarfile "$deb" | tar -xO ./conffiles | grep -qx /etc/rdtf/rdtfd.json || fail "rdtfd.json is not a conffile"

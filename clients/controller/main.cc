@@ -34,6 +34,7 @@
 #include "pd_controller.h"
 #include "rdtf/client.h"
 #include "safe_decode.h"
+#include "rdtf/version.h"
 
 namespace {
 
@@ -129,6 +130,7 @@ class ControllerNode {
 
 int main(int argc, char** argv) {
   CLI::App app{"rdtf-pd-controller: holds a model of rdtfd's live simulation at a target pose (PD)"};
+  app.set_version_flag("--version", rdtf::version_line("rdtf-pd-controller"));
   rdtf::controller::PdOptions options;
   std::string url;
   std::string prefix = "RDTF";

@@ -14,6 +14,7 @@
 #include "message_json.h"
 #include "rdtf/client.h"
 #include "safe_decode.h"
+#include "rdtf/version.h"
 
 namespace {
 
@@ -25,6 +26,7 @@ void on_signal(int) { g_stop = 1; }
 
 int main(int argc, char** argv) {
   CLI::App app{"rdtf-echo: prints every rdtf LCM message as one JSON line"};
+  app.set_version_flag("--version", rdtf::version_line("rdtf-echo"));
   std::string url;
   std::string channels = "RDTF/.*";
   bool omit_json = false;

@@ -29,6 +29,7 @@
 #include "model_hub.h"
 #include "rdtf/client.h"
 #include "server.h"
+#include "rdtf/version.h"
 
 #ifndef RDTF_VIEW_WEB_DIR
 #define RDTF_VIEW_WEB_DIR ""
@@ -100,6 +101,7 @@ std::string default_web_dir() {
 
 int main(int argc, char** argv) {
   CLI::App app{"rdtf-view: every rdtf model on the bus in a browser, live"};
+  app.set_version_flag("--version", rdtf::version_line("rdtf-view"));
   std::string bind = "127.0.0.1";
   int port = 8765;
   std::string url;

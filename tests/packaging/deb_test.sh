@@ -57,9 +57,11 @@ for lib in libode libssl libglib; do
   [[ $depends == *"$lib"* ]] || fail "Depends lacks $lib (dpkg-shlibdeps): $depends"
 done
 
-for program in rdtf rdtfd; do
+declare -A built_at=([rdtf]=clients/rdtf [rdtfd]=daemon [rdtf-echo]=clients/echo [rdtf-view]=clients/view
+                      [rdtf-pd-controller]=clients/controller)
+for program in rdtf rdtfd rdtf-echo rdtf-view rdtf-pd-controller; do
   packaged=$("$work/root/usr/bin/$program" --version)
-  built=$("$build/$([[ $program == rdtf ]] && echo clients/rdtf || echo daemon)/$program" --version)
+  built=$("$build/${built_at[$program]}/$program" --version)
   echo "$program from the package: $packaged"
   [[ $packaged =~ ^$program\ [0-9]+\.[0-9]+\.[0-9]+\ \(commit\ ([0-9a-f]{7,40}(-dirty)?|unknown)\)$ ]] ||
     fail "$program --version printed '$packaged'"

@@ -161,6 +161,15 @@ int main(int argc, char** argv) {
     }
   }
   options.mode = mode == "torque" ? rdtf::controller::Mode::kTorque : rdtf::controller::Mode::kPosition;
+  // The default gains are for position mode, where rdtfd applies the law at every physics step. In
+  // torque mode the loop closes over LCM one state period late, and kd 10 spun arm3's elbow to 35
+  // rad within a second (docs/controller.md, "Position or torque mode").
+  if (options.mode == rdtf::controller::Mode::kTorque && app.count("--kp") == 0 && app.count("--kd") == 0) {
+    std::cerr << "rdtf-pd-controller: --mode torque with the default gains (kp " << options.gains.kp << ", kd "
+              << options.gains.kd << "), which are for position mode: the loop closes over LCM a state period T "
+              << "late and is stable only for soft gains (kd T / I < 1 for a joint moving an inertia I; "
+                 "docs/controller.md). Give --kp and --kd\n";
+  }
 
   lcm::LCM lcm(url);
   if (!lcm.good()) {

@@ -5,6 +5,8 @@
 #include <openssl/evp.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdlib>
 #include <iostream>
 #include <regex>
 
@@ -81,6 +83,7 @@ struct Pending {
 
 struct ModelState {
   std::shared_ptr<const Snapshot> current;
+  std::uint64_t epoch = 0;  // The rdtfd instance (Impl::daemon_epoch) that described `current`.
   int unlisted = 0;  // STATUS messages in a row that did not list it as live
   std::map<Key, Pending> pending;
   Clock::time_point next_request{};
@@ -196,6 +199,7 @@ struct Client::State {
         followed_live = std::any_of(s->model_ids.begin(), s->model_ids.end(),
                                     [&](const std::string& id) { return follows(id); });
         forget_models_not_live(*s);
+        note_daemon(*s);
       }
       return;
     }
@@ -437,7 +441,48 @@ struct Client::State {
       }
     }
     p.assembled = std::move(snapshot);
-    if (p.missing.empty()) deliver(model_id, key);
+    if (p.missing.empty()) deliver_or_hold(model_id, key);
+  }
+
+  // Revisions only grow while one rdtfd serves a model. A complete revision that is not newer than
+  // the one held (lower, or the same number with other content) comes from a replayed log or a
+  // stray publisher while that rdtfd still serves the newer one: taking it would stop a controller
+  // commanding the live revision (rdtfd rejects every command for another) until the next
+  // republication. It is held until a STATUS shows another rdtfd started since (a restart without
+  // its state folder numbers models from 1 again, docs/lcm.md), and then taken.
+  void deliver_or_hold(const std::string& model_id, const Key& key) {
+    ModelState& m = models[model_id];
+    if (m.current && key.first <= m.current->revision() && m.epoch == daemon_epoch) {
+      problem(model_id, "revision " + std::to_string(key.first) + " is not newer than revision " +
+                            std::to_string(m.current->revision()) +
+                            ", which the same rdtfd described (a replayed log?): held until a restarted rdtfd "
+                            "describes it");
+      return;
+    }
+    deliver(model_id, key);
+  }
+
+  // STATUS names the rdtfd that sends it: its pid and its start (utime - uptime). Another pid, or a
+  // later start, is a restarted rdtfd; an earlier start is an earlier run's STATUS played back from
+  // a log, and no news of the live one.
+  void note_daemon(const rdtf::status_t& status) {
+    if (!std::isfinite(status.uptime) || status.uptime < 0 || status.uptime > 1e10) return;
+    const std::int64_t start = status.utime - static_cast<std::int64_t>(status.uptime * 1e6);
+    constexpr std::int64_t kSlack = 1'000'000;  // us: utime and uptime are read at slightly different times
+    if (daemon && status.pid == daemon->first && std::llabs(start - daemon->second) < kSlack) return;
+    if (daemon && start < daemon->second - kSlack) return;
+    const bool restarted = daemon.has_value();
+    daemon = std::make_pair(status.pid, start);
+    if (!restarted) return;
+    ++daemon_epoch;
+    // Revisions held for being lower: the newest complete one of each model is now the model's.
+    for (auto& [model_id, m] : models) {
+      const Key* held = nullptr;
+      for (const auto& [key, p] : m.pending) {
+        if (p.assembled && p.missing.empty() && (!held || key.first >= held->first)) held = &key;
+      }
+      if (held) deliver(model_id, Key(*held));
+    }
   }
 
   void deliver(const std::string& model_id, const Key& key) {
@@ -448,6 +493,7 @@ struct Client::State {
     m.pending.erase(it);
     drop_older(model_id, key.first);
     m.current = snapshot;
+    m.epoch = daemon_epoch;
     m.backoff = options.retry_initial;
     ++stats.revisions;
     if (callbacks.on_revision) callbacks.on_revision(snapshot);
@@ -478,7 +524,7 @@ struct Client::State {
       }
     }
     for (const auto& [model_id, key] : ready) {
-      if (models[model_id].pending.count(key)) deliver(model_id, key);
+      if (models[model_id].pending.count(key)) deliver_or_hold(model_id, key);
     }
   }
 
@@ -537,6 +583,8 @@ struct Client::State {
   BlobFetcher fetcher;
   Clock::time_point next_start_request{};
   std::optional<bool> followed_live;  // Whether rdtfd's latest STATUS listed a followed model.
+  std::optional<std::pair<std::int32_t, std::int64_t>> daemon;  // pid, start (us) of the rdtfd heard
+  std::uint64_t daemon_epoch = 0;  // How many times another rdtfd was heard since the first
   Clock::duration start_backoff{};
   std::int64_t pending_bytes = 0;  // chunk bytes held by incomplete revisions of every model
 };

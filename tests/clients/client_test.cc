@@ -143,9 +143,13 @@ struct Bench {
 };
 
 // rdtfd's heartbeat, listing `live` as its live models.
-Datagram status_listing(std::vector<std::string> live) {
+// pid, start: the rdtfd that sends it (STATUS carries utime and uptime; start = utime - uptime).
+Datagram status_listing(std::vector<std::string> live, std::int32_t pid = 0, std::int64_t start_us = 1,
+                        double uptime_s = 0) {
   rdtf::status_t s{};
-  s.utime = 1;
+  s.utime = start_us + static_cast<std::int64_t>(uptime_s * 1e6);
+  s.pid = pid;
+  s.uptime = uptime_s;
   s.version = "test";
   s.model_ids = std::move(live);
   s.num_model_ids = static_cast<std::int32_t>(s.model_ids.size());
@@ -546,6 +550,40 @@ TEST(Client, ReplacesItsSnapshotWithTheNextRevision) {
   b.feed(publication(arm(3)));
   ASSERT_EQ(b.revisions.size(), 2u);
   EXPECT_EQ(b.client->snapshot("arm.gltf")->revision(), 3);
+}
+
+// Revisions only grow while one rdtfd serves a model: a lower one (a log played back while the
+// rdtfd that described the newer one still runs) is held, not taken, and a controller keeps
+// commanding the live revision. Once a STATUS shows another rdtfd (a restart without its state
+// folder, which numbers from 1 again) the held revision is the model's. STATUS of an earlier run,
+// played back from the same log, is no restart.
+TEST(Client, ALowerRevisionIsTakenOnlyFromARestartedRdtfd) {
+  Bench b(Blobs::kNone);
+  std::vector<std::string> problems;
+  b.feed({status_listing({"arm.gltf"}, 100, 5'000'000, 10.0)});
+  b.feed(publication(arm(2)));
+  ASSERT_EQ(b.client->snapshot("arm.gltf")->revision(), 2);
+  b.feed(publication(arm(1)));  // Played back.
+  EXPECT_EQ(b.client->snapshot("arm.gltf")->revision(), 2) << "a lower revision of the same rdtfd was taken";
+  EXPECT_EQ(b.revisions.size(), 1u);
+  b.feed({status_listing({"arm.gltf"}, 100, 5'000'000, 11.0)});    // the same rdtfd, a second later
+  b.feed({status_listing({"arm.gltf"}, 100, 5'000'200, 12.0)});    // its utime and uptime read apart
+  b.feed({status_listing({"arm.gltf"}, 90, 1'000'000, 3.0)});      // an earlier run's, played back
+  EXPECT_EQ(b.client->snapshot("arm.gltf")->revision(), 2);
+  // The same revision number with other content is no newer either.
+  FakeRevision other = arm(2);
+  other.content_hash = std::string(64, 'c');
+  b.feed(publication(other));
+  EXPECT_EQ(b.client->snapshot("arm.gltf")->content_hash(), arm(2).content_hash);
+  // rdtfd restarted (another pid, a later start): the newest held revision is taken.
+  b.feed({status_listing({"arm.gltf"}, 200, 60'000'000, 0.5)});
+  ASSERT_EQ(b.client->snapshot("arm.gltf")->revision(), 2);
+  EXPECT_EQ(b.client->snapshot("arm.gltf")->content_hash(), other.content_hash);
+  // A lower one after that is held again, until the next restart.
+  b.feed(publication(arm(1)));
+  EXPECT_EQ(b.client->snapshot("arm.gltf")->revision(), 2) << "revision 1 after revision 2 of one rdtfd was taken";
+  b.feed({status_listing({"arm.gltf"}, 201, 70'000'000, 0.5)});
+  EXPECT_EQ(b.client->snapshot("arm.gltf")->revision(), 1);
 }
 
 // Hostile or malformed datagrams: each is dropped with a reason, none crashes or stalls the client.

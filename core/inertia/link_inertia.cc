@@ -536,17 +536,19 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
     for (std::size_t l : no_volume) {
       const Link& link = robot.links[l];
       if (link.meshes.empty() && (body_has_mass[l] || is_root[l])) continue;
-      // A link of rdtf's own output (its node extras say so) that comes without meshes lost them
-      // on the way: Blender 3.4 exports no children of an object parented to a bone, and in the
-      // output a link's meshes are children of its node (docs/blender.md, section 8).
+      // A link without meshes whose node extras give it a density had meshes once: rdtf's output
+      // of a part parented to a bone, exported again by Blender 3.4, which writes no children of
+      // such an object (in the output a link's meshes are children of its node; docs/blender.md,
+      // section 8). A meshless link alone proves nothing (a URDF's frame link, a typed empty).
       const Json& node = document["nodes"][static_cast<std::size_t>(link.node)];
-      const bool typed_before = node.contains("extras") && node["extras"].is_object() &&
-                                node["extras"].value("rdtf_type", Json()) == "link";
+      const bool lost = node.contains("extras") && node["extras"].is_object() &&
+                        node["extras"].contains("rdtf_density");
       const std::string why =
-          link.meshes.empty() ? (typed_before ? "no mesh: it is a link of rdtf's output whose mesh nodes are gone; "
-                                                "Blender 3.4 drops the children of an object parented to a bone "
-                                                "when it exports, so edit the original .blend, not rdtf's output"
-                                              : "no mesh")
+          link.meshes.empty() ? (lost ? "no mesh, though its rdtf_density says it had one: if this is rdtf's output "
+                                        "exported again by Blender, Blender 3.4 drops the children of an object "
+                                        "parented to a bone, its mesh among them; edit the original .blend, not "
+                                        "rdtf's output"
+                                      : "no mesh")
           : link_solids[l].empty() ? "no closed mesh"
                                    : "its closed meshes enclose none: faces doubled back to back, or shells wound "
                                      "inward that cancel the others";

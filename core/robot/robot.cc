@@ -528,9 +528,20 @@ Robot build_robot(const Json& document, const std::vector<NodeType>& types, std:
     // output again put the pivot at the mount, 0.1 m off; so did every armature Blender re-exported,
     // its importer turning the inserted joint node).
     joint.frame_node = child.node;
+    // Unless an entry between names another joint type than the child's keys: those keys are stale
+    // (RDTF_NODE_EXTRAS_IGNORED says so below), and what they say does not move the pivot.
     bool properties_between = false;
     for (int node : joint_nodes) properties_between = properties_between || has_joint_keys(node_extras(document, node));
-    const bool own_pivot = !properties_between && has_joint_keys(node_extras(document, child.node));
+    const Json* child_keys = node_extras(document, child.node);
+    bool entry_disagrees = false;
+    for (int node : joint_nodes) {
+      const Json* entry = entry_joint(static_cast<std::size_t>(node));
+      if (entry != nullptr && entry->is_object() && child_keys != nullptr && child_keys->contains("rdtf_joint") &&
+          entry->value("type", Json()) != (*child_keys)["rdtf_joint"]) {
+        entry_disagrees = true;
+      }
+    }
+    const bool own_pivot = !properties_between && !entry_disagrees && has_joint_keys(child_keys);
     for (std::size_t k = 0; !own_pivot && k < joint_nodes.size(); ++k) {
       const int node = joint_nodes[k];
       if (has_own_transform(document["nodes"][node]) || has_joint_keys(node_extras(document, node))) {

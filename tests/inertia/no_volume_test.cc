@@ -224,16 +224,23 @@ TEST(NoVolume, AMovingLinkWithoutMassIsStillNamed) {
   ASSERT_TRUE(convert(document, diag).has_value());
   EXPECT_EQ(no_volume_messages(diag.all()),
             std::vector<std::string>{"/nodes/2: link 'hand' has no volume (no mesh): its mass is zero"});
-  // The same link typed 'link' in its node extras by an earlier conversion: rdtf's output, whose
-  // mesh nodes a tool dropped (Blender drops the children of bone-parented objects), is named so.
+  // Typed 'link' in its node extras (rdtf's output of a meshless link, or an author's typing):
+  // nothing says it had meshes, and nothing more is said.
   document["nodes"][2]["extras"] = {{"rdtf_type", "link"}};
-  Diagnostics again;
-  ASSERT_TRUE(convert(document, again).has_value());
-  EXPECT_EQ(no_volume_messages(again.all()),
-            std::vector<std::string>{"/nodes/2: link 'hand' has no volume (no mesh: it is a link of rdtf's output "
-                                     "whose mesh nodes are gone; Blender 3.4 drops the children of an object "
-                                     "parented to a bone when it exports, so edit the original .blend, not rdtf's "
-                                     "output): its mass is zero"});
+  Diagnostics typed;
+  ASSERT_TRUE(convert(document, typed).has_value());
+  EXPECT_EQ(no_volume_messages(typed.all()),
+            std::vector<std::string>{"/nodes/2: link 'hand' has no volume (no mesh): its mass is zero"});
+  // A link with a density of its own but no mesh had one: Blender's re-export of rdtf's output
+  // drops the children of a bone-parented part, its mesh nodes among them.
+  document["nodes"][2] = {{"name", "hand"}, {"extras", {{"rdtf_type", "link"}, {"rdtf_density", 1500}}}};
+  Diagnostics lost;
+  ASSERT_TRUE(convert(document, lost).has_value());
+  EXPECT_EQ(no_volume_messages(lost.all()),
+            std::vector<std::string>{"/nodes/2: link 'hand' has no volume (no mesh, though its rdtf_density says it "
+                                     "had one: if this is rdtf's output exported again by Blender, Blender 3.4 drops "
+                                     "the children of an object parented to a bone, its mesh among them; edit the "
+                                     "original .blend, not rdtf's output): its mass is zero"});
 }
 
 // An empty root with the robot below it on a moving joint: the world's frame, as URDF's usual

@@ -2,6 +2,7 @@
 // its input, converting an output again gives it back unchanged, and .glb outputs are complete.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <set>
 #include <stdexcept>
 
@@ -122,6 +123,41 @@ INSTANTIATE_TEST_SUITE_P(Fixtures, WriteRdtf,
                                             ::testing::Values(OutputFormat::kGltf,
                                                               OutputFormat::kGlb)),
                          case_name);
+
+// rdtf's output of mount_empty holds the joint's entry on the mount and its keys on the arm, its
+// own pivot. Keys on the arm that name another joint type than the entry are stale (extras.RDTF
+// wins, and says so): they do not move the pivot off the mount, where the entry alone puts it.
+TEST(WriteRdtfFiles, StaleNodeExtrasDoNotMoveAPivotTheEntryPlaces) {
+  testing::TempDir out;
+  Diagnostics diag;
+  auto first = convert_file(testing::data_dir() / "frames" / "mount_empty.gltf", ConvertOptions{}, diag);
+  ASSERT_TRUE(first);
+  ASSERT_TRUE(write_rdtf(first->asset, out / "out.gltf", OutputFormat::kGltf, diag));
+  Json document = Json::parse(testing::read_file(out / "out.gltf"));
+  std::size_t arm = 0;
+  for (std::size_t i = 0; i < document["nodes"].size(); ++i) {
+    if (document["nodes"][i].value("name", "") == "arm") arm = i;
+  }
+  const auto origin_of = [&](const Json& doc, Diagnostics& d) {
+    testing::write_file(out / "edited.gltf", doc.dump());
+    auto conversion = convert_file(out / "edited.gltf", ConvertOptions{}, d);
+    EXPECT_TRUE(conversion);
+    return conversion ? Eigen::Vector3d(conversion->robot.joints.at(0).X_PJ.translation()) : Eigen::Vector3d::Zero();
+  };
+  Diagnostics agreeing;
+  EXPECT_LE((origin_of(document, agreeing) - Eigen::Vector3d(0.1 * std::sqrt(0.5), 0.2 + 0.1 * std::sqrt(0.5), 0)).norm(),
+            1e-9);
+  document["nodes"][arm]["extras"]["rdtf_joint"] = "fixed";
+  Diagnostics stale;
+  EXPECT_LE((origin_of(document, stale) - Eigen::Vector3d(0, 0.2, 0)).norm(), 1e-9);
+  EXPECT_TRUE(stale.contains("RDTF_NODE_EXTRAS_IGNORED"));
+  document["nodes"][arm]["extras"].erase("rdtf_joint");
+  document["nodes"][arm]["extras"].erase("rdtf_axis");
+  document["nodes"][arm]["extras"].erase("rdtf_lower");
+  document["nodes"][arm]["extras"].erase("rdtf_upper");
+  Diagnostics entry_only;
+  EXPECT_LE((origin_of(document, entry_only) - Eigen::Vector3d(0, 0.2, 0)).norm(), 1e-9);
+}
 
 TEST(WriteRdtfFiles, GltfOutputCopiesItsBufferBesideIt) {
   testing::TempDir out;

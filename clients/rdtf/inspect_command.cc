@@ -1,6 +1,7 @@
 #include <iostream>
 
 #include "commands.h"
+#include "rdtf/diagnostics_json.h"
 #include "rdtf/summary.h"
 
 namespace rdtf::cli {
@@ -15,9 +16,18 @@ struct InspectArguments {
 int run_inspect(const InspectArguments& args) {
   Diagnostics diag(args.input);
   const auto conversion = convert_or_report(args.input, args.options, diag);
-  if (!conversion) return kExitInvalidInput;
+  if (!conversion) {
+    // A script reading --json gets the errors as JSON too, with their places as fields.
+    if (args.json) {
+      const Json out = {{"converted", false}, {"diagnostics", diagnostics_json(diag)}};
+      std::cout << out.dump(2, ' ', false, Json::error_handler_t::replace) << "\n";
+    }
+    return kExitInvalidInput;
+  }
   if (args.json) {
-    std::cout << robot_summary(conversion->robot, conversion->asset.document, diag).dump(2, ' ', false, Json::error_handler_t::replace) << "\n";
+    Json out = robot_summary(conversion->robot, conversion->asset.document, diag);
+    out["converted"] = true;
+    std::cout << out.dump(2, ' ', false, Json::error_handler_t::replace) << "\n";
   } else {
     std::cout << robot_table(conversion->robot, diag);
   }

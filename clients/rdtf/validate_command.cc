@@ -22,7 +22,18 @@ struct ValidateArguments {
 int run_validate(ValidateArguments& args) {
   Diagnostics diag(args.input);
   const auto conversion = convert_or_report(args.input, args.options, diag);
-  if (!conversion) return kExitInvalidInput;
+  if (!conversion) {
+    // Not converted, so not checked: the report a script reads says so, with the errors.
+    if (args.json) {
+      Json out = {{"passed", false}, {"converted", false}, {"simulated", false},
+                  {"diagnostics", Json::array()}, {"conversionDiagnostics", Json::array()}};
+      for (const Diagnostic& d : diag.all()) {
+        if (d.severity != Severity::kInfo || args.verbose) out["conversionDiagnostics"].push_back(diagnostic_json(d));
+      }
+      std::cout << out.dump(2, ' ', false, Json::error_handler_t::replace) << "\n";
+    }
+    return kExitInvalidInput;
+  }
   args.validation.checks.massless_link_error = args.massless_links == "error";
   if (!args.gravity.empty()) {
     args.validation.simulation.gravity = {args.gravity[0], args.gravity[1], args.gravity[2]};
@@ -30,6 +41,7 @@ int run_validate(ValidateArguments& args) {
   const ValidationReport report = validate_dynamics(*conversion, args.validation, args.input);
   if (args.json) {
     Json out = validation_report_json(report);
+    out["converted"] = true;
     out["conversionDiagnostics"] = Json::array();
     for (const Diagnostic& d : diag.all()) {
       if (d.severity != Severity::kInfo || args.verbose) {

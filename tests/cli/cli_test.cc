@@ -93,6 +93,34 @@ TEST(Cli, InspectJsonIsMachineReadable) {
   EXPECT_EQ(summary["joints"][0]["limits"], (nlohmann::json{{"lower", -1.57}, {"upper", 1.57}}));
 }
 
+// A model that does not convert: --json still prints JSON on stdout (a script parsing it got
+// nothing), with every error and its place as fields; exit 2.
+TEST(Cli, JsonOfAModelThatDoesNotConvertHoldsItsErrors) {
+  testing::TempDir dir;
+  const auto blender = testing::data_dir() / "blender";
+  nlohmann::json document = nlohmann::json::parse(testing::read_file(blender / "arm3.gltf"));
+  for (nlohmann::json& node : document["nodes"]) {
+    if (node.value("name", "") == "elbow") node["extras"]["rdtf_axis"] = {0, 0, 0};
+  }
+  testing::write_file(dir / "arm3.gltf", document.dump());
+  std::filesystem::copy_file(blender / "arm3.bin", dir / "arm3.bin");
+  for (const std::string command : {"inspect", "validate"}) {
+    const auto run = testing::run_command(cli() + " " + command + " --json " + (dir / "arm3.gltf").string());
+    EXPECT_EQ(run.exit_code, 2) << command;
+    const nlohmann::json out = nlohmann::json::parse(run.out);
+    EXPECT_EQ(out["converted"], false) << command;
+    const nlohmann::json& errors = out[command == "inspect" ? "diagnostics" : "conversionDiagnostics"];
+    ASSERT_FALSE(errors.empty()) << command << ": " << out.dump();
+    const auto axis = std::find_if(errors.begin(), errors.end(), [](const auto& d) { return d["code"] == "JOINT_AXIS_ZERO"; });
+    ASSERT_NE(axis, errors.end()) << errors.dump();
+    EXPECT_EQ((*axis)["pointer"], "/nodes/3/extras/rdtf_axis") << errors.dump();
+    EXPECT_EQ((*axis)["severity"], "error") << errors.dump();
+    if (command == "validate") {
+      EXPECT_EQ(out["passed"], false);
+    }
+  }
+}
+
 TEST(Cli, DensityOptionScalesMass) {
   const auto run = testing::run_command(cli() + " inspect --json --density 2000 " + fixture("arm3.gltf"));
   ASSERT_EQ(run.exit_code, 0) << run.err;

@@ -360,6 +360,9 @@ TEST(View, DrawsATexturedModelAndOneWithTwoBuffers) {
     two["bufferViews"][i]["byteOffset"] = two["bufferViews"][i].value("byteOffset", 0) + 16;
   }
   write_in_place(s.watch / "two_buffers.gltf", two.dump());
+  // A box under a plain mount empty that carries its own joint keys is its own pivot: the page
+  // draws its node where LINK_STATE puts its frame (it put the frame at the mount, 0.1 m off).
+  write_in_place(s.watch / "mount_empty.gltf", read(testing::data_dir() / "frames" / "mount_empty.gltf"));
   s.start(simulating());
   ViewProcess view(s.root.path());
   Page page(view.url(), s.root / "page.log");
@@ -394,6 +397,15 @@ TEST(View, DrawsATexturedModelAndOneWithTwoBuffers) {
         EXPECT_NEAR((*other)["bounds"][corner][k].get<double>(), link["bounds"][corner][k].get<double>(), 1e-9)
             << link["name"] << " corner " << corner;
       }
+    }
+  }
+  const Json mount = wait_drawn(page, "mount_empty.gltf", 1);
+  ASSERT_FALSE(mount.is_null()) << page.state().dump();
+  expect_links_where_link_state_puts_them(s, page, mount, "mount_empty.gltf");
+  for (const auto& link : mount["links"]) {
+    if (link["name"] != "arm") continue;
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_NEAR(link["node_position"][k].get<double>(), link["position"][k].get<double>(), 1e-9) << link.dump();
     }
   }
   page.eval("window.rdtfView.select('textured.gltf')");

@@ -92,10 +92,26 @@ export class ModelView {
       const chain = [];
       let p = parent[l.node];
       while (p !== undefined && !linkNodes.has(p)) { chain.push(p); p = parent[p]; }
+      // The link frame as rdtf finds it (docs/format.md, "The joint frame is the pivot the
+      // modeller placed"; core/robot/robot.cc): the joint node nearest the link with a transform
+      // of its own or joint keys, else the link node; but the link node itself where it carries
+      // the joint keys below joint nodes that carry none (unless an extras.RDTF entry between
+      // names another joint type: its keys are stale), or where it is a frame link (no mesh,
+      // only inertial or visual nodes below) on a fixed joint.
       let frameNode = l.node;
       if (p !== undefined) {
+        const own = json.nodes[l.node];
+        const ownType = own.extras ? own.extras.rdtf_joint : undefined;
+        const stale = chain.some((n) => {
+          const e = this.rdtfNodes.get(n);
+          return e && e.joint && ownType !== undefined && e.joint.type !== ownType;
+        });
+        const ownPivot = hasJointKeys(own) && !chain.some((n) => hasJointKeys(json.nodes[n])) && !stale;
+        const joint = (this.info.joints || []).find((j) => j.child === l.name);
+        const frameLink = joint && joint.type === 'fixed' && own.mesh === undefined &&
+          (own.children || []).every((c) => { const e = this.rdtfNodes.get(c); return !e || e.type === 'inertial' || e.type === 'visual'; });
         const placed = chain.find((n) => hasOwnTransform(json.nodes[n]) || hasJointKeys(json.nodes[n]));
-        if (placed !== undefined) frameNode = placed;
+        if (!ownPivot && !frameLink && placed !== undefined) frameNode = placed;
       }
       const X_SF0 = rigid(nodeObjects[frameNode].matrixWorld);
       const X_FL = X_SF0.clone().invert().multiply(object.matrixWorld);
@@ -251,7 +267,8 @@ export class ModelView {
     return {
       links: this.links.map((l) => {
         const p = new THREE.Vector3().setFromMatrixPosition(l.X_SF);
-        return { name: l.name, position: [p.x, p.y, p.z], box: l.box ? l.box.sides : null,
+        const n = new THREE.Vector3().setFromMatrixPosition(l.object.matrix);  // the link node, as drawn
+        return { name: l.name, position: [p.x, p.y, p.z], node_position: [n.x, n.y, n.z], box: l.box ? l.box.sides : null,
           com_drawn: this.overlays.comDrawn(l.index), meshes: l.meshes.length,
           bounds: l.bounds.isEmpty() ? null : [l.bounds.min.toArray(), l.bounds.max.toArray()] };
       }),

@@ -233,7 +233,8 @@ double shear_of(const Eigen::Matrix3d& A) {
 // The nodes whose transforms place the robot: in the scene converted (typing's default_scene:
 // "scene", else the first) with a mesh or joint properties (a pivot, or a frame of its own: a
 // camera's empty) at or below them. Empty when there is no scene.
-std::vector<char> nodes_placing_the_robot(const Json& document, const std::vector<int>& parents) {
+std::vector<char> nodes_placing_the_robot(const Json& document, const std::vector<int>& parents,
+                                          std::vector<char>* scene_nodes = nullptr) {
   const Json& nodes = document["nodes"];
   std::vector<char> in_scene(nodes.size(), 0), placing(nodes.size(), 0);
   if (!document.contains("scenes") || document["scenes"].empty()) return placing;
@@ -253,6 +254,7 @@ std::vector<char> nodes_placing_the_robot(const Json& document, const std::vecto
     if (!in_scene[i] || !(nodes[i].contains("mesh") || pivot)) continue;
     for (int up = static_cast<int>(i); up >= 0 && !placing[up]; up = parents[up]) placing[up] = 1;
   }
+  if (scene_nodes != nullptr) *scene_nodes = std::move(in_scene);
   return placing;
 }
 
@@ -311,12 +313,15 @@ void check_animations(const Json& document, Diagnostics& diag) {
   if (!document.contains("animations") || !document["animations"].is_array() || !document.contains("nodes")) return;
   const Json& nodes = document["nodes"];
   const auto parents = node_parents(document);
-  std::vector<char> placing = nodes_placing_the_robot(document, parents);
-  // A skin's joints (bones) place the links made of them, and the parts they hold.
+  std::vector<char> in_scene;
+  std::vector<char> placing = nodes_placing_the_robot(document, parents, &in_scene);
+  // A skin's joints (bones) in the scene converted place the links made of them, and the parts
+  // they hold.
   for (const Json& skin : document.value("skins", Json::array())) {
     if (!skin.is_object()) continue;
     for (const Json& joint : skin.value("joints", Json::array())) {
       if (!joint.is_number_unsigned() || joint.get<std::size_t>() >= nodes.size()) continue;
+      if (in_scene.empty() || !in_scene[joint.get<std::size_t>()]) continue;
       for (int up = joint.get<int>(); up >= 0 && !placing[up]; up = parents[up]) placing[up] = 1;
     }
   }

@@ -211,6 +211,16 @@ TEST(BlenderFixtures, KeyframedJointIsNamedWithItsAnimation) {
     convert_fixture(name, other);
     EXPECT_FALSE(other.contains("NODE_ANIMATED")) << name;
   }
+  // Animations that move nothing of the robot converted: a camera, a node and a skin's bone that
+  // are only in another scene (tests/data/frames, written for a review); and bones that are.
+  for (const char* name : {"animated_camera.gltf", "animated_other_scene.gltf", "animated_skin_other_scene.gltf"}) {
+    Diagnostics other;
+    ASSERT_TRUE(convert_file(testing::data_dir() / "frames" / name, ConvertOptions{}, other)) << name;
+    EXPECT_FALSE(other.contains("NODE_ANIMATED")) << name;
+  }
+  Diagnostics rigged;
+  ASSERT_TRUE(convert_file(testing::data_dir() / "khronos" / "RiggedSimple.gltf", ConvertOptions{}, rigged));
+  EXPECT_TRUE(rigged.contains("NODE_ANIMATED"));
 }
 
 TEST(BlenderFixtures, SkinnedArmBonesAreLinksCarryingTheirPartOfTheMesh) {

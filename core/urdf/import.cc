@@ -320,7 +320,7 @@ class Builder {
       const std::string which = joint.safety && joint.calibration ? "<safety_controller> and <calibration>"
                                 : joint.safety                    ? "<safety_controller>"
                                                                   : "<calibration>";
-      diag.add_at_line(Severity::kInfo, codes::URDF_IGNORED, joint_pointer(joint.name), xml.row,
+      diag.add_at_line(Severity::kInfo, codes::URDF_IGNORED, joint_pointer(joint.name), xml.ignored_row,
                 "joint '" + joint.name + "': " + which + " has no RDTF equivalent and is not imported");
     }
     return out;

@@ -38,7 +38,8 @@ struct XmlLink {
 struct XmlJoint {
   std::string name, type, parent, child;
   int row = 0;
-  int mimic_row = 0;  // The line of its <mimic>, 0 when it has none.
+  int mimic_row = 0;    // The line of its <mimic>, 0 when it has none.
+  int ignored_row = 0;  // The line of its <safety_controller>, else of its <calibration>; 0: none.
 };
 
 // The robot's structure in document order, checked: a <robot> root; named, unique links and

@@ -333,11 +333,13 @@ void check_joint(Checker& c, const TiXmlElement* e, const XmlJoint& joint, const
     const bool lower_read = lower || limit->Attribute("lower") == nullptr;
     const bool upper_read = upper || limit->Attribute("upper") == nullptr;
     const double low = lower ? (*lower)[0] : 0, high = upper ? (*upper)[0] : 0;
-    if (lower_read && upper_read && low > high) {
+    // URDF reads lower and upper on revolute and prismatic joints only: a continuous joint's are
+    // ignored (import does too), whatever they say.
+    const bool ranged = joint.type == "revolute" || joint.type == "prismatic";
+    if (ranged && lower_read && upper_read && low > high) {
       // pybullet reads lower above upper as "no limits"; URDF, urdfdom's users and MuJoCo do not.
       const std::string instead = joint.type == "revolute" ? "make it type=\"continuous\" if it turns freely"
-                                  : joint.type == "prismatic" ? "give its range of travel (URDF requires one)"
-                                                              : "give lower below upper";
+                                                           : "give its range of travel (URDF requires one)";
       c.error(kInvalidNumber, at, limit->Row(),
               "<limit>: lower " + exact_number(low) + " is above upper " + exact_number(high) +
                   " (pybullet reads that as no limits; URDF has no such convention: " + instead + ")");
@@ -600,6 +602,11 @@ std::optional<XmlRobot> scan_urdf_xml(const std::string& text, Diagnostics& diag
     XmlJoint joint{attribute(e, "name"), attribute(e, "type"), link_reference(e, "parent"),
                    link_reference(e, "child"), e->Row()};
     if (const TiXmlElement* mimic = e->FirstChildElement("mimic")) joint.mimic_row = mimic->Row();
+    for (const char* ignored : {"safety_controller", "calibration"}) {
+      if (const TiXmlElement* element = e->FirstChildElement(ignored); element != nullptr && joint.ignored_row == 0) {
+        joint.ignored_row = element->Row();
+      }
+    }
     const std::string pointer = joint.name.empty() ? "/robot/joint" : joint_pointer(joint.name);
     if (joint.name.empty()) {
       diag.error_at_line(codes::URDF_INVALID, pointer, e->Row(), "a <joint> has no name");

@@ -463,6 +463,37 @@ TEST(UrdfImport, MimicJointIsAWarningNamingTheJointItFollows) {
             "coupled joints, so it is imported as a joint of its own that moves freely");
 }
 
+// A continuous joint's lower and upper mean nothing in URDF (urdfdom reads them, nothing uses
+// them): lower above upper there imports, and the joint turns freely. Ignored elements are named
+// at their own line.
+TEST(UrdfImport, AContinuousJointsRangeIsIgnoredWhateverItSays) {
+  testing::TempDir dir;
+  testing::write_file(dir / "wheel.urdf", R"(<robot name="r">
+<link name="a"><inertial><mass value="1"/><inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial></link>
+<link name="b"><inertial><mass value="1"/><inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial></link>
+<joint name="wheel" type="continuous"><parent link="a"/><child link="b"/><axis xyz="0 1 0"/>
+<limit lower="1" upper="-1" effort="5" velocity="3"/>
+<safety_controller k_velocity="10"/>
+</joint>
+</robot>
+)");
+  Diagnostics diag;
+  const auto conversion = import_urdf(dir / "wheel.urdf", UrdfImportOptions{}, diag);
+  ASSERT_TRUE(conversion) << (diag.all().empty() ? "" : format(diag.all().front()));
+  ASSERT_EQ(conversion->robot.joints.size(), 1u);
+  const Joint& wheel = conversion->robot.joints[0];
+  EXPECT_EQ(wheel.kind, JointKind::kContinuous);
+  ASSERT_TRUE(wheel.limits);
+  EXPECT_FALSE(wheel.limits->position);
+  EXPECT_EQ(wheel.limits->effort, 5);
+  const Diagnostic* ignored = nullptr;
+  for (const Diagnostic& d : diag.all()) {
+    if (d.code == "URDF_IGNORED") ignored = &d;
+  }
+  ASSERT_NE(ignored, nullptr);
+  EXPECT_EQ(ignored->line, 6);  // <safety_controller>, not <joint> (line 4)
+}
+
 TEST(UrdfImport, RoundTripOfTheTutorialPhysicsRobot) { round_trip(tutorial("07-physics.urdf")); }
 
 TEST(UrdfImport, RoundTripOfEveryJointKindAndRotatedInertial) {

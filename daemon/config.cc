@@ -14,6 +14,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "safe_decode.h"
+
 namespace rdtf::daemon {
 namespace {
 
@@ -74,7 +76,8 @@ bool check_ranges(const DaemonConfig& config, std::string& error) {
     }
   }
   if (config.republish_period.count() > 0 && config.republish_period.count() < 10) {
-    error = "\"republish_period_ms\" must be 0 (off) or at least 10";
+    error = "\"republish_period_ms\" is " + std::to_string(config.republish_period.count()) +
+            ": it must be 0 (off) or at least 10";
     return false;
   }
   if (config.max_read_bytes > config.max_read_bytes_in_flight) {
@@ -98,8 +101,8 @@ std::optional<std::string> read_config_text(const std::filesystem::path& path, s
     error = path.string() + ": cannot read the config file: " + std::strerror(errno);
   } else if (!S_ISREG(info.st_mode)) {
     error = path.string() + ": the config is " +
-            (S_ISDIR(info.st_mode) ? std::string("a directory") : std::string("not a regular file (a FIFO, device or socket)")) +
-            ", not a file";
+            (S_ISDIR(info.st_mode) ? std::string("a directory") : std::string("a FIFO, device or socket")) +
+            ", not a regular file";
   } else if (static_cast<std::uint64_t>(info.st_size) > kMaxConfigFileBytes) {
     error = path.string() + ": the config file is " + std::to_string(info.st_size) + " bytes, over the limit of " +
             std::to_string(kMaxConfigFileBytes);
@@ -235,7 +238,8 @@ bool check_config(DaemonConfig& config, std::string& error) {
     }
   }
   if (config.channel_prefix.empty() || config.channel_prefix.size() > 16) {
-    error = "channel_prefix must have 1 to 16 characters";
+    error = "channel_prefix \"" + lcm_safe::printable(config.channel_prefix, 40) + "\" has " +
+            std::to_string(config.channel_prefix.size()) + " characters: it must have 1 to 16";
     return false;
   }
   return true;

@@ -90,8 +90,9 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", rdtf::version_line("rdtfd"));
   std::string config_file;
   Overrides overrides;
-  app.add_option("-c,--config", config_file, "JSON config file (see config/rdtfd.json)")
-      ->check(CLI::ExistingFile);
+  // Checked by load_config, which names the file and what is wrong with it (missing, a directory,
+  // a FIFO) and exits 2 as for any other bad setting.
+  app.add_option("-c,--config", config_file, "JSON config file (see config/rdtfd.json)");
   for (const auto& key : rdtf::daemon::config_registry()) {
     if (key.flag.empty()) continue;
     if (key.flag_sets) {

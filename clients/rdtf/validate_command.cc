@@ -69,8 +69,10 @@ void add_validate_command(CLI::App& app, int& exit_code) {
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   command->add_option("--start-offset", args->validation.start_offset_angular,
-                      "Start every unnamed revolute joint this far (rad) from rest; default: the rest pose")
-      ->check(CLI::NonNegativeNumber)
+                      "Start every revolute and continuous joint this far (rad, either sign) from rest, or "
+                      "the other way where its limits do not allow it; 0: the rest pose (rdtfd's "
+                      "validation_start_offset_rad)")
+      ->check(CLI::Range(-6.2832, 6.2832))
       ->capture_default_str();
   command->add_option("--time-step", args->validation.simulation.time_step, "ODE time step (s)")
       ->check(CLI::PositiveNumber)

@@ -59,6 +59,19 @@ TEST(DaemonReload, ATimeStepThatWouldWedgeTheDaemonIsRefusedAtStart) {
   EXPECT_NE(daemon->log().find("time_step"), std::string::npos) << daemon->log();
 }
 
+// A config file that is not there, or a directory, given at start: exit 2 like any bad setting,
+// naming the file and what is wrong (CLI11's own check exited 105 with its wording).
+TEST(DaemonReload, AMissingOrDirectoryConfigIsRefusedAtStartNamingIt) {
+  Session s;
+  for (const fs::path& config : {s.root / "missing.json", s.root.path()}) {
+    ChildProcess daemon({RDTFD_PATH, "--config", config.string()}, s.root / "daemon.log");
+    const auto code = daemon.wait_exit(10s);
+    ASSERT_TRUE(code.has_value()) << config;
+    EXPECT_EQ(*code, 2) << daemon.output();
+    EXPECT_NE(daemon.output().find(config.string() + ": "), std::string::npos) << daemon.output();
+  }
+}
+
 TEST(DaemonLog, FileNamesAreEscapedSoThatNoneForgesALine) {
   Session s;
   s.start();

@@ -248,7 +248,7 @@ struct ValidationOptions {
   PhysicalCheckOptions checks;      // checks.floating_root is taken from simulation.floating_root.
   SimulationOptions simulation;
   double duration = 3.0;            // s of simulated time from the start pose, passive.
-  // By joint name; joints not named start at rest. With start_offset_angular > 0, a revolute or
+  // By joint name; joints not named start at rest. With start_offset_angular != 0, a revolute or
   // continuous joint not named starts that far from rest instead (within its limits), so that the
   // run moves: from an equilibrium (a chain hanging straight) a passive run tests little. The
   // default is the rest pose, as the model was drawn.

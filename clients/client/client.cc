@@ -83,7 +83,8 @@ struct Pending {
 
 struct ModelState {
   std::shared_ptr<const Snapshot> current;
-  std::uint64_t epoch = 0;  // The rdtfd instance (Impl::daemon_epoch) that described `current`.
+  std::uint64_t epoch = 0;      // The rdtfd instance (Impl::daemon_epoch) that described `current`,
+  bool known_daemon = false;    // when a STATUS had named one by then.
   int unlisted = 0;  // STATUS messages in a row that did not list it as live
   std::map<Key, Pending> pending;
   Clock::time_point next_request{};
@@ -450,9 +451,11 @@ struct Client::State {
   // commanding the live revision (rdtfd rejects every command for another) until the next
   // republication. It is held until a STATUS shows another rdtfd started since (a restart without
   // its state folder numbers models from 1 again, docs/lcm.md), and then taken.
+  // Before any STATUS (a client's first second) nothing tells one rdtfd from another, and the
+  // revision described last is taken as before: a restart then must not leave the model held.
   void deliver_or_hold(const std::string& model_id, const Key& key) {
     ModelState& m = models[model_id];
-    if (m.current && key.first <= m.current->revision() && m.epoch == daemon_epoch) {
+    if (m.current && daemon && m.known_daemon && key.first <= m.current->revision() && m.epoch == daemon_epoch) {
       problem(model_id, "revision " + std::to_string(key.first) + " is not newer than revision " +
                             std::to_string(m.current->revision()) +
                             ", which the same rdtfd described (a replayed log?): held until a restarted rdtfd "
@@ -494,6 +497,7 @@ struct Client::State {
     drop_older(model_id, key.first);
     m.current = snapshot;
     m.epoch = daemon_epoch;
+    m.known_daemon = daemon.has_value();
     m.backoff = options.retry_initial;
     ++stats.revisions;
     if (callbacks.on_revision) callbacks.on_revision(snapshot);

@@ -586,6 +586,20 @@ TEST(Client, ALowerRevisionIsTakenOnlyFromARestartedRdtfd) {
   EXPECT_EQ(b.client->snapshot("arm.gltf")->revision(), 1);
 }
 
+// A client that has heard no STATUS yet (its first second) cannot tell one rdtfd from another:
+// an rdtfd restarted then, numbering from 1 again, is followed, not held back for ever.
+TEST(Client, BeforeAnyStatusTheRevisionDescribedLastIsTaken) {
+  Bench b(Blobs::kNone);
+  b.feed(publication(arm(2)));
+  b.feed(publication(arm(1)));
+  EXPECT_EQ(b.client->snapshot("arm.gltf")->revision(), 1);
+  // From the first STATUS on, the rule holds.
+  b.feed({status_listing({"arm.gltf"}, 300, 9'000'000, 1.0)});
+  b.feed(publication(arm(3)));
+  b.feed(publication(arm(2)));
+  EXPECT_EQ(b.client->snapshot("arm.gltf")->revision(), 3);
+}
+
 // Hostile or malformed datagrams: each is dropped with a reason, none crashes or stalls the client.
 TEST(Client, DropsHostileDatagramsWithAReasonAndGoesOn) {
   Bench b;

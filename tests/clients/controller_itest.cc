@@ -164,7 +164,22 @@ TEST(Controller, FollowsRevisionsNumberedAgainFromOneAndStopsCleanlyOnSigint) {
   s.start(live_arm_daemon().with_output(s.root / "fresh_output"));
   ASSERT_TRUE(commanded(1, second_hash)) << "no command for revision 1 after the restart; controller:\n"
                                          << controller.output();
-  EXPECT_TRUE(rejections(s.messages()).empty()) << rejections(s.messages()).front();
+  // From then on it commands the live revision only: a second of states (100) and no rejection.
+  // (A command in flight while a revision goes live is rejected by design, docs/controller.md,
+  // and under a sanitizer's timing one was, at the hot reload to revision 2: not counted here.)
+  const std::size_t commands_before = decoded<rdtf::joint_command_t>(s.messages(), "JOINT_COMMAND", kArm).size();
+  const std::size_t rejections_before = rejections(s.messages()).size();
+  ASSERT_TRUE(s.wait_for([&](const auto& all) {
+    return decoded<rdtf::joint_command_t>(all, "JOINT_COMMAND", kArm).size() >= commands_before + 100;
+  }, 20s));
+  const auto all = s.messages();
+  const auto rejected = rejections(all);
+  // Only a command of the old revision 2 still in flight at the restart may be rejected since.
+  for (std::size_t i = rejections_before; i < rejected.size(); ++i) {
+    EXPECT_EQ(rejected[i].rfind("command for revision 2 ", 0), 0u) << rejected[i];
+  }
+  const auto commands = decoded<rdtf::joint_command_t>(all, "JOINT_COMMAND", kArm);
+  for (std::size_t i = commands_before; i < commands.size(); ++i) EXPECT_EQ(commands[i].revision, 1) << i;
 
   controller.signal(SIGINT);
   EXPECT_EQ(controller.wait_exit(10s), std::optional<int>(0)) << controller.output();

@@ -31,10 +31,18 @@ Json wait_drawn(Page& page, const std::string& id, std::int64_t revision, Clock:
   return m;
 }
 
+// From the newest message back, up to the first older step of that revision: the waits below run
+// this on every message that arrives, and decoding every state so far (50 Hz for each model) was
+// quadratic, which under ASan on a loaded machine starved the subscriber's thread until the kernel
+// dropped the very steps waited for.
 std::optional<rdtf::link_state_t> link_state_at(const std::vector<Message>& all, const std::string& id,
                                                 std::int64_t revision, double sim_time) {
-  for (const auto& s : decoded<rdtf::link_state_t>(all, "LINK_STATE", id)) {
-    if (s.revision == revision && s.sim_time == sim_time) return s;
+  for (auto m = all.rbegin(); m != all.rend(); ++m) {
+    if (m->kind() != "LINK_STATE" || m->model_id() != id) continue;
+    const auto s = m->as<rdtf::link_state_t>();
+    if (s.revision != revision) continue;
+    if (s.sim_time == sim_time) return s;
+    if (s.sim_time < sim_time) break;  // one simulation's steps arrive in order
   }
   return std::nullopt;
 }

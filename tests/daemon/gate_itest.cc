@@ -75,7 +75,7 @@ TEST(DaemonGate, ARejectedRevisionLeavesTheLiveOutputsAndNumbersAlone) {
   EXPECT_EQ(error.live_revision, 1);
   bool mass_ratio = false;
   for (const auto& d : error.diagnostics) mass_ratio |= d.code == "JOINT_MASS_RATIO";
-  EXPECT_TRUE(mass_ratio) << ::testing::PrintToString(s.messages().back().json.dump());
+  EXPECT_TRUE(mass_ratio) << ::testing::PrintToString(s.messages().back().json().dump());
   EXPECT_NE(daemon.log().find("rejected " + id + " revision 2 (dynamics)"), std::string::npos) << daemon.log();
 
   // A subscriber that starts now gets the live revision with its own verdict, not the rejected one's.
@@ -204,8 +204,8 @@ TEST(DaemonGate, WarningsOfAGoodConversionAreLoggedAndPublishedWithTheVerdict) {
                                       id + " DESCRIPTION r1 " + short_hash(content_hash(model)),
                                       id + " INERTIA r1 " + short_hash(content_hash(model))}));
   const auto again = decoded<rdtf::validation_report_t>(answer, "VALIDATION", id).at(0);
-  Json first = on_kind(s.messages(), "VALIDATION", id).at(0).json;
-  Json second = on_kind(answer, "VALIDATION", id).at(0).json;
+  Json first = on_kind(s.messages(), "VALIDATION", id).at(0).json();
+  Json second = on_kind(answer, "VALIDATION", id).at(0).json();
   first.erase("utime");  // Set when each is published.
   second.erase("utime");
   EXPECT_EQ(second, first);

@@ -246,8 +246,9 @@ TEST(LcmSpyJar, DecodesEveryChannelOfARecordedSession) {
   for (const auto& m : all) {
     if (m.channel.rfind("RDTF/", 0) != 0 || m.kind() == "REQUEST") continue;
     std::int64_t utime = 0;
-    if (!m.json.is_object()) continue;
-    utime = m.json["utime"].get<std::int64_t>();
+    const Json json = m.json();
+    if (!json.is_object()) continue;
+    utime = json["utime"].get<std::int64_t>();
     received.emplace(std::make_pair(m.channel, utime), &m);
   }
   std::map<std::string, int> decoded_kinds;

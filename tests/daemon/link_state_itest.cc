@@ -26,7 +26,7 @@ struct ReceivedLinks {
 
 std::vector<ReceivedLinks> link_states(const std::vector<Message>& all, const std::string& model_id) {
   std::vector<ReceivedLinks> out;
-  for (const auto& m : on_kind(all, "LINK_STATE", model_id)) out.push_back({m.as<rdtf::link_state_t>(), m.json});
+  for (const auto& m : on_kind(all, "LINK_STATE", model_id)) out.push_back({m.as<rdtf::link_state_t>(), m.json()});
   return out;
 }
 

@@ -319,8 +319,8 @@ TEST(DaemonPublish, LcmLoggerRecordingReplaysTheSameMessages) {
   ASSERT_EQ(lines.size(), live.size());
   for (std::size_t i = 0; i < live.size(); ++i) {
     EXPECT_EQ(lines[i]["channel"], live[i].channel) << i;
-    EXPECT_EQ(lines[i]["message"], live[i].json) << i;
-    EXPECT_FALSE(live[i].json.is_null()) << live[i].channel << " is no rdtf type";
+    EXPECT_EQ(lines[i]["message"], live[i].json()) << i;
+    EXPECT_FALSE(live[i].json().is_null()) << live[i].channel << " is no rdtf type";
   }
 }
 

@@ -121,7 +121,7 @@ TEST(Revisions, ALimitEditGivesADeltaNamingThatJointWithOnlyLimits) {
   EXPECT_EQ(kinds, (std::vector<std::string>{"DESCRIPTION", "INERTIA", "DELTA", "DESCRIPTION", "INERTIA", "DELTA"}));
   // rdtf-echo's JSON (clients/echo/message_json.cc) of the same message.
   const auto delta_messages = on_kind(all, "DELTA", id);
-  const Json& json = delta_messages.back().json;
+  const Json json = delta_messages.back().json();
   ASSERT_TRUE(json.is_object());
   EXPECT_EQ(json["type"], "rdtf.delta_t");
   EXPECT_EQ(json["previous_revision"], 1);

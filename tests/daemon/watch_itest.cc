@@ -378,7 +378,7 @@ TEST(DaemonWatch, BrokenSaveKeepsTheGoodRevisionAndPublishesTheError) {
     // The bad reference is /meshes/0/primitives/0/attributes/POSITION (accessor 7 of 2).
     if (d.pointer.rfind("/meshes/0/primitives/0", 0) == 0) located = true;
   }
-  EXPECT_TRUE(located) << "no error points at the mesh: " << on_kind(s.messages(), "ERROR").at(0).json.dump();
+  EXPECT_TRUE(located) << "no error points at the mesh: " << on_kind(s.messages(), "ERROR").at(0).json().dump();
   EXPECT_NE(s.daemon->log().find("rejected arm.gltf"), std::string::npos) << s.daemon->log();
   EXPECT_NE(s.daemon->log().find("still serving revision 1"), std::string::npos) << s.daemon->log();
 

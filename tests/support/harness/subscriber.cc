@@ -35,13 +35,16 @@ void Subscriber::record(const std::string& channel, const lcm::ReceiveBuffer& bu
   message.channel = channel;
   const auto* data = static_cast<const std::uint8_t*>(buffer.data);
   message.bytes.assign(data, data + buffer.data_size);
-  if (auto json = rdtf::clients::message_to_json(buffer.data, buffer.data_size)) {
-    // Any peer may send strings that are not UTF-8 (Echo.StringsThatAreNotUtf8PrintReplaced): kept
-    // with U+FFFD in their place, as rdtf-echo prints them.
-    message.json = Json::parse(json->dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace));
-  }
   message.received = received;
   messages_.push_back(std::move(message));
+}
+
+Json Message::json() const {
+  auto json = rdtf::clients::message_to_json(bytes.data(), static_cast<std::uint32_t>(bytes.size()));
+  if (!json) return nullptr;
+  // Any peer may send strings that are not UTF-8 (Echo.StringsThatAreNotUtf8PrintReplaced): kept
+  // with U+FFFD in their place, as rdtf-echo prints them.
+  return Json::parse(json->dump(-1, ' ', false, nlohmann::ordered_json::error_handler_t::replace));
 }
 
 std::vector<Message> Subscriber::messages() const {

@@ -16,8 +16,12 @@ namespace rdtf::itest {
 struct Message {
   std::string channel;
   std::vector<std::uint8_t> bytes;
-  Json json;  // message_to_json(bytes), null when not an rdtf type.
   Clock::time_point received;
+
+  // message_to_json(bytes), null when not an rdtf type. Decoded when asked: the receiving thread
+  // only stores bytes, so that it keeps up with 50 Hz states of several models under ASan on a
+  // loaded machine (decoding each to JSON there fell behind until the kernel dropped datagrams).
+  Json json() const;
 
   template <typename T>
   T as() const {

@@ -53,14 +53,16 @@ rm -f "$digest"
 if [[ $rc -ne 0 && -f $build_dir/Testing/Temporary/LastTestsFailed.log ]]; then
   while IFS= read -r line; do
     name=${line#*:}
-    {
-      echo "--- $name"
-      awk -v name="$name" '
+    output=$(awk -v name="$name" '
         $0 ~ "^[0-9]+/[0-9]+ Test: " && index($0, name) { inside = 1; next }
         inside && /^<end of output>/ { exit }
-        inside' "$build_dir/Testing/Temporary/LastTest.log" |
-        grep -E -A6 'Failure|FAILED|ERROR|error:|runtime error|Timeout|what\(\)' | head -n 40
-    } >>"$digest"
+        inside' "$build_dir/Testing/Temporary/LastTest.log")
+    failure=$(grep -E -A6 'Failure|FAILED|ERROR|error:|runtime error|Timeout|what\(\)' <<<"$output" | head -n 40)
+    {
+      echo "--- $name"
+      # A test stopped at ctest's timeout printed no failure line: its last lines show where it was.
+      if [[ -n $failure ]]; then echo "$failure"; else echo "(no failure line; its last lines:)"; tail -n 15 <<<"$output"; fi
+    } | cut -c1-1000 >>"$digest"  # a dumped page state is one line of many kilobytes
   done <"$build_dir/Testing/Temporary/LastTestsFailed.log"
 fi
 exit "$rc"

@@ -15,9 +15,42 @@
 #include "rdtf/geometry.h"
 #include "rdtf/robot.h"
 #include "rdtf/diagnostic_codes.h"
+#include "scene_nodes.h"
 
 namespace rdtf {
+namespace internal {
+
+// scene_nodes.h says what.
+std::vector<char> nodes_placing_the_robot(const Json& document, const std::vector<int>& parents,
+                                          std::vector<char>* scene_nodes) {
+  const Json& nodes = document["nodes"];
+  std::vector<char> in_scene(nodes.size(), 0), placing(nodes.size(), 0);
+  if (!document.contains("scenes") || document["scenes"].empty()) return placing;
+  std::vector<std::size_t> stack;
+  const Json& scene = document["scenes"][document.value("scene", std::size_t{0})];
+  for (const Json& root : scene.value("nodes", Json::array())) stack.push_back(root.get<std::size_t>());
+  while (!stack.empty()) {
+    const std::size_t node = stack.back();
+    stack.pop_back();
+    if (node >= nodes.size() || in_scene[node]) continue;
+    in_scene[node] = 1;
+    for (const Json& child : nodes[node].value("children", Json::array())) stack.push_back(child.get<std::size_t>());
+  }
+  for (std::size_t i = 0; i < nodes.size(); ++i) {
+    const bool pivot = nodes[i].contains("extras") && nodes[i]["extras"].is_object() &&
+                       nodes[i]["extras"].contains("rdtf_joint");
+    if (!in_scene[i] || !(nodes[i].contains("mesh") || pivot)) continue;
+    for (int up = static_cast<int>(i); up >= 0 && !placing[up]; up = parents[up]) placing[up] = 1;
+  }
+  if (scene_nodes != nullptr) *scene_nodes = std::move(in_scene);
+  return placing;
+}
+
+}  // namespace internal
+
 namespace {
+
+using internal::nodes_placing_the_robot;
 
 // Bounds of a plausible robot in metres and kilograms. A model drawn in millimetres and exported
 // as metres is 1000 times too long and 1e9 times too heavy: a 0.6 m arm becomes 600 m and 3e10
@@ -230,34 +263,6 @@ double shear_of(const Eigen::Matrix3d& A) {
 // a child of an object with unapplied non-uniform scale as its scene shows it (glTF has no parent
 // inverse and no shear in a TRS), so it writes one askew, and the masses, pivots and axes of all
 // below follow.
-// The nodes whose transforms place the robot: in the scene converted (typing's default_scene:
-// "scene", else the first) with a mesh or joint properties (a pivot, or a frame of its own: a
-// camera's empty) at or below them. Empty when there is no scene.
-std::vector<char> nodes_placing_the_robot(const Json& document, const std::vector<int>& parents,
-                                          std::vector<char>* scene_nodes = nullptr) {
-  const Json& nodes = document["nodes"];
-  std::vector<char> in_scene(nodes.size(), 0), placing(nodes.size(), 0);
-  if (!document.contains("scenes") || document["scenes"].empty()) return placing;
-  std::vector<std::size_t> stack;
-  const Json& scene = document["scenes"][document.value("scene", std::size_t{0})];
-  for (const Json& root : scene.value("nodes", Json::array())) stack.push_back(root.get<std::size_t>());
-  while (!stack.empty()) {
-    const std::size_t node = stack.back();
-    stack.pop_back();
-    if (node >= nodes.size() || in_scene[node]) continue;
-    in_scene[node] = 1;
-    for (const Json& child : nodes[node].value("children", Json::array())) stack.push_back(child.get<std::size_t>());
-  }
-  for (std::size_t i = 0; i < nodes.size(); ++i) {
-    const bool pivot = nodes[i].contains("extras") && nodes[i]["extras"].is_object() &&
-                       nodes[i]["extras"].contains("rdtf_joint");
-    if (!in_scene[i] || !(nodes[i].contains("mesh") || pivot)) continue;
-    for (int up = static_cast<int>(i); up >= 0 && !placing[up]; up = parents[up]) placing[up] = 1;
-  }
-  if (scene_nodes != nullptr) *scene_nodes = std::move(in_scene);
-  return placing;
-}
-
 void check_shear(const Json& document, Diagnostics& diag) {
   const Json& nodes = document["nodes"];
   if (!document.contains("scenes") || document["scenes"].empty()) return;
@@ -302,62 +307,6 @@ void check_shear(const Json& document, Diagnostics& diag) {
                      ") and the meshes, pivots and axes below it are skewed too. A modeller rarely means this: "
                      "Blender writes a child of an object with unapplied non-uniform scale so. Apply that "
                      "object's scale (Ctrl+A > Scale) and export again");
-  }
-}
-
-// Animations that move the nodes placing the robot. RDTF describes each node where the file puts
-// it (its rest transform), never at a frame of an animation; a modeller who keyframed a joint and
-// exported at another frame sees one pose and gets another, silently (Blender writes keyframed
-// objects at their frame-1 transform whatever frame it shows). One warning per animation.
-void check_animations(const Json& document, Diagnostics& diag) {
-  if (!document.contains("animations") || !document["animations"].is_array() || !document.contains("nodes")) return;
-  const Json& nodes = document["nodes"];
-  const auto parents = node_parents(document);
-  std::vector<char> in_scene;
-  std::vector<char> placing = nodes_placing_the_robot(document, parents, &in_scene);
-  // A skin's joints (bones) in the scene converted place the links made of them, and the parts
-  // they hold.
-  for (const Json& skin : document.value("skins", Json::array())) {
-    if (!skin.is_object()) continue;
-    for (const Json& joint : skin.value("joints", Json::array())) {
-      if (!joint.is_number_unsigned() || joint.get<std::size_t>() >= nodes.size()) continue;
-      if (in_scene.empty() || !in_scene[joint.get<std::size_t>()]) continue;
-      for (int up = joint.get<int>(); up >= 0 && !placing[up]; up = parents[up]) placing[up] = 1;
-    }
-  }
-  const Json& animations = document["animations"];
-  for (std::size_t a = 0; a < animations.size(); ++a) {
-    if (!animations[a].is_object() || !animations[a].contains("channels")) continue;
-    const Json& channels = animations[a]["channels"];
-    std::vector<std::pair<std::size_t, std::string>> moved;  // node, paths
-    std::size_t first_channel = 0;
-    for (std::size_t c = 0; c < channels.size(); ++c) {
-      const Json* target = channels[c].is_object() && channels[c].contains("target") ? &channels[c]["target"] : nullptr;
-      if (!target || !target->is_object() || !target->contains("node") || !(*target)["node"].is_number_unsigned()) continue;
-      const auto node = (*target)["node"].get<std::size_t>();
-      const std::string path = target->value("path", "");
-      if (node >= nodes.size() || !placing[node] || (path != "translation" && path != "rotation" && path != "scale")) continue;
-      const auto known = std::find_if(moved.begin(), moved.end(), [&](const auto& m) { return m.first == node; });
-      if (moved.empty()) first_channel = c;
-      if (known == moved.end()) {
-        moved.emplace_back(node, path);
-      } else if (known->second.find(path) == std::string::npos) {
-        known->second += ", " + path;
-      }
-    }
-    if (moved.empty()) continue;
-    std::string which;
-    for (std::size_t k = 0; k < moved.size() && k < 3; ++k) {
-      which += (k ? ", " : "") + node_label(document, moved[k].first) + " (" + moved[k].second + ")";
-    }
-    if (moved.size() > 3) which += " and " + std::to_string(moved.size() - 3) + " more nodes";
-    const std::string name = animations[a].value("name", "");
-    diag.warning(codes::NODE_ANIMATED, "/animations/" + std::to_string(a) + "/channels/" + std::to_string(first_channel),
-                 "animation " + std::to_string(a) + (name.empty() ? "" : " '" + name + "'") + " moves " + which +
-                     ": the robot is described where the file places its nodes, in no frame of an animation; "
-                     "Blender writes keyframed objects at their frame-1 transform whatever frame it shows. "
-                     "Clear the keyframes of the parts and joint empties (Object > Animation > Clear "
-                     "Keyframes), or set frame 1 to the pose the robot is modelled in, and export again");
   }
 }
 
@@ -538,7 +487,6 @@ void check_units(const Json& document, const Robot& robot, Diagnostics& diag) {
   check_densities(document, robot, diag);
   check_typed_limits(document, robot, diag);
   check_shear(document, diag);
-  check_animations(document, diag);
   check_duplicate_names(document, robot, diag);
 }
 

@@ -42,7 +42,9 @@ const std::set<std::string>& not_codes() {
       "NUMBER",
       // EXT_meshopt_compression's modes and filters, EXT_mesh_gpu_instancing's attributes.
       "ATTRIBUTES", "TRIANGLES", "INDICES", "NONE", "OCTAHEDRAL", "QUATERNION", "EXPONENTIAL",
-      "TRANSLATION", "ROTATION", "SCALE"};
+      "TRANSLATION", "ROTATION", "SCALE",
+      // Animation samplers' interpolations.
+      "LINEAR", "STEP", "CUBICSPLINE"};
   return names;
 }
 

@@ -157,6 +157,10 @@ void check_extras_keys(const Json& document, Diagnostics& diag);
 // any solid (g/cm^3 or grams typed); limits typed in node extras in degrees or millimetres; more
 // than one root link (an object the modeller did not mean to export).
 void check_units(const Json& document, const Robot& robot, Diagnostics& diag);
+// NODE_ANIMATED: an animation that takes a node placing the robot (a link, a joint empty, a bone,
+// a node above them) away from its rest transform, which is all RDTF describes. Channels whose
+// every keyframe holds the rest value (Blender writes one for each bone of an action) move nothing.
+void check_animations(const GltfAsset& asset, Diagnostics& diag);
 
 // An error for each link whose mass, centre of mass or inertia is not finite (sizes or densities
 // that overflow double precision: a scale of 1e38 on a node and its child). The output would hold

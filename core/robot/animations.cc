@@ -1,0 +1,167 @@
+// NODE_ANIMATED: animations that move the nodes placing the robot. RDTF describes each node where
+// the file puts it (its rest transform), never at a frame of an animation; a modeller who
+// keyframed a joint and exported at another frame sees one pose and gets another, silently
+// (Blender writes keyframed objects at their frame-1 transform whatever frame it shows).
+//
+// A channel moves its node only when some keyframe differs from the node's rest value: Blender
+// writes a channel for every bone of an action (and exports every action of the .blend file), most
+// of them constant at the rest pose, and warning of those would drown the one that matters.
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "rdtf/completion.h"
+#include "rdtf/diagnostic_codes.h"
+#include "rdtf/geometry.h"
+#include "rdtf/robot.h"
+#include "scene_nodes.h"
+
+namespace rdtf {
+namespace {
+
+// What counts as the same value. Exporters sample float32 matrices and decompose them, so a
+// keyframe of an unmoved node differs from its rest by a few float32 ulps of the largest magnitude
+// involved (Blender 3.4: 5e-8 m on a 0.3 m offset, 1.2e-7 in scale, 3e-8 in a quaternion; see
+// tests/data/blender/make_animated.py). 1e-5 relative (10 um at 1 m) and 1e-5 rad are a hundred
+// times that and far below anything a robot description resolves.
+constexpr double kRelative = 1e-5;
+constexpr double kAngle = 1e-5;
+
+std::vector<double> rest_value(const Json& node, const std::string& path) {
+  std::vector<double> fallback = path == "rotation" ? std::vector<double>{0, 0, 0, 1}
+                                 : path == "scale"  ? std::vector<double>{1, 1, 1}
+                                                    : std::vector<double>{0, 0, 0};
+  if (!node.contains(path) || !node[path].is_array() || node[path].size() != fallback.size()) return fallback;
+  std::vector<double> value;
+  for (const Json& x : node[path]) value.push_back(x.is_number() ? x.get<double>() : 0.0);
+  return value;
+}
+
+// A quantized rotation (normalized byte or short, glTF 2.0 3.11) is off by up to half a step in
+// each component: an angle of at most 2 |dq| <= 2 step.
+double angle_tolerance(const Json& accessor) {
+  if (!accessor.value("normalized", false)) return kAngle;
+  const int type = accessor.value("componentType", 0);
+  const double step = (type == 5120 || type == 5121) ? 1.0 / 127 : (type == 5122 || type == 5123) ? 1.0 / 32767 : 0.0;
+  return std::max(kAngle, 2 * step);
+}
+
+bool differs(const std::string& path, const double* key, const std::vector<double>& rest, double angle) {
+  if (path == "rotation") {
+    const Eigen::Vector4d q(key[0], key[1], key[2], key[3]), r(rest[0], rest[1], rest[2], rest[3]);
+    if (!(q.norm() > 0) || !(r.norm() > 0)) return true;
+    // The angle between the two rotations; q and -q are one rotation.
+    const double cos_half = std::min(1.0, std::abs(q.normalized().dot(r.normalized())));
+    return 2 * std::acos(cos_half) > angle;
+  }
+  double scale = 1.0, distance = 0.0;
+  for (int k = 0; k < 3; ++k) {
+    scale = std::max({scale, std::abs(key[k]), std::abs(rest[k])});
+    distance = std::max(distance, std::abs(key[k] - rest[k]));
+  }
+  return !(distance <= kRelative * scale);
+}
+
+// A CUBICSPLINE tangent that is not zero moves the node between equal keys.
+bool tangent_moves(const std::string& path, const double* tangent, const std::vector<double>& rest) {
+  const int n = path == "rotation" ? 4 : 3;
+  double norm = 0.0, scale = 1.0;
+  for (int k = 0; k < n; ++k) norm = std::max(norm, std::abs(tangent[k]));
+  for (int k = 0; k < 3; ++k) scale = std::max(scale, std::abs(rest[k]));
+  return !(norm <= (path == "rotation" ? kAngle : kRelative * scale));
+}
+
+// Whether `channel` of `animation` takes its node anywhere but its rest transform. Anything this
+// cannot read (a sampler or accessor out of range, a node with a matrix, which an animation must not
+// target) counts as moving: the warning is the safe side.
+bool channel_moves(const GltfAsset& asset, const Json& animation, const Json& channel, const Json& node,
+                   const std::string& path) {
+  const Json& document = asset.document;
+  if (node.contains("matrix") || !channel.contains("sampler") || !channel["sampler"].is_number_unsigned()) return true;
+  const auto sampler_index = channel["sampler"].get<std::size_t>();
+  const Json& samplers = animation.value("samplers", Json::array());
+  if (!samplers.is_array() || sampler_index >= samplers.size() || !samplers[sampler_index].is_object()) return true;
+  const Json& sampler = samplers[sampler_index];
+  if (!sampler.contains("output") || !sampler["output"].is_number_unsigned() || !document.contains("accessors")) return true;
+  const auto output = sampler["output"].get<std::size_t>();
+  if (output >= document["accessors"].size()) return true;
+  const Json& accessor = document["accessors"][output];
+  const int n = path == "rotation" ? 4 : 3;
+  if (accessor.value("type", "") != (n == 4 ? "VEC4" : "VEC3")) return true;
+  const std::vector<double> values = read_accessor(asset, output);
+  const std::vector<double> rest = rest_value(node, path);
+  const double angle = angle_tolerance(accessor);
+  const bool cubic = sampler.value("interpolation", "LINEAR") == "CUBICSPLINE";
+  const std::size_t keys = values.size() / static_cast<std::size_t>(n);
+  for (std::size_t k = 0; k < keys; ++k) {
+    const double* key = values.data() + k * static_cast<std::size_t>(n);
+    // CUBICSPLINE keys are (in-tangent, value, out-tangent).
+    if (cubic && k % 3 != 1) {
+      if (tangent_moves(path, key, rest)) return true;
+    } else if (differs(path, key, rest, angle)) {
+      return true;
+    }
+  }
+  return false;
+}
+
+}  // namespace
+
+void check_animations(const GltfAsset& asset, Diagnostics& diag) {
+  const Json& document = asset.document;
+  if (!document.contains("animations") || !document["animations"].is_array() || !document.contains("nodes")) return;
+  const Json& nodes = document["nodes"];
+  const auto parents = node_parents(document);
+  std::vector<char> in_scene;
+  std::vector<char> placing = internal::nodes_placing_the_robot(document, parents, &in_scene);
+  // A skin's joints (bones) in the scene converted place the links made of them, and the parts
+  // they hold.
+  for (const Json& skin : document.value("skins", Json::array())) {
+    if (!skin.is_object()) continue;
+    for (const Json& joint : skin.value("joints", Json::array())) {
+      if (!joint.is_number_unsigned() || joint.get<std::size_t>() >= nodes.size()) continue;
+      if (in_scene.empty() || !in_scene[joint.get<std::size_t>()]) continue;
+      for (int up = joint.get<int>(); up >= 0 && !placing[up]; up = parents[up]) placing[up] = 1;
+    }
+  }
+  const Json& animations = document["animations"];
+  for (std::size_t a = 0; a < animations.size(); ++a) {
+    if (!animations[a].is_object() || !animations[a].contains("channels")) continue;
+    const Json& channels = animations[a]["channels"];
+    std::vector<std::pair<std::size_t, std::string>> moved;  // node, paths
+    std::size_t first_channel = 0;
+    for (std::size_t c = 0; c < channels.size(); ++c) {
+      const Json* target = channels[c].is_object() && channels[c].contains("target") ? &channels[c]["target"] : nullptr;
+      if (!target || !target->is_object() || !target->contains("node") || !(*target)["node"].is_number_unsigned()) continue;
+      const auto node = (*target)["node"].get<std::size_t>();
+      const std::string path = target->value("path", "");
+      if (node >= nodes.size() || !placing[node] || (path != "translation" && path != "rotation" && path != "scale")) continue;
+      if (!channel_moves(asset, animations[a], channels[c], nodes[node], path)) continue;
+      const auto known = std::find_if(moved.begin(), moved.end(), [&](const auto& m) { return m.first == node; });
+      if (moved.empty()) first_channel = c;
+      if (known == moved.end()) {
+        moved.emplace_back(node, path);
+      } else if (known->second.find(path) == std::string::npos) {
+        known->second += ", " + path;
+      }
+    }
+    if (moved.empty()) continue;
+    std::string which;
+    for (std::size_t k = 0; k < moved.size() && k < 3; ++k) {
+      which += (k ? ", " : "") + node_label(document, moved[k].first) + " (" + moved[k].second + ")";
+    }
+    if (moved.size() > 3) which += " and " + std::to_string(moved.size() - 3) + " more nodes";
+    const std::string name = animations[a].value("name", "");
+    diag.warning(codes::NODE_ANIMATED, "/animations/" + std::to_string(a) + "/channels/" + std::to_string(first_channel),
+                 "animation " + std::to_string(a) + (name.empty() ? "" : " '" + name + "'") + " moves " + which +
+                     ": the robot is described where the file places its nodes, in no frame of an animation; "
+                     "Blender writes keyframed objects at their frame-1 transform whatever frame it shows. "
+                     "Clear the keyframes of the parts and joint empties (Object > Animation > Clear "
+                     "Keyframes), or set frame 1 to the pose the robot is modelled in, and export again");
+  }
+}
+
+}  // namespace rdtf

@@ -1,0 +1,17 @@
+// Which nodes place the robot: shared by the checks of core/robot (checks.cc, animations.cc).
+#pragma once
+
+#include <vector>
+
+#include "rdtf/gltf.h"
+
+namespace rdtf::internal {
+
+// The nodes whose transforms place the robot: in the scene converted (typing's default_scene:
+// "scene", else the first) with a mesh or joint properties (a pivot, or a frame of its own: a
+// camera's empty) at or below them. Empty when there is no scene. `scene_nodes`, when given, gets
+// every node of that scene.
+std::vector<char> nodes_placing_the_robot(const Json& document, const std::vector<int>& parents,
+                                          std::vector<char>* scene_nodes = nullptr);
+
+}  // namespace rdtf::internal

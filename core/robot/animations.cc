@@ -82,9 +82,12 @@ bool channel_moves(const GltfAsset& asset, const Json& animation, const Json& ch
   const Json& document = asset.document;
   if (node.contains("matrix") || !channel.contains("sampler") || !channel["sampler"].is_number_unsigned()) return true;
   const auto sampler_index = channel["sampler"].get<std::size_t>();
-  const Json& samplers = animation.value("samplers", Json::array());
-  if (!samplers.is_array() || sampler_index >= samplers.size() || !samplers[sampler_index].is_object()) return true;
-  const Json& sampler = samplers[sampler_index];
+  const auto samplers = animation.find("samplers");  // not value(): that copies them for each channel
+  if (samplers == animation.end() || !samplers->is_array() || sampler_index >= samplers->size() ||
+      !(*samplers)[sampler_index].is_object()) {
+    return true;
+  }
+  const Json& sampler = (*samplers)[sampler_index];
   if (!sampler.contains("output") || !sampler["output"].is_number_unsigned() || !document.contains("accessors")) return true;
   const auto output = sampler["output"].get<std::size_t>();
   if (output >= document["accessors"].size()) return true;

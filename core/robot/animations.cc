@@ -8,6 +8,9 @@
 // of them constant at the rest pose, and warning of those would drown the one that matters.
 #include <algorithm>
 #include <cmath>
+#include <optional>
+#include <string_view>
+#include <utility>
 #include <string>
 #include <vector>
 
@@ -111,6 +114,34 @@ bool channel_moves(const GltfAsset& asset, const Json& animation, const Json& ch
   return false;
 }
 
+// The node and property a channel's target animates: target.node and target.path, or
+// KHR_animation_pointer's "pointer" path with a JSON pointer such as "/nodes/3/rotation".
+std::optional<std::pair<std::size_t, std::string>> animated_property(const Json& target) {
+  if (target.contains("node") && target["node"].is_number_unsigned()) {
+    return std::pair{target["node"].get<std::size_t>(), target.value("path", std::string())};
+  }
+  if (target.value("path", std::string()) != "pointer") return std::nullopt;
+  const Json* extension = nullptr;
+  if (target.contains("extensions") && target["extensions"].is_object() &&
+      target["extensions"].contains("KHR_animation_pointer")) {
+    extension = &target["extensions"]["KHR_animation_pointer"];
+  }
+  if (!extension || !extension->is_object() || !extension->contains("pointer") || !(*extension)["pointer"].is_string()) {
+    return std::nullopt;
+  }
+  const std::string pointer = (*extension)["pointer"].get<std::string>();
+  constexpr std::string_view kNodes = "/nodes/";
+  if (pointer.rfind(kNodes, 0) != 0) return std::nullopt;
+  const auto slash = pointer.find('/', kNodes.size());
+  if (slash == std::string::npos || slash == kNodes.size()) return std::nullopt;
+  const std::string index = pointer.substr(kNodes.size(), slash - kNodes.size());
+  if (index.size() > 9 || !std::all_of(index.begin(), index.end(), [](char ch) { return ch >= '0' && ch <= '9'; }) ||
+      (index.size() > 1 && index[0] == '0')) {
+    return std::nullopt;
+  }
+  return std::pair{static_cast<std::size_t>(std::stoul(index)), pointer.substr(slash + 1)};
+}
+
 }  // namespace
 
 void check_animations(const GltfAsset& asset, Diagnostics& diag) {
@@ -138,9 +169,10 @@ void check_animations(const GltfAsset& asset, Diagnostics& diag) {
     std::size_t first_channel = 0;
     for (std::size_t c = 0; c < channels.size(); ++c) {
       const Json* target = channels[c].is_object() && channels[c].contains("target") ? &channels[c]["target"] : nullptr;
-      if (!target || !target->is_object() || !target->contains("node") || !(*target)["node"].is_number_unsigned()) continue;
-      const auto node = (*target)["node"].get<std::size_t>();
-      const std::string path = target->value("path", "");
+      if (!target || !target->is_object()) continue;
+      const auto animated = animated_property(*target);
+      if (!animated) continue;
+      const auto [node, path] = *animated;
       if (node >= nodes.size() || !placing[node] || (path != "translation" && path != "rotation" && path != "scale")) continue;
       if (!channel_moves(asset, animations[a], channels[c], nodes[node], path)) continue;
       const auto known = std::find_if(moved.begin(), moved.end(), [&](const auto& m) { return m.first == node; });

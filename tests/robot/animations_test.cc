@@ -43,7 +43,7 @@ Channel quantized(int node, std::vector<std::int16_t> shorts) { return Channel{n
 
 // mount_empty with one animation of `channel` over two keys (six output rows for CUBICSPLINE), in
 // a second buffer of its own.
-std::vector<Diagnostic> animated_mount_empty(const Channel& channel) {
+std::vector<Diagnostic> animated_mount_empty(const Channel& channel, bool through_pointer = false) {
   json doc = json::parse(testing::read_file(testing::data_dir() / "frames" / "mount_empty.gltf"));
   const int n = channel.path == "rotation" ? 4 : 3;
   const bool quantized = !channel.shorts.empty();
@@ -69,9 +69,15 @@ std::vector<Diagnostic> animated_mount_empty(const Channel& channel) {
                  {"type", n == 4 ? "VEC4" : "VEC3"}};
   if (quantized) output["normalized"] = true;
   doc["accessors"].push_back(output);
+  json target = {{"node", channel.node}, {"path", channel.path}};
+  if (through_pointer) {
+    target = {{"path", "pointer"},
+              {"extensions", {{"KHR_animation_pointer", {{"pointer", "/nodes/" + std::to_string(channel.node) + "/" + channel.path}}}}}};
+    doc["extensionsUsed"].push_back("KHR_animation_pointer");
+  }
   doc["animations"] = json::array({{{"name", "pose"},
                                     {"samplers", {{{"input", input}, {"output", input + 1}, {"interpolation", channel.interpolation}}}},
-                                    {"channels", {{{"sampler", 0}, {"target", {{"node", channel.node}, {"path", channel.path}}}}}}}});
+                                    {"channels", {{{"sampler", 0}, {"target", target}}}}}});
   testing::TempDir dir;
   testing::write_file(dir / "animated.gltf", doc.dump());
   return animated(dir / "animated.gltf");
@@ -125,6 +131,16 @@ TEST(Animations, AKeyAwayFromTheRestIsNamed) {
   const double half55 = 55.0 / 2 * M_PI / 180;
   EXPECT_EQ(animated_mount_empty(quantized(1, {0, 0, q(kHalf45), q(kCos45), 0, 0, q(std::sin(half55)), q(std::cos(half55))})).size(),
             1u);
+}
+
+// KHR_animation_pointer's channels name the node in a JSON pointer ("/nodes/2/translation").
+TEST(Animations, AChannelOfKhrAnimationPointerIsReadAsItsNodes) {
+  EXPECT_TRUE(animated_mount_empty(floats(2, "translation", "LINEAR", {0.1f, 0, 0, 0.1f, 0, 0}), true).empty());
+  const auto found = animated_mount_empty(floats(2, "translation", "LINEAR", {0.1f, 0, 0, 0.2f, 0, 0}), true);
+  ASSERT_EQ(found.size(), 1u);
+  EXPECT_NE(found[0].message.find("moves node 2 'arm' (translation)"), std::string::npos) << found[0].message;
+  // A pointer at anything else of a node (its weights, an extension's property) moves nothing.
+  EXPECT_TRUE(animated_mount_empty(floats(2, "weights", "LINEAR", {0.1f, 0, 0, 0.2f, 0, 0}), true).empty());
 }
 
 // CUBICSPLINE keys are (in-tangent, value, out-tangent): equal values with a tangent that is not

@@ -30,7 +30,10 @@ std::size_t split_off_mesh(Json& document, std::vector<NodeType>& types, std::si
     if (link_node["extensions"].empty()) link_node.erase("extensions");
   }
   const std::size_t index = append_node(document, types, std::move(mesh_node), NodeType::kMesh);
-  // Morph-weight animations follow the mesh to its new node.
+  // Morph-weight animations follow the mesh to its new node: channels of the node's "weights", and
+  // KHR_animation_pointer's at "/nodes/<link>/weights" (a weights animation of a node without a
+  // mesh is invalid glTF).
+  const std::string pointer_before = "/nodes/" + std::to_string(link) + "/weights";
   if (document.contains("animations")) {
     for (Json& animation : document["animations"]) {
       if (!animation.contains("channels")) continue;
@@ -39,6 +42,16 @@ std::size_t split_off_mesh(Json& document, std::vector<NodeType>& types, std::si
         if (target.value("path", "") == "weights" && target.contains("node") &&
             target["node"].get<std::size_t>() == link) {
           target["node"] = index;
+        }
+        const auto extensions = target.find("extensions");
+        if (target.value("path", "") != "pointer" || extensions == target.end() || !extensions->is_object()) continue;
+        const auto extension = extensions->find("KHR_animation_pointer");
+        if (extension == extensions->end() || !extension->is_object()) continue;
+        const auto pointer = extension->find("pointer");
+        if (pointer == extension->end() || !pointer->is_string()) continue;
+        const std::string before = pointer->get<std::string>();
+        if (before == pointer_before || before.rfind(pointer_before + "/", 0) == 0) {
+          *pointer = "/nodes/" + std::to_string(index) + "/weights" + before.substr(pointer_before.size());
         }
       }
     }

@@ -19,6 +19,7 @@
 #include "rdtf/convert.h"
 #include "rdtf/diff.h"
 #include "rdtf/dynamics.h"
+#include "rdtf/write.h"
 #include "support/test_support.h"
 
 namespace rdtf {
@@ -176,6 +177,47 @@ TEST(MorphTargets, NodesDrawingOneMeshWithOtherWeightsAreOtherShapes) {
       expect_box(link.inertial, 1, 1, 1.25);  // In the lid's frame, 5 m above the base's.
     }
   }
+}
+
+// A link node's mesh moves to its new `<link>_mesh` child with its weights, and so do the
+// animations of those weights: a channel's node, and a KHR_animation_pointer channel's pointer
+// (which stayed at the link, a weights animation of a node without a mesh, invalid glTF). The
+// output passes the Khronos validator.
+TEST(MorphTargets, WeightAnimationsFollowTheMeshToItsNewNode) {
+  json doc = cube_document({0.5, 0.0}, {{{"name", "base"}, {"mesh", 0}}});
+  std::vector<std::uint8_t> bytes;
+  append(bytes, std::vector<float>{0.0f, 1.0f});                   // times
+  append(bytes, std::vector<float>{0.5f, 0.0f, 1.0f, 0.0f});       // weights at each time
+  doc["buffers"].push_back({{"byteLength", bytes.size()}, {"uri", "data:application/octet-stream;base64," + testing::base64(bytes)}});
+  doc["bufferViews"].push_back({{"buffer", 1}, {"byteOffset", 0}, {"byteLength", 8}});
+  doc["bufferViews"].push_back({{"buffer", 1}, {"byteOffset", 8}, {"byteLength", 16}});
+  doc["accessors"].push_back({{"bufferView", 5}, {"componentType", 5126}, {"count", 2}, {"type", "SCALAR"}, {"min", {0.0}}, {"max", {1.0}}});
+  doc["accessors"].push_back({{"bufferView", 6}, {"componentType", 5126}, {"count", 4}, {"type", "SCALAR"}});
+  const json pointer = {{"path", "pointer"}, {"extensions", {{"KHR_animation_pointer", {{"pointer", "/nodes/0/weights"}}}}}};
+  doc["extensionsUsed"] = {"KHR_animation_pointer"};
+  const auto animation = [](const json& target) {
+    json sampler = {{"input", 4}, {"output", 5}};
+    json channel = {{"sampler", 0}, {"target", target}};
+    return json{{"samplers", json::array({sampler})}, {"channels", json::array({channel})}};
+  };
+  doc["animations"] = json::array({animation({{"node", 0}, {"path", "weights"}}), animation(pointer)});
+  const Conversion c = converted(doc);
+  const json& nodes = c.asset.document["nodes"];
+  std::size_t mesh_node = 0;
+  for (std::size_t i = 0; i < nodes.size(); ++i) {
+    if (nodes[i].value("name", "") == "base_mesh") mesh_node = i;
+  }
+  ASSERT_NE(mesh_node, 0u) << nodes.dump();
+  EXPECT_EQ(nodes[mesh_node]["mesh"], 0);
+  const json& animations = c.asset.document["animations"];
+  EXPECT_EQ(animations[0]["channels"][0]["target"]["node"], mesh_node);
+  EXPECT_EQ(animations[1]["channels"][0]["target"]["extensions"]["KHR_animation_pointer"]["pointer"],
+            "/nodes/" + std::to_string(mesh_node) + "/weights");
+  testing::TempDir dir;
+  Diagnostics diag;
+  ASSERT_TRUE(write_rdtf(c.asset, dir / "out.gltf", WriteOptions{}, diag)) << diag.all().size();
+  const json report = testing::khronos_report(dir / "out.gltf");
+  EXPECT_EQ(report["issues"]["numErrors"], 0) << report.dump(1);
 }
 
 // A change of weights is a change of the link's geometry, as an edit of its positions would be.

@@ -1,9 +1,14 @@
+#include <signal.h>
+#include <unistd.h>
+
 #include <cctype>
+#include <cerrno>
 #include <iostream>
 #include <string>
 #include <system_error>
 
 #include "commands.h"
+#include "rdtf/atomic_file.h"
 #include "rdtf/write.h"
 #include "rdtf/diagnostic_codes.h"
 #include "rdtf/utf8.h"
@@ -52,9 +57,21 @@ bool can_be_created_in(const fs::path& folder, Diagnostics& diag) {
 }
 
 // A file about to be written over must be a regular file (or nothing): renaming onto a folder
-// fails, and onto a device would replace the device.
+// fails, and onto a device would replace the device. Nor a symbolic link: the rename replaces the
+// link itself, not what it points to (`-o /dev/stdout` replaced the system's /dev/stdout link with
+// a file when stdout went to a file).
 bool can_be_written_over(const fs::path& path, const char* what, Diagnostics& diag) {
   std::error_code error;
+  if (fs::is_symlink(fs::symlink_status(path, error))) {
+    const fs::path target = fs::read_symlink(path, error);
+    diag.error(kOutputInvalid, "",
+               std::string(what) + " " + path.string() + " is a symbolic link" +
+                   (error ? std::string() : " (to " + target.string() + ")") +
+                   ": rdtf writes a new file and renames it into place, which would replace the link, not "
+                   "write through it. Give the file the link points to, or another path (rdtf writes no "
+                   "model to standard output)");
+    return false;
+  }
   const fs::file_status status = fs::status(path, error);
   if (status.type() == fs::file_type::not_found || fs::is_regular_file(status) || error) return true;
   diag.error(kOutputInvalid, "", std::string(what) + " " + path.string() + " is " + file_type_name(status.type()) +
@@ -237,12 +254,33 @@ std::string unstaged(std::string text, const std::string& stage, const std::stri
   return text;
 }
 
+// Stage folders (".rdtf-stage.<pid>-<random>.tmp") in `folder` whose writer is gone: an rdtf
+// killed mid-write (a CI job at its timeout) left them, tens of megabytes each, and nothing else
+// would ever remove them. A live writer's (another rdtf converting into the same folder) stays, as
+// rdtfd keeps a live process's temporaries (docs/daemon.md).
+void remove_stale_stages(const fs::path& folder) {
+  std::error_code error;
+  std::vector<fs::path> stale;
+  for (fs::directory_iterator it(folder, error), end; !error && it != end; it.increment(error)) {
+    const std::string name = it->path().filename().string();
+    if (name.rfind(".rdtf-stage.", 0) != 0) continue;
+    std::error_code type_error;
+    if (!fs::is_directory(it->symlink_status(type_error))) continue;
+    const auto pid = temporary_writer_pid(name);
+    if (!pid || *pid <= 0 || *pid == ::getpid()) continue;
+    if (::kill(static_cast<pid_t>(*pid), 0) == 0 || errno != ESRCH) continue;
+    stale.push_back(it->path());
+  }
+  for (const fs::path& path : stale) fs::remove_all(path, error);
+}
+
 // The output and every file beside it written into a stage folder next to the target first, then
 // moved into place (the .gltf last): a disk that fills up midway leaves the previous output whole.
 bool write_staged(const Conversion& conversion, const fs::path& target, bool glb, Durability durability,
                   Diagnostics& diag) {
   const fs::path folder = target.has_parent_path() ? target.parent_path() : fs::path(".");
   std::string why;
+  remove_stale_stages(folder);
   auto stage = StagedOutput::create(folder, "rdtf-stage", why);
   if (!stage) {
     diag.error(codes::WRITE_FAILED, "", "cannot write " + target.string() + ": " + why);

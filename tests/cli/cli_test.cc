@@ -1,6 +1,9 @@
 // The rdtf command line as users and scripts run it.
 #include <gtest/gtest.h>
 
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <sstream>
 
@@ -152,7 +155,7 @@ TEST(Cli, MissingInputFileExits2) {
 std::vector<std::string> contents(const std::filesystem::path& dir) {
   std::vector<std::string> found;
   for (const auto& entry : std::filesystem::recursive_directory_iterator(dir)) {
-    found.push_back(std::filesystem::relative(entry.path(), dir).string());
+    found.push_back(entry.path().lexically_relative(dir).string());  // not relative(): it follows links
   }
   std::sort(found.begin(), found.end());
   return found;
@@ -166,6 +169,13 @@ TEST(Cli, ConvertOntoUnwritablePlacesIsExitTwoAndWritesNothing) {
   std::filesystem::create_directories(folder / "out");
   std::filesystem::create_directories(folder / "binfolder/arm3.bin");
   testing::write_file(folder / "afile", "");
+  // Links: the rename would replace the link, not write through it (`-o /dev/stdout` with stdout
+  // sent to a file replaced the system's /dev/stdout link; "stdout" here is a link like it).
+  testing::write_file(folder / "target.glb", "the user's");
+  std::filesystem::create_symlink(folder / "target.glb", folder / "link.glb");
+  std::filesystem::create_symlink("/proc/self/fd/1", folder / "stdout");
+  std::filesystem::create_directories(folder / "binlink");
+  std::filesystem::create_symlink(folder / "target.glb", folder / "binlink/arm3.bin");
   const std::vector<std::string> before = contents(folder.path());
   const std::string out = (folder / "out").string();
   const std::pair<std::string, std::string> cases[] = {
@@ -178,6 +188,11 @@ TEST(Cli, ConvertOntoUnwritablePlacesIsExitTwoAndWritesNothing) {
       {(folder / "binfolder/x.gltf").string(),
        "the buffer or image " + (folder / "binfolder/arm3.bin").string() + " is a folder"},
       {(folder / "arm3.bin").string(), "the output would be written over by its own buffer or image arm3.bin"},
+      {(folder / "link.glb").string(), "the output " + (folder / "link.glb").string() + " is a symbolic link (to " +
+                                           (folder / "target.glb").string() + "): rdtf writes a new file and renames it"},
+      {(folder / "stdout").string(), "the output " + (folder / "stdout").string() + " is a symbolic link (to /proc/self/fd/1)"},
+      {(folder / "binlink/x.gltf").string(), "the buffer or image " + (folder / "binlink/arm3.bin").string() +
+                                                 " is a symbolic link"},
   };
   for (const auto& [output, says] : cases) {
     const auto run = testing::run_command(cli() + " convert " + fixture("arm3.gltf") + " -o '" + output + "'");
@@ -185,6 +200,27 @@ TEST(Cli, ConvertOntoUnwritablePlacesIsExitTwoAndWritesNothing) {
     EXPECT_NE(run.err.find(output + ": error OUTPUT_PATH_INVALID: " + says), std::string::npos) << run.err;
     EXPECT_EQ(contents(folder.path()), before) << output;
   }
+  EXPECT_EQ(testing::read_file(folder / "target.glb"), "the user's");
+  EXPECT_TRUE(std::filesystem::is_symlink(folder / "stdout"));
+}
+
+// A stage folder whose writer was killed (a CI job at its timeout) is removed by the next convert
+// into that folder (they stayed for ever, tens of megabytes each); a live writer's stays.
+TEST(Cli, ConvertRemovesTheStagesOfWritersThatAreGone) {
+  testing::TempDir folder;
+  const pid_t gone = ::fork();
+  if (gone == 0) ::_exit(0);
+  ASSERT_GT(gone, 0);
+  ::waitpid(gone, nullptr, 0);
+  const auto stage = [&](pid_t pid) { return folder / (".rdtf-stage." + std::to_string(pid) + "-12345.tmp"); };
+  for (const pid_t pid : {gone, ::getpid()}) {
+    std::filesystem::create_directories(stage(pid));
+    testing::write_file(stage(pid) / "big.glb", "part of an output");
+  }
+  const auto run = testing::run_command(cli() + " convert " + fixture("arm3.gltf") + " -o '" + (folder / "x.glb").string() + "'");
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_FALSE(std::filesystem::exists(stage(gone)));
+  EXPECT_TRUE(std::filesystem::exists(stage(::getpid()) / "big.glb"));
 }
 
 // Folders that do not exist yet are made, for .gltf and .glb alike (a .glb there failed).

@@ -95,6 +95,7 @@ class DocumentCheck {
   void check_asset();
   void check_extensions();
   void check_images_and_animations();
+  void check_animation(const Json& animation, const std::string& pointer);
   void check_triangle_limit();
 
   // validate_accessors.cc

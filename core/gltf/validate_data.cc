@@ -6,11 +6,13 @@
 // never gathered, and each accessor is read once: the cost is one pass over the data.
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstring>
 #include <limits>
 #include <map>
 #include <set>
 
+#include "rdtf/geometry.h"
 #include "rdtf/validate.h"
 #include "validate_util.h"
 #include "rdtf/diagnostic_codes.h"
@@ -220,6 +222,7 @@ class DataCheck {
     }
     check_mesh_indices();
     check_skin_joint_indices();
+    check_animation_rotations();
   }
 
  private:
@@ -237,6 +240,7 @@ class DataCheck {
   IndexSummary summarize_indices(const AccessorRuns& runs);
   void check_indices(std::uint64_t accessor, std::uint64_t vertices, const std::string& pointer);
   void check_skin_joint_indices();
+  void check_animation_rotations();
 
   // Calls visit(i, components, repeats) for every element, sparse substitution applied. An
   // accessor without a bufferView is zeros: all its zero elements come in one visit.
@@ -637,6 +641,47 @@ void DataCheck::check_indices(std::uint64_t accessor, std::uint64_t vertices,
 // Every JOINTS_n value of a skinned mesh names one of its skin's joints (the Khronos validator's
 // ACCESSOR_JOINTS_INDEX_OOB): rdtf splits the mesh by the joints' weights, and wrote such an
 // index unchanged into an output the validator then refused.
+// Each rotation key of a node's animation is a unit quaternion, within the validator's tolerance
+// (0.00769 of length, as for a node's rotation); a CUBICSPLINE's tangents are not keys. Reported
+// once per channel, at its sampler, as the validator does.
+void DataCheck::check_animation_rotations() {
+  if (!doc_.contains("animations") || !doc_["animations"].is_array()) return;
+  const Json& animations = doc_["animations"];
+  for (std::size_t a = 0; a < animations.size(); ++a) {
+    const Json& animation = animations[a];
+    if (!animation.is_object() || !animation.contains("channels") || !animation.contains("samplers")) continue;
+    const Json& channels = animation["channels"];
+    const Json& samplers = animation["samplers"];
+    for (std::size_t c = 0; channels.is_array() && c < channels.size(); ++c) {
+      const Json& channel = channels[c];
+      if (!channel.is_object() || !channel.contains("target") || !channel["target"].is_object() ||
+          channel["target"].value("path", "") != "rotation" || !channel.contains("sampler")) {
+        continue;
+      }
+      const auto sampler = uint_at(channel, "sampler");
+      if (!sampler || !samplers.is_array() || *sampler >= samplers.size() || !samplers[*sampler].is_object()) continue;
+      const auto output = uint_at(samplers[*sampler], "output");
+      if (!output || *output >= readable_.size() || !readable_[*output]) continue;
+      const Json& accessor = doc_["accessors"][*output];
+      if (accessor.value("type", "") != "VEC4") continue;  // reported by validate_document
+      const bool cubic = samplers[*sampler].value("interpolation", "") == "CUBICSPLINE";
+      const std::vector<double> values = read_accessor(asset_, static_cast<std::size_t>(*output));
+      for (std::size_t k = 0; k + 4 <= values.size(); k += 4) {
+        if (cubic && (k / 4) % 3 != 1) continue;
+        const double length = std::sqrt(values[k] * values[k] + values[k + 1] * values[k + 1] +
+                                        values[k + 2] * values[k + 2] + values[k + 3] * values[k + 3]);
+        if (std::abs(length - 1) <= 0.00769) continue;
+        diag_.error(codes::ACCESSOR_ANIMATION_SAMPLER_OUTPUT_NON_NORMALIZED_QUATERNION,
+                    json_pointer(json_pointer("/animations", a) + "/channels", c) + "/sampler",
+                    "rotation key " + std::to_string(k / 4) + " of accessor " + std::to_string(*output) +
+                        " (components " + std::to_string(k) + ".." + std::to_string(k + 3) + ") has length " +
+                        number_text(length) + "; each key must be a unit quaternion (x, y, z, w)");
+        break;
+      }
+    }
+  }
+}
+
 void DataCheck::check_skin_joint_indices() {
   if (!doc_.contains("nodes") || !doc_["nodes"].is_array()) return;
   std::set<std::pair<std::uint64_t, std::uint64_t>> checked;  // (accessor, joint count)

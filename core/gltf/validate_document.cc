@@ -1,6 +1,7 @@
 // validate_document (rdtf/validate.h): the order of the checks, the type-checked reading of
 // properties they all use, and the checks of the document as a whole. See document_check.h.
 #include <algorithm>
+#include <map>
 #include <cmath>
 #include <unordered_set>
 
@@ -323,17 +324,139 @@ void DocumentCheck::check_images_and_animations() {
   }
   const auto& animations = entries_["animations"];
   for (std::size_t a = 0; a < animations.size(); ++a) {
-    if (animations[a] == nullptr) continue;
-    const std::string pointer = json_pointer("/animations", a);
-    const Json* channels = read_array(*animations[a], "channels", pointer);
-    for (std::size_t c = 0; channels != nullptr && c < channels->size(); ++c) {
-      const Json* channel = object_at(*channels, c, pointer + "/channels");
-      const std::string here = json_pointer(pointer + "/channels", c);
-      const Json* target =
-          channel == nullptr ? nullptr : read_object(*channel, "target", here, true);
-      if (target == nullptr) continue;
-      read_ref(*target, "node", here + "/target", "nodes");
-      read_string(*target, "path", here + "/target", true);
+    if (animations[a] != nullptr) check_animation(*animations[a], json_pointer("/animations", a));
+  }
+}
+
+// An animation's samplers and channels, as the Khronos validator checks them: rdtf reads the
+// channels that move the robot (NODE_ANIMATED) and writes every animation into its output, which
+// would otherwise carry a dangling or misshapen sampler on into a file the validator refuses.
+void DocumentCheck::check_animation(const Json& animation, const std::string& pointer) {
+  struct Sampler {
+    std::size_t input = kNone, output = kNone;
+    std::uint64_t values_per_key = 1;  // 3 for CUBICSPLINE
+  };
+  std::vector<Sampler> samplers;
+  const Json* sampler_array = read_array(animation, "samplers", pointer, true);
+  for (std::size_t k = 0; sampler_array != nullptr && k < sampler_array->size(); ++k) {
+    Sampler& sampler = samplers.emplace_back();
+    const Json* object = object_at(*sampler_array, k, pointer + "/samplers");
+    if (object == nullptr) continue;
+    const std::string here = json_pointer(pointer + "/samplers", k);
+    sampler.input = read_ref(*object, "input", here, "accessors", true);
+    sampler.output = read_ref(*object, "output", here, "accessors", true);
+    const auto interpolation = read_string(*object, "interpolation", here);
+    if (interpolation == "CUBICSPLINE") sampler.values_per_key = 3;
+    if (interpolation && *interpolation != "LINEAR" && *interpolation != "STEP" && *interpolation != "CUBICSPLINE") {
+      diag_.error(codes::VALUE_NOT_IN_LIST, here + "/interpolation",
+                  "is '" + quote(*interpolation) + "'; it must be LINEAR, STEP or CUBICSPLINE");
+    }
+    for (const auto& [accessor, key] : {std::pair{sampler.input, "input"}, std::pair{sampler.output, "output"}}) {
+      if (accessor == kNone || !accessors_[accessor].valid) continue;
+      const std::size_t view = accessors_[accessor].view;
+      if (view != kNone && views_[view].byte_stride != 0) {
+        diag_.error(codes::ANIMATION_SAMPLER_ACCESSOR_WITH_BYTESTRIDE, here + "/" + key,
+                    "accessor " + std::to_string(accessor) + "'s buffer view " + std::to_string(view) +
+                        " has a byteStride, which glTF forbids for animation data");
+      }
+    }
+    if (sampler.input != kNone && accessors_[sampler.input].valid) {
+      const AccessorFacts& input = accessors_[sampler.input];
+      if (input.type != "SCALAR" || input.component_type != kFloat) {
+        diag_.error(codes::ANIMATION_SAMPLER_INPUT_ACCESSOR_INVALID_FORMAT, here + "/input",
+                    "accessor " + std::to_string(sampler.input) + " holds key times, so it must be SCALAR of FLOAT "
+                        "(5126), not " + input.type + " of component type " + std::to_string(input.component_type));
+      } else if (sampler.values_per_key == 3 && input.count < 2) {
+        diag_.error(codes::ANIMATION_SAMPLER_INPUT_ACCESSOR_TOO_FEW_ELEMENTS, here + "/input",
+                    "a CUBICSPLINE sampler needs at least 2 key times; accessor " + std::to_string(sampler.input) +
+                        " has " + std::to_string(input.count));
+      }
+    }
+  }
+  const Json* channels = read_array(animation, "channels", pointer, true);
+  std::map<std::pair<std::size_t, std::string>, std::size_t> targets;  // (node, path) -> first channel
+  std::map<std::string, std::size_t> pointers;                          // KHR_animation_pointer's
+  for (std::size_t c = 0; channels != nullptr && c < channels->size(); ++c) {
+    const Json* channel = object_at(*channels, c, pointer + "/channels");
+    const std::string here = json_pointer(pointer + "/channels", c);
+    if (channel == nullptr) continue;
+    const auto index = read_uint(*channel, "sampler", here, true);
+    if (index && *index >= samplers.size()) {
+      diag_.error(codes::UNRESOLVED_REFERENCE, here + "/sampler",
+                  "there is no samplers[" + std::to_string(*index) + "] in this animation: it has " +
+                      (samplers.empty() ? std::string("none") : std::to_string(samplers.size())));
+    }
+    const Json* target = read_object(*channel, "target", here, true);
+    if (target == nullptr) continue;
+    const std::size_t node = read_ref(*target, "node", here + "/target", "nodes");
+    const auto path = read_string(*target, "path", here + "/target", true);
+    if (!path) continue;
+    const bool trs = *path == "translation" || *path == "rotation" || *path == "scale";
+    if (!trs && *path != "weights" && *path != "pointer") {
+      diag_.error(codes::VALUE_NOT_IN_LIST, here + "/target/path",
+                  "is '" + quote(*path) + "'; it must be translation, rotation, scale, weights, or pointer "
+                  "(KHR_animation_pointer)");
+      continue;
+    }
+    // Two channels of one animation that move one property say two things of it at once.
+    std::optional<std::size_t> earlier;
+    if (*path == "pointer") {
+      const Json* extensions = read_object(*target, "extensions", here + "/target");
+      const Json* extension = extensions ? read_object(*extensions, "KHR_animation_pointer", here + "/target/extensions") : nullptr;
+      const auto animated = extension ? read_string(*extension, "pointer", here + "/target/extensions/KHR_animation_pointer") : std::nullopt;
+      if (animated) {
+        const auto [at, added] = pointers.emplace(*animated, c);
+        if (!added) earlier = at->second;
+      }
+    } else if (node != kNone) {
+      const auto [at, added] = targets.emplace(std::pair{node, *path}, c);
+      if (!added) earlier = at->second;
+    }
+    if (earlier) {
+      diag_.error(codes::ANIMATION_DUPLICATE_TARGETS, json_pointer(pointer + "/channels", *earlier) + "/target",
+                  "channels " + std::to_string(*earlier) + " and " + std::to_string(c) + " both animate the " + *path +
+                      (node != kNone ? " of node " + std::to_string(node) : std::string()) +
+                      ": an animation has one channel per property");
+    }
+    if (trs && node != kNone && doc_["nodes"][node].contains("matrix")) {
+      diag_.error(codes::ANIMATION_CHANNEL_TARGET_NODE_MATRIX, here + "/target",
+                  "node " + std::to_string(node) + " has a matrix, which glTF forbids an animation of its " +
+                      *path + " to move: give the node translation, rotation and scale instead");
+    }
+    if (!index || *index >= samplers.size() || *path == "pointer") continue;
+    const Sampler& sampler = samplers[*index];
+    if (sampler.output == kNone || !accessors_[sampler.output].valid) continue;
+    const AccessorFacts& output = accessors_[sampler.output];
+    const std::uint64_t type = output.component_type;
+    const bool normalized_int = output.normalized && (type == 5120 || type == 5121 || type == 5122 || type == 5123);
+    const bool format_ok = *path == "rotation" ? output.type == "VEC4" && (type == kFloat || normalized_int)
+                           : *path == "weights" ? output.type == "SCALAR" && (type == kFloat || normalized_int)
+                                                : output.type == "VEC3" && type == kFloat;
+    // Where the validator puts them: at the channel whose path the sampler does not suit.
+    const std::string sampler_pointer = here + "/sampler";
+    if (!format_ok) {
+      diag_.error(codes::ANIMATION_SAMPLER_OUTPUT_ACCESSOR_INVALID_FORMAT, sampler_pointer,
+                  "accessor " + std::to_string(sampler.output) + " animates the " + *path + " of channel " +
+                      std::to_string(c) + ", so it must be " +
+                      (*path == "rotation"  ? "VEC4 of FLOAT or of normalized BYTE or SHORT"
+                       : *path == "weights" ? "SCALAR of FLOAT or of a normalized integer"
+                                            : "VEC3 of FLOAT") +
+                      ", not " + output.type + (output.normalized ? " of normalized component type " : " of component type ") +
+                      std::to_string(type));
+      continue;
+    }
+    if (sampler.input == kNone || !accessors_[sampler.input].valid) continue;
+    const std::uint64_t keys = accessors_[sampler.input].count;
+    const std::uint64_t per_key = sampler.values_per_key;
+    // Weights hold one value per morph target per key: a multiple.
+    const bool count_ok = *path == "weights" ? keys > 0 && output.count % (keys * per_key) == 0
+                                             : output.count == keys * per_key;
+    if (!count_ok) {
+      diag_.error(codes::ANIMATION_SAMPLER_OUTPUT_ACCESSOR_INVALID_COUNT, sampler_pointer,
+                  "accessor " + std::to_string(sampler.output) + " holds " + std::to_string(output.count) +
+                      " values for " + std::to_string(keys) + " key times (accessor " + std::to_string(sampler.input) +
+                      "): it must hold " + (*path == "weights" ? "a multiple of " : "") +
+                      std::to_string(keys * per_key) + (per_key == 3 ? " (CUBICSPLINE: in-tangent, value, out-tangent)" : ""));
     }
   }
 }

@@ -3,7 +3,8 @@
 //
 // - Refuse: the report has an error about the container (GLB_*, JSON), or about what converting
 //   mesh geometry and the node tree reads: /asset, /buffers, /bufferViews, /accessors, /meshes,
-//   /nodes, /scenes, /scene, and /skins (skinned meshes are split by bone). load_gltf must then
+//   /nodes, /scenes, /scene, /skins (skinned meshes are split by bone) and /animations (rdtf reads
+//   the channels that move the robot, NODE_ANIMATED, and writes every animation into its output). load_gltf must then
 //   fail with an error naming the file and, when the validator's errors include some about the
 //   document proper (not the container, not loading buffer data), report at least one of them
 //   with the validator's code and JSON pointer. Three kinds of error are exempt, because the
@@ -90,7 +91,8 @@ bool concerns_the_converter(const nlohmann::json& issue) {
     return true;
   // "/scene" also covers "/scenes".
   static const char* const kRead[] = {"/asset",  "/buffers", "/bufferViews", "/accessors",
-                                      "/meshes", "/nodes",   "/scene",       "/skins"};
+                                      "/meshes", "/nodes",   "/scene",       "/skins",
+                                      "/animations"};
   const bool read = std::any_of(std::begin(kRead), std::end(kRead),
                                 [&](const char* prefix) { return starts_with(pointer, prefix); });
   if (!read) return false;

@@ -17,6 +17,7 @@ namespace rdtf {
 enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverityError = 4 };
 
 #define RDTF_DIAGNOSTIC_CODES(X) \
+  X(ACCESSOR_ANIMATION_SAMPLER_OUTPUT_NON_NORMALIZED_QUATERNION, kSeverityError, "glTF") \
   X(ACCESSOR_DATA_UNREADABLE, kSeverityError, "glTF") \
   X(ACCESSOR_ELEMENT_OUT_OF_MAX_BOUND, kSeverityError, "glTF") \
   X(ACCESSOR_ELEMENT_OUT_OF_MIN_BOUND, kSeverityError, "glTF") \
@@ -34,6 +35,13 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(ACCESSOR_SPARSE_INDICES_NON_INCREASING, kSeverityError, "glTF") \
   X(ACCESSOR_TOO_LONG, kSeverityError, "glTF") \
   X(ACCESSOR_TOTAL_OFFSET_ALIGNMENT, kSeverityError, "glTF") \
+  X(ANIMATION_CHANNEL_TARGET_NODE_MATRIX, kSeverityError, "glTF") \
+  X(ANIMATION_DUPLICATE_TARGETS, kSeverityError, "glTF") \
+  X(ANIMATION_SAMPLER_ACCESSOR_WITH_BYTESTRIDE, kSeverityError, "glTF") \
+  X(ANIMATION_SAMPLER_INPUT_ACCESSOR_INVALID_FORMAT, kSeverityError, "glTF") \
+  X(ANIMATION_SAMPLER_INPUT_ACCESSOR_TOO_FEW_ELEMENTS, kSeverityError, "glTF") \
+  X(ANIMATION_SAMPLER_OUTPUT_ACCESSOR_INVALID_COUNT, kSeverityError, "glTF") \
+  X(ANIMATION_SAMPLER_OUTPUT_ACCESSOR_INVALID_FORMAT, kSeverityError, "glTF") \
   X(ARRAY_LENGTH_NOT_IN_LIST, kSeverityError, "glTF") \
   X(ARRAY_TYPE_MISMATCH, kSeverityError, "glTF") \
   X(ASSET_MIN_VERSION_GREATER_THAN_VERSION, kSeverityError, "glTF") \

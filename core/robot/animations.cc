@@ -8,6 +8,8 @@
 // of them constant at the rest pose, and warning of those would drown the one that matters.
 #include <algorithm>
 #include <cmath>
+#include <map>
+#include <tuple>
 #include <optional>
 #include <string_view>
 #include <utility>
@@ -77,11 +79,17 @@ bool tangent_moves(const std::string& path, const double* tangent, const std::ve
   return !(norm <= (path == "rotation" ? kAngle : kRelative * scale));
 }
 
+// Answers already found: a file may point many channels at one sampler, and its keys are read and
+// compared once for each rest value they are compared with, not once per channel.
+struct Memo {
+  std::map<std::tuple<std::size_t, std::string, bool, std::vector<double>>, bool> moves;
+};
+
 // Whether `channel` of `animation` takes its node anywhere but its rest transform. Anything this
 // cannot read (a sampler or accessor out of range, a node with a matrix, which an animation must not
 // target) counts as moving: the warning is the safe side.
 bool channel_moves(const GltfAsset& asset, const Json& animation, const Json& channel, const Json& node,
-                   const std::string& path) {
+                   const std::string& path, Memo& memo) {
   const Json& document = asset.document;
   if (node.contains("matrix") || !channel.contains("sampler") || !channel["sampler"].is_number_unsigned()) return true;
   const auto sampler_index = channel["sampler"].get<std::size_t>();
@@ -97,21 +105,19 @@ bool channel_moves(const GltfAsset& asset, const Json& animation, const Json& ch
   const Json& accessor = document["accessors"][output];
   const int n = path == "rotation" ? 4 : 3;
   if (accessor.value("type", "") != (n == 4 ? "VEC4" : "VEC3")) return true;
-  const std::vector<double> values = read_accessor(asset, output);
   const std::vector<double> rest = rest_value(node, path);
-  const double angle = angle_tolerance(accessor);
   const bool cubic = sampler.value("interpolation", "LINEAR") == "CUBICSPLINE";
+  const auto [known, added] = memo.moves.try_emplace({output, path, cubic, rest}, false);
+  if (!added) return known->second;
+  const std::vector<double> values = read_accessor(asset, output);
+  const double angle = angle_tolerance(accessor);
   const std::size_t keys = values.size() / static_cast<std::size_t>(n);
-  for (std::size_t k = 0; k < keys; ++k) {
+  for (std::size_t k = 0; k < keys && !known->second; ++k) {
     const double* key = values.data() + k * static_cast<std::size_t>(n);
     // CUBICSPLINE keys are (in-tangent, value, out-tangent).
-    if (cubic && k % 3 != 1) {
-      if (tangent_moves(path, key, rest)) return true;
-    } else if (differs(path, key, rest, angle)) {
-      return true;
-    }
+    known->second = cubic && k % 3 != 1 ? tangent_moves(path, key, rest) : differs(path, key, rest, angle);
   }
-  return false;
+  return known->second;
 }
 
 // The node and property a channel's target animates: target.node and target.path, or
@@ -162,6 +168,7 @@ void check_animations(const GltfAsset& asset, Diagnostics& diag) {
     }
   }
   const Json& animations = document["animations"];
+  Memo memo;
   for (std::size_t a = 0; a < animations.size(); ++a) {
     if (!animations[a].is_object() || !animations[a].contains("channels")) continue;
     const Json& channels = animations[a]["channels"];
@@ -174,7 +181,7 @@ void check_animations(const GltfAsset& asset, Diagnostics& diag) {
       if (!animated) continue;
       const auto [node, path] = *animated;
       if (node >= nodes.size() || !placing[node] || (path != "translation" && path != "rotation" && path != "scale")) continue;
-      if (!channel_moves(asset, animations[a], channels[c], nodes[node], path)) continue;
+      if (!channel_moves(asset, animations[a], channels[c], nodes[node], path, memo)) continue;
       const auto known = std::find_if(moved.begin(), moved.end(), [&](const auto& m) { return m.first == node; });
       if (moved.empty()) first_channel = c;
       if (known == moved.end()) {

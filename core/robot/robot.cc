@@ -612,6 +612,28 @@ Robot build_robot(const Json& document, const std::vector<NodeType>& types, std:
       }
       break;
     }
+    // Joint keys on the child link node, below a joint node whose keys are read: they are not read
+    // at all. Said where they say otherwise ("rdtf_lower": "abc" on the part, or limits typed on
+    // the part and the empty alike but apart), or the modeller's edit on the part does nothing.
+    if (source && !source->rdtf_entry && source->frame_node != child.node) {
+      if (const Json* part_keys = node_extras(document, child.node); has_joint_keys(part_keys)) {
+        std::string differing;
+        for (const char* key : kJointExtrasKeys) {
+          if (!part_keys->contains(key)) continue;
+          const Json& here = (*part_keys)[key];
+          const bool there = source->values->contains(key);
+          if (there && (*source->values)[key] == here) continue;
+          differing += (differing.empty() ? "" : ", ") + std::string(key) + " " + value_text(here) +
+                       (there ? " (" + value_text((*source->values)[key]) + " there)" : " (not there)");
+        }
+        if (!differing.empty()) {
+          diag.warning(codes::RDTF_NODE_EXTRAS_IGNORED, json_pointer("/nodes", child.node) + "/extras",
+                       node_label(document, child.node) + ": joint '" + joint.name + "': " + differing +
+                           " are not read: the joint's properties are those of " + source->label +
+                           ", the joint node nearest the part that has any. Set them there, or only on the part");
+        }
+      }
+    }
     for (int node : joint_nodes) joint_node_used[static_cast<std::size_t>(node)] = 1;
     child.parent_joint = static_cast<int>(robot.joints.size());
     robot.links[joint.parent_link].child_joints.push_back(child.parent_joint);

@@ -31,6 +31,7 @@
 
 #include <rdtf/model_error_t.hpp>
 
+#include "../cli_numbers.h"
 #include "pd_controller.h"
 #include "rdtf/client.h"
 #include "safe_decode.h"
@@ -142,15 +143,15 @@ int main(int argc, char** argv) {
   app.add_option("--target", targets,
                  "joint=value in rad or m (repeatable); joints without one hold their first state");
   app.add_option("--kp", options.gains.kp, "Position gain, N m/rad (N/m)")->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(rdtf::cli_numbers::kNonNegative);
   app.add_option("--kd", options.gains.kd, "Velocity gain, N m s/rad (N s/m)")->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(rdtf::cli_numbers::kNonNegative);
   app.add_option("--mode", mode, "position: rdtfd applies the PD law every step; torque: computed here")
       ->capture_default_str()->check(CLI::IsMember({"position", "torque"}));
   app.add_option("--lcm-url", url, "LCM URL (default: LCM_DEFAULT_URL, else LCM's default)");
   app.add_option("--channel-prefix", prefix, "rdtfd's channel prefix")->capture_default_str();
   app.add_option("--duration", duration, "Stop after this many seconds (0: run until SIGINT/SIGTERM)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(rdtf::cli_numbers::kNonNegative);
   app.add_option("--wait", wait, "Seconds to wait for the model on the bus before giving up (exit 2)")
       ->capture_default_str()->check(CLI::Range(0.0, 86400.0));
   CLI11_PARSE(app, argc, argv);

@@ -7,6 +7,7 @@
 #include <string>
 #include <system_error>
 
+#include "../cli_numbers.h"
 #include "commands.h"
 #include "rdtf/atomic_file.h"
 #include "rdtf/write.h"
@@ -145,7 +146,7 @@ std::vector<fs::path> companion_files(const Json& document, const fs::path& targ
 void add_conversion_options(CLI::App& command, ConvertOptions& options) {
   command.add_option("--density", options.default_density,
                      "Density (kg/m^3) of meshes whose nodes set no rdtf_density")
-      ->check(CLI::PositiveNumber)
+      ->check(rdtf::cli_numbers::kPositive)
       ->capture_default_str();
   command.add_option("--max-file-bytes", options.limits.max_file_bytes,
                      "Largest model or external file read")

@@ -2,6 +2,7 @@
 // Exit codes: 0 success, 2 invalid input (diagnostics on stderr), 1 internal error.
 #include <exception>
 #include <iostream>
+#include <string>
 
 #include "commands.h"
 #include "rdtf/version.h"
@@ -17,6 +18,23 @@ int main(int argc, char** argv) {
   rdtf::cli::add_import_command(app, exit_code);
   rdtf::cli::add_validate_command(app, exit_code);
   rdtf::cli::add_pull_command(app, exit_code);
+  // A first word that is no command is named (CLI11 answers "A subcommand is required", which
+  // leaves a script's author guessing which word it did not know).
+  if (argc > 1) {
+    const std::string first = argv[1];
+    const bool flag = first == "-h" || first == "--help" || first == "--version";
+    bool known = flag;
+    std::string commands;
+    for (const CLI::App* command : app.get_subcommands({})) {
+      known = known || command->check_name(first);
+      commands += (commands.empty() ? "" : ", ") + command->get_name();
+    }
+    if (!known) {
+      std::cerr << "rdtf: " << (first.rfind('-', 0) == 0 ? "unknown option '" : "unknown command '") << first
+                << "'; the commands are " << commands << " (rdtf --help; rdtf COMMAND --help)\n";
+      return static_cast<int>(CLI::ExitCodes::ExtrasError);
+    }
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {

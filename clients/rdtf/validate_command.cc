@@ -2,6 +2,7 @@
 // the model passes, 2 when it fails or cannot be converted, 1 on an internal error.
 #include <iostream>
 
+#include "../cli_numbers.h"
 #include "commands.h"
 #include "rdtf/diagnostics_json.h"
 #include "rdtf/dynamics.h"
@@ -66,7 +67,7 @@ void add_validate_command(CLI::App& app, int& exit_code) {
   command->add_option("input", args->input, "The glTF or RDTF model")->required();
   command->add_flag("--json", args->json, "Print the report as JSON");
   command->add_option("--seconds", args->validation.duration, "Simulated time of the passive run")
-      ->check(CLI::NonNegativeNumber)
+      ->check(rdtf::cli_numbers::kNonNegative)
       ->capture_default_str();
   command->add_option("--start-offset", args->validation.start_offset_angular,
                       "Start every revolute and continuous joint this far (rad, either sign) from rest, or "
@@ -75,7 +76,7 @@ void add_validate_command(CLI::App& app, int& exit_code) {
       ->check(CLI::Range(-6.2832, 6.2832))
       ->capture_default_str();
   command->add_option("--time-step", args->validation.simulation.time_step, "ODE time step (s)")
-      ->check(CLI::PositiveNumber)
+      ->check(rdtf::cli_numbers::kPositive)
       ->capture_default_str();
   command->add_flag("--floating", args->validation.simulation.floating_root,
                     "Let the root link float instead of fixing it to the world");
@@ -85,17 +86,17 @@ void add_validate_command(CLI::App& app, int& exit_code) {
       ->expected(3);
   command->add_option("--max-mass-ratio", args->validation.checks.max_mass_ratio,
                       "Largest mass ratio across a joint")
-      ->check(CLI::PositiveNumber)
+      ->check(rdtf::cli_numbers::kPositive)
       ->capture_default_str();
   command->add_option("--bound-mass", args->validation.simulation.bound_mass,
                       "Mass (kg) given to a moving body without mass, with --bound-inertia "
                       "(MuJoCo's boundmass); 0: off, such a link fails")
-      ->check(CLI::NonNegativeNumber)
+      ->check(rdtf::cli_numbers::kNonNegative)
       ->capture_default_str();
   command->add_option("--bound-inertia", args->validation.simulation.bound_inertia,
                       "Inertia (kg m^2 about each axis) given to a moving body without mass, with "
                       "--bound-mass (MuJoCo's boundinertia); 0: off")
-      ->check(CLI::NonNegativeNumber)
+      ->check(rdtf::cli_numbers::kNonNegative)
       ->capture_default_str();
   command->add_option("--massless-links", args->massless_links,
                       "With a bound mass, a massless moving link is a warning or still an error")
@@ -103,7 +104,7 @@ void add_validate_command(CLI::App& app, int& exit_code) {
       ->capture_default_str();
   command->add_option("--cpu-budget", args->validation.cpu_budget,
                       "CPU seconds the check may take; beyond, it fails with SIM_BUDGET_EXCEEDED (0: no limit)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(rdtf::cli_numbers::kNonNegative)
       ->capture_default_str();
   command->add_flag("-v,--verbose", args->verbose, "Also print info diagnostics");
   add_conversion_options(*command, args->options);

@@ -26,6 +26,7 @@
 #include <boost/asio/steady_timer.hpp>
 #include <lcm/lcm-cpp.hpp>
 
+#include "../cli_numbers.h"
 #include "model_hub.h"
 #include "rdtf/client.h"
 #include "server.h"
@@ -119,9 +120,9 @@ int main(int argc, char** argv) {
                  "Natural frequency of each joint's slider response: kp = M w^2, kd = 2 M w for the inertia M it moves")
       ->capture_default_str()->check(CLI::Range(0.01, 100.0));
   app.add_option("--kp", kp, "The same position gain for every joint instead, N m/rad (N/m)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(rdtf::cli_numbers::kNonNegative);
   app.add_option("--kd", kd, "The same velocity gain for every joint instead, N m s/rad (N s/m)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(rdtf::cli_numbers::kNonNegative);
   CLI11_PARSE(app, argc, argv);
   if (kp >= 0) gains.kp = kp;
   if (kd >= 0) gains.kd = kd;

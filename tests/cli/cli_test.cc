@@ -143,6 +143,26 @@ TEST(Cli, UnknownOptionIsAUsageError) {
   const auto run = testing::run_command(cli() + " convert --no-such-option x.gltf");
   EXPECT_NE(run.exit_code, 0);
   EXPECT_NE(run.err.find("no-such-option"), std::string::npos) << run.err;
+  // Before a command too: the word is named (CLI11 said only "A subcommand is required").
+  for (const auto& [word, kind] : {std::pair{"frob", "command"}, std::pair{"--bogus", "option"}}) {
+    const auto first = testing::run_command(cli() + " " + word + " x.gltf");
+    EXPECT_EQ(first.exit_code, 109) << word;
+    EXPECT_NE(first.err.find("rdtf: unknown " + std::string(kind) + " '" + word + "'; the commands are convert, inspect"),
+              std::string::npos)
+        << first.err;
+    EXPECT_TRUE(first.out.empty()) << first.out;
+  }
+}
+
+// A number an option refuses says what it must be (CLI11's own check printed a range of 309 digits).
+TEST(Cli, ANumberOutOfRangeSaysWhatItMustBe) {
+  for (const auto& [value, says] : {std::pair{"0", "--density: is 0; it must be more than 0"},
+                                    std::pair{"-1", "--density: is -1; it must be more than 0"},
+                                    std::pair{"abc", "--density: 'abc' is not a number"}}) {
+    const auto run = testing::run_command(cli() + " convert x.gltf --density " + value);
+    EXPECT_EQ(run.exit_code, 105) << value;
+    EXPECT_NE(run.err.find(says), std::string::npos) << run.err;
+  }
 }
 
 TEST(Cli, MissingInputFileExits2) {

@@ -14,7 +14,8 @@ inline CLI::Validator number_check(bool zero_allowed) {
   return CLI::Validator(
       [zero_allowed](std::string& text) -> std::string {
         double value = 0;
-        if (!CLI::detail::lexical_cast(text, value) || !std::isfinite(value)) return "'" + text + "' is not a number";
+        if (!CLI::detail::lexical_cast(text, value)) return "'" + text + "' is not a number";
+        if (!std::isfinite(value)) return "'" + text + "' is not a finite number (a double's range ends near 1.8e308)";
         if (value > 0 || (zero_allowed && value == 0)) return {};
         return "is " + text + "; it must be " + (zero_allowed ? "0 or more" : "more than 0");
       },

@@ -1,7 +1,9 @@
 #include <signal.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cctype>
+#include <chrono>
 #include <cerrno>
 #include <iostream>
 #include <string>
@@ -119,23 +121,36 @@ std::optional<fs::path> relative_uri(const std::string& uri) {
 // The files write_rdtf puts beside a .gltf without content-addressed names (rdtf/write.h): each
 // external buffer and image under its relative URI, a buffer without URI as <stem>.bin,
 // <stem>_1.bin, ...
-std::vector<fs::path> companion_files(const Json& document, const fs::path& target) {
+// The files write_rdtf writes beside a .gltf output, as it names them: every buffer not embedded
+// as "<output stem>[_i].bin" (write.cc, external_buffers), every image under its relative URI,
+// except an image that already is that very file (it is not written).
+std::vector<fs::path> companion_files(const GltfAsset& asset, const fs::path& target) {
   std::vector<fs::path> files;
+  const Json& document = asset.document;
   const fs::path folder = target.parent_path();
   if (document.contains("buffers")) {
     const Json& buffers = document["buffers"];
     for (std::size_t i = 0; i < buffers.size(); ++i) {
-      if (!buffers[i].contains("uri")) {
-        files.push_back(folder / (target.stem().string() + (i == 0 ? "" : "_" + std::to_string(i)) + ".bin"));
-      } else if (const auto relative = relative_uri(buffers[i]["uri"].get<std::string>())) {
-        files.push_back(folder / *relative);
+      const fs::path file = folder / (target.stem().string() + (i == 0 ? "" : "_" + std::to_string(i)) + ".bin");
+      if (buffers[i].contains("uri")) {
+        const std::string uri = buffers[i]["uri"].get<std::string>();
+        if (uri.rfind("data:", 0) == 0) continue;
+        // Written over itself (the output beside its input, of the same name): not written.
+        std::error_code error;
+        const auto relative = relative_uri(uri);
+        if (relative && !asset.folder.empty() && fs::equivalent(asset.folder / *relative, file, error)) continue;
       }
+      files.push_back(file);
     }
   }
   if (document.contains("images")) {
     for (const Json& image : document["images"]) {
       if (!image.contains("uri")) continue;
-      if (const auto relative = relative_uri(image["uri"].get<std::string>())) files.push_back(folder / *relative);
+      const auto relative = relative_uri(image["uri"].get<std::string>());
+      if (!relative) continue;
+      std::error_code error;
+      if (!asset.folder.empty() && fs::equivalent(asset.folder / *relative, folder / *relative, error)) continue;
+      files.push_back(folder / *relative);
     }
   }
   return files;
@@ -257,19 +272,32 @@ std::string unstaged(std::string text, const std::string& stage, const std::stri
 
 // Stage folders (".rdtf-stage.<pid>-<random>.tmp") in `folder` whose writer is gone: an rdtf
 // killed mid-write (a CI job at its timeout) left them, tens of megabytes each, and nothing else
-// would ever remove them. A live writer's (another rdtf converting into the same folder) stays, as
-// rdtfd keeps a live process's temporaries (docs/daemon.md).
+// would ever remove them. Only this user's, untouched for an hour, whose pid names no process
+// here: a pid says nothing of a writer in another PID namespace (a container sharing the folder),
+// so a stage anything wrote to within the hour stays, as does a live writer's here.
 void remove_stale_stages(const fs::path& folder) {
+  constexpr auto kUntouched = std::chrono::hours(1);
   std::error_code error;
+  const auto now = fs::file_time_type::clock::now();
+  const auto touched_lately = [&](const fs::path& stage) {
+    std::error_code time_error;
+    if (now - fs::last_write_time(stage, time_error) < kUntouched || time_error) return true;
+    for (fs::recursive_directory_iterator it(stage, time_error), end; !time_error && it != end; it.increment(time_error)) {
+      std::error_code entry_error;
+      if (now - it->last_write_time(entry_error) < kUntouched || entry_error) return true;
+    }
+    return static_cast<bool>(time_error);
+  };
   std::vector<fs::path> stale;
   for (fs::directory_iterator it(folder, error), end; !error && it != end; it.increment(error)) {
     const std::string name = it->path().filename().string();
     if (name.rfind(".rdtf-stage.", 0) != 0) continue;
-    std::error_code type_error;
-    if (!fs::is_directory(it->symlink_status(type_error))) continue;
+    struct stat info {};
+    if (::lstat(it->path().c_str(), &info) != 0 || !S_ISDIR(info.st_mode) || info.st_uid != ::geteuid()) continue;
     const auto pid = temporary_writer_pid(name);
     if (!pid || *pid <= 0 || *pid == ::getpid()) continue;
     if (::kill(static_cast<pid_t>(*pid), 0) == 0 || errno != ESRCH) continue;
+    if (touched_lately(it->path())) continue;
     stale.push_back(it->path());
   }
   for (const fs::path& path : stale) fs::remove_all(path, error);
@@ -317,7 +345,7 @@ int write_conversion(const Conversion& conversion, const fs::path& target, bool 
   // Every file of the output checked before the first is written: a folder where the .bin goes
   // would otherwise fail after the .bin beside it was written.
   const std::vector<fs::path> companions =
-      glb ? std::vector<fs::path>{} : companion_files(conversion.asset.document, target);
+      glb ? std::vector<fs::path>{} : companion_files(conversion.asset, target);
   bool usable = true;
   for (const fs::path& file : companions) {
     if (file.lexically_normal() == target.lexically_normal()) {

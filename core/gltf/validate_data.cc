@@ -10,6 +10,7 @@
 #include <cstring>
 #include <limits>
 #include <map>
+#include <optional>
 #include <set>
 
 #include "rdtf/geometry.h"
@@ -647,6 +648,9 @@ void DataCheck::check_indices(std::uint64_t accessor, std::uint64_t vertices,
 void DataCheck::check_animation_rotations() {
   if (!doc_.contains("animations") || !doc_["animations"].is_array()) return;
   const Json& animations = doc_["animations"];
+  // The first key that is no unit quaternion, per (output accessor, CUBICSPLINE): many channels may
+  // share one sampler, whose keys are read once.
+  std::map<std::pair<std::uint64_t, bool>, std::optional<std::pair<std::size_t, double>>> first_bad;  // key, length
   for (std::size_t a = 0; a < animations.size(); ++a) {
     const Json& animation = animations[a];
     if (!animation.is_object() || !animation.contains("channels") || !animation.contains("samplers")) continue;
@@ -665,19 +669,23 @@ void DataCheck::check_animation_rotations() {
       const Json& accessor = doc_["accessors"][*output];
       if (accessor.value("type", "") != "VEC4") continue;  // reported by validate_document
       const bool cubic = samplers[*sampler].value("interpolation", "") == "CUBICSPLINE";
-      const std::vector<double> values = read_accessor(asset_, static_cast<std::size_t>(*output));
-      for (std::size_t k = 0; k + 4 <= values.size(); k += 4) {
-        if (cubic && (k / 4) % 3 != 1) continue;
-        const double length = std::sqrt(values[k] * values[k] + values[k + 1] * values[k + 1] +
-                                        values[k + 2] * values[k + 2] + values[k + 3] * values[k + 3]);
-        if (std::abs(length - 1) <= 0.00769) continue;
-        diag_.error(codes::ACCESSOR_ANIMATION_SAMPLER_OUTPUT_NON_NORMALIZED_QUATERNION,
-                    json_pointer(json_pointer("/animations", a) + "/channels", c) + "/sampler",
-                    "rotation key " + std::to_string(k / 4) + " of accessor " + std::to_string(*output) +
-                        " (components " + std::to_string(k) + ".." + std::to_string(k + 3) + ") has length " +
-                        number_text(length) + "; each key must be a unit quaternion (x, y, z, w)");
-        break;
+      const auto [known, added] = first_bad.try_emplace({*output, cubic});
+      if (added) {
+        const std::vector<double> values = read_accessor(asset_, static_cast<std::size_t>(*output));
+        for (std::size_t k = 0; k + 4 <= values.size() && !known->second; k += 4) {
+          if (cubic && (k / 4) % 3 != 1) continue;
+          const double length = std::sqrt(values[k] * values[k] + values[k + 1] * values[k + 1] +
+                                          values[k + 2] * values[k + 2] + values[k + 3] * values[k + 3]);
+          if (!(std::abs(length - 1) <= 0.00769)) known->second = std::pair{k, length};
+        }
       }
+      if (!known->second) continue;
+      const auto [k, length] = *known->second;
+      diag_.error(codes::ACCESSOR_ANIMATION_SAMPLER_OUTPUT_NON_NORMALIZED_QUATERNION,
+                  json_pointer(json_pointer("/animations", a) + "/channels", c) + "/sampler",
+                  "rotation key " + std::to_string(k / 4) + " of accessor " + std::to_string(*output) +
+                      " (components " + std::to_string(k) + ".." + std::to_string(k + 3) + ") has length " +
+                      number_text(length) + "; each key must be a unit quaternion (x, y, z, w)");
     }
   }
 }

@@ -438,7 +438,7 @@ void DocumentCheck::check_animation(const Json& animation, const std::string& po
       diag_.error(codes::ANIMATION_SAMPLER_OUTPUT_ACCESSOR_INVALID_FORMAT, sampler_pointer,
                   "accessor " + std::to_string(sampler.output) + " animates the " + *path + " of channel " +
                       std::to_string(c) + ", so it must be " +
-                      (*path == "rotation"  ? "VEC4 of FLOAT or of normalized BYTE or SHORT"
+                      (*path == "rotation"  ? "VEC4 of FLOAT or of normalized BYTE, UNSIGNED_BYTE, SHORT or UNSIGNED_SHORT"
                        : *path == "weights" ? "SCALAR of FLOAT or of a normalized integer"
                                             : "VEC3 of FLOAT") +
                       ", not " + output.type + (output.normalized ? " of normalized component type " : " of component type ") +

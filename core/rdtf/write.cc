@@ -158,6 +158,13 @@ bool write_resources(const std::vector<Resource>& resources, const std::filesyst
   for (const Resource& resource : resources) {
     const auto target = folder / resource.name;
     if (!resource.source.empty() && same_file(resource.source, target)) continue;
+    // Staged beside its own source (rdtf convert's output next to the model): the destination is
+    // the source itself, perhaps through a link of the modeller's, which moving a copy over it
+    // would replace. Not for content-addressed outputs (rdtfd), which follow no link they find.
+    if (!resource.source.empty() && !options.staged_for.empty() && !options.content_digest &&
+        same_file(resource.source, options.staged_for / resource.name)) {
+      continue;
+    }
     // Already where the stage's commit would put it, byte for byte: nothing to write, sync or move.
     if (!options.staged_for.empty() &&
         file_holds(options.staged_for / resource.name, std::span<const std::span<const std::uint8_t>>(&resource.bytes, 1))) {

@@ -123,10 +123,10 @@ bool channel_moves(const GltfAsset& asset, const Json& animation, const Json& ch
 // The node and property a channel's target animates: target.node and target.path, or
 // KHR_animation_pointer's "pointer" path with a JSON pointer such as "/nodes/3/rotation".
 std::optional<std::pair<std::size_t, std::string>> animated_property(const Json& target) {
-  if (target.contains("node") && target["node"].is_number_unsigned()) {
+  if (target.value("path", std::string()) != "pointer") {
+    if (!target.contains("node") || !target["node"].is_number_unsigned()) return std::nullopt;
     return std::pair{target["node"].get<std::size_t>(), target.value("path", std::string())};
   }
-  if (target.value("path", std::string()) != "pointer") return std::nullopt;
   const Json* extension = nullptr;
   if (target.contains("extensions") && target["extensions"].is_object() &&
       target["extensions"].contains("KHR_animation_pointer")) {

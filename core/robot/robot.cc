@@ -618,18 +618,20 @@ Robot build_robot(const Json& document, const std::vector<NodeType>& types, std:
     if (source && !source->rdtf_entry && source->frame_node != child.node) {
       if (const Json* part_keys = node_extras(document, child.node); has_joint_keys(part_keys)) {
         std::string differing;
+        int keys = 0;
         for (const char* key : kJointExtrasKeys) {
           if (!part_keys->contains(key)) continue;
           const Json& here = (*part_keys)[key];
           const bool there = source->values->contains(key);
           if (there && (*source->values)[key] == here) continue;
+          ++keys;
           differing += (differing.empty() ? "" : ", ") + std::string(key) + " " + value_text(here) +
                        (there ? " (" + value_text((*source->values)[key]) + " there)" : " (not there)");
         }
         if (!differing.empty()) {
           diag.warning(codes::RDTF_NODE_EXTRAS_IGNORED, json_pointer("/nodes", child.node) + "/extras",
                        node_label(document, child.node) + ": joint '" + joint.name + "': " + differing +
-                           " are not read: the joint's properties are those of " + source->label +
+                           (keys == 1 ? " is" : " are") + " not read: the joint's properties are those of " + source->label +
                            ", the joint node nearest the part that has any. Set them there, or only on the part");
         }
       }

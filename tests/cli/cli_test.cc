@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -187,7 +188,7 @@ std::vector<std::string> contents(const std::filesystem::path& dir) {
 TEST(Cli, ConvertOntoUnwritablePlacesIsExitTwoAndWritesNothing) {
   testing::TempDir folder;
   std::filesystem::create_directories(folder / "out");
-  std::filesystem::create_directories(folder / "binfolder/arm3.bin");
+  std::filesystem::create_directories(folder / "binfolder/x.bin");
   testing::write_file(folder / "afile", "");
   // Links: the rename would replace the link, not write through it (`-o /dev/stdout` with stdout
   // sent to a file replaced the system's /dev/stdout link; "stdout" here is a link like it).
@@ -195,7 +196,7 @@ TEST(Cli, ConvertOntoUnwritablePlacesIsExitTwoAndWritesNothing) {
   std::filesystem::create_symlink(folder / "target.glb", folder / "link.glb");
   std::filesystem::create_symlink("/proc/self/fd/1", folder / "stdout");
   std::filesystem::create_directories(folder / "binlink");
-  std::filesystem::create_symlink(folder / "target.glb", folder / "binlink/arm3.bin");
+  std::filesystem::create_symlink(folder / "target.glb", folder / "binlink/x.bin");
   const std::vector<std::string> before = contents(folder.path());
   const std::string out = (folder / "out").string();
   const std::pair<std::string, std::string> cases[] = {
@@ -204,14 +205,14 @@ TEST(Cli, ConvertOntoUnwritablePlacesIsExitTwoAndWritesNothing) {
                                        (folder / "new/arm3.rdtf.gltf").string()},
       {out, "is a folder, not a file: give the file to write, e.g. " + out + "/arm3.rdtf.gltf"},
       {(folder / "afile/x.gltf").string(), (folder / "afile").string() + " is a file, not a folder"},
-      // arm3.gltf's buffer is arm3.bin: it goes beside the output.
+      // arm3.gltf's buffer goes beside the output, named after it: x.bin.
       {(folder / "binfolder/x.gltf").string(),
-       "the buffer or image " + (folder / "binfolder/arm3.bin").string() + " is a folder"},
+       "the buffer or image " + (folder / "binfolder/x.bin").string() + " is a folder"},
       {(folder / "arm3.bin").string(), "the output would be written over by its own buffer or image arm3.bin"},
       {(folder / "link.glb").string(), "the output " + (folder / "link.glb").string() + " is a symbolic link (to " +
                                            (folder / "target.glb").string() + "): rdtf writes a new file and renames it"},
       {(folder / "stdout").string(), "the output " + (folder / "stdout").string() + " is a symbolic link (to /proc/self/fd/1)"},
-      {(folder / "binlink/x.gltf").string(), "the buffer or image " + (folder / "binlink/arm3.bin").string() +
+      {(folder / "binlink/x.gltf").string(), "the buffer or image " + (folder / "binlink/x.bin").string() +
                                                  " is a symbolic link"},
   };
   for (const auto& [output, says] : cases) {
@@ -224,8 +225,34 @@ TEST(Cli, ConvertOntoUnwritablePlacesIsExitTwoAndWritesNothing) {
   EXPECT_TRUE(std::filesystem::is_symlink(folder / "stdout"));
 }
 
+// An image the model names through a link in its own folder is read, and not written again when
+// the output goes beside the model: it is no output, so its being a link is no reason to refuse.
+TEST(Cli, ALinkedImageBesideTheModelIsNoOutputOfItsOwn) {
+  testing::TempDir folder;
+  std::filesystem::create_directories(folder / "textures");
+  // A 2x2 RGBA checker.
+  const std::string png(
+      "\x89\x50\x4e\x47\x0d\x0a\x1a\x0a\x00\x00\x00\x0d\x49\x48\x44\x52\x00\x00\x00\x02\x00\x00\x00\x02\x08\x06"
+      "\x00\x00\x00\x72\xb6\x0d\x24\x00\x00\x00\x12\x49\x44\x41\x54\x78\x9c\x63\xf8\xcf\xc0\xf0\x1f\x04\xa0\x24"
+      "\xc3\x7f\x00\x6b\xa6\x0b\xf5\xc4\xb7\x3b\xa8\x00\x00\x00\x00\x49\x45\x4e\x44\xae\x42\x60\x82",
+      75);
+  testing::write_file(folder / "textures/red.png", png);
+  std::filesystem::create_symlink("textures/red.png", folder / "red.png");
+  nlohmann::json model = nlohmann::json::parse(testing::read_file(testing::data_dir() / "blender" / "arm3.gltf"));
+  model["images"] = {{{"uri", "red.png"}}};
+  model["buffers"][0]["uri"] = "arm3.bin";
+  testing::write_file(folder / "arm3.gltf", model.dump());
+  std::filesystem::copy_file(testing::data_dir() / "blender" / "arm3.bin", folder / "arm3.bin");
+  const auto run = testing::run_command(cli() + " convert '" + (folder / "arm3.gltf").string() + "' -o '" +
+                                        (folder / "arm3_rdtf.gltf").string() + "'");
+  EXPECT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_TRUE(std::filesystem::is_symlink(folder / "red.png"));
+  EXPECT_TRUE(std::filesystem::is_regular_file(folder / "arm3_rdtf.bin"));
+}
+
 // A stage folder whose writer was killed (a CI job at its timeout) is removed by the next convert
-// into that folder (they stayed for ever, tens of megabytes each); a live writer's stays.
+// into that folder once untouched for an hour (they stayed for ever, tens of megabytes each); a
+// live writer's stays, and so does a dead pid's touched lately (a writer in another PID namespace).
 TEST(Cli, ConvertRemovesTheStagesOfWritersThatAreGone) {
   testing::TempDir folder;
   const pid_t gone = ::fork();
@@ -233,14 +260,20 @@ TEST(Cli, ConvertRemovesTheStagesOfWritersThatAreGone) {
   ASSERT_GT(gone, 0);
   ::waitpid(gone, nullptr, 0);
   const auto stage = [&](pid_t pid) { return folder / (".rdtf-stage." + std::to_string(pid) + "-12345.tmp"); };
-  for (const pid_t pid : {gone, ::getpid()}) {
-    std::filesystem::create_directories(stage(pid));
-    testing::write_file(stage(pid) / "big.glb", "part of an output");
+  const auto recent = folder / (".rdtf-stage." + std::to_string(gone) + "-67890.tmp");
+  for (const auto& path : {stage(gone), stage(::getpid()), recent}) {
+    std::filesystem::create_directories(path);
+    testing::write_file(path / "big.glb", "part of an output");
+  }
+  const auto two_hours_ago = std::filesystem::file_time_type::clock::now() - std::chrono::hours(2);
+  for (const auto& path : {stage(gone), stage(gone) / "big.glb", stage(::getpid()), stage(::getpid()) / "big.glb"}) {
+    std::filesystem::last_write_time(path, two_hours_ago);
   }
   const auto run = testing::run_command(cli() + " convert " + fixture("arm3.gltf") + " -o '" + (folder / "x.glb").string() + "'");
   ASSERT_EQ(run.exit_code, 0) << run.err;
   EXPECT_FALSE(std::filesystem::exists(stage(gone)));
   EXPECT_TRUE(std::filesystem::exists(stage(::getpid()) / "big.glb"));
+  EXPECT_TRUE(std::filesystem::exists(recent / "big.glb"));
 }
 
 // Folders that do not exist yet are made, for .gltf and .glb alike (a .glb there failed).

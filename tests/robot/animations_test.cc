@@ -43,7 +43,8 @@ Channel quantized(int node, std::vector<std::int16_t> shorts) { return Channel{n
 
 // mount_empty with one animation of `channel` over two keys (six output rows for CUBICSPLINE), in
 // a second buffer of its own.
-std::vector<Diagnostic> animated_mount_empty(const Channel& channel, bool through_pointer = false) {
+std::vector<Diagnostic> animated_mount_empty(const Channel& channel, bool through_pointer = false,
+                                             bool node_too = false) {
   json doc = json::parse(testing::read_file(testing::data_dir() / "frames" / "mount_empty.gltf"));
   const int n = channel.path == "rotation" ? 4 : 3;
   const bool quantized = !channel.shorts.empty();
@@ -73,6 +74,7 @@ std::vector<Diagnostic> animated_mount_empty(const Channel& channel, bool throug
   if (through_pointer) {
     target = {{"path", "pointer"},
               {"extensions", {{"KHR_animation_pointer", {{"pointer", "/nodes/" + std::to_string(channel.node) + "/" + channel.path}}}}}};
+    if (node_too) target["node"] = channel.node;  // which the extension forbids; the pointer is read
     doc["extensionsUsed"].push_back("KHR_animation_pointer");
   }
   doc["animations"] = json::array({{{"name", "pose"},
@@ -139,6 +141,8 @@ TEST(Animations, AChannelOfKhrAnimationPointerIsReadAsItsNodes) {
   const auto found = animated_mount_empty(floats(2, "translation", "LINEAR", {0.1f, 0, 0, 0.2f, 0, 0}), true);
   ASSERT_EQ(found.size(), 1u);
   EXPECT_NE(found[0].message.find("moves node 2 'arm' (translation)"), std::string::npos) << found[0].message;
+  // With a stray target.node beside the pointer, the pointer is still what moves.
+  EXPECT_EQ(animated_mount_empty(floats(2, "translation", "LINEAR", {0.1f, 0, 0, 0.2f, 0, 0}), true, true).size(), 1u);
   // A pointer at anything else of a node (its weights, an extension's property) moves nothing.
   EXPECT_TRUE(animated_mount_empty(floats(2, "weights", "LINEAR", {0.1f, 0, 0, 0.2f, 0, 0}), true).empty());
 }

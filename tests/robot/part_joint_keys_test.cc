@@ -38,7 +38,7 @@ TEST(PartJointKeys, AnInvalidOrDifferentKeyOnThePartIsNamedAsNotRead) {
   EXPECT_EQ(found[0].severity, Severity::kWarning);
   EXPECT_EQ(found[0].pointer, "/nodes/6/extras");
   EXPECT_NE(found[0].message.find("node 6 'upper_arm': joint '"), std::string::npos) << found[0].message;
-  EXPECT_NE(found[0].message.find("rdtf_lower 'abc' (-1.57 there) are not read: the joint's properties are those of "
+  EXPECT_NE(found[0].message.find("rdtf_lower 'abc' (-1.57 there) is not read: the joint's properties are those of "
                                   "node 7 'shoulder'"),
             std::string::npos)
       << found[0].message;
@@ -50,9 +50,10 @@ TEST(PartJointKeys, AnInvalidOrDifferentKeyOnThePartIsNamedAsNotRead) {
       EXPECT_EQ(joint.limits->lower, -1.57);
     }
   }
-  found = ignored_keys({{"rdtf_effort", 5.0}});
+  found = ignored_keys({{"rdtf_effort", 5.0}, {"rdtf_upper", 2.0}});
   ASSERT_EQ(found.size(), 1u);
-  EXPECT_NE(found[0].message.find("rdtf_effort 5.0 (not there)"), std::string::npos) << found[0].message;
+  EXPECT_NE(found[0].message.find("rdtf_upper 2.0 (1.57 there), rdtf_effort 5.0 (not there) are not read"), std::string::npos)
+      << found[0].message;
 }
 
 TEST(PartJointKeys, KeysThatSayWhatTheEmptySaysAreNoNews) {

@@ -179,7 +179,8 @@ void check_animations(const GltfAsset& asset, Diagnostics& diag) {
       if (!target || !target->is_object()) continue;
       const auto animated = animated_property(*target);
       if (!animated) continue;
-      const auto [node, path] = *animated;
+      const std::size_t node = animated->first;  // not a structured binding: clang 14 cannot capture one
+      const std::string path = animated->second;
       if (node >= nodes.size() || !placing[node] || (path != "translation" && path != "rotation" && path != "scale")) continue;
       if (!channel_moves(asset, animations[a], channels[c], nodes[node], path, memo)) continue;
       const auto known = std::find_if(moved.begin(), moved.end(), [&](const auto& m) { return m.first == node; });

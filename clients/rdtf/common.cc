@@ -118,9 +118,6 @@ std::optional<fs::path> relative_uri(const std::string& uri) {
   return relative;
 }
 
-// The files write_rdtf puts beside a .gltf without content-addressed names (rdtf/write.h): each
-// external buffer and image under its relative URI, a buffer without URI as <stem>.bin,
-// <stem>_1.bin, ...
 // The files write_rdtf writes beside a .gltf output, as it names them: every buffer not embedded
 // as "<output stem>[_i].bin" (write.cc, external_buffers), every image under its relative URI,
 // except an image that already is that very file (it is not written).

@@ -1,6 +1,9 @@
 // EXT_meshopt_compression: each compressed buffer view is decoded with libmeshoptimizer into the
 // bytes its plain description (buffer, byteOffset, byteLength) names, usually in a "fallback"
 // buffer that has no data of its own; then the extension is removed and the view is plain.
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <optional>
 #include <string>
@@ -107,6 +110,32 @@ bool layout_ok(const MeshoptView& view, const std::string& pointer, Diagnostics&
   return true;
 }
 
+// The coarsest quantization step of a filtered view, read from its encoded elements (the filter
+// decoders' own layout, EXT_meshopt_compression "Filters"), 0 for the other filters:
+// - QUATERNION: each element stores three components as round(q * sqrt(2) * sf), with sf in its
+//   fourth int16 (low two bits the index of the dropped component): a step of 1 / (sqrt(2) sf);
+// - EXPONENTIAL: each int32 is a mantissa (low 24 bits) times 2^e (the high byte, signed): a
+//   step of 2^e.
+double filter_step(const std::vector<std::uint8_t>& encoded, std::size_t count, std::size_t stride,
+                   const std::string& filter) {
+  double step = 0.0;
+  if (filter == "QUATERNION") {
+    for (std::size_t i = 0; i < count; ++i) {
+      std::int16_t fourth = 0;
+      std::memcpy(&fourth, encoded.data() + i * stride + 6, sizeof fourth);
+      const int sf = fourth | 3;
+      if (sf > 0) step = std::max(step, 1.0 / (std::sqrt(2.0) * sf));
+    }
+  } else if (filter == "EXPONENTIAL") {
+    for (std::size_t i = 0; i < count * stride / 4; ++i) {
+      std::int32_t word = 0;
+      std::memcpy(&word, encoded.data() + i * 4, sizeof word);
+      step = std::max(step, std::ldexp(1.0, word >> 24));
+    }
+  }
+  return step;
+}
+
 bool decode_view(GltfAsset& asset, std::size_t index, Diagnostics& diag) {
   Json& view_json = asset.document["bufferViews"][index];
   const std::string view_pointer = json_pointer("/bufferViews", index);
@@ -166,6 +195,7 @@ bool decode_view(GltfAsset& asset, std::size_t index, Diagnostics& diag) {
     return false;
   }
   if (count > 0) {
+    if (const double step = filter_step(decoded, count, stride, view->filter); step > 0) asset.filter_steps[index] = step;
     if (view->filter == "OCTAHEDRAL") meshopt_decodeFilterOct(decoded.data(), count, stride);
     if (view->filter == "QUATERNION") meshopt_decodeFilterQuat(decoded.data(), count, stride);
     if (view->filter == "EXPONENTIAL") meshopt_decodeFilterExp(decoded.data(), count, stride);

@@ -639,9 +639,6 @@ void DataCheck::check_indices(std::uint64_t accessor, std::uint64_t vertices,
   }
 }
 
-// Every JOINTS_n value of a skinned mesh names one of its skin's joints (the Khronos validator's
-// ACCESSOR_JOINTS_INDEX_OOB): rdtf splits the mesh by the joints' weights, and wrote such an
-// index unchanged into an output the validator then refused.
 // Each rotation key of a node's animation is a unit quaternion, within the validator's tolerance
 // (0.00769 of length, as for a node's rotation); a CUBICSPLINE's tangents are not keys. Reported
 // once per channel, at its sampler, as the validator does.
@@ -690,6 +687,9 @@ void DataCheck::check_animation_rotations() {
   }
 }
 
+// Every JOINTS_n value of a skinned mesh names one of its skin's joints (the Khronos validator's
+// ACCESSOR_JOINTS_INDEX_OOB): rdtf splits the mesh by the joints' weights, and wrote such an
+// index unchanged into an output the validator then refused.
 void DataCheck::check_skin_joint_indices() {
   if (!doc_.contains("nodes") || !doc_["nodes"].is_array()) return;
   std::set<std::pair<std::uint64_t, std::uint64_t>> checked;  // (accessor, joint count)

@@ -45,29 +45,50 @@ std::vector<double> rest_value(const Json& node, const std::string& path) {
   return value;
 }
 
+// How far a key may lie from the value it stands for, by how the file stores it: an angle for
+// rotations, a distance for translation and scale (beside kRelative).
+struct Resolution {
+  double angle = kAngle;
+  double distance = 0.0;
+};
+
 // A quantized rotation (normalized byte or short, glTF 2.0 3.11) is off by up to half a step in
-// each component: an angle of at most 2 |dq| <= 2 step.
-double angle_tolerance(const Json& accessor) {
-  if (!accessor.value("normalized", false)) return kAngle;
-  const int type = accessor.value("componentType", 0);
-  const double step = (type == 5120 || type == 5121) ? 1.0 / 127 : (type == 5122 || type == 5123) ? 1.0 / 32767 : 0.0;
-  return std::max(kAngle, 2 * step);
+// each component: an angle of at most 2 |dq| <= 2 step. A view decoded through a meshopt filter
+// (GltfAsset::filter_steps) was rounded before that:
+// - QUATERNION keeps three components to within s/2 (s its step) and recomputes the largest, w >=
+//   1/2, from them: |dw| <= |x| |dx| / w <= (sqrt(3)/2)(sqrt(3) s/2)/(1/2) = 1.5 s, so |dq| <=
+//   sqrt(3 (s/2)^2 + (1.5 s)^2) = sqrt(3) s, then int16 rounding adds up to 1/32767: the angle is
+//   at most 2 (sqrt(3) s + 1/32767), within 4 s + 2/32767;
+// - EXPONENTIAL keeps each component to within half its step 2^e: a distance of one step is twice that.
+Resolution resolution(const GltfAsset& asset, const Json& accessor) {
+  Resolution r;
+  if (accessor.value("normalized", false)) {
+    const int type = accessor.value("componentType", 0);
+    const double step = (type == 5120 || type == 5121) ? 1.0 / 127 : (type == 5122 || type == 5123) ? 1.0 / 32767 : 0.0;
+    r.angle = std::max(kAngle, 2 * step);
+  }
+  if (!accessor.contains("bufferView") || !accessor["bufferView"].is_number_unsigned()) return r;
+  const auto filtered = asset.filter_steps.find(accessor["bufferView"].get<std::size_t>());
+  if (filtered == asset.filter_steps.end()) return r;
+  r.angle = std::max(r.angle, 4 * filtered->second + 2.0 / 32767);
+  r.distance = filtered->second;
+  return r;
 }
 
-bool differs(const std::string& path, const double* key, const std::vector<double>& rest, double angle) {
+bool differs(const std::string& path, const double* key, const std::vector<double>& rest, const Resolution& resolution) {
   if (path == "rotation") {
     const Eigen::Vector4d q(key[0], key[1], key[2], key[3]), r(rest[0], rest[1], rest[2], rest[3]);
     if (!(q.norm() > 0) || !(r.norm() > 0)) return true;
     // The angle between the two rotations; q and -q are one rotation.
     const double cos_half = std::min(1.0, std::abs(q.normalized().dot(r.normalized())));
-    return 2 * std::acos(cos_half) > angle;
+    return 2 * std::acos(cos_half) > resolution.angle;
   }
   double scale = 1.0, distance = 0.0;
   for (int k = 0; k < 3; ++k) {
     scale = std::max({scale, std::abs(key[k]), std::abs(rest[k])});
     distance = std::max(distance, std::abs(key[k] - rest[k]));
   }
-  return !(distance <= kRelative * scale);
+  return !(distance <= std::max(kRelative * scale, resolution.distance));
 }
 
 // A CUBICSPLINE tangent that is not zero moves the node between equal keys.
@@ -110,12 +131,12 @@ bool channel_moves(const GltfAsset& asset, const Json& animation, const Json& ch
   const auto [known, added] = memo.moves.try_emplace({output, path, cubic, rest}, false);
   if (!added) return known->second;
   const std::vector<double> values = read_accessor(asset, output);
-  const double angle = angle_tolerance(accessor);
+  const Resolution within = resolution(asset, accessor);
   const std::size_t keys = values.size() / static_cast<std::size_t>(n);
   for (std::size_t k = 0; k < keys && !known->second; ++k) {
     const double* key = values.data() + k * static_cast<std::size_t>(n);
     // CUBICSPLINE keys are (in-tangent, value, out-tangent).
-    known->second = cubic && k % 3 != 1 ? tangent_moves(path, key, rest) : differs(path, key, rest, angle);
+    known->second = cubic && k % 3 != 1 ? tangent_moves(path, key, rest) : differs(path, key, rest, within);
   }
   return known->second;
 }

@@ -39,6 +39,10 @@ struct GltfAsset {
   // The bytes of each external image (by its path in `folder`), read with the buffers at load time:
   // a writer copies these, never the file again.
   std::map<std::filesystem::path, std::vector<std::uint8_t>> images;
+  // For each buffer view decoded through an EXT_meshopt_compression QUATERNION or EXPONENTIAL
+  // filter, the coarsest quantization step of its values (decode_meshopt): a key a filter rounded
+  // differs from the value it stands for by up to half of it, which a comparison must allow.
+  std::map<std::size_t, double> filter_steps;
 };
 
 // One file a model names, as read once for a load (read_source_files).

@@ -68,6 +68,15 @@ std::string joint_commands_of(const rdtf::joint_command_t& command, const LiveNa
       commands.clear();
       return "joint '" + name + "' takes no command (not a one-degree-of-freedom joint)";
     }
+    // One command per joint: a joint named twice (perhaps once by its URDF name and once by its
+    // glTF name) says two things, and which one holds would be the order of the array.
+    for (std::size_t k = 0; k < commands.size(); ++k) {
+      if (commands[k].joint != *joint) continue;
+      const std::string first = lcm_safe::printable(command.name[k], 80);
+      commands.clear();
+      return "joint '" + name + "' is named twice in one command (entries " + std::to_string(k) + " '" + first +
+             "' and " + std::to_string(i) + "): send one entry per joint";
+    }
     JointCommand c;
     c.joint = *joint;
     switch (command.mode[i]) {

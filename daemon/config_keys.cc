@@ -338,7 +338,8 @@ std::vector<ConfigKey> make_registry() {
             RDTF_FIELD(simulate)),
       plain({.name = "state_rate_hz", .unit = "Hz", .min = 0.1, .max = 10000, .reload = kRestartSimulation,
              .flag = "--state-rate-hz", .flag_help = "Joint-state messages per second and model (default 100)",
-             .doc = "joint-state messages per second and model"},
+             .doc = "joint-state messages per wall-clock second and model, at most one per step (`real_time_factor` / "
+                    "`time_step`, 1,000 with the defaults; a higher rate is logged and gives one per step)"},
             RDTF_FIELD(state_rate_hz)),
       plain({.name = "real_time_factor", .min = 0.01, .max = 100, .reload = kRestartSimulation,
              .doc = "simulated seconds per wall-clock second"},

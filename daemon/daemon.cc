@@ -4,6 +4,7 @@
 #include <malloc.h>
 #include <poll.h>
 #include <sys/stat.h>
+#include <sys/file.h>
 #include <sys/signalfd.h>
 #include <unistd.h>
 
@@ -109,6 +110,7 @@ Daemon::~Daemon() {
   cancel_validations_ = true;
   if (runner_) runner_->stop();
   if (signal_fd_ >= 0) ::close(signal_fd_);
+  if (lock_fd_ >= 0) ::close(lock_fd_);
 }
 
 bool Daemon::start(std::string& error) {
@@ -130,6 +132,7 @@ bool Daemon::start(std::string& error) {
       return false;
     }
   }
+  if (!lock_output(error)) return false;
   const auto cleaning = clock_->now();
   const bool clean = take_clean_stop_mark();
   secure_revision_numbers(clean);
@@ -151,6 +154,42 @@ bool Daemon::start(std::string& error) {
   log_line("rdtfd started: watching" + watched + "; output " + config_.output.string() +
            "; LCM " + (config_.lcm_url.empty() ? std::string("default URL") : config_.lcm_url) +
            "; channels " + config_.channel_prefix + "/...");
+  return true;
+}
+
+// Two daemons on one output folder share its revision numbers, clean-stop mark and result cache:
+// each published revision 1 of a model with other settings, its own document under one number,
+// and each then found the other's outputs "no longer the file rdtfd wrote" (helper sweep s70cache
+// D2). The second is refused at its start. The lock is an flock on a file in the state folder,
+// released by the kernel however the holder ends; the state folder must be a folder of the output,
+// not a link to one elsewhere (where the state and the cache would be written and removed).
+bool Daemon::lock_output(std::string& error) {
+  const auto folder = RevisionStore::folder_for(config_.output);
+  std::error_code ec;
+  std::filesystem::create_directories(folder, ec);
+  struct stat info {};
+  if (::lstat(folder.c_str(), &info) != 0 || !S_ISDIR(info.st_mode)) {
+    error = folder.string() + (S_ISLNK(info.st_mode) ? " is a symbolic link" : " is not a folder") +
+            ": rdtfd keeps its state inside its output folder only; remove it (rdtfd creates it)";
+    return false;
+  }
+  const auto path = folder / "lock";
+  lock_fd_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_NOFOLLOW | O_CLOEXEC, 0644);
+  if (lock_fd_ < 0) {
+    error = path.string() + ": " + std::strerror(errno);
+    return false;
+  }
+  if (::flock(lock_fd_, LOCK_EX | LOCK_NB) != 0) {
+    const int why = errno;
+    ::close(lock_fd_);
+    lock_fd_ = -1;
+    error = why == EWOULDBLOCK
+                ? "another rdtfd uses the output folder " + config_.output.string() + " (it holds " + path.string() +
+                      "): two daemons on one output would publish one revision number for two documents; give "
+                      "each its own output folder (--output)"
+                : path.string() + ": " + std::strerror(why);
+    return false;
+  }
   return true;
 }
 
@@ -236,6 +275,15 @@ void Daemon::open_result_cache() {
   cache_key_ = settings_key(config_);
   cache_.reset();
   if (config_.max_cached_results == 0) return;
+  // A results folder that is a link leads out of the output: entries would be written, and the
+  // bound's eviction would remove files, wherever it points (helper sweep s70cache D3).
+  struct stat info {};
+  if (::lstat(ResultCache::folder_for(config_.output).c_str(), &info) == 0 && !S_ISDIR(info.st_mode)) {
+    log_line("result cache off: " + ResultCache::folder_for(config_.output).string() + " is " +
+             (S_ISLNK(info.st_mode) ? "a symbolic link" : "not a folder") +
+             "; rdtfd keeps its cache inside its output folder only (remove it: rdtfd creates it)");
+    return;
+  }
   cache_ = std::make_shared<ResultCache>(ResultCache::folder_for(config_.output), config_.max_cached_results);
   const std::size_t removed = cache_->open();
   log_line("result cache " + ResultCache::folder_for(config_.output).string() + ": " +
@@ -254,6 +302,15 @@ void Daemon::start_simulation_host() {
   options.simulation = simulation_options(config_);
   options.state_rate_hz = config_.state_rate_hz;
   options.real_time_factor = config_.real_time_factor;
+  // At most one state a step: a higher rate is not refused (it depends on two other settings) but
+  // said, since the states then come at the step rate.
+  const double step_rate = options.real_time_factor / options.simulation.time_step;
+  if (options.state_rate_hz > step_rate) {
+    log_line("state_rate_hz " + format_number(options.state_rate_hz) + " is above one state per step (time_step " +
+             format_number(options.simulation.time_step) + " s at real_time_factor " +
+             format_number(options.real_time_factor) + "): states are published at " + format_number(step_rate) +
+             " Hz");
+  }
   options.joint_command_lifetime =
       std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(config_.joint_command_timeout_s));
   simulation_ = std::make_unique<SimulationHost>(options);

@@ -149,6 +149,7 @@ class Daemon {
   bool rescan_pending_ = false;           // One of them asks for a rescan.
   bool rescanning_ = false;               // note_change() calls from a rescan announce no save.
   int signal_fd_ = -1;
+  int lock_fd_ = -1;  // <output>/.rdtfd-state/lock, held while this daemon runs (lock_output)
   std::atomic<bool> stop_{false};
   Clock::time_point started_;
   Clock::time_point next_republish_;
@@ -160,6 +161,7 @@ class Daemon {
   std::shared_ptr<ResultCache> cache_;       // Shared with the workers; null when off.
   std::string cache_key_;                    // settings_key(config_).
   void open_result_cache();
+  bool lock_output(std::string& error);  // One daemon per output folder.
   bool take_clean_stop_mark();   // The last run left the mark (now removed): nothing to clean.
   void leave_clean_stop_mark();  // At the end of a clean stop.
   // Revision states are saved without an fsync between the blocks of numbers they reserve. Unless

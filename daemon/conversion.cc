@@ -133,10 +133,11 @@ std::string sha256_hex(const std::vector<const std::vector<std::uint8_t>*>& part
   std::unique_ptr<EVP_MD_CTX, decltype(&EVP_MD_CTX_free)> context(EVP_MD_CTX_new(), EVP_MD_CTX_free);
   EVP_DigestInit_ex(context.get(), EVP_sha256(), nullptr);
   for (const auto* part : parts) {
-    // Length first, so that moving bytes between parts changes the hash.
-    const std::uint64_t size = part->size();
+    // Length first, so that moving bytes between parts changes the hash. A part not read (nullptr)
+    // has a length no file has: a missing or refused file never hashes as an empty one.
+    const std::uint64_t size = part ? part->size() : ~std::uint64_t{0};
     EVP_DigestUpdate(context.get(), &size, sizeof(size));
-    EVP_DigestUpdate(context.get(), part->data(), part->size());
+    if (part) EVP_DigestUpdate(context.get(), part->data(), part->size());
   }
   unsigned char digest[EVP_MAX_MD_SIZE];
   unsigned int length = 0;
@@ -146,11 +147,10 @@ std::string sha256_hex(const std::vector<const std::vector<std::uint8_t>*>& part
 
 std::string content_hash(const std::vector<std::uint8_t>& model, const std::vector<std::filesystem::path>& named,
                          const SourceFiles& files) {
-  static const std::vector<std::uint8_t> kUnread;
   std::vector<const std::vector<std::uint8_t>*> parts{&model};
   for (const auto& path : named) {
     const auto found = files.find(path);
-    parts.push_back(found != files.end() && found->second.size ? &found->second.bytes : &kUnread);
+    parts.push_back(found != files.end() && found->second.size ? &found->second.bytes : nullptr);
   }
   return sha256_hex(parts);
 }
@@ -370,6 +370,18 @@ std::string outputs_differ(const ConversionJob& job, const CachedResult& cached,
                            std::string& urdf) {
   if (!cached.written) return {};
   if (cached.output_name != job.source.stem().string() + ".rdtf.gltf") return "another output name";
+  // Nothing between the output root and a file may be a link, as for a conversion's writes (a
+  // model's output folder replaced by a link out of the output was read through, and served; helper
+  // sweep s70cache D3): such an entry is not used, and the conversion that follows says why.
+  const auto inside = job.output_dir.lexically_relative(job.output_root);
+  if (!job.output_root.empty() && !inside.empty() && *inside.begin() != "..") {
+    for (const std::filesystem::path& folder : {job.output_dir, job.output_dir / "urdf", job.output_dir / "urdf" / "meshes"}) {
+      for (auto at = folder; at != job.output_root && at.has_relative_path() && at != at.parent_path(); at = at.parent_path()) {
+        struct stat info {};
+        if (::lstat(at.c_str(), &info) == 0 && S_ISLNK(info.st_mode)) return at.string() + " is a symbolic link";
+      }
+    }
+  }
   std::string why;
   auto read_text = [&](const std::filesystem::path& path, const std::string& sha256, std::string& out) {
     std::vector<std::uint8_t> bytes;
@@ -603,16 +615,18 @@ ConversionOutcome run_conversion(const ConversionJob& job) {
     }
   }
   lap(outcome.stages.read);
-  // A file refused or unreadable counts as no bytes in the hash: a state not read whole is never
-  // "unchanged" (a .bin linked out of the folder, then hard-linked, hashed alike, and the second
-  // refusal went unreported).
+  // A state not read whole is never "unchanged" (a .bin linked out of the folder, then
+  // hard-linked, hashed alike, and the second refusal went unreported).
   const bool read_whole =
       std::all_of(files.begin(), files.end(), [](const auto& file) { return file.second.size.has_value(); });
   if (read_whole && outcome.content_hash == job.previous_hash) {
     outcome.kind = ConversionOutcome::Kind::kUnchanged;
     return finish();
   }
-  const bool cached = job.cache && from_cache(job, outcome);
+  // Nor is a result cached for it served: what a conversion says of the file it could not read
+  // (an error for a refused image, a warning for a missing one) is not in the entry (an empty
+  // texture converted, then deleted while rdtfd was stopped, came back from the cache unreported).
+  const bool cached = read_whole && job.cache && from_cache(job, outcome);
   lap(outcome.stages.cache);
   if (cached) return finish();
 

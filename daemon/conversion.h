@@ -192,7 +192,8 @@ struct ConversionOutcome {
 ConversionOutcome run_conversion(const ConversionJob& job);
 
 // Content hash of several files: hex SHA-256 over each part's length (8 bytes, little endian)
-// followed by its bytes, so that moving bytes from one file to the next changes it.
+// followed by its bytes, so that moving bytes from one file to the next changes it. A null part
+// (a file not read) counts as a length of 2^64 - 1 and no bytes.
 std::string sha256_hex(const std::vector<const std::vector<std::uint8_t>*>& parts);
 // The content hash of a model: its bytes, then each file it names (`named`, in the order of its
 // buffers and images, as often as named) as read in `files` (no bytes when it could not be read).

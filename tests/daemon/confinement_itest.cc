@@ -116,8 +116,8 @@ TEST(DaemonConfinement, EveryEscapeIsRejectedWithItsPlaceAndNothingLeaks) {
       if (on_kind(all, "ERROR", id).empty()) return false;
     }
     return has_revision(all, "good.gltf", 1, content_hash(good)) &&
-           has_revision(all, "missing_image.gltf", 1, content_hash(missing_image, {""})) &&
-           has_revision(all, "dangling_image.gltf", 1, content_hash(dangling_image, {""}));
+           has_revision(all, "missing_image.gltf", 1, content_hash(missing_image, {std::nullopt})) &&
+           has_revision(all, "dangling_image.gltf", 1, content_hash(dangling_image, {std::nullopt}));
   }, 10s)) << ::testing::PrintToString(model_events(s.messages()));
 
   for (std::size_t k = 0; k < rejected.size(); ++k) {

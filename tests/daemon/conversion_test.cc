@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <map>
+#include <optional>
 
 #include "result_cache.h"
 #include "support/test_support.h"
@@ -19,13 +20,15 @@ namespace {
 namespace fs = std::filesystem;
 
 // SHA-256 over each part's 64-bit length and bytes (docs/daemon.md: the content hash), in hex.
-std::string length_prefixed_sha256(const std::vector<std::string>& parts) {
+// Each part's length (8 bytes) then its bytes; a part not read (nullopt) is the length 2^64 - 1
+// alone, which no file has.
+std::string length_prefixed_sha256(const std::vector<std::optional<std::string>>& parts) {
   EVP_MD_CTX* context = EVP_MD_CTX_new();
   EVP_DigestInit_ex(context, EVP_sha256(), nullptr);
   for (const auto& part : parts) {
-    const std::uint64_t size = part.size();
+    const std::uint64_t size = part ? part->size() : ~std::uint64_t{0};
     EVP_DigestUpdate(context, &size, sizeof(size));
-    EVP_DigestUpdate(context, part.data(), part.size());
+    if (part) EVP_DigestUpdate(context, part->data(), part->size());
   }
   unsigned char digest[EVP_MAX_MD_SIZE];
   unsigned int length = 0;
@@ -100,8 +103,9 @@ TEST(ConversionReads, EachFileOnceAndTheHashIsOfTheBytesConvertedEvenWhenRewritt
   EXPECT_EQ(reads.at(folders.watch() / "arm3.bin"), 2);
 }
 
-// A refused file counts as no bytes in the hash, so two different refusals hash alike: a state not
-// read whole is converted again, and its refusal reported, never skipped as unchanged.
+// A refused file counts alike in the hash whatever the refusal, so two different refusals hash
+// alike: a state not read whole is converted again, and its refusal reported, never skipped as
+// unchanged.
 TEST(ConversionReads, AStateNotReadWholeIsNeverUnchanged) {
   Folders folders;
   testing::write_file(folders.root / "arm.gltf", testing::read_file(testing::data_dir() / "blender" / "arm3.gltf"));
@@ -146,13 +150,45 @@ TEST(ConversionReads, AFileNamedTwiceIsReadOnceAndHashedAsOftenAsNamed) {
   EXPECT_EQ(outcome.content_hash, length_prefixed_sha256({model, bin, bin}));
 }
 
-TEST(ConversionReads, AFileThatCannotBeReadIsHashedAsNoBytes) {
+// A file missing (or refused) hashes apart from an empty one: an empty texture, converted and
+// cached, then deleted while rdtfd was stopped, came back from the result cache without the
+// warning a cold conversion gives (helper sweep s70cache D1).
+TEST(ConversionReads, AFileThatCannotBeReadIsHashedApartFromAnEmptyOne) {
   Folders folders;
   const std::string model = testing::read_file(testing::data_dir() / "blender" / "arm3.gltf");
   testing::write_file(folders.root / "arm.gltf", model);  // No arm3.bin.
   const ConversionOutcome outcome = run_conversion(job_for(folders, "arm.gltf"));
   EXPECT_EQ(outcome.kind, ConversionOutcome::Kind::kRejected);
-  EXPECT_EQ(outcome.content_hash, length_prefixed_sha256({model, ""}));
+  EXPECT_EQ(outcome.content_hash, length_prefixed_sha256({model, std::nullopt}));
+  EXPECT_NE(outcome.content_hash, length_prefixed_sha256({model, ""}));
+}
+
+// A result is served from the cache only for files read whole: arm3 with an image that is an
+// empty file, converted and cached; the image then deleted. The entry's hash differs (a missing
+// file hashes apart from an empty one), and a file not read is never looked up: the conversion
+// runs and says the image is missing (helper sweep s70cache D1: served from the cache, unreported).
+TEST(ConversionReads, AResultIsNotServedFromTheCacheForAFileNotRead) {
+  Folders folders;
+  auto model = nlohmann::json::parse(testing::read_file(testing::data_dir() / "blender" / "arm3.gltf"));
+  model["images"] = nlohmann::json::array({{{"uri", "tex.png"}}});
+  testing::write_file(folders.root / "arm3.gltf", model.dump());
+  testing::write_file(folders.root / "arm3.bin", testing::read_file(testing::data_dir() / "blender" / "arm3.bin"));
+  testing::write_file(folders.root / "tex.png", "");
+  testing::TempDir cache_dir;
+  ConversionJob job = job_for(folders, "arm3.gltf");
+  job.cache = std::make_shared<ResultCache>(cache_dir.path() / "results", 10);
+  job.cache_key = "test-settings";
+  ConversionOutcome first = run_conversion(job);
+  ASSERT_EQ(first.kind, ConversionOutcome::Kind::kConverted) << messages(first.diagnostics);
+  ASSERT_TRUE(first.after_handover);
+  first.after_handover();
+  EXPECT_TRUE(run_conversion(job).from_cache) << "the same files again: a hit";
+
+  fs::remove(folders.root / "tex.png");
+  const ConversionOutcome again = run_conversion(job);
+  EXPECT_FALSE(again.from_cache) << again.cache_note;
+  EXPECT_NE(again.content_hash, first.content_hash);
+  EXPECT_NE(messages(again.diagnostics).find("tex.png"), std::string::npos) << messages(again.diagnostics);
 }
 
 }  // namespace

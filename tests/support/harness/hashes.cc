@@ -35,10 +35,21 @@ std::string sha256(const std::vector<std::string>& parts, bool length_prefixed) 
 
 std::string sha256_plain(const std::string& bytes) { return sha256({bytes}, false); }
 
-std::string content_hash(const std::string& model, const std::vector<std::string>& referenced) {
-  std::vector<std::string> parts{model};
+std::string content_hash(const std::string& model, const std::vector<std::optional<std::string>>& referenced) {
+  EVP_MD_CTX* context = EVP_MD_CTX_new();
+  EVP_DigestInit_ex(context, EVP_sha256(), nullptr);
+  std::vector<std::optional<std::string>> parts{model};
   parts.insert(parts.end(), referenced.begin(), referenced.end());
-  return sha256(parts, true);
+  for (const auto& part : parts) {
+    const std::uint64_t size = part ? part->size() : ~std::uint64_t{0};
+    EVP_DigestUpdate(context, &size, sizeof(size));
+    if (part) EVP_DigestUpdate(context, part->data(), part->size());
+  }
+  unsigned char digest[EVP_MAX_MD_SIZE];
+  unsigned int length = 0;
+  EVP_DigestFinal_ex(context, digest, &length);
+  EVP_MD_CTX_free(context);
+  return to_hex(digest, length);
 }
 
 }  // namespace rdtf::itest

@@ -1,6 +1,7 @@
 // Hashes as the daemon computes them, from the bytes a test wrote.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -15,8 +16,9 @@ std::string sha256(const std::vector<std::string>& parts, bool length_prefixed);
 // The plain SHA-256 of a byte string (what `sha256sum` prints).
 std::string sha256_plain(const std::string& bytes);
 
-// content_hash as the daemon computes it: the model file, then each file it refers to.
-std::string content_hash(const std::string& model, const std::vector<std::string>& referenced = {});
+// content_hash as the daemon computes it: the model file, then each file it refers to; a file
+// not read (missing or refused: nullopt) counts as the length 2^64 - 1 and no bytes.
+std::string content_hash(const std::string& model, const std::vector<std::optional<std::string>>& referenced = {});
 
 inline std::string short_hash(const std::string& hash) { return hash.substr(0, 12); }
 

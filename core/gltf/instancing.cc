@@ -72,6 +72,7 @@ std::optional<std::vector<Eigen::Affine3d>> instance_transforms(const GltfAsset&
   const Json& attributes = extension["attributes"];
   std::vector<double> translation, rotation, scale;
   std::optional<std::size_t> count;
+  double rotation_step = 0;  // of a normalized integer ROTATION: each component within half of it
   for (const char* name : {"TRANSLATION", "ROTATION", "SCALE"}) {
     if (!attributes.contains(name)) continue;
     const auto accessor = attribute_accessor(asset, attributes, name, pointer, diag);
@@ -89,6 +90,11 @@ std::optional<std::vector<Eigen::Affine3d>> instance_transforms(const GltfAsset&
                  std::to_string(n) + " instances of " + node_label(asset.document, input_node) +
                      " exceed what the triangle limit allows for its mesh (" + std::to_string(max_instances) + ")");
       return std::nullopt;
+    }
+    if (std::string(name) == "ROTATION" && asset.document["accessors"][*accessor].value("normalized", false)) {
+      rotation_step = asset.document["accessors"][*accessor]["componentType"].get<std::uint64_t>() == internal::kByte
+                          ? 1.0 / 127
+                          : 1.0 / 32767;
     }
     std::vector<double> values = read_accessor(asset, *accessor);
     for (std::size_t k = 0; k < values.size(); ++k) {
@@ -112,6 +118,16 @@ std::optional<std::vector<Eigen::Affine3d>> instance_transforms(const GltfAsset&
       if (q.norm() < 1e-6) {
         diag.error(codes::INSTANCING_INVALID, pointer + "/ROTATION",
                    "ROTATION element " + std::to_string(i) + " is not a rotation (a zero quaternion)");
+        return std::nullopt;
+      }
+      // A unit quaternion within the tolerance the Khronos validator gives a node's rotation
+      // (0.00769 of length), plus what quantization allows: four components each within half a
+      // step change the length by at most one step. A quaternion of length 2 is no rotation the
+      // exporter meant, and normalizing it would place the instance silently.
+      if (!(std::abs(q.norm() - 1) <= 0.00769 + rotation_step)) {
+        diag.error(codes::INSTANCING_INVALID, pointer + "/ROTATION",
+                   "ROTATION element " + std::to_string(i) + " has length " + format_number(q.norm()) +
+                       "; each must be a unit quaternion (x, y, z, w)");
         return std::nullopt;
       }
       X_NI.rotate(q.normalized().toRotationMatrix());

@@ -173,10 +173,11 @@ void report_topology(const MeshGeometry& geometry, const std::string& pointer,
 
 // A solid's integrals, inside-out ones turned right with a warning.
 VolumeIntegrals oriented(VolumeIntegrals integrals, const std::string& pointer,
-                         const std::string& name, Diagnostics& diag) {
+                         const std::string& name, Diagnostics& diag, int instance = -1) {
   if (integrals.volume < 0) {
     diag.warning(codes::MESH_INSIDE_OUT, pointer,
-                 "mesh of '" + name + "' is inside out (signed volume " +
+                 "mesh of '" + name + "'" + (instance >= 0 ? " (instance " + std::to_string(instance) + ")" : "") +
+                     " is inside out (signed volume " +
                      std::to_string(integrals.volume) +
                      " m^3): its faces wind clockwise; mass computed as if turned right");
     integrals.volume = -integrals.volume;
@@ -377,6 +378,18 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
     const auto mass_override = positive_extra(document, node, "rdtf_mass", after_check);
 
     if (skinned) {
+      // A skinned mesh is placed by its bones, not by its node (glTF 2.0 3.7.3.3), and
+      // EXT_mesh_gpu_instancing places instances relative to the node: where instances of a
+      // skinned mesh go is undefined, and counting one of them would weigh the others as nothing.
+      const Json& node_json = document["nodes"][node];
+      if (node_json.contains("extensions") && node_json["extensions"].is_object() &&
+          node_json["extensions"].contains("EXT_mesh_gpu_instancing")) {
+        diag.error(codes::INSTANCING_INVALID, pointer + "/extensions/EXT_mesh_gpu_instancing",
+                   "mesh node '" + name + "' is skinned and instanced: its bones place a skinned mesh, and "
+                   "where instances of it go is undefined; instance the bones' parts as plain meshes, or "
+                   "remove the instancing");
+        continue;
+      }
       diag.append(after_check);
       // Skinned: each bone gets the parts of the mesh bound to it, in its bind pose.
       const SurfaceTopology& topology = geometry.topology();
@@ -417,8 +430,16 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
     // The mass kernel runs while the surface check of a large mesh does (check_surface).
     std::vector<VolumeIntegrals> solids;
     if (instances) {
-      for (const Eigen::Affine3d& X_NI : *instances) {
-        solids.push_back(integrate_solid(std::span<const TriangleMeshView>(geometry.pieces), X_LN * X_NI));
+      for (std::size_t k = 0; k < instances->size(); ++k) {
+        const Eigen::Affine3d X_LI = X_LN * (*instances)[k];
+        // An instance's own SCALE of 0 flattens it as a node's does (above).
+        if (X_LN.linear().determinant() != 0.0 && X_LI.linear().determinant() == 0.0) {
+          after_check.warning(codes::MESH_SCALED_TO_NOTHING, pointer + "/extensions/EXT_mesh_gpu_instancing",
+                              "instance " + std::to_string(k) + " of mesh node '" + name +
+                                  "' is scaled to nothing (a SCALE of 0 on some axis): it adds no volume and no "
+                                  "mass to its link; give it a non-zero scale, or remove it");
+        }
+        solids.push_back(integrate_solid(std::span<const TriangleMeshView>(geometry.pieces), X_LI));
       }
     }
     report_topology(geometry, pointer, name, diag);
@@ -439,9 +460,10 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
                        "reversed copies of its faces");
     }
     std::vector<int> signs;
-    for (VolumeIntegrals& integrals : solids) {
+    for (std::size_t k = 0; k < solids.size(); ++k) {
+      VolumeIntegrals& integrals = solids[k];
       signs.push_back(integrals.volume < 0 ? -1 : 1);
-      integrals = oriented(integrals, pointer, name, diag);
+      integrals = oriented(integrals, pointer, name, diag, solids.size() > 1 ? static_cast<int>(k) : -1);
       volume += integrals.volume;
     }
     double mesh_density = density;

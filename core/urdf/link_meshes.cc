@@ -5,6 +5,7 @@
 
 #include "../inertia/skinning.h"
 #include "rdtf/geometry.h"
+#include "rdtf/instancing.h"
 #include "rdtf/mass_properties.h"
 #include "rdtf/mesh_checks.h"
 #include "urdf_internal.h"
@@ -87,9 +88,21 @@ std::vector<LinkSurface> link_surfaces(const GltfAsset& asset, const Robot& robo
       if (mesh.pieces.empty()) continue;
       if (!n.contains("skin")) {
         const Eigen::Affine3d X_LN = link.X_SL.inverse() * world[node];
-        const bool solid = append_solid(mesh.pieces, X_LN, surface.mesh);
-        surface.closed = surface.closed && mesh.closed && solid;
-        ++surface.solids;
+        // Every instance of EXT_mesh_gpu_instancing is a solid of the link, as its inertial counts
+        // them (core/inertia/link_inertia.cc); the conversion checked them, so a failure here
+        // leaves the mesh out as one the conversion refused.
+        std::uint64_t triangles = 0;
+        for (const TriangleMesh& piece : mesh.pieces) triangles += piece.triangles.size();
+        Diagnostics ignored;
+        const auto instances = instance_transforms(
+            asset, static_cast<std::size_t>(node), asset.limits.max_triangles / std::max<std::uint64_t>(triangles, 1),
+            ignored, static_cast<std::size_t>(node));
+        if (!instances) continue;
+        for (const Eigen::Affine3d& X_NI : *instances) {
+          const bool solid = append_solid(mesh.pieces, X_LN * X_NI, surface.mesh);
+          surface.closed = surface.closed && mesh.closed && solid;
+          ++surface.solids;
+        }
         continue;
       }
       auto bones = bones_of_node.find(node);

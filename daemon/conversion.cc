@@ -162,6 +162,12 @@ std::string sha256_hex(std::string_view text) {
   return to_hex({digest, length});
 }
 
+// The key an entry is stored and found under: the settings, and the model's output folder, which
+// its diagnostics and outputs name (the same file watched through another folder is another model
+// id, with another output folder: it got the entry of the first, naming the first's outputs;
+// helper sweep s70cache D4).
+std::string cache_entry_key(const ConversionJob& job) { return job.cache_key + " " + job.output_dir.string(); }
+
 namespace {
 
 // WRITE_FAILED because a name is longer than the output's file system allows: no retry helps.
@@ -411,7 +417,7 @@ std::string outputs_differ(const ConversionJob& job, const CachedResult& cached,
 bool from_cache(const ConversionJob& job, ConversionOutcome& outcome) {
   CachedResult cached;
   std::string why;
-  switch (job.cache->find(job.source.string(), job.cache_key, outcome.content_hash, cached, why)) {
+  switch (job.cache->find(job.source.string(), cache_entry_key(job), outcome.content_hash, cached, why)) {
     case ResultCache::Lookup::kMiss:
       return false;
     case ResultCache::Lookup::kRefused:
@@ -449,7 +455,7 @@ bool from_cache(const ConversionJob& job, ConversionOutcome& outcome) {
 std::function<void()> cache_after_handover(const ConversionJob& job, const ConversionOutcome& outcome) {
   const ConvertedModel& m = *outcome.converted;
   CachedResult entry;
-  entry.key = job.cache_key;
+  entry.key = cache_entry_key(job);
   entry.source = job.source.string();
   entry.content_hash = outcome.content_hash;
   entry.written = m.written;

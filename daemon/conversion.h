@@ -191,6 +191,10 @@ struct ConversionOutcome {
 
 ConversionOutcome run_conversion(const ConversionJob& job);
 
+// The key a job's result is stored and found under in the result cache: its cache_key and its
+// output folder.
+std::string cache_entry_key(const ConversionJob& job);
+
 // Content hash of several files: hex SHA-256 over each part's length (8 bytes, little endian)
 // followed by its bytes, so that moving bytes from one file to the next changes it. A null part
 // (a file not read) counts as a length of 2^64 - 1 and no bytes.

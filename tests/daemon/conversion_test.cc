@@ -183,6 +183,11 @@ TEST(ConversionReads, AResultIsNotServedFromTheCacheForAFileNotRead) {
   ASSERT_TRUE(first.after_handover);
   first.after_handover();
   EXPECT_TRUE(run_conversion(job).from_cache) << "the same files again: a hit";
+  // The same file for another output folder (watched through another folder: another model id) is
+  // no hit: the entry's diagnostics and outputs name the first folder (helper sweep s70cache D4).
+  ConversionJob elsewhere = job;
+  elsewhere.output_dir = job.output_dir / "elsewhere";
+  EXPECT_FALSE(run_conversion(elsewhere).from_cache);
 
   fs::remove(folders.root / "tex.png");
   const ConversionOutcome again = run_conversion(job);

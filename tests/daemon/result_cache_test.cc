@@ -163,22 +163,24 @@ TEST(ResultCache, OnlyTheSameModelKeyAndContentHit) {
   auto c = convert_arm3();
   ResultCache& cache = *c->job.cache;
   const std::string source = c->job.source.string(), hash = c->outcome.content_hash;
+  const std::string key = cache_entry_key(c->job);  // "key" and the output folder
   CachedResult out;
   std::string why;
-  EXPECT_EQ(cache.find(source, "key", hash, out, why), ResultCache::Lookup::kHit);
+  EXPECT_EQ(cache.find(source, key, hash, out, why), ResultCache::Lookup::kHit);
   EXPECT_EQ(cache.find(source, "other key", hash, out, why), ResultCache::Lookup::kMiss);
-  EXPECT_EQ(cache.find(source, "key", std::string(64, '0'), out, why), ResultCache::Lookup::kMiss);
-  EXPECT_EQ(cache.find(source + "x", "key", hash, out, why), ResultCache::Lookup::kMiss);
+  EXPECT_EQ(cache.find(source, "key", hash, out, why), ResultCache::Lookup::kMiss);  // another output folder
+  EXPECT_EQ(cache.find(source, key, std::string(64, '0'), out, why), ResultCache::Lookup::kMiss);
+  EXPECT_EQ(cache.find(source + "x", key, hash, out, why), ResultCache::Lookup::kMiss);
   // Another entry copied into this model's slot names another model: a miss, never its result.
   CachedResult other = out;
   other.source = source + "x";
   ASSERT_TRUE(cache.store(other, why)) << why;
   fs::copy_file(cache.file_for(other.source), cache.file_for(source), fs::copy_options::overwrite_existing);
-  EXPECT_EQ(cache.find(source, "key", hash, out, why), ResultCache::Lookup::kMiss);
+  EXPECT_EQ(cache.find(source, key, hash, out, why), ResultCache::Lookup::kMiss);
   // A folder where an entry should be is refused, with its reason.
   fs::remove(cache.file_for(source));
   fs::create_directory(cache.file_for(source));
-  EXPECT_EQ(cache.find(source, "key", hash, out, why), ResultCache::Lookup::kRefused);
+  EXPECT_EQ(cache.find(source, key, hash, out, why), ResultCache::Lookup::kRefused);
   EXPECT_NE(why.find(cache.file_for(source).string()), std::string::npos) << why;
 }
 

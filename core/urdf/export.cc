@@ -283,7 +283,14 @@ std::optional<UrdfExport> export_urdf(const Conversion& conversion, const UrdfOp
   result.joint_names = std::move(names.joints);
   // Names of the added root link and joints must not take one of these.
   std::vector<std::string> taken_links = result.link_names, taken_joints = result.joint_names;
-  const auto surfaces = link_surfaces(conversion.asset, robot);
+  auto surfaces = link_surfaces(conversion.asset, robot);
+  // The meshes in the URDF's axes, as the inertials and joints are (p -> C p; C is a rotation, so
+  // the faces stay wound outward). They were written in glTF's Y-up link frame: with the default
+  // Z-up, every link's mesh lay turned 90 degrees about x from its inertial and joints (review
+  // s70rev D2: forearm's solid centroid at (0, 0.232, 0), its <inertial> origin at (0, 0, 0.232)).
+  for (LinkSurface& surface : surfaces) {
+    for (Eigen::Vector3d& p : surface.mesh.positions) p = C * p;
+  }
 
   auto model = std::make_shared<urdf::ModelInterface>();
   model->name_ = robot.name.empty() ? "robot" : robot.name;

@@ -226,8 +226,13 @@ TEST(UrdfExport, NamesAreMadeValidAndUniqueAndEveryChangeIsReported) {
 // Each link's STL holds its solids in the link frame with URDF's axes: their volume is the link's
 // and their centroid its centre of mass (uniform density). STL stores float32, so they agree to
 // float32 precision (1e-6 relative), not bit for bit.
+// In the URDF's (Z-up) link frame: the solid's centroid is the <inertial> origin. arm3's links have
+// their centres of mass away from their origins (transforms.gltf's do not), so a mesh written in
+// glTF's Y-up frame, 90 degrees off, is caught (review s70rev D2).
 TEST(UrdfExport, MeshesAreOutwardStlInTheLinkFrame) {
-  const Conversion conversion = convert_fixture("transforms.gltf");
+  for (const char* fixture : {"transforms.gltf", "arm3.gltf"}) {
+  SCOPED_TRACE(fixture);
+  const Conversion conversion = convert_fixture(fixture);
   TempDir dir;
   const auto model = parse_with_urdfdom(export_to(conversion, dir.path()));
   const Eigen::Matrix3d C = gltf_to_urdf_axes();
@@ -249,6 +254,7 @@ TEST(UrdfExport, MeshesAreOutwardStlInTheLinkFrame) {
     EXPECT_LE((solid.centroid - com).norm(), 1e-6 * std::cbrt(link.inertial.volume)) << solid.centroid.transpose();
     EXPECT_LE((solid.centroid - vector_of(urdf_link->inertial->origin.position)).norm(),
               1e-6 * std::cbrt(link.inertial.volume));
+  }
   }
 }
 

@@ -74,7 +74,7 @@ struct KeptNames {
   // may be newer than the live revision): what they refer to, unless they are the live revision's
   // own, byte for byte (its files are kept already).
   void add_on_disk(const std::filesystem::path& output_dir, const std::string& gltf_name,
-                   const std::vector<OutputFile>& live_files) {
+                   const std::vector<OutputFile>& live_files, bool urdf_kept = true) {
     auto is_live = [&](const std::string& path, const std::string& text) {
       for (const OutputFile& file : live_files) {
         if (file.path == path) return file.size == static_cast<std::int64_t>(text.size()) && file.sha256 == sha256_hex(text);
@@ -83,6 +83,7 @@ struct KeptNames {
     };
     const std::string json = file_text(output_dir / gltf_name);
     if (!is_live(gltf_name, json)) in_folder.merge(names_in_gltf(json, output_dir));
+    if (!urdf_kept) return;
     const std::string urdf = file_text(output_dir / "urdf" / "robot.urdf");
     if (!is_live("urdf/robot.urdf", urdf)) meshes.merge(names_in_urdf(urdf));
   }
@@ -225,6 +226,9 @@ struct StagedOutputs {
   std::vector<std::filesystem::path> primaries;  // Relative to the stage: renamed last.
   KeptNames keep;
   bool urdf = false;
+  // No URDF written, and none live: urdf/robot.urdf on disk is an earlier revision's, which no
+  // revision served now refers to (a ROS user loading it would get another robot).
+  bool urdf_stale = false;
 };
 
 namespace {
@@ -336,7 +340,11 @@ std::unique_ptr<StagedOutputs> stage_outputs(const ConversionJob& job, const Con
   } else {
     keep.add(converted.rdtf_json, converted.urdf, job.output_dir);
   }
-  keep.add_on_disk(job.output_dir, name.string(), job.live_files);
+  const bool live_urdf =
+      !job.live_urdf.empty() || std::any_of(job.live_files.begin(), job.live_files.end(),
+                                            [](const OutputFile& file) { return file.path == "urdf/robot.urdf"; });
+  const bool urdf_stale = !job.urdf && !live_urdf;
+  keep.add_on_disk(job.output_dir, name.string(), job.live_files, !urdf_stale);
   keep.add(job.live_files);
   keep.add(job.live_rdtf_json, job.live_urdf, job.output_dir);
   if (!manifest_why.empty()) {
@@ -351,7 +359,7 @@ std::unique_ptr<StagedOutputs> stage_outputs(const ConversionJob& job, const Con
     return nullptr;
   }
   return std::make_unique<StagedOutputs>(
-      StagedOutputs{std::move(*stage), job.output_dir, std::move(primaries), std::move(keep), job.urdf.has_value()});
+      StagedOutputs{std::move(*stage), job.output_dir, std::move(primaries), std::move(keep), job.urdf.has_value(), urdf_stale});
 }
 
 // Moves a staged revision into place (made durable before it returns), then removes the files
@@ -365,6 +373,19 @@ bool commit_outputs(StagedOutputs& staged, Diagnostics& diagnostics, bool& retry
   }
   remove_unreferenced(staged.output_dir, staged.keep.in_folder);
   if (staged.urdf) remove_unreferenced(staged.output_dir / "urdf" / "meshes", staged.keep.meshes);
+  if (staged.urdf_stale) {
+    // The folders were made by rdtfd and checked for links when the stage was written.
+    const auto folder = staged.output_dir / "urdf";
+    struct stat info {};
+    if (::lstat(folder.c_str(), &info) == 0 && S_ISDIR(info.st_mode)) {
+      ::unlink((folder / "robot.urdf").c_str());
+      if (::lstat((folder / "meshes").c_str(), &info) == 0 && S_ISDIR(info.st_mode)) {
+        remove_unreferenced(folder / "meshes", {});
+        ::rmdir((folder / "meshes").c_str());
+      }
+      ::rmdir(folder.c_str());  // only if empty: anything of the user's stays
+    }
+  }
   return true;
 }
 

@@ -211,6 +211,34 @@ std::vector<std::string> entries(const fs::path& folder) {
   return names;
 }
 
+// With `urdf` turned off, the URDF an earlier revision wrote stays while its revision is live,
+// and goes (robot.urdf, its meshes, the folders) with the next revision: it stayed for ever at
+// the path the docs give, describing an old robot (helper sweep s70cache D5).
+TEST(ConversionOutputs, TheUrdfGoesOnceNoLiveRevisionHasOne) {
+  Folders folders;
+  testing::write_file(folders.root / "arm3.gltf", testing::read_file(testing::data_dir() / "blender" / "arm3.gltf"));
+  testing::write_file(folders.root / "arm3.bin", testing::read_file(testing::data_dir() / "blender" / "arm3.bin"));
+  ConversionJob with_urdf = job_for(folders, "arm3.gltf");
+  with_urdf.urdf = UrdfOptions{};
+  const ConversionOutcome first = run_conversion(with_urdf);
+  ASSERT_EQ(first.kind, ConversionOutcome::Kind::kConverted) << messages(first.diagnostics);
+  const fs::path urdf = folders.out / "urdf" / "robot.urdf";
+  ASSERT_TRUE(fs::exists(urdf));
+  ASSERT_FALSE(fs::is_empty(folders.out / "urdf" / "meshes"));
+
+  ConversionJob without = job_for(folders, "arm3.gltf");  // urdf off; the first revision live
+  without.live_files = first.converted->files;
+  const ConversionOutcome second = run_conversion(without);
+  ASSERT_EQ(second.kind, ConversionOutcome::Kind::kConverted) << messages(second.diagnostics);
+  EXPECT_TRUE(fs::exists(urdf)) << "the live revision's URDF, still served";
+
+  without.live_files = second.converted->files;  // now the second is live: it has no URDF
+  const ConversionOutcome third = run_conversion(without);
+  ASSERT_EQ(third.kind, ConversionOutcome::Kind::kConverted) << messages(third.diagnostics);
+  EXPECT_FALSE(fs::exists(folders.out / "urdf"));
+  EXPECT_TRUE(fs::exists(folders.out / "arm3.rdtf.gltf"));
+}
+
 // Converting while settling: a prepared job stages its outputs and leaves the folder's files as
 // they were; the commit job moves them into place (the same bytes) and stores the result in the
 // cache; a prepared result dropped takes its stage with it.

@@ -200,7 +200,7 @@ std::string cache_entry_key(const ConversionJob& job);
 // (a file not read) counts as a length of 2^64 - 1 and no bytes.
 std::string sha256_hex(const std::vector<const std::vector<std::uint8_t>*>& parts);
 // The content hash of a model: its bytes, then each file it names (`named`, in the order of its
-// buffers and images, as often as named) as read in `files` (no bytes when it could not be read).
+// buffers and images, as often as named) as read in `files` (a null part when it could not be read).
 std::string content_hash(const std::vector<std::uint8_t>& model, const std::vector<std::filesystem::path>& named,
                          const SourceFiles& files);
 // Lowercase hex of a digest's bytes.

@@ -164,33 +164,45 @@ bool Daemon::start(std::string& error) {
 // released by the kernel however the holder ends; the state folder must be a folder of the output,
 // not a link to one elsewhere (where the state and the cache would be written and removed).
 bool Daemon::lock_output(std::string& error) {
-  const auto folder = RevisionStore::folder_for(config_.output);
+  const int fd = lock_output_folder(config_.output, error);
+  if (fd < 0) return false;
+  lock_fd_ = fd;
+  return true;
+}
+
+int lock_output_folder(const std::filesystem::path& output, std::string& error) {
+  const auto folder = RevisionStore::folder_for(output);
   std::error_code ec;
   std::filesystem::create_directories(folder, ec);
   struct stat info {};
-  if (::lstat(folder.c_str(), &info) != 0 || !S_ISDIR(info.st_mode)) {
+  if (::lstat(folder.c_str(), &info) != 0) {
+    // Not there: it could not be made (a read-only or unwritable output); say why.
+    error = "cannot create " + folder.string() + ": " + (ec ? ec.message() : std::string(std::strerror(errno)));
+    return -1;
+  }
+  if (!S_ISDIR(info.st_mode)) {
     error = folder.string() + (S_ISLNK(info.st_mode) ? " is a symbolic link" : " is not a folder") +
             ": rdtfd keeps its state inside its output folder only; remove it (rdtfd creates it)";
-    return false;
+    return -1;
   }
   const auto path = folder / "lock";
-  lock_fd_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_NOFOLLOW | O_CLOEXEC, 0644);
-  if (lock_fd_ < 0) {
-    error = path.string() + ": " + std::strerror(errno);
-    return false;
+  const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_NOFOLLOW | O_CLOEXEC, 0644);
+  if (fd < 0) {
+    error = "cannot open " + path.string() + ": " + std::strerror(errno);
+    return -1;
   }
-  if (::flock(lock_fd_, LOCK_EX | LOCK_NB) != 0) {
+  if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
     const int why = errno;
-    ::close(lock_fd_);
-    lock_fd_ = -1;
+    ::close(fd);
     error = why == EWOULDBLOCK
-                ? "another rdtfd uses the output folder " + config_.output.string() + " (it holds " + path.string() +
+                ? "another rdtfd uses the output folder " + output.string() + " (it holds " + path.string() +
                       "): two daemons on one output would publish one revision number for two documents; give "
                       "each its own output folder (--output)"
-                : path.string() + ": " + std::strerror(why);
-    return false;
+                : "cannot lock " + path.string() + ": " + std::strerror(why) +
+                      " (rdtfd needs flock on its output folder's file system)";
+    return -1;
   }
-  return true;
+  return fd;
 }
 
 // A mark that the last run stopped cleanly: every conversion finished, each removing what its
@@ -343,6 +355,16 @@ void Daemon::reload_config() {
   const bool simulation_changed = change.has(kRestartSimulation);
   keep_restart_settings(config_, *fresh);  // E.g. the worker pool keeps its size until a restart.
   const bool output_changed = fresh->output != config_.output;
+  if (output_changed) {
+    // The new output is locked before the old one is let go: refused, the running config stays.
+    const int fd = lock_output_folder(fresh->output, error);
+    if (fd < 0) {
+      log_line("SIGHUP: config not reloaded, the running config stays: " + error);
+      return;
+    }
+    if (lock_fd_ >= 0) ::close(lock_fd_);
+    lock_fd_ = fd;
+  }
   config_ = std::move(*fresh);
   // Results are keyed by the settings they were computed under: new settings, a new key.
   if (output_changed) {

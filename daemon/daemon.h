@@ -41,6 +41,10 @@ struct DaemonCounters {
   std::int64_t cache_refused = 0;  // Cache entries refused (torn, altered) or whose outputs had changed.
 };
 
+// Creates <output>/.rdtfd-state (refusing one that is a link) and takes the exclusive flock on its
+// `lock` file that keeps a second rdtfd off this output: the open descriptor, or -1 with `error`.
+int lock_output_folder(const std::filesystem::path& output, std::string& error);
+
 class Daemon {
  public:
   Daemon(DaemonConfig config, ConfigLoader reload, DaemonPorts ports = {});

@@ -110,30 +110,43 @@ bool layout_ok(const MeshoptView& view, const std::string& pointer, Diagnostics&
   return true;
 }
 
-// The coarsest quantization step of a filtered view, read from its encoded elements (the filter
-// decoders' own layout, EXT_meshopt_compression "Filters"), 0 for the other filters:
+// The quantization step of each element of a filtered view, read from its encoded elements (the
+// filter decoders' own layout, EXT_meshopt_compression "Filters"); nothing for the other filters:
 // - QUATERNION: each element stores three components as round(q * sqrt(2) * sf), with sf in its
-//   fourth int16 (low two bits the index of the dropped component): a step of 1 / (sqrt(2) sf);
-// - EXPONENTIAL: each int32 is a mantissa (low 24 bits) times 2^e (the high byte, signed): a
-//   step of 2^e.
-double filter_step(const std::vector<std::uint8_t>& encoded, std::size_t count, std::size_t stride,
-                   const std::string& filter) {
-  double step = 0.0;
+//   fourth int16 (low two bits the index of the dropped component): a step of 1 / (sqrt(2) sf).
+//   The filter has 4 to 16 bits (sf = 2^(K-1) - 1 >= 7): a smaller sf is no encoder's, and widens
+//   nothing (an element (0, 0, 0, 3) claimed a step of 0.24, a tolerance of 54 degrees);
+// - EXPONENTIAL: each int32 is a mantissa (low 24 bits, signed) times 2^e (the high byte, signed):
+//   a step of 2^e, taken at most as 1/64 of the element's largest value (an encoder keeps 7 bits
+//   or more of the largest; a zero stored with e = 127 claimed a step of 2^127).
+std::vector<double> filter_steps(const std::vector<std::uint8_t>& encoded, std::size_t count, std::size_t stride,
+                                 const std::string& filter) {
+  std::vector<double> steps;
   if (filter == "QUATERNION") {
+    steps.assign(count, 0.0);
     for (std::size_t i = 0; i < count; ++i) {
       std::int16_t fourth = 0;
       std::memcpy(&fourth, encoded.data() + i * stride + 6, sizeof fourth);
       const int sf = fourth | 3;
-      if (sf > 0) step = std::max(step, 1.0 / (std::sqrt(2.0) * sf));
+      if (sf >= 7) steps[i] = 1.0 / (std::sqrt(2.0) * sf);
     }
   } else if (filter == "EXPONENTIAL") {
-    for (std::size_t i = 0; i < count * stride / 4; ++i) {
-      std::int32_t word = 0;
-      std::memcpy(&word, encoded.data() + i * 4, sizeof word);
-      step = std::max(step, std::ldexp(1.0, word >> 24));
+    steps.assign(count, 0.0);
+    for (std::size_t i = 0; i < count; ++i) {
+      double step = 0.0, largest = 0.0;
+      for (std::size_t c = 0; c < stride / 4; ++c) {
+        std::int32_t word = 0;
+        std::memcpy(&word, encoded.data() + i * stride + 4 * c, sizeof word);
+        const int exponent = word >> 24;
+        // The low 24 bits, sign-extended (shifted as unsigned: no signed overflow).
+        const std::int32_t mantissa = static_cast<std::int32_t>(static_cast<std::uint32_t>(word) << 8) >> 8;
+        step = std::max(step, std::ldexp(1.0, exponent));
+        largest = std::max(largest, std::abs(std::ldexp(static_cast<double>(mantissa), exponent)));
+      }
+      steps[i] = std::min(step, largest / 64);
     }
   }
-  return step;
+  return steps;
 }
 
 bool decode_view(GltfAsset& asset, std::size_t index, Diagnostics& diag) {
@@ -195,7 +208,9 @@ bool decode_view(GltfAsset& asset, std::size_t index, Diagnostics& diag) {
     return false;
   }
   if (count > 0) {
-    if (const double step = filter_step(decoded, count, stride, view->filter); step > 0) asset.filter_steps[index] = step;
+    if (auto steps = filter_steps(decoded, count, stride, view->filter); !steps.empty()) {
+      asset.filter_steps[index] = {stride, std::move(steps)};
+    }
     if (view->filter == "OCTAHEDRAL") meshopt_decodeFilterOct(decoded.data(), count, stride);
     if (view->filter == "QUATERNION") meshopt_decodeFilterQuat(decoded.data(), count, stride);
     if (view->filter == "EXPONENTIAL") meshopt_decodeFilterExp(decoded.data(), count, stride);

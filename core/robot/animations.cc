@@ -53,26 +53,35 @@ struct Resolution {
 };
 
 // A quantized rotation (normalized byte or short, glTF 2.0 3.11) is off by up to half a step in
-// each component: an angle of at most 2 |dq| <= 2 step. A view decoded through a meshopt filter
-// (GltfAsset::filter_steps) was rounded before that:
+// each component: an angle of at most 2 |dq| <= 2 step. A key decoded through a meshopt filter
+// (GltfAsset::filter_steps, per element) was rounded before that:
 // - QUATERNION keeps three components to within s/2 (s its step) and recomputes the largest, w >=
 //   1/2, from them: |dw| <= |x| |dx| / w <= (sqrt(3)/2)(sqrt(3) s/2)/(1/2) = 1.5 s, so |dq| <=
 //   sqrt(3 (s/2)^2 + (1.5 s)^2) = sqrt(3) s, then int16 rounding adds up to 1/32767: the angle is
 //   at most 2 (sqrt(3) s + 1/32767), within 4 s + 2/32767;
 // - EXPONENTIAL keeps each component to within half its step 2^e: a distance of one step is twice that.
-Resolution resolution(const GltfAsset& asset, const Json& accessor) {
+Resolution resolution(const Json& accessor) {
   Resolution r;
   if (accessor.value("normalized", false)) {
     const int type = accessor.value("componentType", 0);
     const double step = (type == 5120 || type == 5121) ? 1.0 / 127 : (type == 5122 || type == 5123) ? 1.0 / 32767 : 0.0;
     r.angle = std::max(kAngle, 2 * step);
   }
-  if (!accessor.contains("bufferView") || !accessor["bufferView"].is_number_unsigned()) return r;
-  const auto filtered = asset.filter_steps.find(accessor["bufferView"].get<std::size_t>());
-  if (filtered == asset.filter_steps.end()) return r;
-  r.angle = std::max(r.angle, 4 * filtered->second + 2.0 / 32767);
-  r.distance = filtered->second;
   return r;
+}
+
+// The filter steps of an accessor's keys, one per key (empty: not filtered).
+std::vector<double> key_steps(const GltfAsset& asset, const Json& accessor, std::size_t keys) {
+  if (!accessor.contains("bufferView") || !accessor["bufferView"].is_number_unsigned()) return {};
+  const auto filtered = asset.filter_steps.find(accessor["bufferView"].get<std::size_t>());
+  if (filtered == asset.filter_steps.end() || filtered->second.stride == 0) return {};
+  const auto offset = accessor.value("byteOffset", std::uint64_t{0});
+  const std::size_t first = static_cast<std::size_t>(offset / filtered->second.stride);
+  std::vector<double> steps(keys, 0.0);
+  for (std::size_t k = 0; k < keys && first + k < filtered->second.steps.size(); ++k) {
+    steps[k] = filtered->second.steps[first + k];
+  }
+  return steps;
 }
 
 bool differs(const std::string& path, const double* key, const std::vector<double>& rest, const Resolution& resolution) {
@@ -131,10 +140,16 @@ bool channel_moves(const GltfAsset& asset, const Json& animation, const Json& ch
   const auto [known, added] = memo.moves.try_emplace({output, path, cubic, rest}, false);
   if (!added) return known->second;
   const std::vector<double> values = read_accessor(asset, output);
-  const Resolution within = resolution(asset, accessor);
+  const Resolution base = resolution(accessor);
   const std::size_t keys = values.size() / static_cast<std::size_t>(n);
+  const std::vector<double> steps = key_steps(asset, accessor, keys);
   for (std::size_t k = 0; k < keys && !known->second; ++k) {
     const double* key = values.data() + k * static_cast<std::size_t>(n);
+    Resolution within = base;
+    if (!steps.empty() && steps[k] > 0) {
+      within.angle = std::max(within.angle, n == 4 ? 4 * steps[k] + 2.0 / 32767 : 0.0);
+      within.distance = steps[k];
+    }
     // CUBICSPLINE keys are (in-tangent, value, out-tangent).
     known->second = cubic && k % 3 != 1 ? tangent_moves(path, key, rest) : differs(path, key, rest, within);
   }

@@ -165,8 +165,10 @@ TEST(ConversionReads, AFileThatCannotBeReadIsHashedApartFromAnEmptyOne) {
 
 // A result is served from the cache only for files read whole: arm3 with an image that is an
 // empty file, converted and cached; the image then deleted. The entry's hash differs (a missing
-// file hashes apart from an empty one), and a file not read is never looked up: the conversion
-// runs and says the image is missing (helper sweep s70cache D1: served from the cache, unreported).
+// file hashes apart from an empty one): the conversion runs and says the image is missing (helper
+// sweep s70cache D1: served from the cache, unreported). (A state not read whole is also never
+// looked up, which this does not reach: no entry is stored for such a state, its manifest being
+// incomplete or its conversion refused.)
 TEST(ConversionReads, AResultIsNotServedFromTheCacheForAFileNotRead) {
   Folders folders;
   auto model = nlohmann::json::parse(testing::read_file(testing::data_dir() / "blender" / "arm3.gltf"));

@@ -5,6 +5,9 @@
 // (s70cache D3).
 #include <unistd.h>
 
+#include <csignal>
+#include <thread>
+
 #include "daemon/harness.h"
 #include "support/harness/fs_support.h"
 
@@ -37,6 +40,47 @@ TEST(DaemonOutputLock, ASecondDaemonOnTheSameOutputIsRefusedAndTheFirstServesOn)
   DaemonProcess third(DaemonOptions().with_watch({s.watch}).with_output(s.output));
   EXPECT_TRUE(third.wait_log("rdtfd started", 10s)) << third.log();
   EXPECT_TRUE(third.running());
+}
+
+// A reload that moves the output takes the new folder's lock before it lets the old one go; one
+// another daemon holds is refused and the running config stays (review s70rev D1: the lock stayed
+// on the old folder, and a second daemon started on the new one).
+TEST(DaemonOutputLock, AReloadMovesTheLockWithTheOutput) {
+  Session s;
+  const fs::path config = s.root / "rdtfd.json", moved = s.root / "moved";
+  auto write_config = [&](const fs::path& output) {
+    testing::write_file(config, Json{{"watch", {s.watch.string()}}, {"output", output.string()}, {"validate", false},
+                                     {"simulate", false}}.dump());
+  };
+  // Its folders from the config file only (a folder given with --output stays through reloads).
+  write_config(s.output);
+  ChildProcess first({RDTFD_PATH, "--config", config.string()}, s.root / "first.log");
+  auto wait_output = [](const ChildProcess& process, const std::string& text) {
+    for (int i = 0; i < 200; ++i) {
+      if (process.output().find(text) != std::string::npos) return true;
+      std::this_thread::sleep_for(50ms);
+    }
+    return false;
+  };
+  ASSERT_TRUE(wait_output(first, "rdtfd started")) << first.output();
+  write_config(moved);
+  first.signal(SIGHUP);
+  ASSERT_TRUE(wait_output(first, "config reloaded")) << first.output();
+
+  DaemonProcess on_moved(DaemonOptions().with_watch({s.root / "w2"}).with_output(moved));
+  const auto code = on_moved.wait_exit(10s);
+  ASSERT_TRUE(code.has_value()) << on_moved.log();
+  EXPECT_EQ(*code, 1);
+  DaemonProcess on_old(DaemonOptions().with_watch({s.root / "w3"}).with_output(s.output));
+  EXPECT_TRUE(on_old.wait_log("rdtfd started", 10s)) << on_old.log();
+
+  // Back to the old output, which the third daemon now holds: refused, the running config stays.
+  write_config(s.output);
+  first.signal(SIGHUP);
+  EXPECT_TRUE(wait_output(first, "config not reloaded, the running config stays: another rdtfd uses the output folder " +
+                                     s.output.string()))
+      << first.output();
+  EXPECT_FALSE(first.wait_exit(0s).has_value()) << "still running";
 }
 
 TEST(DaemonOutputLock, AStateFolderThatIsALinkIsRefused) {

@@ -117,6 +117,32 @@ TEST(Animations, KeysRoundedByAMeshoptFilterAreReadAtTheFilesResolution) {
   EXPECT_EQ(found[0].message.find("'hand'"), std::string::npos) << found[0].message;
 }
 
+// One view holds every channel's keys, and each key is read at its own resolution: a coarse key
+// elsewhere in the view (a 20 m translation, or a hostile zero stored with exponent 127 or a
+// quaternion with sf = 3) widened the tolerance of every channel, and a 5 cm move or a 30 degree
+// turn of the hand went unreported (review s70rev D3; tests/data/blender/meshopt_edits).
+TEST(Animations, EachKeyIsReadAtItsOwnResolution) {
+  const auto dir = testing::data_dir() / "blender" / "meshopt_edits";
+  for (const char* file : {"control.glb", "hidden.glb", "hostile.glb"}) {
+    SCOPED_TRACE(file);
+    bool hand = false;
+    for (const Diagnostic& d : animated(dir / file)) {
+      if (d.pointer.rfind("/animations/1/", 0) == 0 && d.message.find("node 1 'hand' (translation)") != std::string::npos) {
+        hand = true;
+      }
+    }
+    EXPECT_TRUE(hand);
+  }
+  for (const char* file : {"qcontrol.glb", "qhostile.glb"}) {
+    SCOPED_TRACE(file);
+    bool hand = false;
+    for (const Diagnostic& d : animated(dir / file)) {
+      if (d.pointer.rfind("/animations/1/", 0) == 0 && d.message.find("node 1 'hand' (rotation)") != std::string::npos) hand = true;
+    }
+    EXPECT_TRUE(hand);
+  }
+}
+
 TEST(Animations, KeysAtTheRestValueMoveNothing) {
   // The rest rotation and its negation (one rotation); a translation 1e-8 m off; scale 1 on a node
   // that has none.

@@ -40,9 +40,14 @@ struct GltfAsset {
   // a writer copies these, never the file again.
   std::map<std::filesystem::path, std::vector<std::uint8_t>> images;
   // For each buffer view decoded through an EXT_meshopt_compression QUATERNION or EXPONENTIAL
-  // filter, the coarsest quantization step of its values (decode_meshopt): a key a filter rounded
-  // differs from the value it stands for by up to half of it, which a comparison must allow.
-  std::map<std::size_t, double> filter_steps;
+  // filter, the quantization step of each of its elements (decode_meshopt), `stride` bytes apart:
+  // a key a filter rounded differs from the value it stands for by up to half of it, which a
+  // comparison must allow. Per element, since one view holds every channel's keys.
+  struct FilterSteps {
+    std::size_t stride = 0;
+    std::vector<double> steps;
+  };
+  std::map<std::size_t, FilterSteps> filter_steps;
 };
 
 // One file a model names, as read once for a load (read_source_files).

@@ -5,13 +5,12 @@
 
 #include <gtest/gtest.h>
 
-#include <openssl/evp.h>
-
 #include <algorithm>
 #include <map>
 #include <optional>
 
 #include "result_cache.h"
+#include "support/harness/hashes.h"
 #include "support/test_support.h"
 
 namespace rdtf::daemon {
@@ -19,28 +18,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// SHA-256 over each part's 64-bit length and bytes (docs/daemon.md: the content hash), in hex.
-// Each part's length (8 bytes) then its bytes; a part not read (nullopt) is the length 2^64 - 1
-// alone, which no file has.
+// The content hash as docs/daemon.md gives it (the test harness's own implementation): each part's
+// 64-bit length and bytes; a part not read (nullopt) the length 2^64 - 1 alone.
 std::string length_prefixed_sha256(const std::vector<std::optional<std::string>>& parts) {
-  EVP_MD_CTX* context = EVP_MD_CTX_new();
-  EVP_DigestInit_ex(context, EVP_sha256(), nullptr);
-  for (const auto& part : parts) {
-    const std::uint64_t size = part ? part->size() : ~std::uint64_t{0};
-    EVP_DigestUpdate(context, &size, sizeof(size));
-    if (part) EVP_DigestUpdate(context, part->data(), part->size());
-  }
-  unsigned char digest[EVP_MAX_MD_SIZE];
-  unsigned int length = 0;
-  EVP_DigestFinal_ex(context, digest, &length);
-  EVP_MD_CTX_free(context);
-  std::string hex;
-  static const char* const kHex = "0123456789abcdef";
-  for (unsigned int i = 0; i < length; ++i) {
-    hex += kHex[digest[i] >> 4];
-    hex += kHex[digest[i] & 15];
-  }
-  return hex;
+  return itest::content_hash(*parts.front(), {parts.begin() + 1, parts.end()});
 }
 
 std::string messages(const Diagnostics& diag) {

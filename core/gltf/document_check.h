@@ -94,6 +94,7 @@ class DocumentCheck {
                                                   bool required);
   void check_asset();
   void check_extensions();
+  bool integer_bounds_fit(const std::vector<double>& bounds, std::uint64_t component_type, const std::string& pointer);
   void check_images_and_animations();
   void check_animation(const Json& animation, const std::string& pointer);
   void check_triangle_limit();

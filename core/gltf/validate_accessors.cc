@@ -233,12 +233,47 @@ bool DocumentCheck::check_accessor(const Json& accessor, const std::string& poin
   const auto [columns, rows] = type_shape(*type);
   bool ok = true;
   for (const char* key : {"min", "max"}) {
-    if (accessor.contains(key))
-      ok &= read_numbers(accessor, key, pointer, columns * rows).has_value();
+    if (!accessor.contains(key)) continue;
+    const auto bounds = read_numbers(accessor, key, pointer, columns * rows);
+    ok &= bounds.has_value();
+    if (bounds && *component_type != kFloat) ok &= integer_bounds_fit(*bounds, *component_type, json_pointer(pointer, key));
   }
   if (facts.view != kNone) ok &= check_accessor_layout(facts, offset.value_or(0), pointer);
   if (accessor.contains("sparse")) ok &= check_sparse(accessor, facts, pointer);
   return ok;
+}
+
+// The min and max of an integer accessor bound raw values of its component type: integers within
+// its range (the validator's ARRAY_TYPE_MISMATCH and INVALID_GL_VALUE). A bound no value of the
+// type can reach is copied into the output, which the validator then refuses.
+bool DocumentCheck::integer_bounds_fit(const std::vector<double>& bounds, std::uint64_t component_type,
+                                       const std::string& pointer) {
+  double lowest = 0, highest = 0;
+  const char* name = "";
+  switch (component_type) {
+    case kByte: lowest = -128, highest = 127, name = "5120 (BYTE)"; break;
+    case kUnsignedByte: highest = 255, name = "5121 (UNSIGNED_BYTE)"; break;
+    case kShort: lowest = -32768, highest = 32767, name = "5122 (SHORT)"; break;
+    case kUnsignedShort: highest = 65535, name = "5123 (UNSIGNED_SHORT)"; break;
+    case kUnsignedInt: highest = 4294967295.0, name = "5125 (UNSIGNED_INT)"; break;
+    default: return true;
+  }
+  for (std::size_t k = 0; k < bounds.size(); ++k) {
+    const double value = bounds[k];
+    if (value != std::floor(value)) {
+      diag_.error(codes::ARRAY_TYPE_MISMATCH, pointer,
+                  "element " + std::to_string(k) + " is " + number_text(value) + ", not an integer: the bounds of an accessor of " +
+                      "component type " + name + " are raw values of that type, before any normalization");
+      return false;
+    }
+    if (value < lowest || value > highest) {
+      diag_.error(codes::INVALID_GL_VALUE, pointer,
+                  "element " + std::to_string(k) + " is " + number_text(value) + ", which component type " + name + " cannot hold (" +
+                      number_text(lowest) + " to " + number_text(highest) + ")");
+      return false;
+    }
+  }
+  return true;
 }
 
 bool DocumentCheck::check_accessor_layout(const AccessorFacts& facts, std::uint64_t offset,

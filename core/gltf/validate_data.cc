@@ -15,6 +15,7 @@
 
 #include "rdtf/geometry.h"
 #include "rdtf/validate.h"
+#include "validate_semantics.h"
 #include "validate_util.h"
 #include "rdtf/diagnostic_codes.h"
 
@@ -224,6 +225,9 @@ class DataCheck {
     check_mesh_indices();
     check_skin_joint_indices();
     check_animation_rotations();
+    check_skin_influences(asset_, readable_, diag_);
+    check_inverse_bind_matrices(asset_, readable_, diag_);
+    check_animation_inputs(asset_, readable_, diag_);
   }
 
  private:

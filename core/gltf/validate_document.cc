@@ -296,6 +296,20 @@ void DocumentCheck::check_extensions() {
       }
     }
   }
+  // KHR_mesh_quantization cannot be optional (the Khronos validator's NON_REQUIRED_EXTENSION): a
+  // reader without it would take the integer positions for floats. rdtf keeps it in its output.
+  const Json* used_names = read_array(doc_, "extensionsUsed", "");
+  const Json* required_names = read_array(doc_, "extensionsRequired", "");
+  for (std::size_t k = 0; used_names != nullptr && k < used_names->size(); ++k) {
+    if ((*used_names)[k] != "KHR_mesh_quantization") continue;
+    const bool required = required_names != nullptr &&
+                          std::find(required_names->begin(), required_names->end(), (*used_names)[k]) != required_names->end();
+    if (!required) {
+      diag_.error(codes::NON_REQUIRED_EXTENSION, json_pointer("/extensionsUsed", k),
+                  "'KHR_mesh_quantization' is used but not required; it cannot be optional (a reader without it "
+                  "would misread the quantized attributes): list it in extensionsRequired too");
+    }
+  }
   // glTF 2.0: every required extension is also used. One that is not would be kept required by
   // an output that no longer uses it, which the Khronos validator refuses.
   const Json* used = read_array(doc_, "extensionsUsed", "");
@@ -422,6 +436,25 @@ void DocumentCheck::check_animation(const Json& animation, const std::string& po
       diag_.error(codes::ANIMATION_CHANNEL_TARGET_NODE_MATRIX, here + "/target",
                   "node " + std::to_string(node) + " has a matrix, which glTF forbids an animation of its " +
                       *path + " to move: give the node translation, rotation and scale instead");
+    }
+    if (*path == "weights" && node != kNone) {
+      // Morph weights move morph targets: a node whose mesh has none has nothing to animate.
+      const Json& target_node = doc_["nodes"][node];
+      const Json* mesh = nullptr;
+      if (target_node.is_object() && target_node.contains("mesh") && target_node["mesh"].is_number_unsigned() &&
+          doc_.contains("meshes") && doc_["meshes"].is_array() && target_node["mesh"].get<std::size_t>() < doc_["meshes"].size()) {
+        mesh = &doc_["meshes"][target_node["mesh"].get<std::size_t>()];
+      }
+      bool morphs = false;
+      if (mesh != nullptr && mesh->is_object() && mesh->contains("primitives") && (*mesh)["primitives"].is_array()) {
+        for (const Json& primitive : (*mesh)["primitives"]) morphs |= primitive.is_object() && primitive.contains("targets");
+      }
+      if (!morphs) {
+        diag_.error(codes::ANIMATION_CHANNEL_TARGET_NODE_WEIGHTS_NO_MORPHS, here + "/target",
+                    "channel " + std::to_string(c) + " animates the morph weights of " + node_named(doc_, node) + ", whose " +
+                        (mesh == nullptr ? std::string("node has no mesh") : std::string("mesh has no morph targets")) +
+                        ": there is nothing for them to move");
+      }
     }
     if (!index || *index >= samplers.size() || *path == "pointer") continue;
     const Sampler& sampler = samplers[*index];

@@ -29,21 +29,31 @@ std::string robot_name(const GltfAsset& asset) {
 
 // Old exporters (glTF-Sample-Models' Box among them) let several vertex accessors share a
 // buffer view without byteStride, which glTF 2.0 forbids. When they all have one element size the
-// stride is that size: add it, so the output validates.
+// stride is that size: add it, so the output validates. When they differ no stride serves them
+// all, and the file is refused as the validator refuses it (it was copied into an output the
+// validator refused).
 void add_missing_strides(Json& document, Diagnostics& diag) {
   if (!document.contains("meshes") || !document.contains("bufferViews")) return;
   std::map<std::size_t, std::set<std::size_t>> accessors_of_view;
-  for (const Json& mesh : document["meshes"]) {
-    for (const Json& primitive : mesh["primitives"]) {
-      std::vector<const Json*> attribute_sets{&primitive["attributes"]};
+  std::map<std::size_t, std::string> attribute_of_view;  // The last attribute that reads it.
+  for (std::size_t m = 0; m < document["meshes"].size(); ++m) {
+    const Json& mesh = document["meshes"][m];
+    for (std::size_t p = 0; p < mesh["primitives"].size(); ++p) {
+      const Json& primitive = mesh["primitives"][p];
+      const std::string at = json_pointer(json_pointer("/meshes", m) + "/primitives", p);
+      std::vector<std::pair<const Json*, std::string>> attribute_sets{{&primitive["attributes"], at + "/attributes"}};
       if (primitive.contains("targets")) {
-        for (const Json& target : primitive["targets"]) attribute_sets.push_back(&target);
+        for (std::size_t t = 0; t < primitive["targets"].size(); ++t) {
+          attribute_sets.emplace_back(&primitive["targets"][t], json_pointer(at + "/targets", t));
+        }
       }
-      for (const Json* attributes : attribute_sets) {
+      for (const auto& [attributes, pointer] : attribute_sets) {
         for (const auto& [name, index] : attributes->items()) {
           const Json& accessor = document["accessors"][index.get<std::size_t>()];
           if (accessor.contains("bufferView")) {
-            accessors_of_view[accessor["bufferView"].get<std::size_t>()].insert(index.get<std::size_t>());
+            const auto view = accessor["bufferView"].get<std::size_t>();
+            accessors_of_view[view].insert(index.get<std::size_t>());
+            attribute_of_view[view] = json_pointer(pointer, name);
           }
         }
       }
@@ -59,7 +69,14 @@ void add_missing_strides(Json& document, Diagnostics& diag) {
       const std::size_t bytes = (component == 5120 || component == 5121) ? 1 : (component == 5122 || component == 5123) ? 2 : 4;
       sizes.insert(bytes * static_cast<std::size_t>(component_count(accessor["type"].get<std::string>())));
     }
-    if (sizes.size() != 1 || *sizes.begin() % 4 != 0) continue;
+    if (sizes.size() != 1) {
+      diag.error(codes::MESH_PRIMITIVE_ACCESSOR_WITHOUT_BYTESTRIDE, attribute_of_view[view],
+                 "buffer view " + std::to_string(view) + " is shared by " + std::to_string(accessors.size()) +
+                     " vertex accessors of different element sizes and has no byteStride, which glTF 2.0 requires "
+                     "there; give it one, or each accessor a view of its own (re-export the model)");
+      continue;
+    }
+    if (*sizes.begin() % 4 != 0) continue;
     buffer_view["byteStride"] = *sizes.begin();
     diag.info(codes::BUFFER_VIEW_STRIDE_ADDED, json_pointer("/bufferViews", view),
               "buffer view shared by " + std::to_string(accessors.size()) +

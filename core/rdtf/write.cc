@@ -1,6 +1,9 @@
 #include "rdtf/write.h"
 
+#include <algorithm>
 #include <deque>
+#include <optional>
+#include <span>
 #include <limits>
 #include <set>
 #include <system_error>
@@ -69,15 +72,19 @@ std::optional<std::vector<std::uint8_t>> read_image(const GltfAsset& asset, cons
   return found->second;
 }
 
-std::string mime_type_for(const std::string& uri) {
-  const auto dot = uri.rfind('.');
-  std::string extension = dot == std::string::npos ? "" : uri.substr(dot + 1);
-  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  if (extension == "png") return "image/png";
-  if (extension == "jpg" || extension == "jpeg") return "image/jpeg";
-  if (extension == "webp") return "image/webp";
-  if (extension == "ktx2") return "image/ktx2";
-  return "application/octet-stream";
+// An image's media type from its first bytes (the formats glTF and its texture extensions take),
+// as the Khronos validator reads it: not from its file name, which may have no extension,
+// be percent-encoded, or lie (JPEG bytes in a .png), and a GLB's image must say what it holds.
+std::optional<std::string> sniffed_mime_type(std::span<const std::uint8_t> bytes) {
+  const auto starts = [&](std::initializer_list<std::uint8_t> magic, std::size_t at = 0) {
+    if (bytes.size() < at + magic.size()) return false;
+    return std::equal(magic.begin(), magic.end(), bytes.begin() + static_cast<std::ptrdiff_t>(at));
+  };
+  if (starts({0x89, 'P', 'N', 'G', 0x0D, 0x0A, 0x1A, 0x0A})) return "image/png";
+  if (starts({0xFF, 0xD8, 0xFF})) return "image/jpeg";
+  if (starts({'R', 'I', 'F', 'F'}) && starts({'W', 'E', 'B', 'P'}, 8)) return "image/webp";
+  if (starts({0xAB, 'K', 'T', 'X', ' ', '2', '0', 0xBB, 0x0D, 0x0A, 0x1A, 0x0A})) return "image/ktx2";
+  return std::nullopt;
 }
 
 // A file beside a .gltf's JSON.
@@ -317,12 +324,23 @@ bool write_glb(const GltfAsset& asset, const std::filesystem::path& output, cons
                      "image '" + uri + "' could not be read; the output keeps its URI");
         continue;
       }
+      const auto sniffed = sniffed_mime_type(*bytes);
+      const std::string declared = images[i].contains("mimeType") && images[i]["mimeType"].is_string()
+                                       ? images[i]["mimeType"].get<std::string>()
+                                       : std::string();
+      if (!sniffed && declared.empty()) {
+        diag.warning(codes::IMAGE_NOT_EMBEDDED, json_pointer("/images", i) + "/uri",
+                     "image '" + uri + "' is no PNG, JPEG, WebP or KTX2 by its bytes, and declares no mimeType; an "
+                     "image in a GLB must say what it holds, so the output keeps its URI");
+        continue;
+      }
       const std::vector<std::uint8_t>& kept = image_bytes.emplace_back(std::move(*bytes));
       const std::size_t offset = bin.append(kept);
       document["bufferViews"].push_back(Json{{"buffer", 0}, {"byteOffset", offset}, {"byteLength", kept.size()}});
       images[i].erase("uri");
       images[i]["bufferView"] = document["bufferViews"].size() - 1;
-      if (!images[i].contains("mimeType")) images[i]["mimeType"] = mime_type_for(uri);
+      // A declared type is the author's (a wrong one the validator already refuses in the input).
+      if (declared.empty()) images[i]["mimeType"] = *sniffed;
     }
   }
   const std::size_t bin_bytes = bin.size();  // The buffer's byteLength: before the chunk's padding.

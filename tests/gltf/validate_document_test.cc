@@ -561,5 +561,40 @@ TEST(ValidateData, SparseIndices) {
                     "/accessors/0/max/1");
 }
 
+// Three of the validator's rules rdtf did not have, each of which it copied into an output the
+// validator then refused (s80valid): KHR_mesh_quantization listed as optional, integer bounds no
+// value of the type can hold, and morph weights animated on a mesh without morph targets.
+TEST(ValidateDocument, QuantizationIsRequiredIntegerBoundsFitAndWeightsNeedMorphs) {
+  Json doc = triangle_document();
+  doc["extensionsUsed"] = {"KHR_mesh_quantization"};
+  EXPECT_DIAGNOSTIC(check_document(doc), "NON_REQUIRED_EXTENSION", "/extensionsUsed/0");
+  doc["extensionsRequired"] = {"KHR_mesh_quantization"};
+  EXPECT_FALSE(check_document(doc).has_errors()) << listing(check_document(doc));
+
+  doc = triangle_document();
+  doc["accessors"][1]["min"] = {0};
+  doc["accessors"][1]["max"] = {70000};  // UNSIGNED_SHORT indices
+  EXPECT_DIAGNOSTIC(check_document(doc), "INVALID_GL_VALUE", "/accessors/1/max");
+  doc["accessors"][1]["min"] = {-1};
+  EXPECT_DIAGNOSTIC(check_document(doc), "INVALID_GL_VALUE", "/accessors/1/min");
+  doc["accessors"][1]["min"] = {0};
+  doc["accessors"][1]["max"] = {2.5};
+  EXPECT_DIAGNOSTIC(check_document(doc), "ARRAY_TYPE_MISMATCH", "/accessors/1/max");
+  doc["accessors"][1]["max"] = {2.0};  // An integer written as a float is an integer.
+  EXPECT_FALSE(check_document(doc).has_errors()) << listing(check_document(doc));
+
+  doc = triangle_document();
+  doc["accessors"].push_back({{"componentType", 5126}, {"count", 2}, {"type", "SCALAR"}, {"min", {0}}, {"max", {1}}});
+  doc["accessors"].push_back({{"componentType", 5126}, {"count", 2}, {"type", "SCALAR"}});
+  doc["animations"] = Json::array({{{"channels", Json::array({{{"sampler", 0}, {"target", {{"node", 0}, {"path", "weights"}}}}})},
+                                    {"samplers", Json::array({{{"input", 2}, {"output", 3}}})}}});
+  const Diagnostics no_morphs = check_document(doc);
+  EXPECT_DIAGNOSTIC(no_morphs, "ANIMATION_CHANNEL_TARGET_NODE_WEIGHTS_NO_MORPHS", "/animations/0/channels/0/target");
+  doc["meshes"][0]["primitives"][0]["targets"] = Json::array({{{"POSITION", 0}}});
+  EXPECT_FALSE(has_error(check_document(doc), "ANIMATION_CHANNEL_TARGET_NODE_WEIGHTS_NO_MORPHS",
+                         "/animations/0/channels/0/target"))
+      << listing(check_document(doc));
+}
+
 }  // namespace
 }  // namespace rdtf

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <set>
 #include <stdexcept>
 
@@ -328,6 +329,70 @@ TEST(WriteRdtfContentAddressed, GlbChunkAndImagesGetContentNamesWithEncodedUris)
   EXPECT_EQ(names_in(glb_out.path()), (std::set<std::string>{"my robot.gltf", chunk}));
   EXPECT_EQ(Json::parse(testing::read_file(glb_out / "my robot.gltf"))["buffers"][0]["uri"],
             "my%20robot." + chunk.substr(9));
+}
+
+// A GLB's image says what it holds, read from its bytes: the name said it before, so JPEG bytes in
+// a .png, a file without an extension or a percent-encoded dot made a valid model an invalid GLB
+// (s80valid D1). Bytes of no image format, with no mimeType declared, stay behind their URI.
+TEST(WriteRdtfFiles, GlbImagesAreTypedByTheirBytes) {
+  testing::TempDir in;
+  testing::TempDir out;
+  const auto images = testing::data_dir() / "gltf-validator" / "base" / "data" / "image";
+  std::filesystem::copy_file(testing::data_dir() / "blender" / "arm3.bin", in / "arm3.bin");
+  std::filesystem::copy_file(images / "cyan.jpg", in / "cyan.png");        // JPEG bytes, .png name
+  std::filesystem::copy_file(images / "magenta.png", in / "magenta");      // PNG bytes, no extension
+  std::filesystem::copy_file(images / "magenta.png", in / "tex2.png");     // named as tex2%2Epng
+  testing::write_file(in / "notes.txt", "not an image");
+  Json document = Json::parse(testing::read_file(testing::data_dir() / "blender" / "arm3.gltf"));
+  document["images"] = Json::array({{{"uri", "cyan.png"}}, {{"uri", "magenta"}}, {{"uri", "tex2%2Epng"}}, {{"uri", "notes.txt"}}});
+  testing::write_file(in / "arm3.gltf", document.dump());
+  Diagnostics diag;
+  auto conversion = convert_file(in / "arm3.gltf", ConvertOptions{}, diag);
+  ASSERT_TRUE(conversion);
+  WriteOptions as_glb;
+  as_glb.format = OutputFormat::kGlb;
+  ASSERT_TRUE(write_rdtf(conversion->asset, out / "arm3.glb", as_glb, diag));
+  bool kept_uri = false;
+  for (const Diagnostic& d : diag.all()) {
+    kept_uri |= d.code == "IMAGE_NOT_EMBEDDED" && d.pointer == "/images/3/uri" &&
+                d.message.find("no PNG, JPEG, WebP or KTX2 by its bytes") != std::string::npos;
+  }
+  EXPECT_TRUE(kept_uri);
+  const std::string glb = testing::read_file(out / "arm3.glb");
+  std::uint32_t json_length = 0;
+  std::memcpy(&json_length, glb.data() + 12, 4);
+  const Json written = Json::parse(glb.substr(20, json_length));
+  EXPECT_EQ(written["images"][0]["mimeType"], "image/jpeg");
+  EXPECT_EQ(written["images"][1]["mimeType"], "image/png");
+  EXPECT_EQ(written["images"][2]["mimeType"], "image/png");
+  EXPECT_EQ(written["images"][3]["uri"], "notes.txt");
+  EXPECT_FALSE(written["images"][3].contains("bufferView"));
+  // The validator reads the three images from the GLB; the fourth it cannot, as in the input.
+  std::filesystem::copy_file(in / "notes.txt", out / "notes.txt");
+  const auto report = testing::khronos_report(out / "arm3.glb");
+  for (const auto& m : report["issues"]["messages"]) {
+    EXPECT_NE(m["severity"].get<int>(), 0) << m.dump();
+  }
+}
+
+// Vertex accessors of different element sizes sharing a view without byteStride: no stride serves
+// them all, so the file is refused as the validator refuses it; it was copied into an output the
+// validator refused (s80valid D2). One size (Box.gltf, among the fixtures above) gets its stride.
+TEST(WriteRdtfFiles, AViewSharedByAccessorsOfDifferentSizesIsRefused) {
+  testing::TempDir in;
+  Json document = Json::parse(testing::read_file(testing::data_dir() / "khronos" / "Box.gltf"));
+  document["accessors"].push_back({{"bufferView", 1}, {"byteOffset", 0}, {"componentType", 5126}, {"count", 24}, {"type", "VEC2"}});
+  document["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"] = 3;
+  testing::write_file(in / "Box.gltf", document.dump());
+  Diagnostics diag;
+  EXPECT_FALSE(convert_file(in / "Box.gltf", ConvertOptions{}, diag));
+  bool named = false;
+  for (const Diagnostic& d : diag.all()) {
+    named |= d.code == "MESH_PRIMITIVE_ACCESSOR_WITHOUT_BYTESTRIDE" && d.severity == Severity::kError &&
+             d.pointer == "/meshes/0/primitives/0/attributes/TEXCOORD_0" &&
+             d.message.find("buffer view 1 is shared by 3 vertex accessors of different element sizes") != std::string::npos;
+  }
+  EXPECT_TRUE(named) << diag.all().size();
 }
 
 // arm3 whose buffer carries `padding` zero bytes more (counted in byteLength): a new revision.

@@ -17,6 +17,8 @@ namespace rdtf {
 enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverityError = 4 };
 
 #define RDTF_DIAGNOSTIC_CODES(X) \
+  X(ACCESSOR_ANIMATION_INPUT_NEGATIVE, kSeverityError, "glTF") \
+  X(ACCESSOR_ANIMATION_INPUT_NON_INCREASING, kSeverityError, "glTF") \
   X(ACCESSOR_ANIMATION_SAMPLER_OUTPUT_NON_NORMALIZED_QUATERNION, kSeverityError, "glTF") \
   X(ACCESSOR_DATA_UNREADABLE, kSeverityError, "glTF") \
   X(ACCESSOR_ELEMENT_OUT_OF_MAX_BOUND, kSeverityError, "glTF") \
@@ -24,6 +26,8 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(ACCESSOR_INDEX_OOB, kSeverityError, "glTF") \
   X(ACCESSOR_INDEX_PRIMITIVE_RESTART, kSeverityError, "glTF") \
   X(ACCESSOR_INVALID_FLOAT, kSeverityError, "glTF") \
+  X(ACCESSOR_INVALID_IBM, kSeverityError, "glTF") \
+  X(ACCESSOR_JOINTS_INDEX_DUPLICATE, kSeverityError, "glTF") \
   X(ACCESSOR_JOINTS_INDEX_OOB, kSeverityError, "glTF") \
   X(ACCESSOR_MAX_MISMATCH, kSeverityWarning, "glTF") \
   X(ACCESSOR_MIN_MISMATCH, kSeverityWarning, "glTF") \
@@ -35,11 +39,15 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(ACCESSOR_SPARSE_INDICES_NON_INCREASING, kSeverityError, "glTF") \
   X(ACCESSOR_TOO_LONG, kSeverityError, "glTF") \
   X(ACCESSOR_TOTAL_OFFSET_ALIGNMENT, kSeverityError, "glTF") \
+  X(ACCESSOR_WEIGHTS_NEGATIVE, kSeverityError, "glTF") \
+  X(ACCESSOR_WEIGHTS_NON_NORMALIZED, kSeverityError, "glTF") \
   X(ANIMATION_CHANNEL_TARGET_NODE_MATRIX, kSeverityError, "glTF") \
+  X(ANIMATION_CHANNEL_TARGET_NODE_WEIGHTS_NO_MORPHS, kSeverityError, "glTF") \
   X(ANIMATION_DUPLICATE_TARGETS, kSeverityError, "glTF") \
   X(ANIMATION_SAMPLER_ACCESSOR_WITH_BYTESTRIDE, kSeverityError, "glTF") \
   X(ANIMATION_SAMPLER_INPUT_ACCESSOR_INVALID_FORMAT, kSeverityError, "glTF") \
   X(ANIMATION_SAMPLER_INPUT_ACCESSOR_TOO_FEW_ELEMENTS, kSeverityError, "glTF") \
+  X(ANIMATION_SAMPLER_INPUT_ACCESSOR_WITHOUT_BOUNDS, kSeverityError, "glTF") \
   X(ANIMATION_SAMPLER_OUTPUT_ACCESSOR_INVALID_COUNT, kSeverityError, "glTF") \
   X(ANIMATION_SAMPLER_OUTPUT_ACCESSOR_INVALID_FORMAT, kSeverityError, "glTF") \
   X(ARRAY_LENGTH_NOT_IN_LIST, kSeverityError, "glTF") \
@@ -73,6 +81,7 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(GLB_UNEXPECTED_END_OF_HEADER, kSeverityError, "glTF") \
   X(GLB_UNEXPECTED_FIRST_CHUNK, kSeverityError, "glTF") \
   X(INSTANCING_INVALID, kSeverityError, "glTF") \
+  X(INVALID_GL_VALUE, kSeverityError, "glTF") \
   X(INVALID_IBM_ACCESSOR_COUNT, kSeverityError, "glTF") \
   X(INVALID_JSON, kSeverityError, "glTF") \
   X(INVALID_URI, kSeverityError, "glTF") \
@@ -84,6 +93,7 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(MESH_INVALID_WEIGHTS_COUNT, kSeverityError, "glTF") \
   X(MESH_PRIMITIVES_UNEQUAL_TARGETS_COUNT, kSeverityError, "glTF") \
   X(MESH_PRIMITIVE_ACCESSOR_UNALIGNED, kSeverityError, "glTF") \
+  X(MESH_PRIMITIVE_ACCESSOR_WITHOUT_BYTESTRIDE, kSeverityError, "glTF") \
   X(MESH_PRIMITIVE_ATTRIBUTES_ACCESSOR_INVALID_FORMAT, kSeverityError, "glTF") \
   X(MESH_PRIMITIVE_INDEXED_SEMANTIC_CONTINUITY, kSeverityError, "glTF") \
   X(MESH_PRIMITIVE_INDICES_ACCESSOR_INVALID_FORMAT, kSeverityError, "glTF") \
@@ -101,6 +111,7 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(NODE_SKIN_NO_SCENE, kSeverityError, "glTF") \
   X(NODE_SKIN_WITH_NON_SKINNED_MESH, kSeverityError, "glTF") \
   X(NODE_WEIGHTS_INVALID, kSeverityError, "glTF") \
+  X(NON_REQUIRED_EXTENSION, kSeverityError, "glTF") \
   X(PATTERN_MISMATCH, kSeverityError, "glTF") \
   X(ROTATION_NON_UNIT, kSeverityError, "glTF") \
   X(SCENE_NON_ROOT_NODE, kSeverityError, "glTF") \

@@ -395,6 +395,12 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
       const SurfaceTopology& topology = geometry.topology();
       for (BoneGeometry& bone : split_by_bone(asset, node, geometry.meshes(), geometry.primitive_index, diag)) {
         const int link = link_of_node[bone.joint_node];
+        if (link < 0) {  // A bone outside the scene: typing gives it no type, and the robot no link.
+          diag.warning(codes::MESH_WITHOUT_LINK, pointer,
+                       "the part of skinned mesh node '" + name + "' bound to " + node_label(document, bone.joint_node) +
+                           " belongs to no link: that bone is outside the scene; ignored");
+          continue;
+        }
         const Eigen::Affine3d X_LV = robot.links[link].X_SL.inverse() * world[bone.joint_node] * bone.inverse_bind;
         const VolumeIntegrals signed_integrals = integrate_solid(bone.pieces, X_LV);
         auto integrals = oriented(signed_integrals, pointer, name, diag);
@@ -411,6 +417,10 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
       continue;
     }
     const int link = link_of_node[owner];
+    if (link < 0) {  // Typing keeps links in the scene, which the robot holds; stay safe regardless.
+      diag.warning(codes::MESH_WITHOUT_LINK, pointer, "mesh node '" + name + "' belongs to no link of the robot; ignored");
+      continue;
+    }
     const Eigen::Affine3d X_LN = robot.links[link].X_SL.inverse() * world[node];
     // A scale of 0 on the node or an ancestor flattens the mesh: its volume, and with it a part of
     // the link's mass, vanish. (A matrix that does so is refused as not decomposable; a TRS scale

@@ -78,15 +78,20 @@ constexpr const char* kPackerAdvice =
     "renames nodes (parts, joint empties) unless told to keep them: pack with gltfpack -kn -ke (gltf-transform: "
     "keep extras and nodes), or pack rdtf's own output (rdtf convert first)";
 
-bool has_rdtf_keys(const Json& document) {
+// Whether the model says where its joints are: an extras.RDTF (a converted file), or a node with a
+// joint key or rdtf_type. Densities and masses alone do not: a Blender export of the parts only
+// (the joint empties left out) keeps the densities set on the parts, and its joints are all fixed.
+bool has_joint_keys(const Json& document) {
   if (document.contains("extras") && document["extras"].is_object() &&
       document["extras"].contains("RDTF")) {
     return true;
   }
   for (const Json& node : document["nodes"]) {
     if (!node.contains("extras") || !node["extras"].is_object()) continue;
-    for (const auto& [key, value] : node["extras"].items()) {
-      if (key.rfind("rdtf_", 0) == 0) return true;
+    const Json& extras = node["extras"];
+    if (extras.contains("rdtf_type") || extras.contains("rdtf_axes")) return true;
+    for (const char* key : kJointExtrasKeys) {
+      if (extras.contains(key)) return true;
     }
   }
   return false;
@@ -151,9 +156,10 @@ void check_units_of(const Json& document, const Robot& robot, Diagnostics& diag)
     diag.warning(codes::UNITS_IMPLAUSIBLE, json_pointer("/nodes", link.node),
                  "the robot " + size.text() + " and weighs " + short_number(mass) + " kg (" + node_label(document, link.node) + " alone " +
                      short_number(link.inertial.mass) +
-                     " kg): implausible in metres. glTF lengths are metres; the model was likely "
-                     "drawn in millimetres: scale it by 0.001 (in Blender: select all, scale by "
-                     "0.001, Object > Apply > Scale) and export again");
+                     " kg): implausible in metres. glTF lengths are metres; the model was likely drawn in "
+                     "millimetres or centimetres: scale it by 0.001 or 0.01 (in Blender the scene's Unit Scale, "
+                     "Scene > Units, says which: the exporter ignores it and writes 1 unit as 1 m; select all, "
+                     "scale by it, Object > Apply > Scale, set Unit Scale 1) and export again");
   } else if (mass > 0 && volume > 0 && extent < kMinExtent) {
     // (Only with geometry to measure: a robot of one link without meshes, as URDFs without their
     // mesh files give, has no size at all.)
@@ -332,13 +338,20 @@ void check_duplicate_names(const Json& document, const Robot& robot, Diagnostics
   };
   std::vector<std::pair<std::string, int>> links, joints;
   for (const Link& link : robot.links) links.emplace_back(link.name, link.node);
-  // Joints that take the name of an input node (the empty whose properties made them); those rdtf
-  // names after their links ("base_wheel_joint") repeat a link name already reported.
+  // Joints that take the name of an input node (the empty whose properties made them), and those
+  // rdtf names after their links ("base_wheel_joint"), unless a link name repeated, which is
+  // already reported and repeats theirs. Distinct links can still give one joint name, since "_"
+  // joins them: a_b > c and a > b_c both give "a_b_c_joint".
+  std::map<std::string, int> link_names;
+  for (const Link& link : robot.links) ++link_names[link.name];
   for (const Joint& joint : robot.joints) {
-    if (joint.source_node < 0) continue;
-    const Json& node = document["nodes"][static_cast<std::size_t>(joint.source_node)];
-    if (node.contains("name") && node["name"].is_string() && node["name"].get<std::string>() == joint.name) {
+    const Json* node = joint.source_node >= 0 ? &document["nodes"][static_cast<std::size_t>(joint.source_node)] : nullptr;
+    if (node != nullptr && node->contains("name") && (*node)["name"].is_string() &&
+        (*node)["name"].get<std::string>() == joint.name) {
       joints.emplace_back(joint.name, joint.source_node);
+    } else if (joint.parent_link >= 0 && joint.child_link >= 0 &&
+               link_names[robot.links[joint.parent_link].name] == 1 && link_names[robot.links[joint.child_link].name] == 1) {
+      joints.emplace_back(joint.name, joint.node);
     }
   }
   report("links", links);
@@ -398,7 +411,7 @@ void check_extras_keys(const Json& document, Diagnostics& diag) {
 
 void check_missing_properties(const Json& document, const std::vector<NodeType>& types,
                               Diagnostics& diag) {
-  if (!document.contains("nodes") || has_rdtf_keys(document)) return;
+  if (!document.contains("nodes") || has_joint_keys(document)) return;
   const auto packer = repacked_by(document);
   std::vector<char> is_child(document["nodes"].size(), 0);
   for (const Json& node : document["nodes"]) {
@@ -443,8 +456,8 @@ void check_missing_properties(const Json& document, const std::vector<NodeType>&
   }
   if (empties.size() > 4) names += ", ...";
   diag.warning(codes::NO_RDTF_PROPERTIES, "/nodes",
-               std::string("no node has an rdtf_* property, so every joint is fixed and the robot is "
-                           "one rigid body") +
+               std::string("no node has a joint property (rdtf_joint, rdtf_axis, ...), so every joint is fixed and the "
+                           "robot is one rigid body") +
                    (names.empty() ? std::string() : "; these empties look like joints: " + names) +
                    (bones ? std::string("; the model has an armature") : std::string()) +
                    (parts_only ? "; its " + std::to_string(links) +

@@ -644,13 +644,41 @@ Robot build_robot(const Json& document, const std::vector<NodeType>& types, std:
   // A joint node with joint properties that no link hangs below (a joint empty whose part was
   // parented elsewhere, or left out of the export) makes no joint: say so, or the joint the
   // modeller set up is simply missing from the robot.
+  // A joint node at the top of the tree has a part below it but none above to turn on (a root
+  // empty typed "floating", the source objects of a Blender collection instance).
   for (std::size_t node = 0; node < types.size(); ++node) {
     if (types[node] != NodeType::kJoint || !seen[node] || joint_node_used[node]) continue;
     if (entry_joint(node) == nullptr && !has_joint_keys(node_extras(document, node))) continue;
+    bool link_above = false;
+    for (int up = parents[node]; up >= 0 && !link_above; up = parents[up]) link_above = types[up] == NodeType::kLink;
     diag.warning(codes::JOINT_MOVES_NOTHING, json_pointer("/nodes", node),
                  "joint " + node_label(document, node) +
-                     " has joint properties but no part hangs below it, so it makes no joint: parent the part "
-                     "it turns to it (in Blender, select the part, then the empty, Ctrl+P > Object)");
+                     (link_above ? " has joint properties but no part hangs below it, so it makes no joint: parent the "
+                                   "part it turns to it (in Blender, select the part, then the empty, Ctrl+P > Object)"
+                                 : " has joint properties but no part above it, so it makes no joint: a joint turns the "
+                                   "part below it on the part above it, and the top part of the tree is the robot's "
+                                   "base, held by the world (free for a mobile robot: docs/format.md). Parent the "
+                                   "empty to the part it turns on, or remove its joint properties"));
+  }
+  // A joint node's mass keys are not read: mass belongs to parts (rdtf_density on a mesh node or
+  // between it and its link, rdtf_mass on a mesh or link node). A modeller who selected the joint
+  // empty to type its properties puts the part's mass there too, and the part silently kept the
+  // default density.
+  for (std::size_t node = 0; node < types.size(); ++node) {
+    if (types[node] != NodeType::kJoint || !seen[node] || document["nodes"][node].contains("mesh")) continue;
+    const Json* extras = node_extras(document, node);
+    if (extras == nullptr) continue;
+    std::string below;
+    for (const Joint& joint : robot.joints) {
+      if (joint.source_node == static_cast<int>(node)) below = robot.links[joint.child_link].name;
+    }
+    for (const char* key : {"rdtf_density", "rdtf_mass"}) {
+      if (!extras->contains(key)) continue;
+      diag.warning(codes::RDTF_NODE_EXTRAS_IGNORED, json_pointer("/nodes", node) + "/extras/" + key,
+                   "joint " + node_label(document, node) + ": " + key + " is not read on a joint node, which has no "
+                   "mass of its own; set it on the part" +
+                       (below.empty() ? std::string(" (its mesh node, or its link)") : " '" + below + "' (the link below it)"));
+    }
   }
   if (robot.links.empty()) {
     diag.warning(codes::NO_LINKS, json_pointer("/scenes", scene),

@@ -318,8 +318,11 @@ std::vector<NodeType> type_nodes(const Json& document, std::size_t scene, Diagno
   std::vector<char> fixed(count, 0);
   read_authored_types(document, types, fixed, diag);
   type_skin_joints(document, in_scene, types, fixed);
+  // Nodes outside the scene get no type, authored ones included: a second Blender scene holding a
+  // re-imported rdtf output types its nodes by rdtf_type, and a link typed there, which the robot
+  // (built from the scene) never holds, crashed the mass computation.
   for (std::size_t i = 0; i < count; ++i) {
-    if (!in_scene[i] && !fixed[i]) types[i] = NodeType::kNone;
+    if (!in_scene[i]) types[i] = NodeType::kNone;
   }
   const MeshOwnership meshes(document);
   const auto khr_frames = khr_attachment_nodes(nodes);

@@ -133,5 +133,34 @@ TEST(RdtfEntries, AMeshTypedJointIsNamed) {
   EXPECT_TRUE(named);
 }
 
+// A node outside the converted scene gets no type, however its author typed it: a second Blender
+// scene holding a re-imported rdtf output types its nodes by rdtf_type, and a link typed there,
+// which the robot (built from the scene) does not hold, crashed rdtf and rdtfd (s80spec D1).
+TEST(RdtfEntries, NodesTypedOutsideTheSceneAreLeftOut) {
+  for (const bool by_entry : {false, true}) {
+    json doc = arm();
+    doc["nodes"].push_back({{"name", "base.001"}, {"children", {5}}, {"extras", {{"rdtf_type", "link"}}}});  // 4
+    doc["nodes"].push_back({{"name", "base.001_mesh"}, {"mesh", 0}, {"extras", {{"rdtf_type", "mesh"}}}});  // 5
+    doc["scenes"].push_back({{"name", "Scene.001"}, {"nodes", {4}}});
+    doc["scene"] = 0;
+    if (by_entry) {
+      doc["nodes"][4].erase("extras");
+      doc["nodes"][5].erase("extras");
+      doc["extras"]["RDTF"] = {{"nodes", {{{"node", 4}, {"type", "link"}}, {{"node", 5}, {"type", "link"}}}}};
+    }
+    testing::TempDir dir;
+    testing::write_file(dir / "arm.gltf", doc.dump());
+    Diagnostics diag;
+    const auto conversion = convert_file(dir / "arm.gltf", {}, diag);
+    ASSERT_TRUE(conversion.has_value()) << by_entry;
+    ASSERT_EQ(conversion->robot.links.size(), 3u);
+    for (const Link& link : conversion->robot.links) EXPECT_LT(link.node, 4) << link.name;
+    for (const Json& entry : conversion->asset.document["extras"]["RDTF"]["nodes"]) {
+      EXPECT_NE(entry["node"], 4) << entry;
+      EXPECT_NE(entry["node"], 5) << entry;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace rdtf

@@ -182,6 +182,12 @@ TEST(Plausibility, PartsParentedToPartsFromBlenderWithoutPropertiesAreNamed) {
   doc["asset"]["generator"] = "Khronos glTF Blender I/O v3.4.50";
   expect_one(convert_and_find(doc, codes::NO_RDTF_PROPERTIES), "/nodes",
              {"every joint is fixed", "parented to one another", "Selected Objects"});
+  // Densities and masses set on the parts (as docs/blender.md's arm has them) say nothing of joints:
+  // the warning stays. It went silent at any rdtf_* key (s80blend D1).
+  doc["nodes"][0]["extras"] = {{"rdtf_density", 2700}};
+  doc["nodes"][2]["extras"] = {{"rdtf_mass", 1.5}};
+  expect_one(convert_and_find(doc, codes::NO_RDTF_PROPERTIES), "/nodes",
+             {"no node has a joint property", "parented to one another", "Selected Objects"});
   // From another tool, a model of parts alone is not judged (a fixed assembly is a model too).
   doc["asset"]["generator"] = "some CAD exporter";
   EXPECT_TRUE(convert_and_find(doc, codes::NO_RDTF_PROPERTIES).empty());
@@ -213,6 +219,58 @@ TEST(Plausibility, AxesBehindAPackersGeneratorAreNamedAsAssumed) {
   doc["asset"]["generator"] = "gltfpack 1.3";
   expect_one(convert_and_find(doc, codes::NO_RDTF_PROPERTIES), "/nodes",
              {"packed by 'gltfpack 1.3'", "drops node extras", "gltfpack -kn -ke"});
+}
+
+// The arm with its elbow as a joint empty, as Blender models it: base > elbow (empty) > arm.
+json arm_with_elbow_empty() {
+  json doc = arm();
+  json elbow = {{"name", "elbow"},
+                {"translation", doc["nodes"][1]["translation"]},
+                {"rotation", doc["nodes"][1]["rotation"]},
+                {"children", {1}},
+                {"extras", {{"rdtf_joint", "revolute"}, {"rdtf_axis", {0, 0, 1}}, {"rdtf_lower", -1.0}, {"rdtf_upper", 1.5}}}};
+  doc["nodes"][1].erase("translation");
+  doc["nodes"][1].erase("rotation");
+  for (const char* key : {"rdtf_joint", "rdtf_axis", "rdtf_lower", "rdtf_upper", "rdtf_damping", "rdtf_spring_stiffness"}) {
+    doc["nodes"][1]["extras"].erase(key);
+  }
+  doc["nodes"].push_back(elbow);  // node 4
+  doc["nodes"][0]["children"] = {4};
+  return doc;
+}
+
+// A part's density or mass typed on its joint empty (selected to type the joint's keys) was
+// ignored without a word: the part kept the default density (s80blend D4).
+TEST(Plausibility, MassKeysOnAJointEmptyAreNamedAsIgnored) {
+  json doc = arm_with_elbow_empty();
+  EXPECT_TRUE(convert_and_find(doc, codes::RDTF_NODE_EXTRAS_IGNORED).empty());
+  doc["nodes"][4]["extras"]["rdtf_density"] = 2700;
+  doc["nodes"][4]["extras"]["rdtf_mass"] = 1.5;
+  const auto found = convert_and_find(doc, codes::RDTF_NODE_EXTRAS_IGNORED);
+  ASSERT_EQ(found.size(), 2u);
+  EXPECT_EQ(found[0].pointer, "/nodes/4/extras/rdtf_density");
+  EXPECT_EQ(found[1].pointer, "/nodes/4/extras/rdtf_mass");
+  for (const Diagnostic& d : found) {
+    EXPECT_EQ(d.severity, Severity::kWarning);
+    EXPECT_NE(d.message.find("joint node 4 'elbow'"), std::string::npos) << d.message;
+    EXPECT_NE(d.message.find("set it on the part 'arm' (the link below it)"), std::string::npos) << d.message;
+  }
+}
+
+// A joint empty at the top of the tree has its part below it, and nothing above to turn on: the
+// warning said "no part hangs below it" and told the modeller to do what was done (s80blend D5).
+TEST(Plausibility, AJointEmptyAtTheTopOfTheTreeIsSaidToHaveNothingAbove) {
+  json doc = arm_with_elbow_empty();
+  doc["nodes"].push_back({{"name", "root_joint"}, {"children", {0}}, {"extras", {{"rdtf_joint", "revolute"}}}});
+  doc["scenes"][0]["nodes"] = {5};
+  expect_one(convert_and_find(doc, codes::JOINT_MOVES_NOTHING), "/nodes/5",
+             {"joint node 5 'root_joint'", "no part above it", "Parent the empty to the part it turns on"});
+  // An empty whose part went elsewhere still hears that nothing hangs below it.
+  doc = arm_with_elbow_empty();
+  doc["nodes"][4].erase("children");
+  doc["nodes"][0]["children"] = {4, 1};
+  expect_one(convert_and_find(doc, codes::JOINT_MOVES_NOTHING), "/nodes/4",
+             {"joint node 4 'elbow'", "no part hangs below it"});
 }
 
 }  // namespace
@@ -259,6 +317,23 @@ TEST(Plausibility, JointEmptiesThatShareANameAreNamed) {
   const auto found = convert_and_find(doc, codes::DUPLICATE_NAMES);
   expect_one(found, "/nodes/" + std::to_string(first + 1),
              {"2 joints are named 'hinge' (nodes " + std::to_string(first) + ", " + std::to_string(first + 1) + ")"});
+}
+
+// Joints rdtf names after their links can share a name though every link's is its own, since "_"
+// joins them: root > a_b > c and root > a > b_c both give "a_b_c_joint", which joint commands and
+// states cannot tell apart (s80spec D8).
+TEST(Plausibility, JointNamesMadeAlikeFromDistinctLinksAreNamed) {
+  json doc = arm();
+  const json box = doc["nodes"][0]["mesh"];
+  doc["nodes"] = json::array({{{"name", "root"}, {"mesh", box}, {"children", {1, 2}}},
+                              {{"name", "a_b"}, {"mesh", box}, {"translation", {1, 0, 0}}, {"children", {3}}},
+                              {{"name", "a"}, {"mesh", box}, {"translation", {-1, 0, 0}}, {"children", {4}}},
+                              {{"name", "c"}, {"mesh", box}, {"translation", {1, 0, 0}}},
+                              {{"name", "b_c"}, {"mesh", box}, {"translation", {-1, 0, 0}}}});
+  doc["scenes"][0]["nodes"] = {0};
+  const auto found = convert_and_find(doc, codes::DUPLICATE_NAMES);
+  ASSERT_EQ(found.size(), 1u);
+  EXPECT_NE(found[0].message.find("2 joints are named 'a_b_c_joint'"), std::string::npos) << found[0].message;
 }
 
 // A skew is named where a rotation inside a non-uniform scale makes one; the rounding of a float

@@ -1,6 +1,7 @@
 #include "config.h"
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstdlib>
@@ -56,9 +57,18 @@ const std::vector<KeyRange>& config_ranges() {
 
 namespace {
 
+// As many digits as the value needs to be told apart from the bounds (17 at most): six showed
+// 1.09951e+12 both for a value above the maximum and for the maximum (s80cfg D10).
 std::string number_text(double value) {
   std::ostringstream out;
+  out.precision(17);
   out << value;
+  for (int digits = 6; digits < 17; ++digits) {
+    std::ostringstream shorter;
+    shorter.precision(digits);
+    shorter << value;
+    if (std::strtod(shorter.str().c_str(), nullptr) == value) return shorter.str();
+  }
   return out.str();
 }
 
@@ -212,21 +222,37 @@ bool check_config(DaemonConfig& config, std::string& error) {
     error = "nothing to watch: give --watch DIR or \"watch\" in the config";
     return false;
   }
+  // The non-throwing calls throughout: a folder below one rdtfd cannot search (a 0700 home folder
+  // under the packaged unit's user) threw filesystem_error out of the start, an abort and a core
+  // dump (s80cfg D4); it is a bad setting, named with the system's reason.
   std::error_code ec;
   for (auto& folder : config.watch) {
     std::filesystem::create_directories(folder, ec);
-    if (!std::filesystem::is_directory(folder)) {
-      error = "watch folder " + folder.string() + " is not a directory";
+    std::error_code status;
+    if (!std::filesystem::is_directory(folder, status)) {
+      error = "watch folder " + folder.string() + " is not a directory" + (status ? " (" + status.message() + ")" : std::string());
       return false;
     }
-    folder = std::filesystem::canonical(folder);
+    auto canonical = std::filesystem::canonical(folder, status);
+    if (status) {
+      error = "watch folder " + folder.string() + " cannot be resolved: " + status.message();
+      return false;
+    }
+    folder = std::move(canonical);
   }
   std::filesystem::create_directories(config.output, ec);
-  if (!std::filesystem::is_directory(config.output)) {
-    error = "output folder " + config.output.string() + " cannot be created";
+  std::error_code status;
+  if (!std::filesystem::is_directory(config.output, status)) {
+    error = "output folder " + config.output.string() + " cannot be created: " +
+            (status ? status.message() : ec ? ec.message() : std::string("it is not a directory"));
     return false;
   }
-  config.output = std::filesystem::canonical(config.output);
+  auto output = std::filesystem::canonical(config.output, status);
+  if (status) {
+    error = "output folder " + config.output.string() + " cannot be resolved: " + status.message();
+    return false;
+  }
+  config.output = std::move(output);
   if (!check_ranges(config, error)) return false;
   for (const auto& folder : config.watch) {
     // An output folder that contains a watched folder would hide every save in it.
@@ -240,6 +266,17 @@ bool check_config(DaemonConfig& config, std::string& error) {
   if (config.channel_prefix.empty() || config.channel_prefix.size() > 16) {
     error = "channel_prefix \"" + lcm_safe::printable(config.channel_prefix, 40) + "\" has " +
             std::to_string(config.channel_prefix.size()) + " characters: it must have 1 to 16";
+    return false;
+  }
+  // LCM subscribes by POSIX regular expression and '/' separates a channel's parts: a prefix such
+  // as "lab+1" or "robot(1)" was accepted, and rdtfd then never heard a REQUEST or JOINT_COMMAND
+  // (s80cfg D5). Letters, digits, '_', '-' and '.' (escaped where rdtfd subscribes).
+  for (const char c : config.channel_prefix) {
+    if (std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.') continue;
+    error = "channel_prefix \"" + lcm_safe::printable(config.channel_prefix, 40) + "\" holds \"" +
+            lcm_safe::printable(std::string(1, c), 8) +
+            "\": only letters, digits, '_', '-' and '.' are allowed (channels are subscribed by regular "
+            "expression, and '/' separates their parts)";
     return false;
   }
   return true;

@@ -9,6 +9,10 @@
 //      table: `RDTF_UPDATE_DOCS=1 build/tests/rdtf_tests --gtest_filter='DaemonConfigRegistry.*'`.
 // Tests fail until 3 is done: DaemonConfig.RepositoryConfigFileListsEveryKeyWithItsDefault and
 // DaemonConfigRegistry.DocsTableIsGeneratedFromTheRegistry.
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <string>
 #include <type_traits>
 
 #include "config.h"
@@ -36,8 +40,18 @@ struct Plain {
       ok = value.is_boolean();
     } else if constexpr (std::is_integral_v<T> && std::is_unsigned_v<T>) {
       ok = value.is_number_unsigned();
+      // A count beyond the type wrapped silently (workers 4294967298 ran 2: s80cfg D9).
+      if (ok && value.get<std::uint64_t>() > std::numeric_limits<T>::max()) {
+        error = "\"" + name + "\" is " + value.dump() + ", more than " + std::to_string(std::numeric_limits<T>::max());
+        return false;
+      }
     } else if constexpr (std::is_integral_v<T>) {
       ok = value.is_number_integer();
+      if (ok && (value.get<std::int64_t>() > std::numeric_limits<T>::max() ||
+                 value.get<std::int64_t>() < std::numeric_limits<T>::min())) {
+        error = "\"" + name + "\" is " + value.dump() + ", beyond what it can hold";
+        return false;
+      }
     } else if constexpr (std::is_floating_point_v<T>) {
       ok = value.is_number();
     } else {
@@ -60,15 +74,17 @@ struct Plain {
   }
 };
 
-// Whole milliseconds, given as a JSON number (a fraction is cut).
+// Whole milliseconds, given as a JSON number. A fraction was cut without a word (0.5 turned
+// republishing off, 60000.9 passed a maximum of 60000: s80cfg D11), and a value beyond 2^63 came
+// out negative: both refused.
 struct Millis {
   static constexpr ValueKind kind = ValueKind::kNumber;
   static bool decode(const std::string& name, const json& value, const fs::path& base, std::chrono::milliseconds& out,
                      std::string& error) {
     double ms = 0;
     if (!Plain<double>::decode(name, value, base, ms, error)) return false;
-    if (!(ms >= 0)) {
-      error = "\"" + name + "\" must be a number of milliseconds >= 0";
+    if (!(ms >= 0) || ms != std::floor(ms) || ms >= 9.2e18) {
+      error = "\"" + name + "\" is " + value.dump() + ": it must be a whole number of milliseconds, 0 or more";
       return false;
     }
     out = std::chrono::milliseconds(static_cast<long long>(ms));
@@ -215,7 +231,7 @@ std::vector<ConfigKey> make_registry() {
              .flag_help = "LCM URL (default: LCM_DEFAULT_URL, else LCM's default)",
              .doc = "LCM URL, `\"\"` for `LCM_DEFAULT_URL`, else LCM's default"},
             RDTF_FIELD(lcm_url)),
-      plain({.name = "channel_prefix", .range_text = "1 .. 16 characters", .reload = kReconnect | kRestartSimulation,
+      plain({.name = "channel_prefix", .range_text = "1 .. 16 letters, digits, `_`, `-`, `.`", .reload = kReconnect | kRestartSimulation,
              .flag = "--channel-prefix", .flag_help = "First part of every channel (default RDTF)",
              .doc = "first part of every channel"},
             RDTF_FIELD(channel_prefix)),

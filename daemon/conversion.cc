@@ -571,6 +571,7 @@ ConversionOutcome run_conversion(const ConversionJob& job) {
   ConversionOutcome outcome;
   outcome.model_id = job.model_id;
   outcome.source = job.source;
+  outcome.cache_key = job.cache_key;
   outcome.prepared = job.prepare;
   outcome.diagnostics.set_file(job.source.string());
   // Each stage's time: from the end of the one before to now.

@@ -152,6 +152,9 @@ struct ConversionOutcome {
   std::string model_id;
   std::filesystem::path source;
   std::string content_hash;                  // Of what was read ("" when nothing could be).
+  // The settings it was converted under (the job's cache_key): a reload that changes them while
+  // the job runs makes its result stale, and the model is converted again.
+  std::string cache_key;
   std::optional<ConvertedModel> converted;   // For kConverted.
   Diagnostics diagnostics;                   // Errors for kRejected; warnings otherwise.
   // Files the model refers to, and their targets where it names them through a symlink.

@@ -58,6 +58,9 @@ void write_log_line(const std::string& safe_text) {
   char full[40];
   std::snprintf(full, sizeof(full), "%s.%03lldZ", stamp, static_cast<long long>(millis));
   const std::string line = std::string(full) + " " + safe_text + "\n";
+  // A write that failed once (stderr's disk full) left the stream failed, and every later line
+  // was dropped though the disk had room again (s80cfg D7): each line tries afresh.
+  std::cerr.clear();
   std::cerr.write(line.data(), static_cast<std::streamsize>(line.size()));
   std::cerr.flush();
 }
@@ -372,6 +375,11 @@ void Daemon::reload_config() {
   } else {
     cache_key_ = settings_key(config_);
   }
+  // A shorter period takes effect now, not when the old one runs out (a day's republishing
+  // period, shortened, waited out the day: s80cfg D2); a longer one from the next tick.
+  const auto now = clock_->now();
+  next_republish_ = std::min(next_republish_, now + config_.republish_period);
+  next_status_ = std::min(next_status_, now + config_.status_period);
   // A new settle period or open-write wait moves the deadlines of the models settling.
   for (auto& [source, record] : registry_.all()) {
     unfile_timer(record);

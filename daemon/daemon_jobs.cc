@@ -185,7 +185,9 @@ void Daemon::apply_prepared(ConversionOutcome outcome) {
   if (record == nullptr) return;
   // A verdict depends only on what it was computed from: kept whatever becomes of this result.
   if (outcome.verdict) record->verdict = outcome.verdict;
-  const bool usable = !outcome.cancelled && !outcome.retry && outcome.kind != ConversionOutcome::Kind::kVanished;
+  // Prepared under settings a reload has since changed: dropped, the deadline converts afresh.
+  const bool usable = !outcome.cancelled && !outcome.retry && outcome.kind != ConversionOutcome::Kind::kVanished &&
+                      outcome.cache_key == cache_key_;
   const auto now = clock_->now();
   const ModelActions actions =
       transition(*record, [&](ModelSchedule& schedule) { return schedule.prepare_finished(now, usable); });
@@ -219,7 +221,16 @@ void Daemon::apply(ConversionOutcome outcome) {
     log_line(id + ": " + outcome.cache_note);
   }
   JobResult result = JobResult::kDone;
-  switch (outcome.kind) {
+  // Converted under settings a reload changed while it ran (the reload's rescan found the model
+  // busy): its result is not the running config's, and applying it marked the content converted
+  // for good (s80cfg D1). Nothing of it is applied; the model is converted again.
+  const bool stale = outcome.cache_key != cache_key_ && !outcome.cancelled &&
+                     outcome.kind != ConversionOutcome::Kind::kVanished;
+  if (stale) {
+    log_line(id + ": converted under the settings before the last reload; converting again");
+    record->last_hash.clear();
+    result = JobResult::kRecreated;  // Settles from now, then converts: what a new save gets.
+  } else switch (outcome.kind) {
     case ConversionOutcome::Kind::kConverted:
       apply_converted(outcome, *record);
       break;

@@ -3,10 +3,14 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <csignal>
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <map>
+
+#include <pthread.h>
+#include <signal.h>
 
 #include "daemon.h"
 #include "rdtf/version.h"
@@ -85,6 +89,15 @@ std::optional<rdtf::daemon::DaemonConfig> load(const std::string& config_file,
 }  // namespace
 
 int main(int argc, char** argv) {
+  // First thing: SIGTERM, SIGINT and SIGHUP are read from a signalfd once the loop runs
+  // (Daemon::start), and held until then; a SIGHUP in the first milliseconds (`systemctl reload`
+  // right after `start`) killed rdtfd, which systemd counts as a clean exit (s80cfg D6). A log
+  // reader that goes away (`rdtfd 2>&1 | head`) must not kill it either: the write fails instead.
+  sigset_t held;
+  sigemptyset(&held);
+  for (int s : {SIGTERM, SIGINT, SIGHUP}) sigaddset(&held, s);
+  pthread_sigmask(SIG_BLOCK, &held, nullptr);
+  std::signal(SIGPIPE, SIG_IGN);
   CLI::App app{"rdtfd: watches folders of glTF models, converts each save to RDTF and publishes "
                "it over LCM"};
   app.set_version_flag("--version", rdtf::version_line("rdtfd"));
@@ -118,12 +131,12 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   std::string error;
-  auto config = load(config_file, overrides, error);
-  if (!config) {
-    std::cerr << "rdtfd: " << error << "\n";
-    return 2;
-  }
   try {
+    auto config = load(config_file, overrides, error);
+    if (!config) {
+      std::cerr << "rdtfd: " << error << "\n";
+      return 2;
+    }
     rdtf::daemon::Daemon daemon(std::move(*config), [config_file, overrides](std::string& reload_error) {
       return load(config_file, overrides, reload_error);
     });

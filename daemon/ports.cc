@@ -22,6 +22,7 @@ ConversionOutcome run_job(const ConversionJob& job) {
     ConversionOutcome outcome;
     outcome.model_id = job.model_id;
     outcome.source = job.source;
+    outcome.cache_key = job.cache_key;
     outcome.kind = ConversionOutcome::Kind::kRejected;
     outcome.prepared = job.prepare;  // The model's schedule waits for a prepared job's end as such.
     outcome.diagnostics.set_file(job.source.string());
@@ -142,9 +143,13 @@ class LcmBus final : public Bus {
   LcmBus(std::unique_ptr<lcm::LCM> lcm, BusHandlers handlers) : lcm_(std::move(lcm)), handlers_(std::move(handlers)) {}
 
   void subscribe(const std::string& prefix) {
-    lcm_->subscribe(prefix + "/REQUEST", &LcmBus::on_request, this);
-    lcm_->subscribe(prefix + "/.*/JOINT_COMMAND", &LcmBus::on_command, this);
-    lcm_->subscribe(prefix + "/BLOB_REQUEST", &LcmBus::on_blob_request, this);
+    // LCM's channel argument is a regular expression: the prefix's '.' (the one character of a
+    // prefix that means something there, check_config) must match itself only.
+    std::string literal;
+    for (const char c : prefix) literal += c == '.' ? std::string("\\.") : std::string(1, c);
+    lcm_->subscribe(literal + "/REQUEST", &LcmBus::on_request, this);
+    lcm_->subscribe(literal + "/.*/JOINT_COMMAND", &LcmBus::on_command, this);
+    lcm_->subscribe(literal + "/BLOB_REQUEST", &LcmBus::on_blob_request, this);
   }
   int send(const std::string& channel, const std::uint8_t* data, unsigned int size) override {
     return lcm_->publish(channel, data, size);

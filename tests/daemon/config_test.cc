@@ -208,6 +208,30 @@ TEST(DaemonConfig, CheckMakesCommandLineFoldersAbsolute) {
   EXPECT_TRUE(config.watch[0].is_absolute());
 }
 
+// A count beyond its type wrapped (workers 4294967298 ran 2), a fraction of a millisecond was cut
+// (0.5 turned republishing off) and a range error showed six digits, the same for the value and
+// the bound (s80cfg D9-D11).
+TEST(DaemonConfig, NumbersAreTakenWholeOrRefusedNamingTheValue) {
+  testing::TempDir folder;
+  std::string error;
+  EXPECT_FALSE(load_text(folder, R"({"workers": 4294967298})", error));
+  EXPECT_NE(error.find("\"workers\" is 4294967298, beyond what it can hold"), std::string::npos) << error;
+  EXPECT_FALSE(load_text(folder, R"({"republish_period_ms": 0.5})", error));
+  EXPECT_NE(error.find("\"republish_period_ms\" is 0.5: it must be a whole number of milliseconds"), std::string::npos)
+      << error;
+  EXPECT_FALSE(load_text(folder, R"({"settle_ms": 1e19})", error));
+  EXPECT_NE(error.find("settle_ms"), std::string::npos) << error;
+  const auto whole = load_text(folder, R"({"settle_ms": 60000.0})", error);
+  ASSERT_TRUE(whole) << error;
+  EXPECT_EQ(whole->settle, std::chrono::milliseconds(60000));
+  auto config = *whole;
+  config.watch = {folder / "w"};
+  config.output = folder / "o";
+  config.convert.limits.max_file_bytes = 1099511627777ull;  // One above its maximum, 2^40.
+  EXPECT_FALSE(check_config(config, error));
+  EXPECT_NE(error.find("is 1099511627777, outside its valid range [1, 1099511627776]"), std::string::npos) << error;
+}
+
 TEST(DaemonConfig, CheckRefusesSettingsThatCannotWork) {
   testing::TempDir top;
   auto good = [&] {
@@ -243,11 +267,25 @@ TEST(DaemonConfig, CheckRefusesSettingsThatCannotWork) {
       {"rate 0", [](DaemonConfig& c) { c.chunk_rate_bytes_per_s = 0; }},
       {"prefix empty", [](DaemonConfig& c) { c.channel_prefix = ""; }},
       {"prefix 17", [](DaemonConfig& c) { c.channel_prefix = std::string(17, 'P'); }},
+      // Regular-expression characters and '/' (s80cfg D5): rdtfd then heard no REQUEST.
+      {"prefix lab+1", [](DaemonConfig& c) { c.channel_prefix = "lab+1"; }},
+      {"prefix robot(1)", [](DaemonConfig& c) { c.channel_prefix = "robot(1)"; }},
+      {"prefix R[1]", [](DaemonConfig& c) { c.channel_prefix = "R[1]"; }},
+      {"prefix a/b", [](DaemonConfig& c) { c.channel_prefix = "a/b"; }},
+      {"prefix a b", [](DaemonConfig& c) { c.channel_prefix = "a b"; }},
   };
   for (const auto& [what, change] : bad) {
     auto config = good();
     change(config);
     EXPECT_FALSE(check_config(config, error)) << what;
+  }
+  {
+    auto config = good();
+    config.channel_prefix = "lab-1.robot_A";
+    EXPECT_TRUE(check_config(config, error)) << error;
+    config.channel_prefix = "lab+1";
+    EXPECT_FALSE(check_config(config, error));
+    EXPECT_NE(error.find("channel_prefix \"lab+1\" holds \"+\""), std::string::npos) << error;
   }
   {
     auto config = good();

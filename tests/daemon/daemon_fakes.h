@@ -90,6 +90,7 @@ class FakeRunner final : public JobRunner {
     ConversionOutcome outcome;
     outcome.model_id = job.model_id;
     outcome.source = job.source;
+    outcome.cache_key = job.cache_key;  // Under the settings it ran with, as run_conversion's.
     outcome.kind = ConversionOutcome::Kind::kRejected;
     outcome.retry = true;
     outcome.prepared = job.prepare;

@@ -180,5 +180,38 @@ TEST_F(DaemonLoop, AReloadWithANewSettlePeriodAppliesItToModelsSettling) {
   EXPECT_EQ(runner_->waiting(), 1u);
 }
 
+// A reload that changes a conversion setting while a model converts under the old one: the result
+// is not applied, and the model converts again under the new settings. It was applied and marked
+// its content converted, so the reload's own rescan (which found the model busy) was the last
+// word and the model kept the old density for good (s80cfg D1).
+TEST_F(DaemonLoop, AResultConvertedUnderSettingsAReloadChangedIsConvertedAgain) {
+  start({}, [this](std::string&) -> std::optional<DaemonConfig> {
+    DaemonConfig fresh = config_;
+    fresh.convert.default_density = 2000;
+    return fresh;
+  });
+  save("arm3.glb", fixture("arm3.glb"));
+  advance(50ms);
+  ASSERT_EQ(runner_->waiting(), 1u);  // Converting under density 1000.
+  daemon_->reload_config();
+  convert();  // The job ends after the reload.
+  EXPECT_TRUE(events("arm3.glb").empty());
+  advance(50ms);
+  ASSERT_EQ(runner_->waiting(), 1u);
+  convert();
+  EXPECT_EQ(events("arm3.glb"), kRevision1);
+  const ModelRecord* record = const_cast<Registry&>(daemon_->registry()).find(watch_ / "arm3.glb");
+  ASSERT_TRUE(record != nullptr && record->live.has_value());
+  // arm3's parts without an rdtf_density of their own take the default: 2000 now, 1000 never.
+  int at_default = 0;
+  for (const Link& link : record->live->robot.links) {
+    for (const LinkMesh& mesh : link.meshes) {
+      EXPECT_NE(mesh.density, 1000.0) << link.name;
+      at_default += mesh.density == 2000.0;
+    }
+  }
+  EXPECT_GT(at_default, 0);
+}
+
 }  // namespace
 }  // namespace rdtf::daemon

@@ -1,5 +1,6 @@
 #include "blob_manifest.h"
 
+#include <filesystem>
 #include <set>
 
 #include <nlohmann/json.hpp>
@@ -74,6 +75,10 @@ std::vector<OutputFile> output_files(const std::string& gltf_name, const std::st
   std::set<std::string> listed;
   auto addressed = [&](const std::string& path, const std::string& name, const std::string& role) {
     if (listed.count(path) > 0) return true;  // Two buffers with the same bytes: one file.
+    // An image the conversion could not copy (missing or unreadable: IMAGE_NOT_COPIED) keeps its
+    // own URI in the output, and no such file is there to list: the model's other files are
+    // still had from the bus. It made the whole manifest empty (s80client D2).
+    if (role == "image" && !is_content_addressed_name(std::filesystem::path(name).filename().string())) return true;
     const auto entries = log.matching(name_digits(name));
     if (name.find('/') != std::string::npos || entries.size() != 1) {
       why = "no single hash was recorded for " + path + " when it was written (" +

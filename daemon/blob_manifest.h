@@ -53,7 +53,9 @@ class DigestLog {
 // The manifest of one written revision: `gltf_name` (the .rdtf.gltf, its text `rdtf_json`), the
 // buffers and images its JSON names, and when `urdf` is not empty urdf/robot.urdf and the meshes
 // it names. A content-addressed file missing from `log` (not written by this conversion) makes
-// `why` non-empty and the result empty: a manifest with a wrong hash would be worse than none.
+// `why` non-empty and the result empty: a manifest with a wrong hash would be worse than none. An
+// image under a name that is not content-addressed is one the conversion could not copy
+// (IMAGE_NOT_COPIED): it is not in the output, and not listed.
 std::vector<OutputFile> output_files(const std::string& gltf_name, const std::string& rdtf_json,
                                      const std::string& urdf, const DigestLog& log, std::string& why);
 

@@ -16,6 +16,7 @@
 #include <rdtf/blob_chunk_t.hpp>
 #include <rdtf/blob_unavailable_t.hpp>
 
+#include "blob_manifest.h"
 #include "blob_server.h"
 #include "support/test_support.h"
 
@@ -369,6 +370,29 @@ TEST(BlobServer, ALargeBlobIsReadAsTheQueueDrainsWithinItsBound) {
   EXPECT_LE(most, BlobServer::kQueueBytes + 60000);
   EXPECT_GE(most, BlobServer::kQueueBytes);
   EXPECT_TRUE(f.reassemble(sha256(bytes)) == bytes);
+}
+
+// A model whose image is missing converts (IMAGE_NOT_COPIED) and its output keeps the image's own
+// URI: that file is not in the output and is left out of the manifest, and every other file is
+// listed. The whole manifest was empty, so nothing of the model could be had from the bus
+// (s80client D2).
+TEST(OutputFiles, AnImageTheConversionCouldNotCopyIsLeftOutNotTheWholeManifest) {
+  DigestLog log;
+  const std::string bytes = "buffer bytes";
+  const std::string hex = log.digest()(std::span(reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size()));
+  const std::string bin = "arm." + hex.substr(0, 16) + ".bin";
+  const std::string json = R"({"buffers": [{"uri": ")" + bin + R"(", "byteLength": 12}], "images": [{"uri": "tex/missing.png"}]})";
+  std::string why;
+  const auto files = output_files("arm.rdtf.gltf", json, "", log, why);
+  EXPECT_TRUE(why.empty()) << why;
+  ASSERT_EQ(files.size(), 2u);
+  EXPECT_EQ(files[0].path, "arm.rdtf.gltf");
+  EXPECT_EQ(files[1].path, bin);
+  EXPECT_EQ(files[1].sha256, hex);
+  // A content-addressed file the conversion did not write is still no manifest at all.
+  const std::string stray = R"({"buffers": [{"uri": "arm.0123456789abcdef.bin"}]})";
+  EXPECT_TRUE(output_files("arm.rdtf.gltf", stray, "", log, why).empty());
+  EXPECT_FALSE(why.empty());
 }
 
 }  // namespace

@@ -695,46 +695,35 @@ void DataCheck::check_animation_rotations() {
 // ACCESSOR_JOINTS_INDEX_OOB): rdtf splits the mesh by the joints' weights, and wrote such an
 // index unchanged into an output the validator then refused.
 void DataCheck::check_skin_joint_indices() {
-  if (!doc_.contains("nodes") || !doc_["nodes"].is_array()) return;
   std::set<std::pair<std::uint64_t, std::uint64_t>> checked;  // (accessor, joint count)
-  for (std::size_t n = 0; n < doc_["nodes"].size(); ++n) {
-    const Json& node = doc_["nodes"][n];
-    const Json* skin = node.is_object() ? element_at(doc_, "skins", uint_at(node, "skin")) : nullptr;
-    const Json* mesh = node.is_object() ? element_at(doc_, "meshes", uint_at(node, "mesh")) : nullptr;
-    if (skin == nullptr || mesh == nullptr || !skin->contains("joints") || !(*skin)["joints"].is_array() ||
-        !mesh->contains("primitives") || !(*mesh)["primitives"].is_array()) {
-      continue;
-    }
-    const std::uint64_t joints = (*skin)["joints"].size();
-    const std::uint64_t mesh_index = *uint_at(node, "mesh");
-    for (std::size_t p = 0; p < (*mesh)["primitives"].size(); ++p) {
-      const Json& primitive = (*mesh)["primitives"][p];
-      if (!primitive.is_object() || !primitive.contains("attributes") || !primitive["attributes"].is_object()) continue;
-      for (int set = 0;; ++set) {
-        const std::string name = "JOINTS_" + std::to_string(set);
-        const auto accessor = uint_at(primitive["attributes"], name.c_str());
-        if (!accessor) break;
-        if (*accessor >= readable_.size() || !readable_[*accessor] || !checked.emplace(*accessor, joints).second) continue;
-        const auto runs = locate_accessor(*accessor);
-        if (!runs) continue;
-        double largest = -1;
-        std::uint64_t largest_at = 0;
-        const int components = runs->base.components;
-        for_each_element(*runs, [&](std::uint64_t i, const double* value, std::uint64_t) {
-          for (int c = 0; c < components; ++c) {
-            if (value[c] > largest) {
-              largest = value[c];
-              largest_at = i;
-            }
+  for (const SkinnedPrimitive& skinned : skinned_primitives(doc_)) {
+    const std::uint64_t joints = skinned.joint_count;
+    for (int set = 0;; ++set) {
+      const std::string name = "JOINTS_" + std::to_string(set);
+      const auto accessor = uint_at(*skinned.attributes, name.c_str());
+      if (!accessor) break;
+      if (*accessor >= readable_.size() || !readable_[*accessor] || !checked.emplace(*accessor, joints).second) continue;
+      const auto runs = locate_accessor(*accessor);
+      if (!runs) continue;
+      double largest = -1;
+      std::uint64_t largest_at = 0;
+      const int components = runs->base.components;
+      for_each_element(*runs, [&](std::uint64_t i, const double* value, std::uint64_t) {
+        for (int c = 0; c < components; ++c) {
+          if (value[c] > largest) {
+            largest = value[c];
+            largest_at = i;
           }
-        });
-        if (largest < static_cast<double>(joints)) continue;
-        diag_.error(codes::ACCESSOR_JOINTS_INDEX_OOB,
-                    json_pointer(json_pointer("/meshes", mesh_index) + "/primitives", p) + "/attributes/" + name,
-                    name + " accessor " + std::to_string(*accessor) + " (" + json_pointer("/accessors", *accessor) +
-                        ") names joint " + std::to_string(static_cast<std::uint64_t>(largest)) + " (element " +
-                        std::to_string(largest_at) + "), but the skin of " + node_named(doc_, n) + " has only " + counted(joints, "joint", "joints"));
-      }
+        }
+      });
+      if (largest < static_cast<double>(joints)) continue;
+      diag_.error(codes::ACCESSOR_JOINTS_INDEX_OOB,
+                  json_pointer(json_pointer("/meshes", skinned.mesh) + "/primitives", skinned.primitive) + "/attributes/" +
+                      name,
+                  name + " accessor " + std::to_string(*accessor) + " (" + json_pointer("/accessors", *accessor) +
+                      ") names joint " + std::to_string(static_cast<std::uint64_t>(largest)) + " (element " +
+                      std::to_string(largest_at) + "), but the skin of " + node_named(doc_, skinned.node) + " has only " +
+                      counted(joints, "joint", "joints"));
     }
   }
 }

@@ -150,11 +150,9 @@ void check_primitive_influences(const GltfAsset& asset, const std::vector<std::u
 
 }  // namespace
 
-void check_skin_influences(const GltfAsset& asset, const std::vector<char>& readable, Diagnostics& diag) {
-  const Json& doc = asset.document;
-  if (!doc.contains("nodes") || !doc["nodes"].is_array()) return;
-  // A primitive's sets are read once per joint count, however many nodes draw it with a skin.
-  std::set<std::pair<std::vector<std::uint64_t>, std::uint64_t>> checked;
+std::vector<SkinnedPrimitive> skinned_primitives(const Json& doc) {
+  std::vector<SkinnedPrimitive> found;
+  if (!doc.contains("nodes") || !doc["nodes"].is_array()) return found;
   for (std::size_t n = 0; n < doc["nodes"].size(); ++n) {
     const Json& node = doc["nodes"][n];
     const Json* skin = node.is_object() ? element_at(doc, "skins", index_at(node, "skin")) : nullptr;
@@ -163,37 +161,47 @@ void check_skin_influences(const GltfAsset& asset, const std::vector<char>& read
         !mesh->contains("primitives") || !(*mesh)["primitives"].is_array()) {
       continue;
     }
-    const std::uint64_t joint_count = (*skin)["joints"].size();
-    const std::uint64_t mesh_index = *index_at(node, "mesh");
     for (std::size_t p = 0; p < (*mesh)["primitives"].size(); ++p) {
       const Json& primitive = (*mesh)["primitives"][p];
       if (!primitive.is_object() || !primitive.contains("attributes") || !primitive["attributes"].is_object()) continue;
-      const Json& attributes = primitive["attributes"];
-      const auto position = index_at(attributes, "POSITION");
-      if (!position || *position >= readable.size() || !readable[*position]) continue;
-      const auto vertex_count = index_at(doc["accessors"][static_cast<std::size_t>(*position)], "count");
-      std::vector<std::uint64_t> joints, weights;
-      bool sound = vertex_count.has_value();
-      for (int set = 0; sound; ++set) {
-        const auto j = index_at(attributes, ("JOINTS_" + std::to_string(set)).c_str());
-        const auto w = index_at(attributes, ("WEIGHTS_" + std::to_string(set)).c_str());
-        if (!j && !w) break;
-        // A set without its partner, of another count or format: validate_document's errors.
-        sound = j && w && usable(doc, readable, *j, "VEC4", false) && usable(doc, readable, *w, "VEC4", false) &&
-                index_at(doc["accessors"][static_cast<std::size_t>(*j)], "count") == vertex_count &&
-                index_at(doc["accessors"][static_cast<std::size_t>(*w)], "count") == vertex_count;
-        if (sound) joints.push_back(*j), weights.push_back(*w);
-      }
-      if (!sound || joints.empty()) continue;
-      const auto zeros = [&](std::uint64_t a) { return !holds_data(doc, a); };
-      if (std::any_of(joints.begin(), joints.end(), zeros) || std::any_of(weights.begin(), weights.end(), zeros)) continue;
-      std::vector<std::uint64_t> key = joints;
-      key.insert(key.end(), weights.begin(), weights.end());
-      if (!checked.emplace(std::move(key), joint_count).second) continue;
-      check_primitive_influences(asset, joints, weights, *vertex_count, joint_count,
-                                 json_pointer(json_pointer("/meshes", mesh_index) + "/primitives", p) + "/attributes",
-                                 node_named(doc, n), diag);
+      found.push_back({n, (*skin)["joints"].size(), *index_at(node, "mesh"), p, &primitive["attributes"]});
     }
+  }
+  return found;
+}
+
+void check_skin_influences(const GltfAsset& asset, const std::vector<char>& readable, Diagnostics& diag) {
+  const Json& doc = asset.document;
+  // A primitive's sets are read once per joint count, however many nodes draw it with a skin.
+  std::set<std::pair<std::vector<std::uint64_t>, std::uint64_t>> checked;
+  for (const SkinnedPrimitive& skinned : skinned_primitives(doc)) {
+    const Json& attributes = *skinned.attributes;
+    const std::uint64_t joint_count = skinned.joint_count;
+    const auto position = index_at(attributes, "POSITION");
+    if (!position || *position >= readable.size() || !readable[*position]) continue;
+    const auto vertex_count = index_at(doc["accessors"][static_cast<std::size_t>(*position)], "count");
+    std::vector<std::uint64_t> joints, weights;
+    bool sound = vertex_count.has_value();
+    for (int set = 0; sound; ++set) {
+      const auto j = index_at(attributes, ("JOINTS_" + std::to_string(set)).c_str());
+      const auto w = index_at(attributes, ("WEIGHTS_" + std::to_string(set)).c_str());
+      if (!j && !w) break;
+      // A set without its partner, of another count or format: validate_document's errors.
+      sound = j && w && usable(doc, readable, *j, "VEC4", false) && usable(doc, readable, *w, "VEC4", false) &&
+              index_at(doc["accessors"][static_cast<std::size_t>(*j)], "count") == vertex_count &&
+              index_at(doc["accessors"][static_cast<std::size_t>(*w)], "count") == vertex_count;
+      if (sound) joints.push_back(*j), weights.push_back(*w);
+    }
+    if (!sound || joints.empty()) continue;
+    const auto zeros = [&](std::uint64_t a) { return !holds_data(doc, a); };
+    if (std::any_of(joints.begin(), joints.end(), zeros) || std::any_of(weights.begin(), weights.end(), zeros)) continue;
+    std::vector<std::uint64_t> key = joints;
+    key.insert(key.end(), weights.begin(), weights.end());
+    if (!checked.emplace(std::move(key), joint_count).second) continue;
+    check_primitive_influences(asset, joints, weights, *vertex_count, joint_count,
+                               json_pointer(json_pointer("/meshes", skinned.mesh) + "/primitives", skinned.primitive) +
+                                   "/attributes",
+                               node_named(doc, skinned.node), diag);
   }
 }
 

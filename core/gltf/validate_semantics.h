@@ -3,12 +3,24 @@
 // are sound, so read_accessor may read it.
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 #include "rdtf/diagnostics.h"
 #include "rdtf/gltf.h"
 
 namespace rdtf::internal {
+
+// A primitive a node draws with a skin (the node has both), where the checks of its JOINTS_n and
+// WEIGHTS_n find it. Primitives of malformed meshes or skins are left out (validate_document's).
+struct SkinnedPrimitive {
+  std::size_t node = 0;
+  std::uint64_t joint_count = 0;  // Of the node's skin.
+  std::uint64_t mesh = 0;
+  std::size_t primitive = 0;
+  const Json* attributes = nullptr;  // An object.
+};
+std::vector<SkinnedPrimitive> skinned_primitives(const Json& document);
 
 // JOINTS_n / WEIGHTS_n of every skinned primitive: ACCESSOR_JOINTS_INDEX_DUPLICATE,
 // ACCESSOR_WEIGHTS_NEGATIVE, ACCESSOR_WEIGHTS_NON_NORMALIZED.

@@ -230,7 +230,8 @@ bool check_config(DaemonConfig& config, std::string& error) {
     std::filesystem::create_directories(folder, ec);
     std::error_code status;
     if (!std::filesystem::is_directory(folder, status)) {
-      error = "watch folder " + folder.string() + " is not a directory" + (status ? " (" + status.message() + ")" : std::string());
+      error = "watch folder " + folder.string() +
+              (status ? " cannot be looked at: " + status.message() : std::string(" is not a directory"));
       return false;
     }
     auto canonical = std::filesystem::canonical(folder, status);

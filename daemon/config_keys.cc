@@ -83,8 +83,12 @@ struct Millis {
                      std::string& error) {
     double ms = 0;
     if (!Plain<double>::decode(name, value, base, ms, error)) return false;
-    if (!(ms >= 0) || ms != std::floor(ms) || ms >= 9.2e18) {
+    if (!(ms >= 0) || ms != std::floor(ms)) {
       error = "\"" + name + "\" is " + value.dump() + ": it must be a whole number of milliseconds, 0 or more";
+      return false;
+    }
+    if (ms >= 9.2e18) {
+      error = "\"" + name + "\" is " + value.dump() + " ms, beyond any setting's range (docs/daemon.md)";
       return false;
     }
     out = std::chrono::milliseconds(static_cast<long long>(ms));

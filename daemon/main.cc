@@ -3,14 +3,21 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <cerrno>
 #include <csignal>
+#include <cstddef>
+#include <cstring>
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <map>
+#include <optional>
 
 #include <pthread.h>
 #include <signal.h>
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <unistd.h>
 
 #include "daemon.h"
 #include "rdtf/version.h"
@@ -86,6 +93,30 @@ std::optional<rdtf::daemon::DaemonConfig> load(const std::string& config_file,
   return config;
 }
 
+// systemd's readiness protocol (sd_notify(3)) without libsystemd: one datagram "READY=1" to the
+// socket named in $NOTIFY_SOCKET. Under Type=notify, `systemctl start` returns, and a reload is
+// sent, only once rdtfd reads its signals: a SIGHUP in its first milliseconds (library loading
+// alone takes 20-45 ms, before main can hold any signal) killed it, and systemd counted that as
+// a clean exit (s80cfg D6, s80rev R1).
+void notify_ready() {
+  const char* socket_path = std::getenv("NOTIFY_SOCKET");
+  if (socket_path == nullptr || (socket_path[0] != '/' && socket_path[0] != '@')) return;
+  const std::string name = socket_path;
+  sockaddr_un address{};
+  address.sun_family = AF_UNIX;
+  if (name.size() >= sizeof(address.sun_path)) return;
+  std::memcpy(address.sun_path, name.data(), name.size());
+  if (name[0] == '@') address.sun_path[0] = '\0';  // An abstract socket.
+  const int fd = ::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+  if (fd < 0) return;
+  static constexpr char kReady[] = "READY=1";
+  const auto length = static_cast<socklen_t>(offsetof(sockaddr_un, sun_path) + name.size());
+  if (::sendto(fd, kReady, sizeof(kReady) - 1, MSG_NOSIGNAL, reinterpret_cast<const sockaddr*>(&address), length) < 0) {
+    std::cerr << "rdtfd: could not tell systemd it is ready (NOTIFY_SOCKET " << name << "): " << std::strerror(errno) << "\n";
+  }
+  ::close(fd);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -132,7 +163,14 @@ int main(int argc, char** argv) {
 
   std::string error;
   try {
-    auto config = load(config_file, overrides, error);
+    std::optional<rdtf::daemon::DaemonConfig> config;
+    try {
+      config = load(config_file, overrides, error);
+    } catch (const std::exception& e) {
+      // A value JSON cannot hold (1e400) throws from the parser: a bad config all the same, which
+      // systemd must not restart (exit 2: RestartPreventExitStatus), not an internal error.
+      error = (config_file.empty() ? std::string("the settings") : config_file) + ": " + e.what();
+    }
     if (!config) {
       std::cerr << "rdtfd: " << error << "\n";
       return 2;
@@ -144,6 +182,7 @@ int main(int argc, char** argv) {
       std::cerr << "rdtfd: " << error << "\n";
       return 1;
     }
+    notify_ready();
     return daemon.run();
   } catch (const std::exception& e) {
     std::cerr << "rdtfd: internal error: " << e.what() << "\n";

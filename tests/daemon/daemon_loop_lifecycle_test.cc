@@ -1,5 +1,7 @@
 // rdtfd's loop stepped in-process (daemon_loop.h): models removed, recreated and renamed,
 // rescans, requests and republication, and reloads, as seen on the bus.
+#include <algorithm>
+
 #include "daemon_loop.h"
 
 namespace rdtf::daemon {
@@ -211,6 +213,26 @@ TEST_F(DaemonLoop, AResultConvertedUnderSettingsAReloadChangedIsConvertedAgain) 
     }
   }
   EXPECT_GT(at_default, 0);
+}
+
+// A reload that shortens the heartbeat takes effect at once: it waited out the old period (a
+// minute here; a day's republishing period, a day: s80cfg D2).
+TEST_F(DaemonLoop, AShorterStatusPeriodTakesEffectAtOnce) {
+  start([](DaemonConfig& config) { config.status_period = 60s; },
+        [this](std::string&) -> std::optional<DaemonConfig> {
+          DaemonConfig fresh = config_;
+          fresh.status_period = 100ms;
+          return fresh;
+        });
+  const auto statuses = [&] {
+    return std::count_if(bus_->sent.begin(), bus_->sent.end(), [](const auto& sent) { return sent.channel == "RDTF/STATUS"; });
+  };
+  const auto at_start = statuses();
+  advance(1s);
+  EXPECT_EQ(statuses(), at_start);
+  daemon_->reload_config();
+  advance(100ms);
+  EXPECT_GT(statuses(), at_start);
 }
 
 }  // namespace

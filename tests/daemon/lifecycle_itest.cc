@@ -1,8 +1,14 @@
 // The life of rdtfd: stopping on SIGTERM/SIGINT, reloading its config on SIGHUP, surviving bad
 // models, and its default settings (dynamics validation on). See harness.h for how these run.
+#include <poll.h>
 #include <signal.h>
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <regex>
 #include <set>
 
@@ -40,6 +46,32 @@ TEST(DaemonLife, SigtermExitsZero) {
   EXPECT_NE(daemon.log().find("received Terminated: stopping"), std::string::npos) << daemon.log();
   EXPECT_NE(daemon.log().find("rdtfd stopped"), std::string::npos) << daemon.log();
   expect_outputs_whole(s.output);
+}
+
+// systemd's readiness protocol: with $NOTIFY_SOCKET, rdtfd sends READY=1 once it reads its
+// signals (the unit is Type=notify), and a SIGHUP from then on reloads. Before it was ready, a
+// SIGHUP in its first milliseconds killed it, and systemd counted that as a clean exit (s80cfg D6).
+TEST(DaemonLife, TellsSystemdItIsReadyAndASighupRightThenReloads) {
+  Session s;
+  const fs::path socket_path = s.output.parent_path() / "notify.sock";
+  const int fd = ::socket(AF_UNIX, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+  ASSERT_GE(fd, 0);
+  sockaddr_un address{};
+  address.sun_family = AF_UNIX;
+  ASSERT_LT(socket_path.string().size(), sizeof(address.sun_path));
+  std::memcpy(address.sun_path, socket_path.c_str(), socket_path.string().size());
+  ASSERT_EQ(::bind(fd, reinterpret_cast<const sockaddr*>(&address), sizeof(address)), 0) << std::strerror(errno);
+  auto& daemon = s.start(DaemonOptions().with_env("NOTIFY_SOCKET=" + socket_path.string()));
+  pollfd ready{fd, POLLIN, 0};
+  ASSERT_EQ(::poll(&ready, 1, 10000), 1) << "no READY=1 in 10 s:\n" << daemon.log();
+  char text[64] = {};
+  ASSERT_GT(::recv(fd, text, sizeof(text) - 1, 0), 0);
+  EXPECT_STREQ(text, "READY=1");
+  ::close(fd);
+  daemon.signal(SIGHUP);  // At once, as `systemctl reload` right after `start`.
+  ASSERT_TRUE(daemon.wait_log("config reloaded")) << daemon.log();
+  daemon.signal(SIGTERM);
+  EXPECT_EQ(daemon.wait_exit(3s), std::optional<int>(0)) << daemon.log();
 }
 
 TEST(DaemonLife, SigintExitsZero) {

@@ -35,8 +35,11 @@ std::vector<rdtf::description_chunk_t> chunks_of(const ModelRecord& record, cons
   empty.content_hash = record.live->content_hash;
   set_counts(empty);
   const std::size_t overhead = static_cast<std::size_t>(empty.getEncodedSize());
-  // A limit below the chunk's own fields still has to make progress.
-  const std::size_t piece = max_message_bytes > overhead + 1024 ? max_message_bytes - overhead : 1024;
+  // The piece is what the limit leaves beside the chunk's own fields. A floor of 1024 sent chunks
+  // of up to 1,150 bytes at the documented minimum limit, 1024 (s80client D4); the floor now only
+  // keeps a model id of nearly the limit's length making progress.
+  constexpr std::size_t kSmallestPiece = 64;
+  const std::size_t piece = max_message_bytes > overhead + kSmallestPiece ? max_message_bytes - overhead : kSmallestPiece;
   const std::size_t count = (text.size() + piece - 1) / piece;
   std::vector<rdtf::description_chunk_t> chunks;
   for (std::size_t i = 0; i < count; ++i) {

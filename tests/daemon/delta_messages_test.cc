@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include "delta_messages.h"
+#include "messages.h"
+#include "registry.h"
 
 namespace rdtf::daemon {
 namespace {
@@ -50,6 +52,33 @@ TEST(DeltaMessages, NoChangeIsOneMessageWithNone) {
   EXPECT_EQ(parts[0].num_parts, 1);
   EXPECT_EQ(parts[0].total_changes, 0);
   EXPECT_TRUE(parts[0].changes.empty());
+}
+
+// At the documented smallest max_chunk_bytes, 1024, a description's chunks encoded to up to 1,150
+// bytes: the piece of text had a floor of 1024 beside the chunk's own fields (s80client D4).
+TEST(DescriptionMessages, EveryMessageFitsTheSmallestLimit) {
+  ModelRecord record;
+  record.id = "sub/arm3.gltf";
+  record.revisions = 3;
+  record.live.emplace();
+  record.live->content_hash = std::string(64, 'a');
+  const LiveTexts texts{std::string(5000, 'j'), std::string(3000, 'u')};
+  for (const std::size_t limit : {1024u, 1100u, 4096u}) {
+    const DescriptionMessages messages = make_description(record, texts, limit);
+    ASSERT_FALSE(messages.json_chunks.empty());
+    std::string json, urdf;
+    for (const auto& chunk : messages.json_chunks) {
+      EXPECT_LE(static_cast<std::size_t>(chunk.getEncodedSize()), limit);
+      json.append(chunk.data.begin(), chunk.data.end());
+    }
+    for (const auto& chunk : messages.urdf_chunks) {
+      EXPECT_LE(static_cast<std::size_t>(chunk.getEncodedSize()), limit);
+      urdf.append(chunk.data.begin(), chunk.data.end());
+    }
+    EXPECT_LE(static_cast<std::size_t>(messages.description.getEncodedSize()), limit);
+    EXPECT_EQ(json, texts.rdtf_json);
+    EXPECT_EQ(urdf.empty() ? messages.description.urdf : urdf, texts.urdf);
+  }
 }
 
 }  // namespace

@@ -222,6 +222,25 @@ bool check_config(DaemonConfig& config, std::string& error) {
     error = "nothing to watch: give --watch DIR or \"watch\" in the config";
     return false;
   }
+  // The checks of values first: a config refused for one of them (a reload, most often) must not
+  // leave its new watch and output folders created (s80cfg D12).
+  if (!check_ranges(config, error)) return false;
+  if (config.channel_prefix.empty() || config.channel_prefix.size() > 16) {
+    error = "channel_prefix \"" + lcm_safe::printable(config.channel_prefix, 40) + "\" has " +
+            std::to_string(config.channel_prefix.size()) + " characters: it must have 1 to 16";
+    return false;
+  }
+  // LCM subscribes by POSIX regular expression and '/' separates a channel's parts: a prefix such
+  // as "lab+1" or "robot(1)" was accepted, and rdtfd then never heard a REQUEST or JOINT_COMMAND
+  // (s80cfg D5). Letters, digits, '_', '-' and '.' (escaped where rdtfd subscribes).
+  for (const char c : config.channel_prefix) {
+    if (std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.') continue;
+    error = "channel_prefix \"" + lcm_safe::printable(config.channel_prefix, 40) + "\" holds \"" +
+            lcm_safe::printable(std::string(1, c), 8) +
+            "\": only letters, digits, '_', '-' and '.' are allowed (channels are subscribed by regular "
+            "expression, and '/' separates their parts)";
+    return false;
+  }
   // The non-throwing calls throughout: a folder below one rdtfd cannot search (a 0700 home folder
   // under the packaged unit's user) threw filesystem_error out of the start, an abort and a core
   // dump (s80cfg D4); it is a bad setting, named with the system's reason.
@@ -254,7 +273,6 @@ bool check_config(DaemonConfig& config, std::string& error) {
     return false;
   }
   config.output = std::move(output);
-  if (!check_ranges(config, error)) return false;
   for (const auto& folder : config.watch) {
     // An output folder that contains a watched folder would hide every save in it.
     const auto relative = folder.lexically_relative(config.output);
@@ -263,22 +281,6 @@ bool check_config(DaemonConfig& config, std::string& error) {
               folder.string() + ": choose an output folder outside it (or inside the watched one)";
       return false;
     }
-  }
-  if (config.channel_prefix.empty() || config.channel_prefix.size() > 16) {
-    error = "channel_prefix \"" + lcm_safe::printable(config.channel_prefix, 40) + "\" has " +
-            std::to_string(config.channel_prefix.size()) + " characters: it must have 1 to 16";
-    return false;
-  }
-  // LCM subscribes by POSIX regular expression and '/' separates a channel's parts: a prefix such
-  // as "lab+1" or "robot(1)" was accepted, and rdtfd then never heard a REQUEST or JOINT_COMMAND
-  // (s80cfg D5). Letters, digits, '_', '-' and '.' (escaped where rdtfd subscribes).
-  for (const char c : config.channel_prefix) {
-    if (std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.') continue;
-    error = "channel_prefix \"" + lcm_safe::printable(config.channel_prefix, 40) + "\" holds \"" +
-            lcm_safe::printable(std::string(1, c), 8) +
-            "\": only letters, digits, '_', '-' and '.' are allowed (channels are subscribed by regular "
-            "expression, and '/' separates their parts)";
-    return false;
   }
   return true;
 }

@@ -232,6 +232,24 @@ TEST(DaemonConfig, NumbersAreTakenWholeOrRefusedNamingTheValue) {
   EXPECT_NE(error.find("is 1099511627777, outside its valid range [1, 1099511627776]"), std::string::npos) << error;
 }
 
+// A config refused for a value (a reload, most often) leaves no new folder behind: it created its
+// watch and output folders before its values were checked (s80cfg D12).
+TEST(DaemonConfig, ARefusedConfigCreatesNoFolder) {
+  testing::TempDir top;
+  for (const auto& change : std::vector<std::function<void(DaemonConfig&)>>{
+           [](DaemonConfig& c) { c.settle = std::chrono::milliseconds(0); },
+           [](DaemonConfig& c) { c.channel_prefix = "lab+1"; }}) {
+    DaemonConfig config = default_config();
+    config.watch = {top / "new_watch"};
+    config.output = top / "new_output";
+    change(config);
+    std::string error;
+    EXPECT_FALSE(check_config(config, error));
+    EXPECT_FALSE(std::filesystem::exists(top / "new_watch")) << error;
+    EXPECT_FALSE(std::filesystem::exists(top / "new_output")) << error;
+  }
+}
+
 TEST(DaemonConfig, CheckRefusesSettingsThatCannotWork) {
   testing::TempDir top;
   auto good = [&] {

@@ -25,22 +25,6 @@ namespace {
 
 constexpr int kMaxComponents = 16;
 
-std::optional<std::uint64_t> uint_at(const Json& object, const char* key) {
-  if (!object.is_object() || !object.contains(key)) return std::nullopt;
-  return as_uint(object[key]);
-}
-
-// The object at document[array][index], or null.
-const Json* element_at(const Json& document, const char* array,
-                       std::optional<std::uint64_t> index) {
-  if (!index || !document.contains(array) || !document[array].is_array() ||
-      *index >= document[array].size()) {
-    return nullptr;
-  }
-  const Json& element = document[array][static_cast<std::size_t>(*index)];
-  return element.is_object() ? &element : nullptr;
-}
-
 // The float nearest a JSON number (which is a double), kept as it is beyond the float range.
 double nearest_float(double number) {
   if (!(std::abs(number) <= std::numeric_limits<float>::max())) return number;

@@ -22,26 +22,13 @@
 namespace rdtf::internal {
 namespace {
 
-std::optional<std::uint64_t> index_at(const Json& object, const char* key) {
-  if (!object.is_object() || !object.contains(key)) return std::nullopt;
-  return as_uint(object[key]);
-}
-
-const Json* element_at(const Json& document, const char* array, std::optional<std::uint64_t> index) {
-  if (!index || !document.contains(array) || !document[array].is_array() || *index >= document[array].size()) {
-    return nullptr;
-  }
-  const Json& element = document[array][static_cast<std::size_t>(*index)];
-  return element.is_object() ? &element : nullptr;
-}
-
 // An accessor validate_data located, of `type` and component type FLOAT when `float_only`.
 bool usable(const Json& document, const std::vector<char>& readable, std::uint64_t accessor, const char* type,
             bool float_only) {
   if (accessor >= readable.size() || !readable[accessor]) return false;
   const Json& a = document["accessors"][static_cast<std::size_t>(accessor)];
   if (a.value("type", "") != type) return false;
-  return !float_only || index_at(a, "componentType") == kFloat;
+  return !float_only || uint_at(a, "componentType") == kFloat;
 }
 
 // Whether an accessor has values of its own: without a bufferView and sparse it is zeros, which
@@ -155,8 +142,8 @@ std::vector<SkinnedPrimitive> skinned_primitives(const Json& doc) {
   if (!doc.contains("nodes") || !doc["nodes"].is_array()) return found;
   for (std::size_t n = 0; n < doc["nodes"].size(); ++n) {
     const Json& node = doc["nodes"][n];
-    const Json* skin = node.is_object() ? element_at(doc, "skins", index_at(node, "skin")) : nullptr;
-    const Json* mesh = node.is_object() ? element_at(doc, "meshes", index_at(node, "mesh")) : nullptr;
+    const Json* skin = node.is_object() ? element_at(doc, "skins", uint_at(node, "skin")) : nullptr;
+    const Json* mesh = node.is_object() ? element_at(doc, "meshes", uint_at(node, "mesh")) : nullptr;
     if (skin == nullptr || mesh == nullptr || !skin->contains("joints") || !(*skin)["joints"].is_array() ||
         !mesh->contains("primitives") || !(*mesh)["primitives"].is_array()) {
       continue;
@@ -164,7 +151,7 @@ std::vector<SkinnedPrimitive> skinned_primitives(const Json& doc) {
     for (std::size_t p = 0; p < (*mesh)["primitives"].size(); ++p) {
       const Json& primitive = (*mesh)["primitives"][p];
       if (!primitive.is_object() || !primitive.contains("attributes") || !primitive["attributes"].is_object()) continue;
-      found.push_back({n, (*skin)["joints"].size(), *index_at(node, "mesh"), p, &primitive["attributes"]});
+      found.push_back({n, (*skin)["joints"].size(), *uint_at(node, "mesh"), p, &primitive["attributes"]});
     }
   }
   return found;
@@ -177,19 +164,19 @@ void check_skin_influences(const GltfAsset& asset, const std::vector<char>& read
   for (const SkinnedPrimitive& skinned : skinned_primitives(doc)) {
     const Json& attributes = *skinned.attributes;
     const std::uint64_t joint_count = skinned.joint_count;
-    const auto position = index_at(attributes, "POSITION");
+    const auto position = uint_at(attributes, "POSITION");
     if (!position || *position >= readable.size() || !readable[*position]) continue;
-    const auto vertex_count = index_at(doc["accessors"][static_cast<std::size_t>(*position)], "count");
+    const auto vertex_count = uint_at(doc["accessors"][static_cast<std::size_t>(*position)], "count");
     std::vector<std::uint64_t> joints, weights;
     bool sound = vertex_count.has_value();
     for (int set = 0; sound; ++set) {
-      const auto j = index_at(attributes, ("JOINTS_" + std::to_string(set)).c_str());
-      const auto w = index_at(attributes, ("WEIGHTS_" + std::to_string(set)).c_str());
+      const auto j = uint_at(attributes, ("JOINTS_" + std::to_string(set)).c_str());
+      const auto w = uint_at(attributes, ("WEIGHTS_" + std::to_string(set)).c_str());
       if (!j && !w) break;
       // A set without its partner, of another count or format: validate_document's errors.
       sound = j && w && usable(doc, readable, *j, "VEC4", false) && usable(doc, readable, *w, "VEC4", false) &&
-              index_at(doc["accessors"][static_cast<std::size_t>(*j)], "count") == vertex_count &&
-              index_at(doc["accessors"][static_cast<std::size_t>(*w)], "count") == vertex_count;
+              uint_at(doc["accessors"][static_cast<std::size_t>(*j)], "count") == vertex_count &&
+              uint_at(doc["accessors"][static_cast<std::size_t>(*w)], "count") == vertex_count;
       if (sound) joints.push_back(*j), weights.push_back(*w);
     }
     if (!sound || joints.empty()) continue;
@@ -212,7 +199,7 @@ void check_inverse_bind_matrices(const GltfAsset& asset, const std::vector<char>
   if (!doc.contains("skins") || !doc["skins"].is_array()) return;
   std::set<std::uint64_t> checked;
   for (std::size_t s = 0; s < doc["skins"].size(); ++s) {
-    const auto accessor = index_at(doc["skins"][s], "inverseBindMatrices");
+    const auto accessor = uint_at(doc["skins"][s], "inverseBindMatrices");
     if (!accessor || !usable(doc, readable, *accessor, "MAT4", true) || !holds_data(doc, *accessor) ||
         !checked.insert(*accessor).second) {
       continue;
@@ -242,7 +229,7 @@ void check_animation_inputs(const GltfAsset& asset, const std::vector<char>& rea
     const Json& animation = doc["animations"][a];
     if (!animation.is_object() || !animation.contains("samplers") || !animation["samplers"].is_array()) continue;
     for (std::size_t s = 0; s < animation["samplers"].size(); ++s) {
-      const auto input = index_at(animation["samplers"][s], "input");
+      const auto input = uint_at(animation["samplers"][s], "input");
       if (!input || !usable(doc, readable, *input, "SCALAR", true) || !checked.insert(*input).second) continue;
       const Json& accessor = doc["accessors"][static_cast<std::size_t>(*input)];
       const std::string sampler = json_pointer(json_pointer("/animations", a) + "/samplers", s);

@@ -78,6 +78,21 @@ inline std::optional<std::uint64_t> as_uint(const Json& value) {
   return std::nullopt;
 }
 
+// object[key] as a non-negative integer, or nothing (absent, or no such integer).
+inline std::optional<std::uint64_t> uint_at(const Json& object, const char* key) {
+  if (!object.is_object() || !object.contains(key)) return std::nullopt;
+  return as_uint(object[key]);
+}
+
+// The object at document[array][index], or null.
+inline const Json* element_at(const Json& document, const char* array, std::optional<std::uint64_t> index) {
+  if (!index || !document.contains(array) || !document[array].is_array() || *index >= document[array].size()) {
+    return nullptr;
+  }
+  const Json& element = document[array][static_cast<std::size_t>(*index)];
+  return element.is_object() ? &element : nullptr;
+}
+
 // Text from the file, shortened for a message without splitting a UTF-8 character.
 inline std::string quote(const std::string& text) {
   constexpr std::size_t kMax = 40;

@@ -81,7 +81,7 @@ constexpr const char* kPackerAdvice =
 // Whether the model says where its joints are: an extras.RDTF (a converted file), or a node with a
 // joint key or rdtf_type. Densities and masses alone do not: a Blender export of the parts only
 // (the joint empties left out) keeps the densities set on the parts, and its joints are all fixed.
-bool has_joint_keys(const Json& document) {
+bool any_node_has_joint_keys(const Json& document) {
   if (document.contains("extras") && document["extras"].is_object() &&
       document["extras"].contains("RDTF")) {
     return true;
@@ -411,7 +411,7 @@ void check_extras_keys(const Json& document, Diagnostics& diag) {
 
 void check_missing_properties(const Json& document, const std::vector<NodeType>& types,
                               Diagnostics& diag) {
-  if (!document.contains("nodes") || has_joint_keys(document)) return;
+  if (!document.contains("nodes") || any_node_has_joint_keys(document)) return;
   const auto packer = repacked_by(document);
   std::vector<char> is_child(document["nodes"].size(), 0);
   for (const Json& node : document["nodes"]) {

@@ -667,7 +667,7 @@ Robot build_robot(const Json& document, const std::vector<NodeType>& types, std:
   for (std::size_t node = 0; node < types.size(); ++node) {
     if (types[node] != NodeType::kJoint || !seen[node] || document["nodes"][node].contains("mesh")) continue;
     const Json* extras = node_extras(document, node);
-    if (extras == nullptr) continue;
+    if (extras == nullptr || (!extras->contains("rdtf_density") && !extras->contains("rdtf_mass"))) continue;
     std::string below;
     for (const Joint& joint : robot.joints) {
       if (joint.source_node == static_cast<int>(node)) below = robot.links[joint.child_link].name;

@@ -15,6 +15,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "lcm_url.h"
 #include "safe_decode.h"
 
 namespace rdtf::daemon {
@@ -241,6 +242,7 @@ bool check_config(DaemonConfig& config, std::string& error) {
             "expression, and '/' separates their parts)";
     return false;
   }
+  if (!check_lcm_url(config.lcm_url, error)) return false;
   // The non-throwing calls throughout: a folder below one rdtfd cannot search (a 0700 home folder
   // under the packaged unit's user) threw filesystem_error out of the start, an abort and a core
   // dump (s80cfg D4); it is a bad setting, named with the system's reason.

@@ -121,7 +121,9 @@ bool Daemon::start(std::string& error) {
     error = std::string("inotify: ") + std::strerror(errno);
     return false;
   }
-  if (!open_bus(error)) return false;
+  std::unique_ptr<Bus> bus = make_bus(config_, error);
+  if (!bus) return false;
+  install_bus(std::move(bus));
   blobs_.set_max_message_bytes(config_.max_chunk_bytes);
   if (ports_.signals) {
     sigset_t signals;
@@ -357,6 +359,17 @@ void Daemon::reload_config() {
   const bool conversion_changed = change.has(kReconvert);
   const bool simulation_changed = change.has(kRestartSimulation);
   keep_restart_settings(config_, *fresh);  // E.g. the worker pool keeps its size until a restart.
+  // The new bus is opened before anything changes: a URL LCM cannot open (a unicast address, a
+  // port in use by nothing it may join) left the new URL in the running config, the old bus
+  // serving, and the simulations restarted on a bus that did not work (s80cfg, stop 42's leftover).
+  std::unique_ptr<Bus> fresh_bus;
+  if (lcm_changed) {
+    fresh_bus = make_bus(*fresh, error);
+    if (!fresh_bus) {
+      log_line("SIGHUP: config not reloaded, the running config stays: " + error);
+      return;
+    }
+  }
   const bool output_changed = fresh->output != config_.output;
   if (output_changed) {
     // The new output is locked before the old one is let go: refused, the running config stays.
@@ -385,7 +398,7 @@ void Daemon::reload_config() {
     unfile_timer(record);
     file_timer(record);
   }
-  if (lcm_changed && !open_bus(error)) log_line("SIGHUP: " + error);
+  if (fresh_bus) install_bus(std::move(fresh_bus));
   publisher_->set_rate(config_.chunk_rate_bytes_per_s);
   blobs_.set_max_message_bytes(config_.max_chunk_bytes);
   read_budget_->set_capacity(config_.max_read_bytes_in_flight);

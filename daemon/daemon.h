@@ -109,7 +109,10 @@ class Daemon {
   void drop_model(const std::filesystem::path& source, std::chrono::microseconds checked);
 
   // The bus (daemon_publish.cc).
-  bool open_bus(std::string& error);
+  // A bus on `config`'s URL and prefix (nullptr and `error` when LCM cannot open it), and the
+  // publisher that sends on it; opened before a reload commits, so a URL LCM refuses changes nothing.
+  std::unique_ptr<Bus> make_bus(const DaemonConfig& config, std::string& error);
+  void install_bus(std::unique_ptr<Bus> bus);
   void publish_daemon_error(const std::string& code, const std::string& file, const std::string& message);
   void on_publisher_event(const PublisherEvent& event);
   std::size_t publish_model(const ModelRecord& record);  // 1 when it has a live revision.

@@ -11,15 +11,17 @@
 
 namespace rdtf::daemon {
 
-bool Daemon::open_bus(std::string& error) {
+std::unique_ptr<Bus> Daemon::make_bus(const DaemonConfig& config, std::string& error) {
   BusHandlers handlers{
       [this](const std::string& channel, const void* data, std::size_t size) { bus_.request_datagram(channel, data, size); },
       [this](const std::string& channel, const void* data, std::size_t size) { bus_.command_datagram(channel, data, size); },
       [this](const std::string& channel, const void* data, std::size_t size) {
         bus_.blob_request_datagram(channel, data, size);
       }};
-  std::unique_ptr<Bus> bus = ports_.bus(config_, std::move(handlers), error);
-  if (!bus) return false;
+  return ports_.bus(config, std::move(handlers), error);
+}
+
+void Daemon::install_bus(std::unique_ptr<Bus> bus) {
   Bus* sender = bus.get();
   publisher_ = std::make_unique<Publisher>(
       [sender](const std::string& channel, const std::uint8_t* data, unsigned int size) {
@@ -30,7 +32,6 @@ bool Daemon::open_bus(std::string& error) {
   publisher_->on_event([this](const PublisherEvent& event) { on_publisher_event(event); });
   blobs_.publisher_replaced();
   lcm_ = std::move(bus);
-  return true;
 }
 
 void Daemon::publish_daemon_error(const std::string& code, const std::string& file, const std::string& message) {

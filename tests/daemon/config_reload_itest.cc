@@ -59,6 +59,20 @@ TEST(DaemonReload, ATimeStepThatWouldWedgeTheDaemonIsRefusedAtStart) {
   EXPECT_NE(daemon->log().find("time_step"), std::string::npos) << daemon->log();
 }
 
+// A misspelt LCM option is a bad setting, refused at start with exit 2 (LCM itself only warned
+// and ran with TTL 0); a URL LCM cannot open at this moment is not, and exits 1 so that systemd
+// restarts it (a network not yet up at boot).
+TEST(DaemonReload, AMisspeltLcmOptionIsRefusedAtStart) {
+  Session s;
+  DaemonOptions options;
+  options.with("lcm_url", "udpm://239.255.76.67:7667?tll=1");
+  auto daemon = std::make_unique<DaemonProcess>(options.with_watch({s.watch}).with_output(s.output));
+  const auto code = daemon->wait_exit(10s);
+  ASSERT_TRUE(code.has_value());
+  EXPECT_EQ(*code, 2);
+  EXPECT_NE(daemon->log().find("option \"tll=1\" is not one LCM's udpm provider reads"), std::string::npos) << daemon->log();
+}
+
 // A config file that is not there, or a directory, given at start: exit 2 like any bad setting,
 // naming the file and what is wrong (CLI11's own check exited 105 with its wording).
 TEST(DaemonReload, AMissingOrDirectoryConfigIsRefusedAtStartNamingIt) {

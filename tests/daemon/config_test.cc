@@ -1,6 +1,7 @@
 // rdtfd's config file (daemon/config.h): every key read, unknown keys and wrong types refused
 // with the key named, relative folders relative to the file, and the sanity checks.
 #include "config.h"
+#include "lcm_url.h"
 
 #include <sys/stat.h>
 
@@ -247,6 +248,35 @@ TEST(DaemonConfig, ARefusedConfigCreatesNoFolder) {
     EXPECT_FALSE(check_config(config, error));
     EXPECT_FALSE(std::filesystem::exists(top / "new_watch")) << error;
     EXPECT_FALSE(std::filesystem::exists(top / "new_output")) << error;
+  }
+}
+
+// What LCM 1.3 refuses, and what it only warns about on stderr and then ignores (a misspelt or
+// unreadable option: TTL 0, no datagram leaves the host), are all refused, naming the part.
+TEST(DaemonConfig, LcmUrlsAreCheckedAsLcmReadsThem) {
+  std::string error;
+  for (const char* good : {"", "udpm://239.255.76.67:7667", "udpm://239.255.76.67:7667?ttl=1",
+                           "udpm://239.255.76.67", "udpm://224.0.0.251:5353?ttl=0&recv_buf_size=2097152",
+                           "memq://", "file:///tmp/x.lcmlog?mode=w"}) {
+    EXPECT_TRUE(check_lcm_url(good, error)) << good << ": " << error;
+  }
+  const std::vector<std::pair<std::string, std::string>> bad = {
+      {"udpm://239.255.76.67:7667?tll=1", "option \"tll=1\" is not one LCM's udpm provider reads (ttl, recv_buf_size)"},
+      {"udpm://239.255.76.67:7667?ttl=one", "option \"ttl=one\": ttl is a whole number from 0 to 255"},
+      {"udpm://239.255.76.67:7667?ttl=256", "option \"ttl=256\": ttl is a whole number from 0 to 255"},
+      {"udpm://239.255.76.67:7667?recv_buf_size=2M", "recv_buf_size is a byte count"},
+      {"udpm://10.0.0.1:7667", "10.0.0.1 is not a multicast group"},
+      {"udpm://robots.local:7667", "\"robots.local\" is not an IPv4 address"},
+      {"udpm://239.255.76.67:99999", "port \"99999\" is not a number from 1 to 65535"},
+      {"udpm://239.255.76.67:", "port \"\" is not a number from 1 to 65535"},
+      {"239.255.76.67:7667", "is not an LCM URL"},
+      {"udp://239.255.76.67:7667", "LCM has no provider \"udp\""},
+  };
+  for (const auto& [url, message] : bad) {
+    error.clear();
+    EXPECT_FALSE(check_lcm_url(url, error)) << url;
+    EXPECT_NE(error.find(message), std::string::npos) << url << ": " << error;
+    EXPECT_NE(error.find("lcm_url"), std::string::npos) << error;
   }
 }
 

@@ -136,6 +136,7 @@ struct BusRecord {
   BusHandlers handlers;
   std::deque<std::pair<std::string, std::vector<std::uint8_t>>> incoming;  // Channel, datagram.
   int opened = 0;
+  std::string unopenable_url;  // An LCM URL the fake bus cannot open, as LCM refuses one.
 };
 
 class FakeBus final : public Bus {
@@ -163,7 +164,11 @@ class FakeBus final : public Bus {
 };
 
 inline BusFactory fake_bus(std::shared_ptr<BusRecord> record) {
-  return [record](const DaemonConfig&, BusHandlers handlers, std::string&) -> std::unique_ptr<Bus> {
+  return [record](const DaemonConfig& config, BusHandlers handlers, std::string& error) -> std::unique_ptr<Bus> {
+    if (!record->unopenable_url.empty() && config.lcm_url == record->unopenable_url) {
+      error = "cannot open LCM at '" + config.lcm_url + "'";
+      return nullptr;
+    }
     record->handlers = std::move(handlers);
     ++record->opened;
     return std::make_unique<FakeBus>(record);

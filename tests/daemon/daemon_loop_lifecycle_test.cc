@@ -235,5 +235,37 @@ TEST_F(DaemonLoop, AShorterStatusPeriodTakesEffectAtOnce) {
   EXPECT_GT(statuses(), at_start);
 }
 
+// A reload to an LCM URL that cannot be opened changes nothing: the new URL and prefix were
+// committed before the bus was opened, so rdtfd went on sending on its old bus under the new
+// prefix, and restarted its simulations on the URL that did not open (stop 42's leftover).
+TEST_F(DaemonLoop, AReloadToAnUnopenableBusKeepsTheRunningConfig) {
+  std::string next_url = "udpm://239.255.76.1:7601";
+  start([](DaemonConfig& config) { config.status_period = 100ms; },
+        [this, &next_url](std::string&) -> std::optional<DaemonConfig> {
+          DaemonConfig fresh = config_;
+          fresh.lcm_url = next_url;
+          fresh.channel_prefix = "NEW";
+          return fresh;
+        });
+  bus_->unopenable_url = next_url;
+  const auto on = [&](const std::string& channel) {
+    return std::count_if(bus_->sent.begin(), bus_->sent.end(), [&](const auto& sent) { return sent.channel == channel; });
+  };
+  daemon_->reload_config();
+  clear_bus();
+  advance(200ms);
+  EXPECT_GT(on("RDTF/STATUS"), 0);
+  EXPECT_EQ(on("NEW/STATUS"), 0);
+  EXPECT_EQ(bus_->opened, 1);
+  // The same reload once the URL opens: the new bus, under the new prefix.
+  next_url = "udpm://239.255.76.2:7602";
+  daemon_->reload_config();
+  clear_bus();
+  advance(200ms);
+  EXPECT_EQ(bus_->opened, 2);
+  EXPECT_GT(on("NEW/STATUS"), 0);
+  EXPECT_EQ(on("RDTF/STATUS"), 0);
+}
+
 }  // namespace
 }  // namespace rdtf::daemon

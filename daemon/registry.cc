@@ -169,8 +169,19 @@ std::string restore_revisions(const std::filesystem::path& output_root, ModelRec
   ModelState state;
   std::string why;
   switch (RevisionStore::load(output_root, record.id, state, why)) {
-    case RevisionStore::LoadResult::kAbsent:
-      return "";
+    case RevisionStore::LoadResult::kAbsent: {
+      // No state, but the outputs of an earlier run under this id (`.rdtfd-state` deleted, or the
+      // outputs copied without it): that run handed out numbers nothing here remembers, and
+      // counting from 1 again gave other contents the numbers subscribers had seen (stop 42's
+      // leftover). Numbered from the clock, as for a state file refused.
+      std::error_code ec;
+      const std::filesystem::path earlier = output_root / record.id;
+      if (!std::filesystem::is_directory(earlier, ec) || std::filesystem::is_empty(earlier, ec) || ec) return "";
+      record.numbered = std::max(record.numbered, revision_floor_now());
+      return "revision state of " + record.id + " missing while " + earlier.string() +
+             " holds an earlier run's outputs; its revisions are numbered from " + std::to_string(record.numbered + 1) +
+             ", above any number an earlier run can have handed out";
+    }
     case RevisionStore::LoadResult::kRefused:
       record.numbered = std::max(record.numbered, revision_floor_now());
       return "revision state of " + record.id + " ignored: " + why + "; its revisions are numbered from " +

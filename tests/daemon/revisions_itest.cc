@@ -286,7 +286,8 @@ TEST(Revisions, NumbersOfRejectedContentsAreNotHandedOutAgainAfterARestart) {
 
 // A state file torn, hostile or not a file: refused with the reason in the log, and the model
 // numbered above anything an earlier run can have handed out (microseconds since the epoch).
-void expect_refused_state(const std::function<void(const fs::path&)>& spoil, const std::string& reason) {
+void expect_refused_state(const std::function<void(const fs::path&)>& spoil,
+                          const std::function<std::string(const fs::path& state)>& logged) {
   Session s;
   const std::string id = "arm.gltf";
   const auto v1 = chain(1.0);
@@ -307,7 +308,7 @@ void expect_refused_state(const std::function<void(const fs::path&)>& spoil, con
     }
     return false;
   }, 10s)) << daemon.log();
-  EXPECT_TRUE(daemon.wait_log("revision state of arm.gltf ignored: " + state.string() + ": " + reason)) << daemon.log();
+  EXPECT_TRUE(daemon.wait_log(logged(state))) << daemon.log();
   const auto d = *last_description(s.messages(), id);
   EXPECT_GT(d.revision, before) << "a number an earlier run may have handed out";
   EXPECT_LT(d.revision, std::int64_t{1} << 53);
@@ -328,11 +329,24 @@ void expect_refused_state(const std::function<void(const fs::path&)>& spoil, con
   EXPECT_EQ(again->content_hash, content_hash(v1));
 }
 
+std::function<std::string(const fs::path&)> refused_because(const std::string& reason) {
+  return [reason](const fs::path& state) { return "revision state of arm.gltf ignored: " + state.string() + ": " + reason; };
+}
+
+// The state folder deleted, the outputs kept: the earlier run's numbers are not handed out again
+// to other contents (they started at 1 again).
+TEST(Revisions, AStateFolderDeletedBesideTheOutputsNumbersFromTheClock) {
+  expect_refused_state([](const fs::path& state) { fs::remove_all(state.parent_path()); }, [](const fs::path& state) {
+    return "revision state of arm.gltf missing while " + (state.parent_path().parent_path() / "arm.gltf").string() +
+           " holds an earlier run's outputs";
+  });
+}
+
 TEST(Revisions, ATornStateFileIsRefused) {
   expect_refused_state([](const fs::path& state) {
     const std::string text = read(state);
     write_in_place(state, text.substr(0, text.size() / 2));
-  }, "not valid JSON (at byte ");
+  }, refused_because("not valid JSON (at byte "));
 }
 
 TEST(Revisions, AHostileStateFileIsRefused) {
@@ -340,7 +354,7 @@ TEST(Revisions, AHostileStateFileIsRefused) {
     Json j = Json::parse(read(state));
     j["numbered"] = 9007199254740993ull;  // 2^53 + 1: a number that would not stay exact
     write_in_place(state, j.dump());
-  }, "/: 'numbered' ");
+  }, refused_because("/: 'numbered' "));
 }
 
 TEST(Revisions, AStateFileThatIsASymlinkIsRefused) {
@@ -348,7 +362,7 @@ TEST(Revisions, AStateFileThatIsASymlinkIsRefused) {
     const fs::path elsewhere = state.parent_path().parent_path().parent_path() / "elsewhere.json";
     fs::rename(state, elsewhere);
     fs::create_symlink(elsewhere, state);
-  }, "cannot open: Too many levels of symbolic links");
+  }, refused_because("cannot open: Too many levels of symbolic links"));
 }
 
 TEST(Revisions, AStateFileOfAnotherModelIsRefused) {
@@ -357,7 +371,7 @@ TEST(Revisions, AStateFileOfAnotherModelIsRefused) {
     j["model_id"] = "other.gltf";
     j["live"] = nullptr;
     write_in_place(state, j.dump());
-  }, "is the state of model 'other.gltf', not of 'arm.gltf'");
+  }, refused_because("is the state of model 'other.gltf', not of 'arm.gltf'"));
 }
 
 }  // namespace

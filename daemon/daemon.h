@@ -13,6 +13,7 @@
 #include <set>
 #include <utility>
 
+#include <rdtf/model_error_t.hpp>
 #include <rdtf/request_t.hpp>
 
 #include "blob_server.h"
@@ -114,6 +115,9 @@ class Daemon {
   std::unique_ptr<Bus> make_bus(const DaemonConfig& config, std::string& error);
   void install_bus(std::unique_ptr<Bus> bus);
   void publish_daemon_error(const std::string& code, const std::string& file, const std::string& message);
+  // A model's ERROR, kept as its refusal while no revision of it is live (ModelRecord::refusal).
+  void publish_error(ModelRecord& record, rdtf::model_error_t error);
+  void republish_refusal(const ModelRecord& record);
   void on_publisher_event(const PublisherEvent& event);
   std::size_t publish_model(const ModelRecord& record);  // 1 when it has a live revision.
   std::size_t publish_all();                             // How many models were published.

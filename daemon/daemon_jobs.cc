@@ -271,10 +271,7 @@ void Daemon::apply(ConversionOutcome outcome) {
              std::to_string(std::chrono::duration_cast<std::chrono::milliseconds>(*actions.retry_in).count()) +
              " ms (attempt " + std::to_string(record->schedule.attempts()) + ")");
   }
-  if (actions.publish_error) {
-    publisher_->publish(channel(id, "ERROR"),
-                        make_model_error(*record, outcome.content_hash, outcome.diagnostics, config_.max_chunk_bytes));
-  }
+  if (actions.publish_error) publish_error(*record, make_model_error(*record, outcome.content_hash, outcome.diagnostics, config_.max_chunk_bytes));
   if (actions.remove) drop_model(outcome.source, outcome.duration);
 }
 
@@ -335,8 +332,7 @@ void Daemon::apply_converted(ConversionOutcome& outcome, ModelRecord& record) {
              milliseconds(outcome.duration) + ": " + candidate.validation->summary_line +
              (outcome.verdict_reused ? " (the verdict of the same robot, reused)" : "") +
              (record.live ? "; still serving revision " + std::to_string(record.revisions) : ""));
-    publisher_->publish(channel(id, "ERROR"),
-                        make_model_error(record, outcome.content_hash, candidate.validation->diagnostics, config_.max_chunk_bytes));
+    publish_error(record, make_model_error(record, outcome.content_hash, candidate.validation->diagnostics, config_.max_chunk_bytes));
     return;
   }
   ++counters_.conversions;
@@ -346,6 +342,7 @@ void Daemon::apply_converted(ConversionOutcome& outcome, ModelRecord& record) {
   record.restored.reset();
   record.live_result = candidate_result;
   record.live = std::move(outcome.converted);
+  record.refusal.reset();
   record.texts_on_disk = false;
   record.live->validation = std::move(report);
   // From now on the previous revision's files are no longer served (docs/lcm.md, "Files and blobs").

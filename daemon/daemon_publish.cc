@@ -1,6 +1,7 @@
 // What rdtfd sends and answers on the bus: descriptions, STATUS, errors, requests.
 #include <unistd.h>
 
+#include <rdtf/model_error_t.hpp>
 #include <rdtf/status_t.hpp>
 
 #include "daemon.h"
@@ -43,6 +44,11 @@ void Daemon::publish_daemon_error(const std::string& code, const std::string& fi
   error.live_revision = 0;
   error.diagnostics = to_messages(diag);
   publisher_->publish(config_.channel_prefix + "/ERROR", error);
+}
+
+void Daemon::publish_error(ModelRecord& record, rdtf::model_error_t error) {
+  publisher_->publish(channel(record.id, "ERROR"), error);
+  if (!record.live) record.refusal = std::make_shared<const rdtf::model_error_t>(std::move(error));
 }
 
 void Daemon::on_publisher_event(const PublisherEvent& event) {
@@ -144,16 +150,31 @@ void Daemon::on_request(const rdtf::request_t& request) {
   answer_request(request.model_id, request.requester.substr(0, 80));
 }
 
+void Daemon::republish_refusal(const ModelRecord& record) {
+  rdtf::model_error_t again = *record.refusal;
+  again.utime = now_utime();
+  publisher_->publish(channel(record.id, "ERROR"), again);
+}
+
 // `requester` is already escaped for the log (it comes from the bus).
 void Daemon::answer_request(const std::string& model_id, const std::string& requester) {
   const auto start = clock_->now();
   if (model_id.empty()) {
     const std::size_t count = publish_all();
+    for (auto& [source, record] : registry_.all()) {
+      if (!record.live && record.refusal) republish_refusal(record);
+    }
     log_line("republished every model on request of '" + requester + "' (" + std::to_string(count) +
              " models), queued in " + since(start));
     return;
   }
   if (ModelRecord* record = registry_.find_id(model_id)) {
+    if (!record->live && record->refusal) {
+      republish_refusal(*record);
+      log_line("answered the request of '" + requester + "' for " + record->id +
+               " with the ERROR of its last save (no revision of it is live)");
+      return;
+    }
     if (record->schedule.request().publish_live) publish_model(*record);
     log_line("republished " + record->id + " on request of '" + requester + "', queued in " + since(start));
   }

@@ -14,6 +14,10 @@
 #include "model_schedule.h"
 #include "revision_store.h"
 
+namespace rdtf {
+class model_error_t;
+}  // namespace rdtf
+
 namespace rdtf::daemon {
 
 struct ModelRecord {
@@ -44,6 +48,10 @@ struct ModelRecord {
   // A conversion made while the model settled, waiting for its deadline (model_schedule.h,
   // holds_prepared()): its outputs are staged, not yet in place.
   std::optional<ConversionOutcome> prepared;
+  // The ERROR of its last save refused while no revision of it is live: a REQUEST for the model
+  // is answered with it again, since a subscriber that came late has nothing else to learn why.
+  // Dropped once a revision goes live.
+  std::shared_ptr<const rdtf::model_error_t> refusal;
 };
 
 // The live revision's two primary texts, as its DESCRIPTION carries them.

@@ -128,6 +128,34 @@ TEST_F(DaemonLoop, RequestsAreAnsweredForOneModelOrAllAndRepeatsWithinASecondOnc
   EXPECT_EQ(events("modelled_arm.glb"), kRevision1);
 }
 
+// A model every save of which was refused has no description to send: a REQUEST for it (or for
+// all) is answered with the ERROR of its last save, all a subscriber that came late can learn of
+// it; it was answered with nothing. Once a revision is live, requests get that instead.
+TEST_F(DaemonLoop, ARequestForAModelNeverLiveIsAnsweredWithItsLastError) {
+  start();
+  save("broken.glb", "{ not json");
+  advance(50ms);
+  convert();
+  ASSERT_EQ(events("broken.glb"), (std::vector<std::string>{"ERROR live r0"}));
+  advance(1s);
+  clear_bus();
+  bus_->incoming.emplace_back("RDTF/REQUEST", fakes::encode_request("broken.glb", "late"));
+  step();
+  EXPECT_EQ(events("broken.glb"), (std::vector<std::string>{"ERROR live r0"}));
+  advance(1s);
+  bus_->incoming.emplace_back("RDTF/REQUEST", fakes::encode_request("", "all"));
+  step();
+  EXPECT_EQ(events("broken.glb"), (std::vector<std::string>{"ERROR live r0", "ERROR live r0"}));
+  save("broken.glb", fixture("arm3.glb"));
+  advance(50ms);
+  convert();
+  advance(1s);
+  clear_bus();
+  bus_->incoming.emplace_back("RDTF/REQUEST", fakes::encode_request("broken.glb", "late"));
+  step();
+  EXPECT_EQ(events("broken.glb"), kRevision1);
+}
+
 TEST_F(DaemonLoop, PeriodicRepublicationSendsEveryLiveModel) {
   start([](DaemonConfig& config) { config.republish_period = 5000ms; });
   save("arm3.glb", fixture("arm3.glb"));

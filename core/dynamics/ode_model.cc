@@ -255,7 +255,10 @@ void add_joint(Simulation::Model& model, int j, const Eigen::Isometry3d& X_SJ, D
     jm.lower = joint.limits->lower;
     jm.upper = joint.limits->upper;
   }
-  if (joint.limits) jm.effort_limit = joint.limits->effort;
+  if (joint.limits) {
+    jm.effort_limit = joint.limits->effort;
+    jm.velocity_limit = joint.limits->velocity;
+  }
   jm.child_body = model.links[joint.child_link].body;
   jm.parent_body = model.links[joint.parent_link].body;
   const std::string where = node_pointer(joint.node);
@@ -374,12 +377,26 @@ std::vector<std::string> take_ode_messages() {
   return out;
 }
 
+double slider_rate(dJointID slider) {
+  dVector3 axis;
+  dJointGetSliderAxis(slider, axis);  // In the scene frame.
+  const dBodyID child = dJointGetBody(slider, 0);
+  const dBodyID parent = dJointGetBody(slider, 1);
+  const auto vector = [](const dReal* v) { return Eigen::Vector3d(v[0], v[1], v[2]); };
+  Eigen::Vector3d relative = vector(dBodyGetLinearVel(child));
+  if (parent != nullptr) {
+    const Eigen::Vector3d lever = vector(dBodyGetPosition(child)) - vector(dBodyGetPosition(parent));
+    relative -= vector(dBodyGetLinearVel(parent)) + vector(dBodyGetAngularVel(parent)).cross(lever);
+  }
+  return relative.dot(Eigen::Vector3d(axis[0], axis[1], axis[2]));
+}
+
 void prime_joint_states(Simulation::Model& model) {
   for (JointModel& jm : model.joints) {
     if (!jm.dof || !jm.id) continue;
     if (jm.kind == JointKind::kPrismatic) {
       jm.q = dJointGetSliderPosition(jm.id);
-      jm.qdot = dJointGetSliderPositionRate(jm.id);
+      jm.qdot = slider_rate(jm.id);
     } else {
       jm.ode_angle = dJointGetHingeAngle(jm.id);
       jm.qdot = dJointGetHingeAngleRate(jm.id);

@@ -155,6 +155,7 @@ struct JointModel {
   dJointFeedback feedback{};  // Of `id` (or of limit_motor), for stop_yield
 
   double effort_limit = 0;  // 0: none
+  double velocity_limit = 0;  // 0: none; bounds the speed a command drives the joint at
   double damping = 0;
   double stiffness = 0;
   std::optional<JointCommand> command;
@@ -214,6 +215,12 @@ Eigen::Isometry3d body_pose(dBodyID body);  // X_SB
 void read_frames(Simulation::Model& model);  // model.frames from ODE's bodies (after set-up and every step)
 // Reads back the ODE state of the one-dof joints without unwrapping (after set-up).
 void prime_joint_states(Simulation::Model& model);
+// The rate of a slider's position: the exact time derivative of dJointGetSliderPosition, the
+// child's centre of mass moving along the axis relative to the point of the parent it passes,
+// v_c - v_p - w_p x (p_c - p_p). ODE's dJointGetSliderPositionRate leaves out the parent's
+// rotation, so a slider on a turning parent reported a speed it did not have, and its damping
+// pushed it (s90ctrl D2, D3).
+double slider_rate(dJointID slider);
 // The ODE messages the calling thread received since the last call.
 std::vector<std::string> take_ode_messages();
 

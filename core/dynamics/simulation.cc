@@ -64,7 +64,8 @@ Drive command_drive(const JointModel& jm, double h) {
     // Gains this soft are stable applied as a torque (kd h / I > 2 would need I below 5e-13
     // kg m^2), and a motor of CFM 1 / stiffness would not be a number the solver can use.
     const auto bounded = [bound](double term) { return std::isnan(term) ? 0.0 : std::clamp(term, -bound, bound); };
-    d.feed_forward = bounded(d.feed_forward + bounded(kp * (c.position - jm.q)) + bounded(kd * (c.velocity - jm.qdot)));
+    const double target = jm.velocity_limit > 0 ? std::clamp(c.velocity, -jm.velocity_limit, jm.velocity_limit) : c.velocity;
+    d.feed_forward = bounded(d.feed_forward + bounded(kp * (c.position - jm.q)) + bounded(kd * (target - jm.qdot)));
     return d;
   }
   // Weighed, not multiplied out; a target beyond any speed (a gain of 1e308 on an error of 1e308)
@@ -73,7 +74,11 @@ Drive command_drive(const JointModel& jm, double h) {
   const double fmax = bound - std::abs(d.feed_forward);
   if (std::isnan(velocity) || !(fmax > 0)) return d;
   d.motor = true;
-  d.velocity = std::clamp(velocity, -kFastestTarget, kFastestTarget);
+  // The joint's velocity limit bounds the speed the motor drives it at (as ros_control's limits
+  // saturate a command); gravity or a collision may still carry it faster. A velocity command of
+  // 10 rad/s on a joint limited to 3 rad/s drove it at 10 (s90ctrl D5).
+  const double fastest = jm.velocity_limit > 0 ? jm.velocity_limit : kFastestTarget;
+  d.velocity = std::clamp(velocity, -fastest, fastest);
   d.cfm = 1 / stiffness;
   d.fmax = fmax;
   return d;
@@ -130,7 +135,10 @@ double command_motor_effort(const JointModel& jm, double fmax) {
   if (jm.kind != JointKind::kPrismatic) {
     dJointGetAMotorAxis(jm.command_motor, 0, axis);
   } else {
-    dJointGetLMotorAxis(jm.command_motor, 0, axis);
+    // The slider's axis in the scene frame, as the feedback is: dJointGetLMotorAxis returns the
+    // motor's axis as stored, in the child's frame, and a turned parent scaled the effort by the
+    // cosine of its turn, or flipped it (s90ctrl D1).
+    dJointGetSliderAxis(jm.id, axis);
     load = jm.command_feedback.f1;
   }
   const double along = load[0] * axis[0] + load[1] * axis[1] + load[2] * axis[2];
@@ -239,7 +247,13 @@ void Simulation::step(double dt) {
   for (JointModel& jm : m.joints) {
     if (!jm.id) continue;
     if (jm.dof) {
-      const Drive drive = command_drive(jm, dt);
+      Drive drive = command_drive(jm, dt);
+      if (drive.motor && jm.kind == JointKind::kPrismatic) {
+        // A linear motor's row holds the centres of mass's relative speed along the axis, which
+        // is the slider's rate plus the parent's turn (slider_rate): its target is moved by that
+        // turn's part as of the step's start, so the law acts on the slider's rate (to O(h)).
+        drive.velocity += dJointGetSliderPositionRate(jm.id) - jm.qdot;
+      }
       set_command_motor(m, jm, drive);
       jm.motor_fmax = drive.motor ? drive.fmax : 0.0;
       jm.effort = drive.feed_forward;
@@ -283,7 +297,7 @@ void Simulation::step(double dt) {
     if (jm.dof) {
       if (jm.kind == JointKind::kPrismatic) {
         jm.q = dJointGetSliderPosition(jm.id);
-        jm.qdot = dJointGetSliderPositionRate(jm.id);
+        jm.qdot = dynamics_internal::slider_rate(jm.id);
       } else {
         const double angle = dJointGetHingeAngle(jm.id);
         jm.q += std::remainder(angle - jm.ode_angle, 2 * std::numbers::pi);

@@ -247,13 +247,9 @@ void Simulation::step(double dt) {
   for (JointModel& jm : m.joints) {
     if (!jm.id) continue;
     if (jm.dof) {
-      Drive drive = command_drive(jm, dt);
-      if (drive.motor && jm.kind == JointKind::kPrismatic) {
-        // A linear motor's row holds the centres of mass's relative speed along the axis, which
-        // is the slider's rate plus the parent's turn (slider_rate): its target is moved by that
-        // turn's part as of the step's start, so the law acts on the slider's rate (to O(h)).
-        drive.velocity += dJointGetSliderPositionRate(jm.id) - jm.qdot;
-      }
+      // A linear motor's row already measures the slider's rate: ODE decouples its torque (the
+      // angular terms of addLimot's linear rows), so no correction for the parent's turn here.
+      const Drive drive = command_drive(jm, dt);
       set_command_motor(m, jm, drive);
       jm.motor_fmax = drive.motor ? drive.fmax : 0.0;
       jm.effort = drive.feed_forward;

@@ -111,6 +111,54 @@ TEST(DynamicsSlider, TheEffortOfARailOnATurnedArmIsAlongTheRail) {
   EXPECT_GT(std::abs(holding), 1.0);
   EXPECT_NEAR(rail.effort, holding, 1e-9 * std::abs(holding));
   EXPECT_NEAR(rail.effort, kp_rail * (0.05 - rail.position), 1e-9 * std::abs(holding));
+  // The arm's holding torque is gravity's moment of arm and carriage about the hinge: the rail's
+  // motor, acting between two centres 0.5 m apart across the rail, adds no couple of its own.
+  const Eigen::Vector3d arm_center = sim->link_pose("arm")->X_SL * Eigen::Vector3d(0, -0.5, 0);
+  const Eigen::Vector3d carriage_center = sim->link_pose("carriage")->X_SL.translation();
+  const double moment = 1.0 * kG * arm_center.x() + m * kG * carriage_center.x();
+  EXPECT_NEAR(sim->joint_state("hinge")->effort, moment, 1e-9 * std::abs(moment));
+}
+
+// The arm spun at 2 rad/s without gravity and the rail commanded to 0.1 m/s: at every step the
+// rail's motor force F is its law on the rail's rate, F = kd (0.1 - qdot'). The motor's row holds
+// the rate as of the step's start (ODE builds its Jacobian there: rail axis ax and the centres'
+// offset d at the start, the velocities u = v_c - v_p and w at the end), and qdot' is the rate at
+// the end; over a step h the axis turns by at most h |w| and d moves by h |u|, so the two differ by
+// at most h |w| (2 |u| + |w| |d|), about 6e-3 m/s here. Had the row measured the centres'
+// relative speed (as ODE's own slider rate does), the law would be off by |ax . (w x d)|, 1 m/s.
+TEST(DynamicsSlider, ARailCommandedOnASpinningArmFollowsItsLawOnTheRailsRate) {
+  RobotBuilder b = arm_with_rail(0.0);
+  SimulationOptions no_gravity;
+  no_gravity.gravity = Eigen::Vector3d::Zero();
+  auto sim = simulate(b.robot(), no_gravity);
+  const double kd = 100, target = 0.1, h = no_gravity.time_step;
+  ASSERT_TRUE(sim->set_command({"hinge", CommandMode::kVelocity, 0, 0, 2.0, 0, 1000}));
+  ASSERT_TRUE(sim->set_command({"rail", CommandMode::kVelocity, 0, 0, target, 0, kd}));
+  double worst = 0, worst_bound = 0, largest_lever_term = 0;
+  while (sim->time() < 0.5) {
+    sim->step();
+    const JointState rail = *sim->joint_state("rail");
+    const LinkPose arm = *sim->link_pose("arm");
+    const LinkPose carriage = *sim->link_pose("carriage");
+    const Eigen::Vector3d arm_center = arm.X_SL * Eigen::Vector3d(0, -0.5, 0);
+    const Eigen::Vector3d v_arm_center = arm.v_SLo_S + arm.w_SL_S.cross(arm_center - arm.X_SL.translation());
+    const Eigen::Vector3d d = carriage.X_SL.translation() - arm_center;  // The carriage's centre is its origin.
+    const Eigen::Vector3d u = carriage.v_SLo_S - v_arm_center;
+    const double w = arm.w_SL_S.norm();
+    const Eigen::Vector3d axis_S = carriage.X_SL.linear() * Eigen::Vector3d::UnitX();
+    // The reported effort is F along the axis at the end: F cos(h w), within F (h w)^2 / 2.
+    const double bound = h * w * (2 * u.norm() + w * d.norm()) + std::abs(rail.effort) / kd * (h * w) * (h * w) + 1e-12;
+    const double departure = std::abs(rail.velocity - (target - rail.effort / kd));
+    ASSERT_LE(departure, bound) << "t = " << sim->time();
+    worst = std::max(worst, departure);
+    worst_bound = std::max(worst_bound, bound);
+    largest_lever_term = std::max(largest_lever_term, std::abs(axis_S.dot(arm.w_SL_S.cross(d))));
+  }
+  std::printf("rail on a spinning arm at %.3f rad/s: worst departure from the law %.3g m/s (bound up to %.3g), "
+              "the centres' turning term up to %.3g m/s\n",
+              sim->joint_state("hinge")->velocity, worst, worst_bound, largest_lever_term);
+  EXPECT_GT(sim->joint_state("hinge")->velocity, 1.9);
+  EXPECT_GT(largest_lever_term, 10 * worst_bound);  // The bound tells the two measures apart.
 }
 
 // A velocity command beyond the joint's velocity limit drives it at the limit: a hinge about the

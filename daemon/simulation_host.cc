@@ -154,14 +154,16 @@ std::string SimulationHost::command(const rdtf::joint_command_t& command) {
     ++dropped_commands_;
     return "joint_command_t dropped: " + std::to_string(kMaxPendingCommands) + " commands already wait";
   }
-  if (command.num_joints < 0 || static_cast<std::size_t>(command.num_joints) > joints->second) {
-    // A controller that kept its joint list across a reload that removed a joint must hear why
-    // its robot went passive, as for any other joint it names that is not there.
-    const std::size_t count = joints->second;
+  // The queue's bound by count bounds its bytes only if each command's size is bounded by its
+  // model's: beyond twice its joints and a few, a command is not queued, but rejected on ERROR all
+  // the same (a controller must hear why its robot went passive). Below that, the simulation
+  // thread names what is wrong: the joint named twice, the joint a reload removed (s90ctrl D6:
+  // a count above the model's hid both).
+  const std::size_t count = joints->second;
+  if (command.num_joints < 0 || static_cast<std::size_t>(command.num_joints) > 2 * count + kSpareCommandEntries) {
     inbox_.rejections.emplace_back(
         command.model_id, "command names " + std::to_string(command.num_joints) + " joints, but the model has " +
-                              std::to_string(count) + " joint" + (count == 1 ? "" : "s") +
-                              " (a joint no longer in the live revision, or a joint named twice)");
+                              std::to_string(count) + " joint" + (count == 1 ? "" : "s") + ": send one entry per joint");
     return "";
   }
   inbox_.commands.push_back(command);

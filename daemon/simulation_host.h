@@ -206,6 +206,8 @@ class SimulationHost {
 
   // Commands waiting for the host thread beyond this are dropped (a flood of them).
   static constexpr std::size_t kMaxPendingCommands = 4096;
+  // Entries a command may have beyond twice its model's joints and still be read entry by entry.
+  static constexpr std::size_t kSpareCommandEntries = 16;
   // COMMAND_REJECTED reports a second, at most.
   static constexpr int kRejectionsPerSecond = 20;
   // SIMULATION_FAILED reports a second (all models), at most.

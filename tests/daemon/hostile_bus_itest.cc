@@ -399,9 +399,9 @@ TEST(HostileBus, HugeFiniteCommandsNeverStopTheSimulationNorPublishNonFiniteValu
 }
 
 // A command is queued for the simulation thread only when it fits one datagram (64 KiB) and has
-// no more joints than the model: the queue's bound by count then bounds its bytes. One with more
-// joints (a controller that kept a joint a reload removed) is rejected on ERROR all the same, not
-// dropped in silence. A rejection's ERROR carries the bus's text escaped and cut, and the live
+// at most twice the model's joints plus 16: the queue's bound by count then bounds its bytes. One
+// with more is rejected on ERROR all the same, not dropped in silence; one within the bound that
+// names a joint twice is rejected naming it, whatever its count (s90ctrl D6). A rejection's ERROR carries the bus's text escaped and cut, and the live
 // model's content hash.
 TEST(HostileBus, OversizedCommandsAreDroppedAndRejectionsCarryNoBusBytes) {
   Session s;
@@ -414,25 +414,38 @@ TEST(HostileBus, OversizedCommandsAreDroppedAndRejectionsCarryNoBusBytes) {
   // 70,000 bytes of content hash (LCM sends it in fragments); four joints for arm3's three.
   s.subscriber.publish("RDTF/arm3.gltf/JOINT_COMMAND",
                        make_command(kArm, 1, std::string(70000, 'h'), {{"shoulder", rdtf::joint_command_t::TORQUE, 1}}));
+  std::vector<JointOrder> many;
+  for (int i = 0; i < 40; ++i) many.push_back({"j" + std::to_string(i), rdtf::joint_command_t::TORQUE, 1});
+  s.subscriber.publish("RDTF/arm3.gltf/JOINT_COMMAND", make_command(kArm, 1, hash, many));
   s.subscriber.publish("RDTF/arm3.gltf/JOINT_COMMAND",
                        make_command(kArm, 1, hash,
                                     {{"shoulder", rdtf::joint_command_t::TORQUE, 1},
                                      {"elbow", rdtf::joint_command_t::TORQUE, 1},
-                                     {"a", rdtf::joint_command_t::TORQUE, 1},
-                                     {"b", rdtf::joint_command_t::TORQUE, 1}}));
+                                     {"shoulder", rdtf::joint_command_t::TORQUE, 1}}));
   ASSERT_TRUE(s.wait_for([&](const auto& all) { return dropped(all) >= dropped_before + 1; }))
       << "STATUS counts " << dropped(s.messages()) - dropped_before << " dropped of 1";
   ASSERT_TRUE(s.daemon->wait_log("above rdtfd's input limit of 65536")) << s.daemon->log();
   const auto over_count = [](const std::vector<Message>& all) {
     for (const auto& e : decoded<rdtf::model_error_t>(all, "ERROR", kArm)) {
       if (!e.diagnostics.empty() && e.diagnostics[0].code == "COMMAND_REJECTED" &&
-          e.diagnostics[0].message.find("command names 4 joints, but the model has ") != std::string::npos) {
+          e.diagnostics[0].message.find("command names 40 joints, but the model has ") != std::string::npos) {
         return true;
       }
     }
     return false;
   };
-  ASSERT_TRUE(s.wait_for(over_count)) << "no COMMAND_REJECTED for the command with four joints";
+  ASSERT_TRUE(s.wait_for(over_count)) << "no COMMAND_REJECTED for the command with 40 joints";
+  const auto named_twice = [](const std::vector<Message>& all) {
+    for (const auto& e : decoded<rdtf::model_error_t>(all, "ERROR", kArm)) {
+      if (!e.diagnostics.empty() &&
+          e.diagnostics[0].message.find("joint 'shoulder' is named twice in one command (entries 0 'shoulder' and 2)") !=
+              std::string::npos) {
+        return true;
+      }
+    }
+    return false;
+  };
+  ASSERT_TRUE(s.wait_for(named_twice)) << "no COMMAND_REJECTED naming the joint named twice in three entries";
   // 30,000 bytes of hash with control bytes, in one datagram: rejected, the text escaped and cut.
   std::string bad_hash(30000, 'x');
   bad_hash[10] = '\n';

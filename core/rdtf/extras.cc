@@ -86,7 +86,9 @@ void write_node_extras(Json& document, const std::vector<NodeType>& types, const
   for (std::size_t i = 0; i < types.size() && i < nodes.size(); ++i) {
     if (types[i] == NodeType::kNone) continue;
     Json* extras = extras_object(nodes[i]);
-    if (extras != nullptr && !extras->contains("rdtf_type")) (*extras)["rdtf_type"] = to_string(types[i]);
+    // Always the type the robot was built with: an authored one that extras.RDTF overrode would
+    // read as another robot without extras.RDTF (typing warns RDTF_NODE_EXTRAS_IGNORED).
+    if (extras != nullptr) (*extras)["rdtf_type"] = to_string(types[i]);
   }
   // Joints whose properties were not in node extras: written on the joint's frame node, where
   // they are read again (joint properties make a node a pivot, and this one is already the pivot).

@@ -72,11 +72,24 @@ constexpr double kSlideReach = 100.0;
 
 std::string short_number(double value) { return format_number(value, 3); }
 
-// What a packer's options do to a robot, for the warnings that meet a packed file.
-constexpr const char* kPackerAdvice =
-    "drops node extras (custom properties: joints, masses, densities) unless told to keep them, and merges or "
-    "renames nodes (parts, joint empties) unless told to keep them: pack with gltfpack -kn -ke (gltf-transform: "
-    "keep extras and nodes), or pack rdtf's own output (rdtf convert first)";
+// What a packer does to a robot, and the options that keep it, for the warnings that meet a
+// packed file: each tool's own (glTF-Transform keeps node extras; its flatten, join and instance,
+// which `optimize` runs by default, move and merge nodes; s90tools D1).
+std::string packer_advice(const std::string& packer) {
+  if (packer.rfind("glTF-Transform", 0) == 0) {
+    return "keeps node extras (custom properties: joints, masses, densities), but whose flatten, join and instance "
+           "steps (which optimize runs by default) move parts to the scene's root, merge them or drop their "
+           "empties: run gltf-transform optimize --flatten false --join false --instance false, or pack rdtf's own "
+           "output (rdtf convert first)";
+  }
+  if (packer.rfind("gltfpack", 0) == 0) {
+    return "drops node extras (custom properties: joints, masses, densities) unless -ke, and merges or renames nodes "
+           "(parts, joint empties) unless -kn: pack with gltfpack -kn -ke, or pack rdtf's own output (rdtf convert "
+           "first)";
+  }
+  return "may have dropped node extras (custom properties: joints, masses, densities) or merged nodes: pack rdtf's "
+         "own output instead (rdtf convert first)";
+}
 
 // Whether the model says where its joints are: an extras.RDTF (a converted file), or a node with a
 // joint key or rdtf_type. Densities and masses alone do not: a Blender export of the parts only
@@ -433,12 +446,15 @@ void check_missing_properties(const Json& document, const std::vector<NodeType>&
   std::vector<std::size_t> empties;
   // An armature: a skinned mesh, or bones without one (parts parented to bones).
   bool bones = document.contains("skins") && document["skins"].is_array() && !document["skins"].empty();
-  std::size_t links = 0;
+  std::size_t links = 0, links_parented = 0;
   for (std::size_t i = 0; i < types.size() && i < document["nodes"].size(); ++i) {
     const Json& node = document["nodes"][i];
     if (types[i] == NodeType::kNone) continue;
     if (node.contains("skin")) bones = true;
-    if (types[i] == NodeType::kLink) ++links;
+    if (types[i] == NodeType::kLink) {
+      ++links;
+      links_parented += is_child[i] ? 1 : 0;
+    }
     const bool has_children = node.contains("children") && !node["children"].empty();
     if (!node.contains("mesh") && has_children && is_child[i] && !bone[i] &&
         (types[i] == NodeType::kJoint || types[i] == NodeType::kLink)) {
@@ -461,13 +477,18 @@ void check_missing_properties(const Json& document, const std::vector<NodeType>&
                    (names.empty() ? std::string() : "; these empties look like joints: " + names) +
                    (bones ? std::string("; the model has an armature") : std::string()) +
                    (parts_only ? "; its " + std::to_string(links) +
-                                     " parts are parented to one another with no empty between them" +
+                                     (links_parented > 0 ? std::string(" parts are parented to one another with no empty "
+                                                                       "between them")
+                                                         : std::string(" parts lie side by side at the scene's root, "
+                                                                       "none parented to another")) +
                                      (packer ? std::string()
                                              : std::string(" (were the joint empties left out of the export, by "
                                                            "Include > Limit to > Selected Objects with only the "
                                                            "meshes selected?)"))
                                : std::string()) +
-                   (packer ? std::string(". The file was packed by '") + *packer + "', which " + kPackerAdvice
+                   (packer ? std::string(". The file was packed by '") + *packer + "', which " + packer_advice(*packer) +
+                                 " (if the file it packed had no joint properties either: a Blender export needs "
+                                 "Include > Custom Properties ticked)"
                            : std::string(". In Blender, tick File > Export > glTF 2.0 > Include > Custom Properties "
                                          "(export_extras=True): it is off by default; on an armature set the "
                                          "properties on the Bone (Bone tab, edit or object mode), not on the pose "
@@ -494,7 +515,7 @@ void check_units(const Json& document, const Robot& robot, Diagnostics& diag) {
                      "leave them out of the export: Blender exports hidden objects, and the objects of "
                      "a collection excluded from the view layer, unless Include > Limit to > Visible "
                      "Objects is ticked" +
-                     (packer ? ". The file was packed by '" + *packer + "', which " + kPackerAdvice : std::string()));
+                     (packer ? ". The file was packed by '" + *packer + "', which " + packer_advice(*packer) : std::string()));
   }
   check_units_of(document, robot, diag);
   check_densities(document, robot, diag);

@@ -89,6 +89,9 @@ bool is_skin_joint(const Json& document, std::size_t node) {
   return false;
 }
 
+// The tool that re-saved a file and replaced its generator, when asset.generator names one (below).
+std::optional<std::string> resaved_by(const Json& document);
+
 // Does a node-extras vector of this node need turning from Blender's axes to the node's? "rdtf_axes"
 // on the node says whether it is in Blender's axes ("blender" or "gltf"); without it, it is exactly
 // when Blender's exporter wrote the file. A bone is never turned: Blender's exporter writes a bone's
@@ -101,14 +104,14 @@ bool reads_blender_axes(const Json& document, std::size_t node, Diagnostics& dia
   if (typed_axis && !extras->contains("rdtf_axes") && !is_skin_joint(document, node)) {
     // A packer that replaces asset.generator hides which tool wrote the axis: gltfpack's output of
     // a Blender export turned every typed axis by 90 degrees, without a word.
-    if (const auto packer = repacked_by(document)) {
+    if (const auto tool = resaved_by(document)) {
       diag.warning(codes::RDTF_AXES_ASSUMED, json_pointer("/nodes", node) + "/extras/rdtf_axis",
                    node_label(document, node) + ": rdtf_axis " + value_text((*extras)["rdtf_axis"]) +
-                       " is read in glTF's axes, since asset.generator is '" + *packer +
-                       "', which replaced the generator of the file it packed: rdtf cannot tell whether "
+                       " is read in glTF's axes, since asset.generator is '" + *tool +
+                       "', which replaces the generator of a file it re-saves: rdtf cannot tell whether "
                        "Blender wrote it, where a typed axis is in Blender's axes (Z up). If it came from "
-                       "Blender, add \"rdtf_axes\": \"blender\" beside rdtf_axis, or pack rdtf's own output "
-                       "instead (rdtf convert, then gltfpack -kn -ke), which says its axes");
+                       "Blender, add \"rdtf_axes\": \"blender\" beside rdtf_axis, or re-save rdtf's own output "
+                       "instead (rdtf convert first, then e.g. gltfpack -kn -ke), which says its axes");
     }
   }
   if (extras != nullptr && extras->contains("rdtf_axes")) {
@@ -350,6 +353,18 @@ std::string generator_of(const Json& document) {
   return asset["generator"].get<std::string>();
 }
 
+std::optional<std::string> resaved_by(const Json& document) {
+  if (auto packer = repacked_by(document)) return packer;
+  // Editors and converters that load a file and write it again, keeping node extras (three.js's
+  // userData, the three.js editor; Assimp; Babylon.js): a Blender export they re-save reads its
+  // typed axes turned by 90 degrees (s90tools D2).
+  const std::string generator = generator_of(document);
+  for (const char* editor : {"THREE.GLTFExporter", "Assimp", "Babylon.js", "babylon.js"}) {
+    if (generator.rfind(editor, 0) == 0) return generator.substr(0, 80);
+  }
+  return std::nullopt;
+}
+
 }  // namespace
 
 std::optional<std::string> repacked_by(const Json& document) {
@@ -359,6 +374,7 @@ std::optional<std::string> repacked_by(const Json& document) {
   }
   return std::nullopt;
 }
+
 
 bool written_by_blender(const Json& document) {
   return generator_of(document).rfind("Khronos glTF Blender I/O", 0) == 0;

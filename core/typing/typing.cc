@@ -150,8 +150,20 @@ void read_authored_types(const Json& document, std::vector<NodeType>& types,
   }
   for (std::size_t i = 0; i < nodes.size(); ++i) {
     const Json* extras = node_extras(nodes[i]);
-    if (fixed[i] || extras == nullptr || !extras->contains("rdtf_type")) continue;
+    if (extras == nullptr || !extras->contains("rdtf_type")) continue;
     const Json& value = (*extras)["rdtf_type"];
+    if (fixed[i]) {
+      // Typed by extras.RDTF, which takes precedence: a node-extras type that says otherwise (a
+      // tool that edited one and not the other) is named, and the output's is rewritten to agree
+      // (s90tools D4: it was kept, and the output read otherwise without its extras.RDTF).
+      if (!value.is_string() || node_type_from_string(value.get<std::string>()) != types[i]) {
+        diag.warning(codes::RDTF_NODE_EXTRAS_IGNORED, json_pointer("/nodes", i) + "/extras/rdtf_type",
+                     node_label(document, i) + ": rdtf_type " + value_text(value) + " is not its type in extras.RDTF, '" +
+                         to_string(types[i]) +
+                         "'; extras.RDTF takes precedence, and the output's node extras are rewritten to agree");
+      }
+      continue;
+    }
     const auto type = value.is_string() ? node_type_from_string(value.get<std::string>()) : std::nullopt;
     if (!type) {
       diag.error(codes::RDTF_INVALID_TYPE, json_pointer("/nodes", i) + "/extras/rdtf_type",

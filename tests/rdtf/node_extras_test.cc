@@ -146,6 +146,31 @@ TEST_F(NodeExtras, EditedNodeExtrasAreNamedIgnoredAndRewrittenToAgree) {
   expect_same_robot(robot_, blender->robot);
 }
 
+// A node's rdtf_type that says otherwise than its extras.RDTF entry (one edited, the other not):
+// named, extras.RDTF wins, and the output's rdtf_type agrees, so the output read without
+// extras.RDTF is the same robot (s90tools D4: no word, and the stale type kept in the output).
+TEST_F(NodeExtras, ANodeTypeThatDisagreesWithExtrasRdtfIsNamedAndRewritten) {
+  json edited = rdtf_;
+  const std::size_t mesh = node_named(rdtf_, "arm_mesh");
+  ASSERT_EQ(edited["nodes"][mesh]["extras"]["rdtf_type"], "mesh");
+  edited["nodes"][mesh]["extras"]["rdtf_type"] = "visual";
+  Diagnostics diag;
+  auto converted = convert_json(dir_, "retyped.gltf", edited, diag);
+  ASSERT_TRUE(converted);
+  const auto warnings = with_code(diag, codes::RDTF_NODE_EXTRAS_IGNORED);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_EQ(warnings[0].pointer, "/nodes/" + std::to_string(mesh) + "/extras/rdtf_type");
+  EXPECT_NE(warnings[0].message.find("'arm_mesh': rdtf_type 'visual' is not its type in extras.RDTF, 'mesh'"),
+            std::string::npos)
+      << warnings[0].message;
+  expect_same_robot(robot_, converted->robot);
+  EXPECT_EQ(converted->asset.document["nodes"][mesh]["extras"]["rdtf_type"], "mesh");
+  Diagnostics blender_diag;
+  auto blender = convert_json(dir_, "blender.gltf", as_blender_keeps_it(converted->asset.document), blender_diag);
+  ASSERT_TRUE(blender);
+  expect_same_robot(robot_, blender->robot);
+}
+
 TEST_F(NodeExtras, InvalidNodeExtrasBesideExtrasRdtfAreAWarningAndRewritten) {
   std::optional<Conversion> converted;
   const auto warnings = convert_edited(-0.5, -2.0, converted);

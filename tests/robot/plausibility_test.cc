@@ -214,11 +214,22 @@ TEST(Plausibility, AxesBehindAPackersGeneratorAreNamedAsAssumed) {
   doc = arm();
   doc["asset"]["generator"] = "some CAD exporter";
   EXPECT_TRUE(convert_and_find(doc, codes::RDTF_AXES_ASSUMED).empty());
+  // Editors that load a file and save it again keep node extras and replace the generator too:
+  // arm3 re-saved by three.js turned both its joints by 90 degrees without a word (s90tools D2).
+  for (const char* editor : {"THREE.GLTFExporter r187", "Assimp Exporter 5.2", "Babylon.js glTF2 Serializer v6"}) {
+    doc["asset"]["generator"] = editor;
+    EXPECT_EQ(convert_and_find(doc, codes::RDTF_AXES_ASSUMED).size(), 2u) << editor;
+  }
   // Without any property (gltfpack without -ke), the warning says what the packer drops.
   for (json& node : doc["nodes"]) node.erase("extras");
   doc["asset"]["generator"] = "gltfpack 1.3";
   expect_one(convert_and_find(doc, codes::NO_RDTF_PROPERTIES), "/nodes",
-             {"packed by 'gltfpack 1.3'", "drops node extras", "gltfpack -kn -ke"});
+             {"packed by 'gltfpack 1.3'", "drops node extras", "gltfpack -kn -ke", "Include > Custom Properties"});
+  // glTF-Transform keeps node extras: its advice is its own options, not gltfpack's (s90tools D1).
+  doc["asset"]["generator"] = "glTF-Transform v4.5.1";
+  const auto transformed = convert_and_find(doc, codes::NO_RDTF_PROPERTIES);
+  expect_one(transformed, "/nodes", {"keeps node extras", "--flatten false --join false"});
+  EXPECT_EQ(transformed[0].message.find("gltfpack"), std::string::npos) << transformed[0].message;
 }
 
 // The arm with its elbow as a joint empty, as Blender models it: base > elbow (empty) > arm.

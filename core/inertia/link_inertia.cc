@@ -227,7 +227,8 @@ std::optional<MassProperties> authored_inertial(const Json& inertial, const std:
     for (std::size_t i = 0; valid && i < I.size(); ++i) valid = number(I[i]);
     if (!valid) {
       diag.error(codes::RDTF_INVALID_VALUE, where + "/inertia",
-                 label + ": inertia is " + value_text(I) + "; it must be [ixx, ixy, ixz, iyy, iyz, izz] or a row-major 3x3 matrix");
+                 label + ": inertia is " + value_text(I) +
+                     "; it must be six numbers [ixx, ixy, ixz, iyy, iyz, izz] or nine, a row-major 3x3 matrix");
       return std::nullopt;
     }
     if (six) {
@@ -237,6 +238,22 @@ std::optional<MassProperties> authored_inertial(const Json& inertial, const std:
     } else {
       for (int r = 0; r < 3; ++r)
         for (int c = 0; c < 3; ++c) result.inertia(r, c) = I[r * 3 + c].get<double>();
+      // An inertia tensor is symmetric: nine numbers that are not say two tensors, and what read the
+      // upper triangle (inspect, the URDF) and what kept all nine (the RDTF) disagreed (s90urdf D8).
+      // A tool's rounding (a tensor turned into other axes) leaves a few ulps, which are averaged.
+      const double scale = result.inertia.cwiseAbs().maxCoeff();
+      for (int r = 0; r < 3; ++r) {
+        for (int c = r + 1; c < 3; ++c) {
+          if (std::abs(result.inertia(r, c) - result.inertia(c, r)) <= 1e-12 * scale) continue;
+          diag.error(codes::RDTF_INVALID_VALUE, where + "/inertia",
+                     label + ": inertia " + value_text(I) + " is not symmetric: row " + std::to_string(r + 1) +
+                         ", column " + std::to_string(c + 1) + " is " + format_number(result.inertia(r, c)) +
+                         " but row " + std::to_string(c + 1) + ", column " + std::to_string(r + 1) + " is " +
+                         format_number(result.inertia(c, r)));
+          return std::nullopt;
+        }
+      }
+      result.inertia = 0.5 * (result.inertia + result.inertia.transpose()).eval();
     }
   }
   if (inertial.contains("volume") && number(inertial["volume"])) result.volume = inertial["volume"].get<double>();

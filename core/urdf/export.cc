@@ -1,4 +1,5 @@
 // RDTF -> URDF with urdfdom's own model types and exporter. docs/urdf.md describes the mapping.
+#include <algorithm>
 #include <cstdint>
 #include <cstdio>
 #include <fstream>
@@ -247,7 +248,15 @@ void fix_precision(TiXmlElement* robot, const urdf::ModelInterface& model,
       origin->SetAttribute("xyz", vector_text(joint->parent_to_joint_origin_transform.position));
       origin->SetAttribute("rpy", vector_text(joint_rpy.at(name)));
     }
-    if (TiXmlElement* axis = e->FirstChildElement("axis")) axis->SetAttribute("xyz", vector_text(joint->axis));
+    if (TiXmlElement* axis = e->FirstChildElement("axis")) {
+      // urdfdom's writer gives every joint an axis; a fixed or floating one has none to give (a
+      // zero axis is what an import refuses on a moving joint; docs/urdf.md: s90urdf D5).
+      if (joint->type == urdf::Joint::FIXED || joint->type == urdf::Joint::FLOATING) {
+        e->RemoveChild(axis);
+      } else {
+        axis->SetAttribute("xyz", vector_text(joint->axis));
+      }
+    }
     if (TiXmlElement* limit = e->FirstChildElement("limit"); limit && joint->limits) {
       if (joint->type == urdf::Joint::CONTINUOUS) {  // URDF reads no range on a continuous joint.
         limit->RemoveAttribute("lower");
@@ -293,7 +302,26 @@ std::optional<UrdfExport> export_urdf(const Conversion& conversion, const UrdfOp
   }
 
   auto model = std::make_shared<urdf::ModelInterface>();
+  // The robot's name as given (spaces and all), but no control character: XML 1.0 has no way to
+  // write most of them (expat and libxml2 refused "arm&#x01;"), and urdfdom cut a name at a
+  // newline (s90urdf D2).
   model->name_ = robot.name.empty() ? "robot" : robot.name;
+  if (std::any_of(model->name_.begin(), model->name_.end(), [](char c) { return static_cast<unsigned char>(c) < 0x20 || c == 0x7f; })) {
+    std::string first;
+    for (std::size_t k = 0; k < model->name_.size(); ++k) {
+      const auto c = static_cast<unsigned char>(model->name_[k]);
+      if (c >= 0x20 && c != 0x7f) continue;
+      if (first.empty()) {
+        char code[48];
+        std::snprintf(code, sizeof(code), "byte 0x%02X at position %zu", c, k);
+        first = code;
+      }
+      model->name_[k] = '_';
+    }
+    diag.warning(codes::URDF_NAME_CHANGED, "/extras/RDTF/name",
+                 "the robot's name holds control characters (the first: " + first + "); it is '" + model->name_ +
+                     "' in the URDF, since XML 1.0 cannot carry them");
+  }
   for (std::size_t l = 0; l < robot.links.size(); ++l) {
     const Link& link = robot.links[l];
     const std::string& name = result.link_names[l];

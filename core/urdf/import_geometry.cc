@@ -130,7 +130,13 @@ std::optional<std::filesystem::path> resolve_mesh_path(const std::string& filena
     }
     const std::string name = rest.substr(0, slash);
     const fs::path inside = rest.substr(slash + 1);
-    for (fs::path dir = urdf_folder;; dir = dir.parent_path()) {
+    // From the folder's absolute path: a relative one ("" or "urdf", `cd my_pkg/urdf && rdtf
+    // import robot.urdf`) ran out at the working folder before reaching the package (s90urdf D1).
+    std::error_code ec;
+    fs::path start = fs::absolute(urdf_folder.empty() ? fs::path(".") : urdf_folder, ec).lexically_normal();
+    if (ec) start = urdf_folder;
+    if (!start.has_filename() && start.has_parent_path() && start != start.root_path()) start = start.parent_path();
+    for (fs::path dir = start;; dir = dir.parent_path()) {
       if (dir.filename() == name) candidates.push_back(dir / inside);
       candidates.push_back(dir / name / inside);
       if (dir == dir.parent_path() || dir.empty()) break;

@@ -208,5 +208,30 @@ TEST_F(NodeExtras, NegativeAmountsAloneAreErrorsNamingTheNodeAndKey) {
   EXPECT_NE(errors[0].message.find("'arm_inertial': mass -2.0 kg is negative"), std::string::npos) << errors[0].message;
 }
 
+// Nine numbers that are no symmetric matrix are two tensors: refused naming the two entries that
+// differ (inspect and the URDF read the upper triangle, the output kept all nine: s90urdf D8). A
+// tool's rounding, a few ulps, is averaged away.
+TEST_F(NodeExtras, AnAuthoredInertiaThatIsNotSymmetricIsRefused) {
+  json edited = as_blender_keeps_it(rdtf_);
+  edited["nodes"][arm_inertial_]["extras"]["rdtf_inertial"]["inertia"] = {0.02, 0.001, 0.002, 0.005, 0.03,
+                                                                         0.003, 0.002, 0.003, 0.04};
+  Diagnostics diag;
+  EXPECT_FALSE(convert_json(dir_, "asymmetric.gltf", edited, diag));
+  const auto errors = with_code(diag, codes::RDTF_INVALID_VALUE);
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_EQ(errors[0].pointer, "/nodes/" + std::to_string(arm_inertial_) + "/extras/rdtf_inertial/inertia");
+  EXPECT_NE(errors[0].message.find("is not symmetric: row 1, column 2 is 0.001 but row 2, column 1 is 0.005"),
+            std::string::npos)
+      << errors[0].message;
+  const double ulp = std::nextafter(0.001, 1.0) - 0.001;
+  edited["nodes"][arm_inertial_]["extras"]["rdtf_inertial"]["inertia"] = {0.02, 0.001, 0.002, 0.001 + 2 * ulp, 0.03,
+                                                                         0.003, 0.002, 0.003, 0.04};
+  Diagnostics rounded;
+  const auto converted = convert_json(dir_, "rounded.gltf", edited, rounded);
+  ASSERT_TRUE(converted);
+  const Eigen::Matrix3d I = converted->robot.links[static_cast<std::size_t>(1)].inertial.inertia;
+  EXPECT_EQ(I(0, 1), I(1, 0));
+}
+
 }  // namespace
 }  // namespace rdtf

@@ -223,6 +223,31 @@ TEST(UrdfExport, NamesAreMadeValidAndUniqueAndEveryChangeIsReported) {
   EXPECT_EQ(exported->meshes[1].path, "meshes/arm_link_2.stl");
 }
 
+// A robot name with control characters is written without them (XML 1.0 cannot carry them: expat
+// and libxml2 refused "arm&#x01;", urdfdom cut a name at a newline), and fixed joints carry no
+// <axis> (urdfdom's writer gave each one "0 0 0"): s90urdf D2, D5.
+TEST(UrdfExport, TheRobotNameIsXmlAndFixedJointsHaveNoAxis) {
+  GltfBuilder b;
+  const int mesh = b.box_mesh(Eigen::Vector3f(0.2f, 0.2f, 0.2f));
+  const int base = b.node("base", -1, Json{{"mesh", mesh}});
+  b.node("arm", base, Json{{"mesh", mesh}, {"translation", {0.0, 1.0, 0.0}}});
+  Diagnostics diag;
+  Conversion conversion = b.convert(diag);
+  conversion.robot.name = std::string("arm\x01 one\ntwo");
+  Diagnostics export_diag;
+  const auto exported = export_urdf(conversion, UrdfOptions{}, export_diag);
+  ASSERT_TRUE(exported);
+  EXPECT_NE(exported->text.find("<robot name=\"arm_ one_two\">"), std::string::npos) << exported->text;
+  const auto changed = with_code(export_diag, "URDF_NAME_CHANGED");
+  ASSERT_EQ(changed.size(), 1u);
+  EXPECT_EQ(changed[0].pointer, "/extras/RDTF/name");
+  EXPECT_NE(changed[0].message.find("byte 0x01 at position 3"), std::string::npos) << changed[0].message;
+  EXPECT_EQ(parse_with_urdfdom(exported->text)->getName(), "arm_ one_two");
+  ASSERT_EQ(conversion.robot.joints.size(), 1u);
+  ASSERT_EQ(conversion.robot.joints[0].kind, JointKind::kFixed);
+  EXPECT_EQ(exported->text.find("<axis"), std::string::npos) << exported->text;
+}
+
 // Each link's STL holds its solids in the link frame with URDF's axes: their volume is the link's
 // and their centroid its centre of mass (uniform density). STL stores float32, so they agree to
 // float32 precision (1e-6 relative), not bit for bit.

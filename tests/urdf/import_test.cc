@@ -223,6 +223,22 @@ TEST(UrdfImport, StlMeshesAreFoundByRelativeAbsoluteFileAndPackagePaths) {
     // 0.2 m cube, float32 corners, scaled 2x along one axis.
     EXPECT_NEAR(conversion.robot.links.at(0).inertial.volume, 0.016, 1e-6 * 0.016);
   }
+  // The URDF named by a path relative to the working folder, as in `cd my_pkg/urdf && rdtf import
+  // robot.urdf`: the package is still found above it (the search ran out at the working folder).
+  testing::write_file(dir / "my_pkg" / "urdf" / "robot.urdf",
+                      "<robot name=\"r\"><link name=\"cube\"><visual><geometry><mesh filename=\""
+                      "package://my_pkg/meshes/cube.stl\"/></geometry></visual></link></robot>");
+  const fs::path before = fs::current_path();
+  for (const auto& [folder, relative] : {std::pair<fs::path, fs::path>{dir / "my_pkg" / "urdf", "robot.urdf"},
+                                         std::pair<fs::path, fs::path>{dir / "my_pkg", fs::path("urdf") / "robot.urdf"}}) {
+    SCOPED_TRACE(relative.string());
+    fs::current_path(folder);
+    Diagnostics diag;
+    const auto conversion = import_urdf(relative, {}, diag);
+    fs::current_path(before);
+    ASSERT_TRUE(conversion) << (diag.first_error() ? diag.first_error()->message : std::string());
+    EXPECT_NEAR(conversion->robot.links.at(0).inertial.volume, 0.008, 1e-6 * 0.008);
+  }
 }
 
 // ---- Round trip: URDF -> RDTF -> URDF ----

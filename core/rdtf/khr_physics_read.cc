@@ -189,14 +189,31 @@ void read_motion(const Json& document, const std::vector<Eigen::Affine3d>& world
   if (rdtf_describes_mass(document, link)) {
     const MassProperties& own = link.inertial;
     const double length = std::max(1.0, own.center_of_mass.norm());
-    const bool same = (!motion->mass || close(khr.mass, own.mass, own.mass)) &&
-                      (!motion->center || (khr.center_of_mass - own.center_of_mass).norm() <= kAgree * length) &&
-                      (!motion->moments || (khr.inertia - own.inertia).cwiseAbs().maxCoeff() <=
-                                               kAgree * std::max(own.inertia.cwiseAbs().maxCoeff(), 1e-300));
-    if (!same) {
+    // Each quantity that differs, with both values (two equal masses were printed when only the
+    // tensor differed: s90urdf D10).
+    std::vector<std::string> differ;
+    if (motion->mass && !close(khr.mass, own.mass, own.mass)) {
+      differ.push_back("mass " + format_number(khr.mass, 10) + " kg against " + format_number(own.mass, 10) + " kg");
+    }
+    if (motion->center && (khr.center_of_mass - own.center_of_mass).norm() > kAgree * length) {
+      differ.push_back("centre of mass " + vector_to_json(khr.center_of_mass).dump() + " m against " +
+                       vector_to_json(own.center_of_mass).dump() + " m (link frame)");
+    }
+    if (motion->moments && (khr.inertia - own.inertia).cwiseAbs().maxCoeff() >
+                               kAgree * std::max(own.inertia.cwiseAbs().maxCoeff(), 1e-300)) {
+      const Eigen::Matrix3d& a = khr.inertia;
+      const Eigen::Matrix3d& b = own.inertia;
+      const auto six = [](const Eigen::Matrix3d& I) {
+        return Json::array({I(0, 0), I(0, 1), I(0, 2), I(1, 1), I(1, 2), I(2, 2)}).dump();
+      };
+      differ.push_back("inertia [ixx, ixy, ixz, iyy, iyz, izz] " + six(a) + " against " + six(b) + " kg m^2");
+    }
+    if (!differ.empty()) {
+      std::string text;
+      for (std::size_t k = 0; k < differ.size(); ++k) text += (k ? "; " : "") + differ[k];
       diag.warning(codes::KHR_PHYSICS_IGNORED, pointer,
-                   label + ": the KHR motion (mass " + std::to_string(khr.mass) + " kg) differs from the link's RDTF "
-                           "mass properties (mass " + std::to_string(own.mass) + " kg), which take precedence");
+                   label + ": the KHR motion differs from the link's RDTF mass properties, which take precedence: " +
+                       text);
     }
     return;
   }
@@ -405,6 +422,9 @@ std::string limits_text(const Joint& joint) {
 std::optional<std::string> joint_difference(const Joint& khr, const Joint& rdtf) {
   const JointKind kind = motion_kind(rdtf);
   if (motion_kind(khr) != kind) {
+    // Same kinds, other motions (a [0, 0] range locks a revolute joint): the limits say why
+    // ("type revolute against revolute" said nothing: s90urdf D7).
+    if (khr.kind == rdtf.kind) return "limits " + limits_text(khr) + " against " + limits_text(rdtf);
     return std::string("type ") + to_string(khr.kind) + " against " + to_string(rdtf.kind);
   }
   if (kind == JointKind::kFixed) return std::nullopt;  // Nothing moves: no axis, range or drive.

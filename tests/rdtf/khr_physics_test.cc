@@ -422,6 +422,19 @@ TEST(KhrPhysicsRead, RdtfTakesPrecedenceAndSaysSo) {
     const auto d = expect_diagnostic(doc, codes::KHR_PHYSICS_IGNORED);
     EXPECT_EQ(d.pointer, "/nodes/0" + kMotion);
     EXPECT_NE(d.message.find("'base'"), std::string::npos) << d.message;
+    EXPECT_NE(d.message.find("mass 5 kg against 7 kg"), std::string::npos) << d.message;
+  }
+  {
+    // Only the tensor differs: the message says the tensor, not two equal masses (s90urdf D10).
+    json doc = khr_twin();
+    json& motion = doc["nodes"][0]["extensions"][kKhrPhysics]["motion"];
+    motion["inertiaDiagonal"] = {1.0, 2.0, 3.0};
+    doc["nodes"][0]["extras"] = {{"rdtf_mass", motion["mass"]}};  // The same mass; the computed tensor.
+    const auto d = expect_diagnostic(doc, codes::KHR_PHYSICS_IGNORED);
+    EXPECT_NE(d.message.find("inertia [ixx, ixy, ixz, iyy, iyz, izz] [1.0,0.0,0.0,2.0,0.0,3.0] against ["),
+              std::string::npos)
+        << d.message;
+    EXPECT_EQ(d.message.find(" kg against "), std::string::npos) << d.message;  // No mass compared.
   }
   {
     json doc = khr_twin();
@@ -429,6 +442,15 @@ TEST(KhrPhysicsRead, RdtfTakesPrecedenceAndSaysSo) {
     const auto d = expect_diagnostic(doc, codes::KHR_PHYSICS_IGNORED);
     EXPECT_EQ(d.pointer, "/nodes/3" + kJoint);
     EXPECT_NE(d.message.find("revolute"), std::string::npos) << d.message;
+  }
+  {
+    // The same kind locked by a [0, 0] range: the limits are named, not "revolute against
+    // revolute" (s90urdf D7).
+    json doc = khr_twin();
+    doc["nodes"][1]["extras"] = {{"rdtf_joint", "revolute"}, {"rdtf_axis", {0, 0, 1}}, {"rdtf_lower", 0.0}, {"rdtf_upper", 0.0}};
+    const auto d = expect_diagnostic(doc, codes::KHR_PHYSICS_IGNORED);
+    EXPECT_NE(d.message.find("limits "), std::string::npos) << d.message;
+    EXPECT_NE(d.message.find(" against [0.0, 0.0]"), std::string::npos) << d.message;
   }
   {
     json doc = khr_twin();

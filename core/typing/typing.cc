@@ -7,6 +7,7 @@
 #include "rdtf/completion.h"
 #include "rdtf/geometry.h"
 #include "rdtf/mesh_carriers.h"
+#include "rdtf/robot.h"
 #include "rdtf/diagnostic_codes.h"
 
 namespace rdtf {
@@ -104,6 +105,17 @@ void read_authored_types(const Json& document, std::vector<NodeType>& types,
     if (rdtf.is_object() && rdtf.contains("nodes") && rdtf["nodes"].is_array()) {
       const Json& entries = rdtf["nodes"];
       std::map<std::size_t, std::size_t> first_entry;  // Node -> its first entry.
+      // A packer that renumbers or removes nodes keeps extras.RDTF as it was: its entries then
+      // name other nodes or none, and the error says so and how to recover (s90tools D5: the
+      // errors named the index only, and deleting just those entries gave a 0 kg base).
+      const auto packer = repacked_by(document);
+      const std::string repacked =
+          packer ? "; asset.generator is '" + *packer +
+                       "', which renumbers or removes nodes (prune, flatten, join) but keeps extras.RDTF as rdtf "
+                       "wrote it, so its entries, in range or not, no longer name the nodes they describe: remove "
+                       "extras.RDTF (the node extras rdtf writes beside it describe the same robot), or pack "
+                       "without those steps"
+                 : std::string();
       for (std::size_t i = 0; i < entries.size(); ++i) {
         const std::string pointer = json_pointer("/extras/RDTF/nodes", i);
         const Json& entry = entries[i];
@@ -113,7 +125,8 @@ void read_authored_types(const Json& document, std::vector<NodeType>& types,
                      std::string("an RDTF node entry needs \"node\": the index of an existing node "
                                  "(0 to ") + std::to_string(nodes.size() - 1) + "); it has " +
                          (entry.is_object() && entry.contains("node") ? value_text(entry["node"])
-                                                                      : std::string("none")));
+                                                                      : std::string("none")) +
+                         repacked);
           continue;
         }
         const auto listed = entry["node"].get<std::size_t>();

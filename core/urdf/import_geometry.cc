@@ -1,5 +1,6 @@
 // Geometry for URDF import: generated primitives, mesh file lookup, and the glTF buffer.
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -142,7 +143,27 @@ std::optional<std::filesystem::path> resolve_mesh_path(const std::string& filena
       if (dir == dir.parent_path() || dir.empty()) break;
     }
   } else if (filename.rfind("file://", 0) == 0) {
-    candidates.push_back(fs::path(filename.substr(7)));
+    // A URI (RFC 8089): an empty host or localhost, then the path percent-encoded ("my%20dir");
+    // it was read as a raw path, so file://localhost/abs was looked for under the working folder
+    // and %20 was not a space (s90urdf D9).
+    std::string rest = filename.substr(7);
+    if (rest.rfind("localhost/", 0) == 0) rest = rest.substr(9);
+    if (rest.empty() || rest[0] != '/') {
+      why = "'" + filename + "' names a host ('" + rest.substr(0, rest.find('/')) +
+            "'): only file:///path and file://localhost/path are read";
+      return std::nullopt;
+    }
+    std::string path;
+    for (std::size_t i = 0; i < rest.size(); ++i) {
+      const auto hex = [](char c) { return std::isxdigit(static_cast<unsigned char>(c)) != 0; };
+      if (rest[i] == '%' && i + 2 < rest.size() && hex(rest[i + 1]) && hex(rest[i + 2])) {
+        path += static_cast<char>(std::stoi(rest.substr(i + 1, 2), nullptr, 16));
+        i += 2;
+      } else {
+        path += rest[i];
+      }
+    }
+    candidates.push_back(fs::path(path));
   } else if (filename.find("://") != std::string::npos) {
     why = "'" + filename + "': only relative paths, absolute paths, file:// and package:// are read";
     return std::nullopt;

@@ -65,6 +65,22 @@ TEST(RdtfEntries, ANodeListedTwiceIsRefused) {
       << d.message;
 }
 
+// rdtf's output re-packed by a tool that renumbers nodes (glTF-Transform prune, flatten, join)
+// keeps its extras.RDTF: the error says why its entries point past the nodes, and how to recover
+// (s90tools D5).
+TEST(RdtfEntries, AnEntryPastTheNodesOfARepackedFileSaysWhy) {
+  json doc = arm();
+  doc["extras"]["RDTF"] = {{"nodes", {{{"node", 9}, {"type", "mesh"}}}}};
+  const Diagnostic plain = refused(doc, codes::RDTF_INVALID_NODE_ENTRY);
+  EXPECT_NE(plain.message.find("the index of an existing node (0 to 3); it has 9"), std::string::npos) << plain.message;
+  EXPECT_EQ(plain.message.find("renumbers"), std::string::npos) << plain.message;
+  doc["asset"]["generator"] = "glTF-Transform v4.5.1";
+  const Diagnostic repacked = refused(doc, codes::RDTF_INVALID_NODE_ENTRY);
+  EXPECT_NE(repacked.message.find("'glTF-Transform v4.5.1', which renumbers or removes nodes"), std::string::npos)
+      << repacked.message;
+  EXPECT_NE(repacked.message.find("remove extras.RDTF"), std::string::npos) << repacked.message;
+}
+
 // Another major version may give its keys other meanings: refused, not read as 1.0.
 TEST(RdtfEntries, AVersionThatIsNotFormatOneIsRefused) {
   for (const json& version : {json("2.0"), json("0.9"), json(1.0), json("1"), json("v1.0"), json("1.0.0"),

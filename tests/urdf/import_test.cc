@@ -223,6 +223,20 @@ TEST(UrdfImport, StlMeshesAreFoundByRelativeAbsoluteFileAndPackagePaths) {
     // 0.2 m cube, float32 corners, scaled 2x along one axis.
     EXPECT_NEAR(conversion.robot.links.at(0).inertial.volume, 0.016, 1e-6 * 0.016);
   }
+  // file:// URIs as RFC 8089 has them: a percent-encoded path, and the host localhost (s90urdf D9).
+  fs::create_directories(dir / "my dir");
+  fs::copy_file(dir / "my_pkg" / "meshes" / "cube.stl", dir / "my dir" / "cube.stl");
+  std::string encoded = (dir / "my dir" / "cube.stl").string();
+  encoded.replace(encoded.find("my dir"), 6, "my%20dir");
+  for (const std::string& uri : {"file://" + encoded, "file://localhost" + encoded}) {
+    SCOPED_TRACE(uri);
+    testing::write_file(dir / "my_pkg" / "urdf" / "robot.urdf",
+                        "<robot name=\"r\"><link name=\"cube\"><visual><geometry><mesh filename=\"" + uri +
+                            "\"/></geometry></visual></link></robot>");
+    Diagnostics diag;
+    const Conversion conversion = import_or_fail(dir / "my_pkg" / "urdf" / "robot.urdf", diag);
+    EXPECT_NEAR(conversion.robot.links.at(0).inertial.volume, 0.008, 1e-6 * 0.008);
+  }
   // The URDF named by a path relative to the working folder, as in `cd my_pkg/urdf && rdtf import
   // robot.urdf`: the package is still found above it (the search ran out at the working folder).
   testing::write_file(dir / "my_pkg" / "urdf" / "robot.urdf",

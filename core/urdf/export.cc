@@ -1,5 +1,6 @@
 // RDTF -> URDF with urdfdom's own model types and exporter. docs/urdf.md describes the mapping.
 #include <algorithm>
+#include <cctype>
 #include <cstdint>
 #include <cstdio>
 #include <fstream>
@@ -113,27 +114,56 @@ urdf::LinkSharedPtr make_link(const std::string& name, const Link* link, const L
   return out;
 }
 
-// A link's name as a file stem: whole when it is short; a name too long for a file system (255
-// bytes a name on Linux; a link named with 200 accented letters is valid glTF) keeps its first 120
-// bytes, cut between characters, and a 64-bit FNV-1a digest of the whole name, so that two long
-// names that start alike still name two files.
-std::string mesh_file_stem(const std::string& link) {
-  constexpr std::size_t kKept = 120;
-  if (link.size() <= kKept + 20) return link;
-  std::size_t cut = kKept;
-  while (cut > 0 && (static_cast<unsigned char>(link[cut]) & 0xC0) == 0x80) --cut;  // Not inside a character.
+// A 64-bit FNV-1a digest of `text`, in 16 hex digits.
+std::string digest_hex(const std::string& text) {
   std::uint64_t digest = 14695981039346656037ull;
-  for (const char c : link) {
+  for (const char c : text) {
     digest ^= static_cast<unsigned char>(c);
     digest *= 1099511628211ull;
   }
   char hex[17];
   std::snprintf(hex, sizeof(hex), "%016llx", static_cast<unsigned long long>(digest));
-  return link.substr(0, cut) + "~" + hex;
+  return hex;
 }
 
-std::string mesh_file_name(const std::string& link, std::span<const std::uint8_t> stl, const UrdfOptions& options) {
-  const std::string stem = mesh_file_stem(link);
+// A link's name as a file stem: whole when it is short; a name too long for a file system (255
+// bytes a name on Linux; a link named with 200 accented letters is valid glTF) keeps its first 120
+// bytes, cut between characters, and a digest of the whole name, so that two long names that
+// start alike still name two files. A name that starts with '.' ("." or "..": valid URDF names)
+// gets a '_' before it, or its file would be hidden from `cp meshes/*` and file browsers.
+std::string mesh_file_stem(const std::string& link) {
+  constexpr std::size_t kKept = 120;
+  const std::string shown = !link.empty() && link[0] == '.' ? "_" + link : link;
+  if (shown.size() <= kKept + 20) return shown;
+  std::size_t cut = kKept;
+  while (cut > 0 && (static_cast<unsigned char>(shown[cut]) & 0xC0) == 0x80) --cut;  // Not inside a character.
+  return shown.substr(0, cut) + "~" + digest_hex(link);
+}
+
+// Stems unique without regard to case: links "Arm", "arm" and "ARM" wrote three files that are
+// one on a case-insensitive file system (macOS, Windows, a copy there), and every link showed
+// the last one written (s90urdf D13). The first keeps its stem, the others get the digest of
+// their whole name.
+class MeshStems {
+ public:
+  std::string operator()(const std::string& link) {
+    std::string stem = mesh_file_stem(link);
+    if (!taken_.insert(folded(stem)).second) {
+      stem += "~" + digest_hex(link);
+      taken_.insert(folded(stem));
+    }
+    return stem;
+  }
+
+ private:
+  static std::string folded(std::string text) {
+    for (char& c : text) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return text;
+  }
+  std::set<std::string> taken_;
+};
+
+std::string mesh_file_name(const std::string& stem, std::span<const std::uint8_t> stl, const UrdfOptions& options) {
   return options.mesh_digest ? content_addressed_name(stem, ".stl", stl, options.mesh_digest) : stem + ".stl";
 }
 
@@ -322,12 +352,13 @@ std::optional<UrdfExport> export_urdf(const Conversion& conversion, const UrdfOp
                  "the robot's name holds control characters (the first: " + first + "); it is '" + model->name_ +
                      "' in the URDF, since XML 1.0 cannot carry them");
   }
+  MeshStems stems;
   for (std::size_t l = 0; l < robot.links.size(); ++l) {
     const Link& link = robot.links[l];
     const std::string& name = result.link_names[l];
     auto bytes = surfaces[l].mesh.triangles.empty() ? std::vector<std::uint8_t>{}
                                                      : stl_bytes(surfaces[l].mesh, "rdtf: link " + name);
-    const std::string file = "meshes/" + mesh_file_name(name, bytes, options);
+    const std::string file = "meshes/" + mesh_file_name(stems(name), bytes, options);
     model->links_[name] = make_link(name, &link, &surfaces[l], C, options.mesh_uri_prefix + file);
     if (!surfaces[l].mesh.triangles.empty()) {
       result.meshes.push_back({file, std::move(bytes)});

@@ -248,6 +248,31 @@ TEST(UrdfExport, TheRobotNameIsXmlAndFixedJointsHaveNoAxis) {
   EXPECT_EQ(exported->text.find("<axis"), std::string::npos) << exported->text;
 }
 
+// Mesh files are one per link on any file system: links whose names differ only in case get
+// distinct files there, and a name starting with '.' no hidden file (s90urdf D13).
+TEST(UrdfExport, MeshFilesAreDistinctWithoutRegardToCaseAndNoneIsHidden) {
+  GltfBuilder b;
+  const int mesh = b.box_mesh(Eigen::Vector3f(0.2f, 0.2f, 0.2f));
+  const int base = b.node("arm", -1, Json{{"mesh", mesh}});
+  b.node("Arm", base, Json{{"mesh", mesh}, {"translation", {0.0, 1.0, 0.0}}});
+  b.node("ARM", base, Json{{"mesh", mesh}, {"translation", {0.0, 2.0, 0.0}}});
+  b.node("..", base, Json{{"mesh", mesh}, {"translation", {0.0, 3.0, 0.0}}});
+  Diagnostics diag;
+  const Conversion conversion = b.convert(diag);
+  Diagnostics export_diag;
+  const auto exported = export_urdf(conversion, UrdfOptions{}, export_diag);
+  ASSERT_TRUE(exported);
+  std::set<std::string> folded;
+  for (const auto& m : exported->meshes) {
+    std::string name = std::filesystem::path(m.path).filename().string();
+    EXPECT_NE(name[0], '.') << m.path;
+    for (char& c : name) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    EXPECT_TRUE(folded.insert(name).second) << m.path;
+  }
+  EXPECT_EQ(folded.size(), 4u);
+  EXPECT_EQ(exported->meshes[0].path, "meshes/arm.stl");  // The first keeps its name.
+}
+
 // Each link's STL holds its solids in the link frame with URDF's axes: their volume is the link's
 // and their centroid its centre of mass (uniform density). STL stores float32, so they agree to
 // float32 precision (1e-6 relative), not bit for bit.

@@ -174,9 +174,14 @@ std::string restore_revisions(const std::filesystem::path& output_root, ModelRec
       // outputs copied without it): that run handed out numbers nothing here remembers, and
       // counting from 1 again gave other contents the numbers subscribers had seen (stop 42's
       // leftover). Numbered from the clock, as for a state file refused.
+      // Only a folder of rdtfd's own: never a symbolic link, which rdtfd does not make there (and
+      // refuses to write through).
       std::error_code ec;
       const std::filesystem::path earlier = output_root / record.id;
-      if (!std::filesystem::is_directory(earlier, ec) || std::filesystem::is_empty(earlier, ec) || ec) return "";
+      if (!std::filesystem::is_directory(std::filesystem::symlink_status(earlier, ec)) ||
+          std::filesystem::is_empty(earlier, ec) || ec) {
+        return "";
+      }
       record.numbered = std::max(record.numbered, revision_floor_now());
       return "revision state of " + record.id + " missing while " + earlier.string() +
              " holds an earlier run's outputs; its revisions are numbered from " + std::to_string(record.numbered + 1) +

@@ -287,6 +287,10 @@ bool check_config(DaemonConfig& config, std::string& error) {
   return true;
 }
 
+namespace {
+std::string reload_text(unsigned effects);
+}  // namespace
+
 ConfigChange compare_configs(const DaemonConfig& running, const DaemonConfig& fresh) {
   ConfigChange change;
   for (const ConfigKey& key : config_registry()) {
@@ -296,6 +300,26 @@ ConfigChange compare_configs(const DaemonConfig& running, const DaemonConfig& fr
     }
   }
   return change;
+}
+
+std::string change_text(const ConfigChange& change) {
+  if (change.keys.empty()) return "no setting changed";
+  std::string applied, kept;
+  for (const std::string& name : change.keys) {
+    const ConfigKey* key = nullptr;
+    for (const ConfigKey& k : config_registry()) {
+      if (k.name == name) key = &k;
+    }
+    if (key == nullptr) continue;
+    if ((key->reload & kNeedsRestart) != 0) {
+      kept += (kept.empty() ? "" : ", ") + name;
+    } else {
+      applied += (applied.empty() ? "" : ", ") + name + " (" + reload_text(key->reload) + ")";
+    }
+  }
+  std::string text = applied.empty() ? std::string() : "changed " + applied;
+  if (!kept.empty()) text += (text.empty() ? "" : "; ") + std::string("kept until a restart: ") + kept;
+  return text;
 }
 
 void keep_restart_settings(const DaemonConfig& running, DaemonConfig& fresh) {

@@ -169,6 +169,9 @@ struct ConfigChange {
   bool has(ReloadEffect effect) const { return (effects & effect) != 0; }
 };
 ConfigChange compare_configs(const DaemonConfig& running, const DaemonConfig& fresh);
+// The keys a reload changed, each with what it does ("settle_ms (live)", "lcm_url (reopens LCM,
+// restarts the simulations)"), and those kept until a restart; for the reload's log line.
+std::string change_text(const ConfigChange& change);
 
 // Puts the running value of every kNeedsRestart key into `fresh` (a reload does not apply them).
 void keep_restart_settings(const DaemonConfig& running, DaemonConfig& fresh);

@@ -409,6 +409,7 @@ void Daemon::reload_config() {
   if (conversion_changed) {
     for (auto& [source, record] : registry_.all()) record.last_hash.clear();
   }
+  log_line("SIGHUP: config reloaded: " + change_text(change));
   rescan(folders_changed ? "config reloaded, folders changed" : "config reloaded");
 }
 

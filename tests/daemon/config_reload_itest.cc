@@ -37,6 +37,18 @@ TEST(DaemonReload, ADirectoryOrAFifoAsTheConfigKeepsTheRunningConfig) {
   EXPECT_TRUE(s.daemon->running());
   expect_serving(s, "third_base", 3);
 
+  // A good change: the log names the keys and what each does (and one kept until a restart).
+  Json changed = Json::parse(good);
+  changed["status_period_ms"] = 120;
+  changed["workers"] = 3;
+  fs::remove(config);
+  testing::write_file(config, changed.dump());
+  s.daemon->signal(SIGHUP);
+  ASSERT_TRUE(s.daemon->wait_log("SIGHUP: config reloaded: changed status_period_ms (live); kept until a restart: workers"))
+      << s.daemon->log();
+  fs::remove(config);
+  testing::write_file(config, good);
+
   // A value outside its range: refused, naming the key and the range.
   fs::remove(config);
   Json wedging = Json::parse(good);

@@ -298,8 +298,14 @@ void DocumentCheck::check_extensions() {
   }
   // KHR_mesh_quantization cannot be optional (the Khronos validator's NON_REQUIRED_EXTENSION): a
   // reader without it would take the integer positions for floats. rdtf keeps it in its output.
-  const Json* used_names = read_array(doc_, "extensionsUsed", "");
-  const Json* required_names = read_array(doc_, "extensionsRequired", "");
+  // Read again without a word: the loop above reported an empty or mistyped list (s80valid D9: an
+  // empty extensionsUsed was an EMPTY_ENTITY three times).
+  const auto list = [&](const char* key) -> const Json* {
+    const auto it = doc_.find(key);
+    return it != doc_.end() && it->is_array() ? &*it : nullptr;
+  };
+  const Json* used_names = list("extensionsUsed");
+  const Json* required_names = list("extensionsRequired");
   for (std::size_t k = 0; used_names != nullptr && k < used_names->size(); ++k) {
     if ((*used_names)[k] != "KHR_mesh_quantization") continue;
     const bool required = required_names != nullptr &&
@@ -312,8 +318,8 @@ void DocumentCheck::check_extensions() {
   }
   // glTF 2.0: every required extension is also used. One that is not would be kept required by
   // an output that no longer uses it, which the Khronos validator refuses.
-  const Json* used = read_array(doc_, "extensionsUsed", "");
-  const Json* required = read_array(doc_, "extensionsRequired", "");
+  const Json* used = used_names;
+  const Json* required = required_names;
   for (std::size_t k = 0; required != nullptr && k < required->size(); ++k) {
     const Json& name = (*required)[k];
     if (!name.is_string()) continue;

@@ -94,7 +94,11 @@ bool DocumentCheck::check_primitive(const Json& primitive, const std::string& po
         check_target(*target, json_pointer(pointer + "/targets", t), accessors);
     }
   }
-  mesh.skinned |= accessors.count("JOINTS_0") > 0;
+  // By the attribute's presence: a JOINTS_0 whose accessor was refused (and so is not in
+  // `accessors`) is still one, and the node's skin is no second error (s80rev R5).
+  mesh.skinned |= accessors.count("JOINTS_0") > 0 ||
+                  (primitive.contains("attributes") && primitive["attributes"].is_object() &&
+                   primitive["attributes"].contains("JOINTS_0"));
   const auto position = accessors.find("POSITION");
   const std::uint64_t vertices = indices != kNone              ? accessors_[indices].count
                                  : position != accessors.end() ? accessors_[position->second].count

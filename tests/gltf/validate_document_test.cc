@@ -596,5 +596,28 @@ TEST(ValidateDocument, QuantizationIsRequiredIntegerBoundsFitAndWeightsNeedMorph
       << listing(check_document(doc));
 }
 
+// One fault, one error: an empty extensionsUsed was an EMPTY_ENTITY twice (s80valid D9), and a
+// refused JOINTS_0 accessor made the node's skin a second error (s80rev R5).
+TEST(ValidateDocument, OneFaultIsOneError) {
+  const auto count = [](const Diagnostics& diag, const std::string& code) {
+    return std::count_if(diag.all().begin(), diag.all().end(), [&](const Diagnostic& d) { return d.code == code; });
+  };
+  Json doc = triangle_document();
+  doc["extensionsUsed"] = Json::array();
+  const Diagnostics empty = check_document(doc);
+  EXPECT_EQ(count(empty, "EMPTY_ENTITY"), 1) << listing(empty);
+  doc = triangle_document();
+  // JOINTS_0 on an accessor of an invalid bound; the node's skin names two joint nodes.
+  doc["accessors"].push_back({{"componentType", 5121}, {"count", 3}, {"type", "VEC4"}, {"min", {0, 0, 0, 0}},
+                              {"max", {256, 0, 0, 0}}});
+  doc["meshes"][0]["primitives"][0]["attributes"]["JOINTS_0"] = doc["accessors"].size() - 1;
+  doc["nodes"].push_back({{"name", "bone"}});
+  doc["skins"] = Json::array({{{"joints", {1}}}});
+  doc["nodes"][0]["skin"] = 0;
+  const Diagnostics refused = check_document(doc);
+  EXPECT_DIAGNOSTIC(refused, "INVALID_GL_VALUE", "/accessors/2/max");
+  EXPECT_EQ(count(refused, "NODE_SKIN_WITH_NON_SKINNED_MESH"), 0) << listing(refused);
+}
+
 }  // namespace
 }  // namespace rdtf

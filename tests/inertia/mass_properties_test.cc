@@ -628,6 +628,32 @@ TEST(SurfaceTopology, SplitVerticesStillClosed) {
   EXPECT_TRUE(MatNear(split.second_central, shared.second_central));
 }
 
+// A seam whose split vertices are a rounding apart (three.js writes sin(2 pi) r, 1e-17, where the
+// seam's other side has 0) still closes the surface: welded within 2^-30 of the extent when the
+// exact weld leaves it open (s90tools D3). A gap a modeller could make (1e-6 of the extent) stays
+// open, as does a face taken away.
+TEST(SurfaceTopology, SplitVerticesARoundingApartStillClosed) {
+  const TriangleMesh box = make_box_split_faces(Vector3d(0, 0, 0), Vector3d(1, 2, 3));
+  // Move the zero coordinates of one face's copies of its corners off zero: the other faces keep
+  // them exact.
+  const auto moved = [&](double by) {
+    TriangleMesh mesh = box;
+    for (std::size_t k = 0; k < 4; ++k) {
+      for (int c = 0; c < 3; ++c) {
+        if (mesh.positions[k][c] == 0) mesh.positions[k][c] = by;
+      }
+    }
+    return mesh;
+  };
+  const TriangleMesh nudged = moved(1e-17);
+  ASSERT_NE(nudged.positions, box.positions);
+  EXPECT_TRUE(topology_of(nudged).closed());
+  EXPECT_EQ(topology_of(nudged).boundary_edges, 0u);
+  const TriangleMesh gap = moved(3e-6);
+  EXPECT_FALSE(topology_of(gap).closed());
+  EXPECT_GT(topology_of(gap).boundary_edges, 0u);
+}
+
 // A box given as two pieces (faces split between two meshes, each with its own vertices).
 TEST(SurfaceTopology, BoxSplitIntoTwoPieces) {
   const TriangleMesh box = make_box_split_faces(Vector3d(0, 0, 0), Vector3d(1, 2, 3));

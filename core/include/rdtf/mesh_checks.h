@@ -25,7 +25,8 @@ struct SurfaceTopology {
 };
 
 // Vertices are welded by exact position first: glTF exporters split vertices along UV and normal
-// seams, which does not open the surface.
+// seams, which does not open the surface. A surface still open is welded again within 2^-30 of
+// its largest coordinate (seams a rounding apart), and the fewer boundary edges count.
 SurfaceTopology analyze_surface(std::span<const TriangleMesh> pieces);
 
 // The same on meshes read in place (the same result for the same positions and triangles).

@@ -161,11 +161,16 @@ void Daemon::answer_request(const std::string& model_id, const std::string& requ
   const auto start = clock_->now();
   if (model_id.empty()) {
     const std::size_t count = publish_all();
+    std::size_t refusals = 0;
     for (auto& [source, record] : registry_.all()) {
-      if (!record.live && record.refusal) republish_refusal(record);
+      if (!record.live && record.refusal) {
+        republish_refusal(record);
+        ++refusals;
+      }
     }
-    log_line("republished every model on request of '" + requester + "' (" + std::to_string(count) +
-             " models), queued in " + since(start));
+    log_line("republished every model on request of '" + requester + "' (" + std::to_string(count) + " models" +
+             (refusals > 0 ? ", and the ERROR of " + std::to_string(refusals) + " with no live revision" : std::string()) +
+             "), queued in " + since(start));
     return;
   }
   if (ModelRecord* record = registry_.find_id(model_id)) {

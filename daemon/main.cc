@@ -20,6 +20,7 @@
 #include <unistd.h>
 
 #include "daemon.h"
+#include "lcm_url.h"
 #include "rdtf/version.h"
 
 namespace {
@@ -70,6 +71,12 @@ std::optional<rdtf::daemon::DaemonConfig> load(const std::string& config_file,
     config = std::move(*loaded);
   }
   if (const char* url = std::getenv("LCM_DEFAULT_URL"); url != nullptr && config.lcm_url.empty()) {
+    // Named as what the user set (review s90rev R7), when the command line does not replace it.
+    const auto option = overrides.options.find("lcm_url");
+    const bool replaced = option != overrides.options.end() && !option->second.empty();
+    if (!replaced && !rdtf::daemon::check_lcm_url(url, error, "LCM_DEFAULT_URL")) {
+      return std::nullopt;
+    }
     config.lcm_url = url;
   }
   if (!overrides.settings.empty()) {

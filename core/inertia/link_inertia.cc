@@ -240,16 +240,17 @@ std::optional<MassProperties> authored_inertial(const Json& inertial, const std:
         for (int c = 0; c < 3; ++c) result.inertia(r, c) = I[r * 3 + c].get<double>();
       // An inertia tensor is symmetric: nine numbers that are not say two tensors, and what read the
       // upper triangle (inspect, the URDF) and what kept all nine (the RDTF) disagreed (s90urdf D8).
-      // A tool's rounding (a tensor turned into other axes) leaves a few ulps, which are averaged.
+      // Within the dynamics check's symmetry tolerance (1e-9 of the largest entry: a CAD tool that
+      // prints ten digits, each entry computed on its own), the two halves are averaged.
       const double scale = result.inertia.cwiseAbs().maxCoeff();
       for (int r = 0; r < 3; ++r) {
         for (int c = r + 1; c < 3; ++c) {
-          if (std::abs(result.inertia(r, c) - result.inertia(c, r)) <= 1e-12 * scale) continue;
+          if (std::abs(result.inertia(r, c) - result.inertia(c, r)) <= 1e-9 * scale) continue;
           diag.error(codes::RDTF_INVALID_VALUE, where + "/inertia",
                      label + ": inertia " + value_text(I) + " is not symmetric: row " + std::to_string(r + 1) +
-                         ", column " + std::to_string(c + 1) + " is " + format_number(result.inertia(r, c)) +
+                         ", column " + std::to_string(c + 1) + " is " + value_text(Json(result.inertia(r, c))) +
                          " but row " + std::to_string(c + 1) + ", column " + std::to_string(r + 1) + " is " +
-                         format_number(result.inertia(c, r)));
+                         value_text(Json(result.inertia(c, r))));
           return std::nullopt;
         }
       }

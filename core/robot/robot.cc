@@ -359,7 +359,8 @@ std::optional<std::string> resaved_by(const Json& document) {
   // userData, the three.js editor; Assimp; Babylon.js): a Blender export they re-save reads its
   // typed axes turned by 90 degrees (s90tools D2).
   const std::string generator = generator_of(document);
-  for (const char* editor : {"THREE.GLTFExporter", "Assimp", "Babylon.js", "babylon.js"}) {
+  // (Assimp signs "Open Asset Import Library (assimp v5.2.0)": s90rev R5.)
+  for (const char* editor : {"THREE.GLTFExporter", "Open Asset Import Library", "Assimp", "Babylon.js", "babylon.js"}) {
     if (generator.rfind(editor, 0) == 0) return generator.substr(0, 80);
   }
   return std::nullopt;

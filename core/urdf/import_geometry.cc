@@ -142,15 +142,21 @@ std::optional<std::filesystem::path> resolve_mesh_path(const std::string& filena
       candidates.push_back(dir / name / inside);
       if (dir == dir.parent_path() || dir.empty()) break;
     }
-  } else if (filename.rfind("file://", 0) == 0) {
-    // A URI (RFC 8089): an empty host or localhost, then the path percent-encoded ("my%20dir");
-    // it was read as a raw path, so file://localhost/abs was looked for under the working folder
-    // and %20 was not a space (s90urdf D9).
-    std::string rest = filename.substr(7);
-    if (rest.rfind("localhost/", 0) == 0) rest = rest.substr(9);
-    if (rest.empty() || rest[0] != '/') {
-      why = "'" + filename + "' names a host ('" + rest.substr(0, rest.find('/')) +
-            "'): only file:///path and file://localhost/path are read";
+  } else if (filename.rfind("file:", 0) == 0) {
+    // A URI (RFC 8089): file:///path, file://localhost/path (any case), or file:/path; the path
+    // percent-encoded ("my%20dir"). It was read as a raw path, so file://localhost/abs was looked
+    // for under the working folder and %20 was not a space (s90urdf D9, s90rev R6).
+    std::string rest = filename.substr(5);
+    std::string host;
+    if (rest.rfind("//", 0) == 0) {
+      rest = rest.substr(2);
+      host = rest.substr(0, rest.find('/'));
+      for (char& c : host) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+      rest = rest.substr(host.size());
+    }
+    if ((!host.empty() && host != "localhost") || rest.empty() || rest[0] != '/') {
+      why = "'" + filename + "' is not a file URI of this machine: only file:///path, file://localhost/path and "
+            "file:/path are read";
       return std::nullopt;
     }
     std::string path;

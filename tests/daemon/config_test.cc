@@ -255,20 +255,27 @@ TEST(DaemonConfig, ARefusedConfigCreatesNoFolder) {
 // unreadable option: TTL 0, no datagram leaves the host), are all refused, naming the part.
 TEST(DaemonConfig, LcmUrlsAreCheckedAsLcmReadsThem) {
   std::string error;
-  for (const char* good : {"", "udpm://239.255.76.67:7667", "udpm://239.255.76.67:7667?ttl=1",
-                           "udpm://239.255.76.67", "udpm://224.0.0.251:5353?ttl=0&recv_buf_size=2097152",
-                           "memq://", "file:///tmp/x.lcmlog?mode=w"}) {
+  // "udpm://" (with or without options) is LCM's default group and port (review s90rev R3).
+  for (const char* good : {"", "udpm://239.255.76.67:7667", "udpm://239.255.76.67:7667?ttl=1", "udpm://",
+                           "udpm://?ttl=1", "udpm://224.0.0.251:5353?ttl=0&recv_buf_size=2097152", "memq://",
+                           "file:///tmp/x.lcmlog?mode=w"}) {
     EXPECT_TRUE(check_lcm_url(good, error)) << good << ": " << error;
   }
   const std::vector<std::pair<std::string, std::string>> bad = {
       {"udpm://239.255.76.67:7667?tll=1", "option \"tll=1\" is not one LCM's udpm provider reads (ttl, recv_buf_size)"},
-      {"udpm://239.255.76.67:7667?ttl=one", "option \"ttl=one\": ttl is a whole number from 0 to 255"},
-      {"udpm://239.255.76.67:7667?ttl=256", "option \"ttl=256\": ttl is a whole number from 0 to 255"},
-      {"udpm://239.255.76.67:7667?recv_buf_size=2M", "recv_buf_size is a byte count"},
+      {"udpm://239.255.76.67:7667?ttl=one", "option \"ttl=one\": ttl is a decimal whole number from 0 to 255"},
+      {"udpm://239.255.76.67:7667?ttl=256", "option \"ttl=256\": ttl is a decimal whole number from 0 to 255"},
+      {"udpm://239.255.76.67:7667?ttl=01", "ttl is a decimal whole number"},  // LCM: octal.
+      {"udpm://239.255.76.67:7667?recv_buf_size=2M", "recv_buf_size is a decimal byte count"},
       {"udpm://10.0.0.1:7667", "10.0.0.1 is not a multicast group"},
       {"udpm://robots.local:7667", "\"robots.local\" is not an IPv4 address"},
-      {"udpm://239.255.76.67:99999", "port \"99999\" is not a number from 1 to 65535"},
-      {"udpm://239.255.76.67:", "port \"\" is not a number from 1 to 65535"},
+      // LCM reads a group without a port as port 0, on which no send works (s90rev R1), and ports
+      // with a leading 0 as octal or hexadecimal (R2: ":07667" joined port 4023).
+      {"udpm://239.255.76.67", "no port: give the group's port (udpm://239.255.76.67:7667)"},
+      {"udpm://239.255.76.67:07667", "port \"07667\" is not a decimal number from 1 to 65535"},
+      {"udpm://239.255.76.67:0x1DF3", "port \"0x1DF3\" is not a decimal number from 1 to 65535"},
+      {"udpm://239.255.76.67:99999", "port \"99999\" is not a decimal number from 1 to 65535"},
+      {"udpm://239.255.76.67:", "port \"\" is not a decimal number from 1 to 65535"},
       {"239.255.76.67:7667", "is not an LCM URL"},
       {"udp://239.255.76.67:7667", "LCM has no provider \"udp\""},
   };
@@ -278,6 +285,9 @@ TEST(DaemonConfig, LcmUrlsAreCheckedAsLcmReadsThem) {
     EXPECT_NE(error.find(message), std::string::npos) << url << ": " << error;
     EXPECT_NE(error.find("lcm_url"), std::string::npos) << error;
   }
+  // Named as the user set it.
+  EXPECT_FALSE(check_lcm_url("udpm://239.255.76.67:7667?tll=1", error, "LCM_DEFAULT_URL"));
+  EXPECT_EQ(error.rfind("LCM_DEFAULT_URL \"udpm://", 0), 0u) << error;
 }
 
 TEST(DaemonConfig, CheckRefusesSettingsThatCannotWork) {

@@ -223,14 +223,24 @@ TEST_F(NodeExtras, AnAuthoredInertiaThatIsNotSymmetricIsRefused) {
   EXPECT_NE(errors[0].message.find("is not symmetric: row 1, column 2 is 0.001 but row 2, column 1 is 0.005"),
             std::string::npos)
       << errors[0].message;
-  const double ulp = std::nextafter(0.001, 1.0) - 0.001;
-  edited["nodes"][arm_inertial_]["extras"]["rdtf_inertial"]["inertia"] = {0.02, 0.001, 0.002, 0.001 + 2 * ulp, 0.03,
+  // Within the dynamics check's symmetry tolerance, 1e-9 of the largest entry (a CAD tool's ten
+  // digits): averaged, and it converts (review s90rev R4); beyond it, refused with both values
+  // to the digit.
+  edited["nodes"][arm_inertial_]["extras"]["rdtf_inertial"]["inertia"] = {0.02, 0.001, 0.002, 0.00100000000001, 0.03,
                                                                          0.003, 0.002, 0.003, 0.04};
   Diagnostics rounded;
   const auto converted = convert_json(dir_, "rounded.gltf", edited, rounded);
   ASSERT_TRUE(converted);
   const Eigen::Matrix3d I = converted->robot.links[static_cast<std::size_t>(1)].inertial.inertia;
   EXPECT_EQ(I(0, 1), I(1, 0));
+  edited["nodes"][arm_inertial_]["extras"]["rdtf_inertial"]["inertia"] = {0.02, 0.001, 0.002, 0.0010000001, 0.03,
+                                                                         0.003, 0.002, 0.003, 0.04};
+  Diagnostics apart;
+  EXPECT_FALSE(convert_json(dir_, "apart.gltf", edited, apart));
+  const auto refused = with_code(apart, codes::RDTF_INVALID_VALUE);
+  ASSERT_EQ(refused.size(), 1u);
+  EXPECT_NE(refused[0].message.find("row 1, column 2 is 0.001 but row 2, column 1 is 0.0010000001"), std::string::npos)
+      << refused[0].message;
 }
 
 }  // namespace

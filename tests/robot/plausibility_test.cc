@@ -216,7 +216,8 @@ TEST(Plausibility, AxesBehindAPackersGeneratorAreNamedAsAssumed) {
   EXPECT_TRUE(convert_and_find(doc, codes::RDTF_AXES_ASSUMED).empty());
   // Editors that load a file and save it again keep node extras and replace the generator too:
   // arm3 re-saved by three.js turned both its joints by 90 degrees without a word (s90tools D2).
-  for (const char* editor : {"THREE.GLTFExporter r187", "Assimp Exporter 5.2", "Babylon.js glTF2 Serializer v6"}) {
+  for (const char* editor : {"THREE.GLTFExporter r187", "Open Asset Import Library (assimp v5.2.0)",
+                             "Babylon.js glTF2 Serializer v6"}) {
     doc["asset"]["generator"] = editor;
     EXPECT_EQ(convert_and_find(doc, codes::RDTF_AXES_ASSUMED).size(), 2u) << editor;
   }

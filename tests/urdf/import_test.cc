@@ -228,7 +228,8 @@ TEST(UrdfImport, StlMeshesAreFoundByRelativeAbsoluteFileAndPackagePaths) {
   fs::copy_file(dir / "my_pkg" / "meshes" / "cube.stl", dir / "my dir" / "cube.stl");
   std::string encoded = (dir / "my dir" / "cube.stl").string();
   encoded.replace(encoded.find("my dir"), 6, "my%20dir");
-  for (const std::string& uri : {"file://" + encoded, "file://localhost" + encoded}) {
+  for (const std::string& uri : {"file://" + encoded, "file://localhost" + encoded, "file://LocalHost" + encoded,
+                                 "file:" + encoded}) {
     SCOPED_TRACE(uri);
     testing::write_file(dir / "my_pkg" / "urdf" / "robot.urdf",
                         "<robot name=\"r\"><link name=\"cube\"><visual><geometry><mesh filename=\"" + uri +

@@ -4,6 +4,9 @@
 
 #include <gtest/gtest.h>
 
+#include <map>
+#include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -116,6 +119,16 @@ inline std::string all_text(const Diagnostics& diag) {
   std::string text;
   for (const Diagnostic& d : diag.all()) text += format(d) + "\n";
   return text;
+}
+
+// A simulation of `robot` that must build without errors (a test failure names them).
+inline std::unique_ptr<Simulation> simulate(const Robot& robot, const SimulationOptions& options,
+                                            const std::map<std::string, double>& initial = {}) {
+  Diagnostics diag;
+  auto sim = Simulation::create(robot, options, initial, diag);
+  EXPECT_FALSE(diag.has_errors()) << all_text(diag);
+  if (!sim) throw std::runtime_error("the model was not built");
+  return sim;
 }
 
 // Exactly one error `code`, at glTF node `node`, its message naming `name`.

@@ -13,18 +13,10 @@ namespace {
 
 using dynamics_test::box_inertial;
 using dynamics_test::RobotBuilder;
+using dynamics_test::simulate;
 using dynamics_test::translation;
 
 constexpr double kG = kStandardGravity;
-
-std::unique_ptr<Simulation> simulate(const Robot& robot, const SimulationOptions& options,
-                                     const std::map<std::string, double>& initial = {}) {
-  Diagnostics diag;
-  auto sim = Simulation::create(robot, options, initial, diag);
-  EXPECT_FALSE(diag.has_errors()) << dynamics_test::all_text(diag);
-  if (!sim) throw std::runtime_error("the model was not built");
-  return sim;
-}
 
 // A 1 kg arm hanging along -Y from a hinge about Z at the origin, and at its end (1 m down) a
 // 0.5 kg carriage on a rail along the arm's X, across the arm: the carriage's centre (its link

@@ -85,7 +85,7 @@ void add_urdf_command(CLI::App& app, int& exit_code) {
                     "Keep glTF's Y-up axes (default: turn them to ROS's Z up, (x,y,z) -> (x,-z,y))");
   command->add_option("--mesh-prefix", args->urdf.mesh_uri_prefix,
                       "Put before meshes/<link>.stl in the URDF, e.g. package://my_robot/urdf/ or "
-                      "file:///abs/dir/ (default: a relative path)");
+                      "file:///abs/dir/ (a folder: '/' is added when missing; default: a relative path)");
   command->add_flag("--no-mujoco", args->no_mujoco,
                     "Leave out the <mujoco><compiler meshdir=.../></mujoco> element");
   command->add_flag("-v,--verbose", args->verbose, "Also print info diagnostics");

@@ -352,6 +352,11 @@ std::optional<UrdfExport> export_urdf(const Conversion& conversion, const UrdfOp
                  "the robot's name holds control characters (the first: " + first + "); it is '" + model->name_ +
                      "' in the URDF, since XML 1.0 cannot carry them");
   }
+  // The prefix names the folder DIR is copied to: "package://my_robot/urdf" without its slash
+  // must not become "package://my_robot/urdfmeshes/..." (a path no resolver finds, and no error
+  // until RViz draws nothing).
+  std::string mesh_prefix = options.mesh_uri_prefix;
+  if (!mesh_prefix.empty() && mesh_prefix.back() != '/') mesh_prefix += '/';
   MeshStems stems;
   for (std::size_t l = 0; l < robot.links.size(); ++l) {
     const Link& link = robot.links[l];
@@ -359,7 +364,7 @@ std::optional<UrdfExport> export_urdf(const Conversion& conversion, const UrdfOp
     auto bytes = surfaces[l].mesh.triangles.empty() ? std::vector<std::uint8_t>{}
                                                      : stl_bytes(surfaces[l].mesh, "rdtf: link " + name);
     const std::string file = "meshes/" + mesh_file_name(stems(name), bytes, options);
-    model->links_[name] = make_link(name, &link, &surfaces[l], C, options.mesh_uri_prefix + file);
+    model->links_[name] = make_link(name, &link, &surfaces[l], C, mesh_prefix + file);
     if (!surfaces[l].mesh.triangles.empty()) {
       result.meshes.push_back({file, std::move(bytes)});
       if (!surfaces[l].closed) {

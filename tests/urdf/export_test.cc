@@ -325,6 +325,13 @@ TEST(UrdfExport, MeshPathsAndMujocoElementFollowTheOptions) {
   EXPECT_TRUE(std::filesystem::is_regular_file(ros / "meshes/base.stl"));
   EXPECT_TRUE(std::filesystem::is_regular_file(ros / "meshes/arm.stl"));
   expect_check_urdf_passes(ros / "robot.urdf");
+
+  // The prefix is a folder whether or not it ends in '/'.
+  TempDir no_slash;
+  options.mesh_uri_prefix = "package://my_robot/urdf";
+  const std::string no_slash_text = export_to(conversion, no_slash.path(), options);
+  EXPECT_NE(no_slash_text.find(R"(<mesh filename="package://my_robot/urdf/meshes/base.stl")"), std::string::npos)
+      << no_slash_text;
 }
 
 TEST(UrdfExport, BallJointAndPrismaticWithoutLimitsAreRefusedAndNothingIsWritten) {

@@ -25,7 +25,8 @@ struct UrdfOptions {
   bool y_up = false;
   // Put in front of "meshes/<link>.stl" in every <mesh filename>: "" (a path relative to the
   // URDF, which MuJoCo, pybullet, Drake and Gazebo resolve), or e.g. "package://my_robot/urdf/"
-  // or "file:///abs/dir/" for RViz. The files are always written to DIR/meshes/.
+  // or "file:///abs/dir/" for RViz: a folder, so a '/' is added when it does not end in one.
+  // The files are always written to DIR/meshes/.
   std::string mesh_uri_prefix;
   // Add <mujoco><compiler meshdir="meshes" fusestatic="false" inertiafromgeom="false"/></mujoco>
   // so that MuJoCo finds the meshes and keeps one body per link with our inertials.

@@ -177,8 +177,7 @@ VolumeIntegrals oriented(VolumeIntegrals integrals, const std::string& pointer,
   if (integrals.volume < 0) {
     diag.warning(codes::MESH_INSIDE_OUT, pointer,
                  "mesh of '" + name + "'" + (instance >= 0 ? " (instance " + std::to_string(instance) + ")" : "") +
-                     " is inside out (signed volume " +
-                     std::to_string(integrals.volume) +
+                     " is inside out (signed volume " + format_number(integrals.volume, 3) +
                      " m^3): its faces wind clockwise; mass computed as if turned right");
     integrals.volume = -integrals.volume;
     integrals.second_central = -integrals.second_central;
@@ -409,9 +408,17 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
         continue;
       }
       diag.append(after_check);
-      // Skinned: each bone gets the parts of the mesh bound to it, in its bind pose.
+      // Skinned: each bone gets the parts of the mesh bound to it, posed by its skinning matrix.
       const SurfaceTopology& topology = geometry.topology();
-      for (BoneGeometry& bone : split_by_bone(asset, node, geometry.meshes(), geometry.primitive_index, diag)) {
+      struct BonePart {
+        int link;
+        Eigen::Affine3d X_LV;
+        VolumeIntegrals signed_integrals, integrals;
+        std::vector<TriangleMesh> pieces;
+      };
+      std::vector<BonePart> parts;
+      double volume = 0;
+      for (BoneGeometry& bone : split_by_bone(asset, node, geometry.meshes(), geometry.primitive_index, world, diag)) {
         const int link = link_of_node[bone.joint_node];
         if (link < 0) {  // A bone outside the scene: typing gives it no type, and the robot no link.
           diag.warning(codes::MESH_WITHOUT_LINK, pointer,
@@ -419,18 +426,30 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
                            " belongs to no link: that bone is outside the scene; ignored");
           continue;
         }
-        const Eigen::Affine3d X_LV = robot.links[link].X_SL.inverse() * world[bone.joint_node] * bone.inverse_bind;
-        const VolumeIntegrals signed_integrals = integrate_solid(bone.pieces, X_LV);
-        auto integrals = oriented(signed_integrals, pointer, name, diag);
-        pieces[link].push_back({integrals, density});
-        robot.links[link].meshes.push_back({static_cast<int>(node), integrals.volume, density});
+        BonePart& part = parts.emplace_back();
+        part.link = link;
+        part.X_LV = robot.links[link].X_SL.inverse() * world[bone.joint_node] * bone.inverse_bind;
+        part.signed_integrals = integrate_solid(bone.pieces, part.X_LV);
+        part.integrals = oriented(part.signed_integrals, pointer, name, diag);
+        part.pieces = std::move(bone.pieces);
+        volume += part.integrals.volume;
+      }
+      // The node's rdtf_mass is the whole mesh's, shared by its bones as their volumes are (it was
+      // ignored here, the default density weighing the mesh instead: s100xform D3).
+      const double mesh_density = mass_override && volume > 0 ? *mass_override / volume : density;
+      for (BonePart& part : parts) {
+        pieces[part.link].push_back({part.integrals, mesh_density});
+        robot.links[part.link].meshes.push_back({static_cast<int>(node), part.integrals.volume, mesh_density});
+        if (mass_override && volume > 0) {
+          mesh_masses[part.link].emplace_back(reported, mesh_density * part.integrals.volume);
+        }
         if (!topology.closed() || !topology.consistently_oriented()) continue;
         // The bone's part, kept for the overlap check (parts of one bone can overlap as any
         // link's can).
         std::vector<TriangleMeshView>& views = kept.bone_views.emplace_back();
-        const std::vector<TriangleMesh>& meshes = kept.bone_meshes.emplace_back(std::move(bone.pieces));
-        for (const TriangleMesh& part : meshes) views.push_back(TriangleMeshView::of(part));
-        link_solids[link].push_back({views, X_LV, signed_integrals.volume < 0 ? -1 : 1, reported, -1});
+        const std::vector<TriangleMesh>& meshes = kept.bone_meshes.emplace_back(std::move(part.pieces));
+        for (const TriangleMesh& piece : meshes) views.push_back(TriangleMeshView::of(piece));
+        link_solids[part.link].push_back({views, part.X_LV, part.signed_integrals.volume < 0 ? -1 : 1, reported, -1});
       }
       continue;
     }
@@ -477,9 +496,11 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
     // A closed, consistently wound surface that encloses nothing: every face has a twin wound the
     // other way (a double-sided export), or inward shells cancel the others. Its edges all pair
     // up, so nothing else would say that the mesh adds no mass.
-    if (!solids.empty() && geometry.topology().closed() && geometry.topology().consistently_oriented() &&
-        solids.front().extent > 0 &&
-        std::abs(solids.front().volume) <= kNoVolume * std::pow(solids.front().extent, 3)) {
+    const bool encloses_nothing =
+        !solids.empty() && geometry.topology().closed() && geometry.topology().consistently_oriented() &&
+        solids.front().extent > 0 && std::isfinite(solids.front().extent) &&
+        std::abs(solids.front().volume) <= kNoVolume * std::pow(solids.front().extent, 3);
+    if (encloses_nothing) {
       diag.warning(codes::MESH_ENCLOSES_NO_VOLUME, pointer,
                    "mesh of '" + name + "' is closed but encloses no volume (" + format_number(solids.front().volume, 2) +
                        " m^3 across " + format_number(solids.front().extent, 3) +
@@ -491,6 +512,14 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
     for (std::size_t k = 0; k < solids.size(); ++k) {
       VolumeIntegrals& integrals = solids[k];
       signs.push_back(integrals.volume < 0 ? -1 : 1);
+      if (encloses_nothing) {
+        // Exactly nothing: the sums' rounding (8e-14 kg, a moment of -1.7e-15 kg m^2) went into
+        // every output as the link's mass and a tensor no body has, and its sign into a false
+        // MESH_INSIDE_OUT (s100xform D4).
+        integrals.volume = 0;
+        integrals.second_central.setZero();
+        continue;
+      }
       integrals = oriented(integrals, pointer, name, diag, solids.size() > 1 ? static_cast<int>(k) : -1);
       volume += integrals.volume;
     }

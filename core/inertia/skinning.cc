@@ -1,9 +1,12 @@
 #include "skinning.h"
 
+#include <algorithm>
+#include <cstdint>
 #include <numeric>
 #include <unordered_map>
 
 #include "rdtf/geometry.h"
+#include "rdtf/completion.h"
 #include "rdtf/diagnostic_codes.h"
 
 namespace rdtf {
@@ -19,14 +22,19 @@ struct UnionFind {
   void unite(std::uint32_t a, std::uint32_t b) { parent[find(a)] = find(b); }
 };
 
+// A vertex is welded to another at the same position weighted most to the same joint: the
+// copies a seam (UV, sharp edge) splits. Position alone welded rigid parts that only touch (CAD
+// parts of an arm sharing a face's corners, each wholly on its own bone) into one part, which
+// then went whole to one bone and left the other massless (s100xform D2).
 struct PositionKey {
   double x, y, z;
-  bool operator==(const PositionKey& o) const { return x == o.x && y == o.y && z == o.z; }
+  std::int64_t joint;  // the joint with the most weight on the vertex (-1: none)
+  bool operator==(const PositionKey& o) const { return x == o.x && y == o.y && z == o.z && joint == o.joint; }
 };
 struct PositionKeyHash {
   std::size_t operator()(const PositionKey& p) const {
     const std::hash<double> h;
-    return h(p.x) ^ (h(p.y) * 31) ^ (h(p.z) * 1000003);
+    return h(p.x) ^ (h(p.y) * 31) ^ (h(p.z) * 1000003) ^ (std::hash<std::int64_t>()(p.joint) * 7919);
   }
 };
 
@@ -49,7 +57,7 @@ std::vector<Eigen::Affine3d> inverse_bind_matrices(const GltfAsset& asset, const
 std::vector<BoneGeometry> split_by_bone(const GltfAsset& asset, std::size_t mesh_node,
                                         const std::vector<TriangleMesh>& pieces,
                                         const std::vector<std::size_t>& primitive_index,
-                                        Diagnostics& diag) {
+                                        const std::vector<Eigen::Affine3d>& world, Diagnostics& diag) {
   const Json& document = asset.document;
   const Json& node = document["nodes"][mesh_node];
   const Json& skin = document["skins"][node["skin"].get<std::size_t>()];
@@ -61,6 +69,8 @@ std::vector<BoneGeometry> split_by_bone(const GltfAsset& asset, std::size_t mesh
   std::unordered_map<PositionKey, std::uint32_t, PositionKeyHash> ids;
   std::vector<std::vector<std::uint32_t>> welded(pieces.size());
   std::vector<std::vector<double>> vertex_weights;  // Per welded vertex, per joint.
+  // Per piece, per vertex: 4 x sets joints and their weights, as read.
+  std::vector<std::vector<double>> joints_by_piece(pieces.size()), weights_by_piece(pieces.size());
   for (std::size_t p = 0; p < pieces.size(); ++p) {
     const Json& attributes = primitives[primitive_index[p]]["attributes"];
     const std::size_t n = pieces[p].positions.size();
@@ -89,10 +99,23 @@ std::vector<BoneGeometry> split_by_bone(const GltfAsset& asset, std::size_t mesh
                    "are left out of the mass");
     }
     welded[p].resize(n);
+    std::vector<double> own(joint_count);
     for (std::size_t v = 0; v < n; ++v) {
       const Eigen::Vector3d& q = pieces[p].positions[v];
+      std::int64_t heaviest = -1;
+      if (bound) {
+        std::fill(own.begin(), own.end(), 0.0);
+        for (std::size_t s = 0; s < joints_of.size() / (n * 4); ++s) {
+          for (int k = 0; k < 4; ++k) {
+            const auto joint = static_cast<std::size_t>(joints_of[(s * n + v) * 4 + k]);
+            if (joint < joint_count) own[joint] += weights_of[(s * n + v) * 4 + k];
+          }
+        }
+        const auto best = std::max_element(own.begin(), own.end());
+        if (best != own.end() && *best > 0) heaviest = best - own.begin();
+      }
       const auto [it, inserted] =
-          ids.try_emplace(PositionKey{q.x(), q.y(), q.z()}, static_cast<std::uint32_t>(ids.size()));
+          ids.try_emplace(PositionKey{q.x(), q.y(), q.z(), heaviest}, static_cast<std::uint32_t>(ids.size()));
       if (inserted) vertex_weights.emplace_back(joint_count, 0.0);
       welded[p][v] = it->second;
       if (!bound) continue;
@@ -102,6 +125,10 @@ std::vector<BoneGeometry> split_by_bone(const GltfAsset& asset, std::size_t mesh
           if (joint < joint_count) vertex_weights[it->second][joint] += weights_of[(s * n + v) * 4 + k];
         }
       }
+    }
+    if (bound) {
+      joints_by_piece[p] = std::move(joints_of);
+      weights_by_piece[p] = std::move(weights_of);
     }
   }
 
@@ -127,9 +154,11 @@ std::vector<BoneGeometry> split_by_bone(const GltfAsset& asset, std::size_t mesh
     }
     bone_of_part[part] = static_cast<int>(best - sum.begin());
     if (*best < 0.999 * total) {
+      const auto joint_node = skin["joints"][static_cast<std::size_t>(best - sum.begin())].get<std::size_t>();
       diag.info(codes::SKIN_PART_SHARED, pointer,
-                "a connected part of the skinned mesh is weighted to several bones; all of it "
-                "counts for the bone with the most weight");
+                "a connected part of the skinned mesh is weighted to several bones: it weighs as drawn (each "
+                "vertex where its weights blend it to), all of it on " + node_label(document, joint_node) +
+                    ", which carries " + format_number(100.0 * *best / total, 3) + "% of its weight");
     }
   }
 
@@ -145,6 +174,44 @@ std::vector<BoneGeometry> split_by_bone(const GltfAsset& asset, std::size_t mesh
     for (const auto& t : pieces[p].triangles) {
       const int bone = bone_of_part[parts.find(welded[p][t[0]])];
       if (bone >= 0) bones[bone].pieces[p].triangles.push_back(t);
+    }
+  }
+  // A vertex weighted to other bones too is drawn where its weights blend it to (glTF 2.0 3.7.3.3:
+  // sum of w_j S_j v, S_j = the joint's world transform times its inverse bind matrix), which no
+  // one bone's S_b puts it: its place is kept in the bone's space, S_b^-1 sum(w_j S_j) v, so that
+  // the part weighs as drawn. (Rigid under S_b alone it was 53% heavier than drawn, with the
+  // skeleton posed away from its bind pose; s100xform D1.) In the bind pose every S_j is the
+  // identity, and a vertex wholly on its part's bone keeps its coordinates to the bit.
+  std::vector<Eigen::Affine3d> S(joint_count);
+  for (std::size_t j = 0; j < joint_count; ++j) {
+    const auto joint_node = skin["joints"][j].get<std::size_t>();
+    S[j] = (joint_node < world.size() ? world[joint_node] : Eigen::Affine3d::Identity()) * inverse_binds[j];
+  }
+  for (std::size_t p = 0; p < pieces.size(); ++p) {
+    const std::vector<double>& joints_of = joints_by_piece[p];
+    const std::vector<double>& weights_of = weights_by_piece[p];
+    const std::size_t n = pieces[p].positions.size();
+    if (joints_of.empty() || n == 0) continue;
+    const std::size_t slots = joints_of.size() / n;  // 4 per JOINTS_n set
+    for (std::size_t v = 0; v < n; ++v) {
+      const int bone = bone_of_part[parts.find(welded[p][v])];
+      if (bone < 0) continue;
+      Eigen::Matrix4d blend = Eigen::Matrix4d::Zero();
+      double total = 0, others = 0;
+      for (std::size_t k = 0; k < slots; ++k) {
+        const std::size_t set = k / 4, slot = k % 4;
+        const auto joint = static_cast<std::size_t>(joints_of[(set * n + v) * 4 + slot]);
+        const double weight = weights_of[(set * n + v) * 4 + slot];
+        if (joint >= joint_count || weight == 0) continue;
+        blend += weight * S[joint].matrix();
+        total += weight;
+        if (joint != static_cast<std::size_t>(bone)) others += weight;
+      }
+      if (others == 0 || !(total > 0)) continue;
+      const Eigen::Matrix3d L = S[static_cast<std::size_t>(bone)].linear();
+      if (!(std::abs(L.determinant()) > 0)) continue;
+      const Eigen::Vector4d drawn = (blend / total) * pieces[p].positions[v].homogeneous();
+      bones[static_cast<std::size_t>(bone)].pieces[p].positions[v] = S[static_cast<std::size_t>(bone)].inverse() * drawn.head<3>();
     }
   }
   std::erase_if(bones, [](const BoneGeometry& bone) {

@@ -19,11 +19,14 @@ struct BoneGeometry {
 };
 
 // Splits a skinned mesh node's triangles among its skin's bones. Each connected part of the
-// surface (vertices welded by position) goes whole to the bone that carries most of its vertex
-// weight, so closed parts stay closed and their volumes exact.
+// surface (vertices welded by position and heaviest joint) goes whole to the bone that carries most
+// of its vertex weight, so closed parts stay closed and their volumes exact. A part weighted to
+// several bones keeps the shape it is drawn in: its vertices are blended by their weights and put
+// in the bone's space, so that bone.inverse_bind then world[bone] places them as drawn.
+// `world`: every node's transform in the scene (node_world_transforms).
 std::vector<BoneGeometry> split_by_bone(const GltfAsset& asset, std::size_t mesh_node,
                                         const std::vector<TriangleMesh>& pieces,
                                         const std::vector<std::size_t>& primitive_index,
-                                        Diagnostics& diag);
+                                        const std::vector<Eigen::Affine3d>& world, Diagnostics& diag);
 
 }  // namespace rdtf

@@ -110,7 +110,7 @@ std::vector<LinkSurface> link_surfaces(const GltfAsset& asset, const Robot& robo
         Diagnostics ignored;
         bones = bones_of_node
                     .emplace(node, split_by_bone(asset, static_cast<std::size_t>(node), mesh.pieces,
-                                                 mesh.primitive_index, ignored))
+                                                 mesh.primitive_index, world, ignored))
                     .first;
       }
       for (const BoneGeometry& bone : bones->second) {

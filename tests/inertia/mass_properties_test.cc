@@ -454,6 +454,33 @@ TEST(MassProperties, FarFromOriginKeepsPrecision) {
   }
 }
 
+// Vertices no triangle uses change nothing: glTF lets meshes share one POSITION accessor (packers
+// merge them), so a 2 cm part's accessor can hold another part's vertices metres away. They moved
+// the tetrahedra's apex (1e-4 of the part's inertia at 10 m, negative moments at 1e4 m, 1.4e10 kg
+// at 1e8 m), and the weld of an open surface closed a 1 mm gap (s100xform D5).
+TEST(MassProperties, UnusedVerticesChangeNothing) {
+  const TriangleMesh part = make_box(Vector3d(0.1, 0.2, 0.3), Vector3d(0.12, 0.23, 0.31));
+  const VolumeIntegrals alone = integrals(part);
+  for (double distance : {10.0, 1e4, 1e8}) {
+    SCOPED_TRACE(::testing::Message() << "unused vertex at " << distance << " m");
+    TriangleMesh shared = part;
+    shared.positions.insert(shared.positions.begin(), Vector3d(distance, -distance, distance));
+    for (auto& t : shared.triangles) t = {t[0] + 1, t[1] + 1, t[2] + 1};
+    const VolumeIntegrals got = integrals(shared);
+    EXPECT_EQ(got.volume, alone.volume);
+    EXPECT_EQ(got.centroid, alone.centroid);
+    EXPECT_EQ(got.second_central, alone.second_central);
+    EXPECT_EQ(got.extent, alone.extent);
+    // Open: one face of a 1 m cube left out, its edge 1 mm from the next face's; the weld's
+    // tolerance follows the surface's own coordinates only.
+    TriangleMesh open = make_box(Vector3d(0, 0, 0), Vector3d(1, 1, 1));
+    open.positions.push_back(Vector3d(1.001, 0, 0));
+    open.triangles[10] = {8, 3, 7};  // +x face: vertex 1 moved 1 mm out, a gap along two edges
+    open.positions.push_back(Vector3d(distance, distance, -distance));
+    EXPECT_GT(analyze_surface(std::vector<TriangleMesh>{open}).boundary_edges, 0u);
+  }
+}
+
 // Reversed triangles: the same solid inside out. The volume is negative; the centroid is the same
 // (first moment and volume both change sign) and the second moment changes sign with the volume.
 TEST(MassProperties, InsideOutMeshHasNegativeVolume) {

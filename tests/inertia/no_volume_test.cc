@@ -4,6 +4,7 @@
 // way, as a double-sided export writes a mesh. Each edge is used as often one way as the other,
 // so the surface check finds it closed, and its volume is 0: MESH_ENCLOSES_NO_VOLUME says so, and
 // LINK_NO_VOLUME does not claim there is no closed mesh.
+#include <algorithm>
 #include <cstdint>
 #include <cstring>
 #include <map>
@@ -22,11 +23,15 @@ namespace {
 
 // A one-node glTF of the unit cube [0,1]^3, its 12 outward triangles and, if `doubled`, each again
 // wound the other way.
-Json cube(bool doubled) {
+// `skew` moves the corners off the unit grid (a hexahedron whose sums round).
+Json cube(bool doubled, bool skew = false) {
   std::vector<float> positions;
   for (int v = 0; v < 8; ++v) {
     positions.insert(positions.end(), {static_cast<float>(v & 1), static_cast<float>((v >> 1) & 1),
                                        static_cast<float>((v >> 2) & 1)});
+  }
+  if (skew) {
+    for (std::size_t k = 0; k < positions.size(); ++k) positions[k] += 0.1f * static_cast<float>((k * 7) % 5) - 0.13f;
   }
   std::vector<std::uint16_t> indices{0, 2, 3, 0, 3, 1, 4, 5, 7, 4, 7, 6, 0, 1, 5, 0, 5, 4,
                                      2, 6, 7, 2, 7, 3, 0, 4, 6, 0, 6, 2, 1, 3, 7, 1, 7, 5};
@@ -37,6 +42,11 @@ Json cube(bool doubled) {
   std::memcpy(bytes.data(), positions.data(), positions.size() * 4);
   std::memcpy(bytes.data() + positions.size() * 4, indices.data(), indices.size() * 2);
   const std::size_t index_offset = positions.size() * 4;
+  std::vector<float> lo(positions.begin(), positions.begin() + 3), hi = lo;
+  for (std::size_t k = 0; k < positions.size(); ++k) {
+    lo[k % 3] = std::min(lo[k % 3], positions[k]);
+    hi[k % 3] = std::max(hi[k % 3], positions[k]);
+  }
   return {{"asset", {{"version", "2.0"}}},
           {"scene", 0},
           {"scenes", {{{"nodes", {0}}}}},
@@ -47,7 +57,7 @@ Json cube(bool doubled) {
            {{{"buffer", 0}, {"byteOffset", 0}, {"byteLength", index_offset}},
             {{"buffer", 0}, {"byteOffset", index_offset}, {"byteLength", indices.size() * 2}}}},
           {"accessors",
-           {{{"bufferView", 0}, {"componentType", 5126}, {"count", 8}, {"type", "VEC3"}, {"min", {0, 0, 0}}, {"max", {1, 1, 1}}},
+           {{{"bufferView", 0}, {"componentType", 5126}, {"count", 8}, {"type", "VEC3"}, {"min", lo}, {"max", hi}},
             {{"bufferView", 1}, {"componentType", 5123}, {"count", indices.size()}, {"type", "SCALAR"}}}}};
 }
 
@@ -85,6 +95,33 @@ TEST(NoVolume, ADoubleSidedMeshIsNamedAsEnclosingNothing) {
   }
   EXPECT_TRUE(named);
   EXPECT_TRUE(link);
+}
+
+// Off the grid the twins' sums round (-8e-17 m^3): that went out as the link's mass (8e-14 kg), a
+// tensor with a negative moment in every output, and a false MESH_INSIDE_OUT from its sign
+// (s100xform D4). A mesh that encloses nothing weighs exactly nothing.
+TEST(NoVolume, ADoubleSidedMeshWeighsExactlyNothingWhereItsSumsRound) {
+  Diagnostics diag;
+  const auto conversion = convert(cube(true, true), diag);
+  ASSERT_TRUE(conversion.has_value());
+  ASSERT_EQ(conversion->robot.links.size(), 1u);
+  const MassProperties& inertial = conversion->robot.links[0].inertial;
+  EXPECT_EQ(inertial.mass, 0.0);
+  EXPECT_EQ(inertial.volume, 0.0);
+  EXPECT_EQ(inertial.inertia, Eigen::Matrix3d::Zero());
+  bool named = false, link = false;
+  for (const Diagnostic& d : diag.all()) {
+    EXPECT_NE(d.code, codes::MESH_INSIDE_OUT) << d.message;
+    named = named || d.code == codes::MESH_ENCLOSES_NO_VOLUME;
+    link = link || d.code == codes::LINK_NO_VOLUME;
+  }
+  EXPECT_TRUE(named);
+  EXPECT_TRUE(link);
+  // The single-sided hexahedron has volume: the skew keeps it a solid.
+  Diagnostics single_diag;
+  const auto single = convert(cube(false, true), single_diag);
+  ASSERT_TRUE(single.has_value());
+  EXPECT_GT(single->robot.links[0].inertial.volume, 0.5);
 }
 
 TEST(NoVolume, TheSingleSidedCubeIsSilent) {

@@ -354,6 +354,7 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
   const std::vector<int> owners = owning_link_nodes(document, types);
 
   std::vector<std::vector<MassPiece>> pieces(robot.links.size());
+  std::vector<bool> flattened(robot.links.size(), false);  // a mesh of it is scaled to nothing
   // Mesh nodes whose own rdtf_mass set their density, by link: a link's rdtf_mass rescales them.
   std::vector<std::vector<std::pair<std::size_t, double>>> mesh_masses(robot.links.size());
   LinkSolids own_solids;
@@ -463,6 +464,7 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
     // the link's mass, vanish. (A matrix that does so is refused as not decomposable; a TRS scale
     // of 0 is valid glTF, and cut a link's mass without a word.)
     if (X_LN.linear().determinant() == 0.0) {
+      flattened[static_cast<std::size_t>(link)] = true;
       after_check.warning(codes::MESH_SCALED_TO_NOTHING, pointer,
                           "mesh node '" + name + "' is scaled to nothing (a scale of 0 on it or an ancestor): "
                           "it adds no volume and no mass to its link; give it a non-zero scale, or remove it");
@@ -628,6 +630,7 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
                                         "parented to a bone, its mesh among them; edit the original .blend, not "
                                         "rdtf's output"
                                       : "no mesh")
+          : flattened[l] ? "its meshes are scaled to nothing or enclose none"
           : link_solids[l].empty() ? "no closed mesh"
                                    : "its closed meshes enclose none: faces doubled back to back, or shells wound "
                                      "inward that cancel the others";

@@ -151,6 +151,18 @@ std::vector<std::string> no_volume_messages(const std::vector<Diagnostic>& diagn
   return messages;
 }
 
+// A scale of 0 flattens the mesh (MESH_SCALED_TO_NOTHING); the link's word then says so, not that
+// faces are doubled back to back (s100xform D6).
+TEST(NoVolume, AFlattenedMeshIsNamedAsSuch) {
+  Json document = cube(false);
+  document["nodes"][0]["scale"] = {1, 0, 1};
+  Diagnostics diag;
+  ASSERT_TRUE(convert(document, diag).has_value());
+  const auto messages = no_volume_messages(diag.all());
+  ASSERT_EQ(messages.size(), 1u);
+  EXPECT_NE(messages[0].find("its meshes are scaled to nothing"), std::string::npos) << messages[0];
+}
+
 // A frame welded to a body that has mass weighs nothing by design: the armature's own object of a
 // skinned robot built as docs/blender.md says (it holds the root bone by a fixed joint), or a
 // sensor frame. LINK_NO_VOLUME said "its mass is zero" of every such link.

@@ -1,7 +1,8 @@
 // The checks behind validate_document (rdtf/validate.h), one class split over files by what
 // they check: validate_document.cc (reading properties; asset, extensions, images, animations,
 // limits), validate_accessors.cc (buffers, buffer views, accessors), validate_meshes.cc (meshes)
-// and validate_nodes.cc (nodes, the node graph, skins, scenes).
+// validate_nodes.cc (nodes, the node graph, skins, scenes) and validate_materials.cc (materials,
+// textures, samplers, every object's extensions: what rdtf writes out unread).
 //
 // The document is untrusted and may be fuzzed: every property is type-checked before it is read
 // (nlohmann::json throws on a wrong-type access), and offsets and lengths are unsigned 64-bit
@@ -96,6 +97,14 @@ class DocumentCheck {
   void check_extensions();
   bool integer_bounds_fit(const std::vector<double>& bounds, std::uint64_t component_type, const std::string& pointer);
   void check_images_and_animations();
+  // validate_materials.cc: what rdtf passes through unread.
+  void read_unit_number(const Json& object, const char* key, const std::string& pointer, double low,
+                        double high);
+  void read_factor(const Json& object, const char* key, const std::string& pointer, std::size_t length);
+  void check_texture_info(const Json& object, const char* key, const std::string& pointer);
+  void check_materials();
+  void check_textures();
+  void check_extension_objects(const Json& value, const std::string& pointer, int depth);
   void check_animation(const Json& animation, const std::string& pointer);
   void check_triangle_limit();
 

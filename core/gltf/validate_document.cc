@@ -1,6 +1,7 @@
 // validate_document (rdtf/validate.h): the order of the checks, the type-checked reading of
 // properties they all use, and the checks of the document as a whole. See document_check.h.
 #include <algorithm>
+#include <cctype>
 #include <map>
 #include <cmath>
 #include <unordered_set>
@@ -40,10 +41,11 @@ void DocumentCheck::run() {
   }
   check_asset();
   check_extensions();
-  for (const char* key : {"buffers", "bufferViews", "accessors", "meshes", "nodes", "scenes",
-                          "skins", "cameras", "materials", "images", "animations"}) {
+  for (const char* key : {"buffers", "bufferViews", "accessors", "meshes", "nodes", "scenes", "skins",
+                          "cameras", "materials", "images", "animations", "textures", "samplers"}) {
     entries_[key] = top_level(key);
   }
+  check_extension_objects(doc_, "", 0);
   // Each step uses the facts of those before it.
   check_buffers();
   check_buffer_views();
@@ -54,6 +56,8 @@ void DocumentCheck::run() {
   check_skins();
   check_scenes();
   check_images_and_animations();
+  check_materials();
+  check_textures();
   check_triangle_limit();
 }
 
@@ -144,6 +148,9 @@ std::optional<std::uint64_t> DocumentCheck::uint_value(const Json& value,
   if (value.is_number_integer()) {  // Negative.
     diag_.error(codes::VALUE_NOT_IN_RANGE, pointer,
                 "must be a non-negative integer, found " + describe(value));
+  } else if (value.is_number_float() && std::isfinite(value.get<double>()) && value.get<double>() >= 0 &&
+             std::floor(value.get<double>()) == value.get<double>()) {  // 2^64 and beyond: whole, too large
+    diag_.error(codes::VALUE_NOT_IN_RANGE, pointer, describe(value) + " is too large for an index or a count");
   } else {
     diag_.error(
         codes::TYPE_MISMATCH, pointer,
@@ -261,6 +268,7 @@ std::optional<std::pair<int, int>> DocumentCheck::read_version(const Json& asset
 void DocumentCheck::check_asset() {
   const Json* asset = read_object(doc_, "asset", "", true);
   if (asset == nullptr) return;
+  for (const char* key : {"generator", "copyright"}) read_string(*asset, key, "/asset");
   const auto version = read_version(*asset, "version", true);
   if (version && version->first != 2) {
     diag_.error(
@@ -281,12 +289,16 @@ void DocumentCheck::check_asset() {
 void DocumentCheck::check_extensions() {
   for (const std::string key : {"extensionsUsed", "extensionsRequired"}) {
     const Json* names = read_array(doc_, key.c_str(), "");
+    std::unordered_set<std::string> seen;
     for (std::size_t k = 0; names != nullptr && k < names->size(); ++k) {
       const std::string pointer = json_pointer(json_pointer("", key), k);
       const Json& name = (*names)[k];
       if (!name.is_string()) {
         diag_.error(codes::TYPE_MISMATCH, pointer,
                     "an extension name must be a string, found " + describe(name));
+      } else if (!seen.insert(name.get<std::string>()).second) {
+        diag_.error(codes::DUPLICATE_ELEMENTS, pointer,
+                    "'" + quote(name.get<std::string>()) + "' is listed twice; list each extension once");
       } else if (key == "extensionsUsed" && name == "KHR_mesh_quantization") {
         quantization_ = true;
       } else if (key == "extensionsRequired" && !extension_is_harmless(name)) {
@@ -517,8 +529,47 @@ void DocumentCheck::check_triangle_limit() {
 
 }  // namespace internal
 
+namespace {
+
+// A problem under /nodes/N (or a mesh's, a material's, ...) names the object by its name too,
+// unless the message does already: a Blender user knows objects by name, not by export index
+// (s100err D4: TYPE_MISMATCH, UNRESOLVED_REFERENCE, ARRAY_LENGTH_NOT_IN_LIST on nodes gave the
+// index only).
+std::string named(const Json& document, const Diagnostic& d) {
+  static constexpr std::pair<const char*, const char*> kKinds[] = {
+      {"nodes", "node"}, {"meshes", "mesh"}, {"materials", "material"}, {"skins", "skin"},
+      {"animations", "animation"}, {"cameras", "camera"}, {"scenes", "scene"}, {"accessors", "accessor"}};
+  if (!document.is_object()) return d.message;
+  for (const auto& [array, kind] : kKinds) {
+    const std::string prefix = std::string("/") + array + "/";
+    if (d.pointer.rfind(prefix, 0) != 0) continue;
+    const std::size_t end = d.pointer.find('/', prefix.size());
+    const std::string digits = d.pointer.substr(prefix.size(), end == std::string::npos ? std::string::npos : end - prefix.size());
+    if (digits.empty() || digits.size() > 9 || digits.find_first_not_of("0123456789") != std::string::npos) return d.message;
+    const std::size_t index = std::stoul(digits);
+    const auto it = document.find(array);
+    if (it == document.end() || !it->is_array() || index >= it->size()) return d.message;
+    const Json& object = (*it)[index];
+    if (!object.is_object() || !object.contains("name") || !object["name"].is_string()) return d.message;
+    const std::string name = internal::quote(object["name"].get<std::string>());
+    if (name.empty() || d.message.find("'" + name + "'") != std::string::npos) return d.message;
+    // A message that names its nodes itself ("node 2 'hand' is already a child of ...").
+    for (std::size_t at = d.message.find(std::string(kind) + " "); at != std::string::npos;
+         at = d.message.find(std::string(kind) + " ", at + 1)) {
+      const std::size_t next = at + std::string_view(kind).size() + 1;
+      if (next < d.message.size() && std::isdigit(static_cast<unsigned char>(d.message[next]))) return d.message;
+    }
+    return std::string(kind) + " " + digits + " '" + name + "': " + d.message;
+  }
+  return d.message;
+}
+
+}  // namespace
+
 void validate_document(const Json& document, const LoadLimits& limits, Diagnostics& diagnostics) {
-  internal::DocumentCheck(document, limits, diagnostics).run();
+  Diagnostics found(diagnostics.file());
+  internal::DocumentCheck(document, limits, found).run();
+  for (const Diagnostic& d : found.all()) diagnostics.add(d.severity, d.code, d.pointer, named(document, d));
 }
 
 }  // namespace rdtf

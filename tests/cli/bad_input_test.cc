@@ -103,7 +103,8 @@ std::vector<BadCase> cases() {
                    d["accessors"][1]["normalized"] = true;
                    d["accessors"][1]["byteOffset"] = 2;
                  }),
-                 "/meshes/0/primitives/0/attributes/TEXCOORD_0: error MESH_PRIMITIVE_ACCESSOR_UNALIGNED: attribute "
+                 "/meshes/0/primitives/0/attributes/TEXCOORD_0: error MESH_PRIMITIVE_ACCESSOR_UNALIGNED: mesh 0 "
+                 "'Cylinder.001': attribute "
                  "TEXCOORD_0 reads accessor 1, whose elements start at byte 2306 of its buffer"});
   // gltf-pipeline removes the nodes nothing refers to and leaves their parent's children empty:
   // the error names the node and that cause (it said only "the array is empty").

@@ -43,6 +43,8 @@ const std::set<std::string>& not_codes() {
       // EXT_meshopt_compression's modes and filters, EXT_mesh_gpu_instancing's attributes.
       "ATTRIBUTES", "TRIANGLES", "INDICES", "NONE", "OCTAHEDRAL", "QUATERNION", "EXPONENTIAL",
       "TRANSLATION", "ROTATION", "SCALE",
+      // A material's alpha modes (BLEND is above).
+      "OPAQUE", "MASK",
       // Animation samplers' interpolations.
       "LINEAR", "STEP", "CUBICSPLINE"};
   return names;

@@ -99,6 +99,69 @@ TEST(ValidateDocument, AcceptsAValidTriangle) {
   EXPECT_EQ(data.all().size(), 0u) << listing(data);
 }
 
+// What rdtf writes out unread is checked too: each of these passed through into an output the
+// Khronos validator refused, with exit 0 (s100err D1). Codes and pointers are the validator's.
+TEST(ValidateDocument, WhatPassesThroughUnreadIsChecked) {
+  const auto one = [](const char* patch) {
+    Json document = triangle_document();
+    document.merge_patch(Json::parse(patch));
+    return check_document(document);
+  };
+  EXPECT_DIAGNOSTIC(one(R"({"asset": {"generator": 7}})"), "TYPE_MISMATCH", "/asset/generator");
+  EXPECT_DIAGNOSTIC(one(R"({"asset": {"copyright": 5}})"), "TYPE_MISMATCH", "/asset/copyright");
+  EXPECT_DIAGNOSTIC(one(R"({"asset": {"extensions": "x"}})"), "TYPE_MISMATCH", "/asset/extensions");
+  EXPECT_DIAGNOSTIC(one(R"({"extensionsUsed": ["KHR_x", "KHR_x"]})"), "DUPLICATE_ELEMENTS", "/extensionsUsed/1");
+  EXPECT_DIAGNOSTIC(one(R"({"materials": [{"pbrMetallicRoughness": {"baseColorFactor": [1, 0, 0]}}]})"),
+                    "ARRAY_LENGTH_NOT_IN_LIST", "/materials/0/pbrMetallicRoughness/baseColorFactor");
+  EXPECT_DIAGNOSTIC(one(R"({"materials": [{"pbrMetallicRoughness": {"baseColorFactor": [2, 0, 0, 1]}}]})"),
+                    "VALUE_NOT_IN_RANGE", "/materials/0/pbrMetallicRoughness/baseColorFactor/0");
+  EXPECT_DIAGNOSTIC(one(R"({"materials": [{"pbrMetallicRoughness": {"roughnessFactor": -0.5}}]})"),
+                    "VALUE_NOT_IN_RANGE", "/materials/0/pbrMetallicRoughness/roughnessFactor");
+  EXPECT_DIAGNOSTIC(one(R"({"materials": [{"alphaMode": "CLIP"}]})"), "VALUE_NOT_IN_LIST", "/materials/0/alphaMode");
+  EXPECT_DIAGNOSTIC(one(R"({"materials": [{"emissiveTexture": {"index": 3}}]})"), "UNRESOLVED_REFERENCE",
+                    "/materials/0/emissiveTexture/index");
+  EXPECT_DIAGNOSTIC(one(R"({"materials": [{"doubleSided": "yes"}]})"), "TYPE_MISMATCH", "/materials/0/doubleSided");
+  EXPECT_DIAGNOSTIC(one(R"({"samplers": [{"wrapS": 7}]})"), "VALUE_NOT_IN_LIST", "/samplers/0/wrapS");
+  EXPECT_DIAGNOSTIC(one(R"({"textures": [{"source": 0}]})"), "UNRESOLVED_REFERENCE", "/textures/0/source");
+  // Every object's extensions, the node's named by its name.
+  Json document = triangle_document();
+  document["nodes"][0]["extensions"] = 5;
+  const Diagnostics diag = check_document(document);
+  EXPECT_DIAGNOSTIC(diag, "TYPE_MISMATCH", "/nodes/0/extensions");
+  ASSERT_FALSE(diag.all().empty());
+  EXPECT_EQ(diag.all()[0].message, "node 0 'base': must be an object, found number 5");
+  document = triangle_document();
+  document["meshes"][0]["primitives"][0]["extensions"] = Json::array({1});
+  EXPECT_DIAGNOSTIC(check_document(document), "TYPE_MISMATCH", "/meshes/0/primitives/0/extensions");
+  // Extras hold anything.
+  document = triangle_document();
+  document["nodes"][0]["extras"] = {{"extensions", 5}};
+  EXPECT_EQ(check_document(document).all().size(), 0u);
+  // A materials, textures and samplers section as exporters write it is silent.
+  EXPECT_EQ(one(R"({"materials": [{"pbrMetallicRoughness": {"baseColorFactor": [1, 0.5, 0, 1], "metallicFactor": 0,
+                     "baseColorTexture": {"index": 0, "texCoord": 0}}, "alphaMode": "MASK", "alphaCutoff": 0.5,
+                     "doubleSided": true, "normalTexture": {"index": 0, "scale": -2}, "emissiveFactor": [0, 0, 1]}],
+                   "textures": [{"sampler": 0, "source": 0}], "images": [{"uri": "a.png"}],
+                   "samplers": [{"magFilter": 9729, "minFilter": 9987, "wrapS": 33648, "wrapT": 10497}]})")
+                .all()
+                .size(),
+            0u);
+}
+
+// Schema errors on a node name it (a Blender user knows objects by name; s100err D4), and an index
+// beyond 2^64 is too large, not "not an integer".
+TEST(ValidateDocument, NodesAreNamedAndHugeIndicesAreOutOfRange) {
+  Json document = triangle_document();
+  document["nodes"][0]["mesh"] = "x";
+  Diagnostics diag = check_document(document);
+  ASSERT_FALSE(diag.all().empty());
+  EXPECT_EQ(diag.all()[0].message, "node 0 'base': must be an integer, found string \"x\"");
+  document["nodes"][0]["mesh"] = 1.8446744073709552e19;
+  diag = check_document(document);
+  EXPECT_DIAGNOSTIC(diag, "VALUE_NOT_IN_RANGE", "/nodes/0/mesh");
+  EXPECT_NE(diag.all()[0].message.find("too large"), std::string::npos) << listing(diag);
+}
+
 TEST(ValidateDocument, AccessorPastTheEndOfItsBufferView) {
   Json document = triangle_document();
   document["accessors"][0]["count"] = 4;  // 4 x 12 bytes in a 36-byte view.

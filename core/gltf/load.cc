@@ -103,7 +103,18 @@ std::string without_bytes_read(std::string message) {
   return message.substr(0, start);
 }
 
-std::optional<Json> parse_json(std::string_view text, Diagnostics& diag) {
+// `chunk_offset`: where the text starts in its file, for a GLB's JSON chunk: a place is then said
+// in both (a chunk's "byte 9" alone read as the file's and pointed into the GLB header; s100err D6).
+std::optional<Json> parse_json(std::string_view text, Diagnostics& diag,
+                               std::optional<std::size_t> chunk_offset = std::nullopt) {
+  const auto place_in = [&](std::string_view in, std::size_t byte) {
+    std::string place = ::rdtf::place_in(in, byte);
+    if (chunk_offset && !place.empty() && place.back() == ')') {
+      place.pop_back();
+      place += " of the JSON chunk, at offset " + std::to_string(*chunk_offset + (byte == 0 ? 0 : byte - 1)) + " of the file)";
+    }
+    return place;
+  };
   if (text.substr(0, 3) == "\xEF\xBB\xBF") {
     diag.error(codes::JSON_BOM, "", "the JSON starts with a UTF-8 byte order mark, which glTF forbids");
     return std::nullopt;
@@ -140,8 +151,17 @@ std::optional<Json> parse_json(std::string_view text, Diagnostics& diag) {
     diag.error(codes::INVALID_JSON, "", "unusable JSON value" + at + ": " + error.what());
     return std::nullopt;
   } catch (const Json::parse_error& error) {
+    // XML where glTF was expected: most likely a URDF given to a command that reads glTF
+    // (`rdtf validate robot.urdf`), which a bare parse error at line 1 does not tell (s100err D5).
+    const std::size_t first = text.find_first_not_of(" \t\r\n");
+    const bool xml = first != std::string_view::npos && text[first] == '<';
+    const bool urdf = xml && text.find("<robot") != std::string_view::npos;
     diag.error(codes::INVALID_JSON, "",
-               "invalid JSON at " + place_in(text, error.byte) + ": " + without_bytes_read(error.what()));
+               "invalid JSON at " + place_in(text, error.byte) + ": " + without_bytes_read(error.what()) +
+                   (urdf  ? ". This is a URDF (XML), not glTF: convert it with `rdtf import FILE -o model.gltf`, "
+                            "then give that to this command"
+                    : xml ? ". This is XML, not glTF JSON"
+                          : ""));
     return std::nullopt;
   } catch (const Json::exception& error) {
     diag.error(codes::INVALID_JSON, "", "invalid JSON: " + without_bytes_read(error.what()));
@@ -526,7 +546,10 @@ std::optional<GltfAsset> load_from_bytes(const std::vector<std::uint8_t>& bytes,
     json_text = chunks->json;
     if (chunks->bin) bin = *chunks->bin;
   }
-  auto document = parse_json(json_text, diag);
+  auto document = parse_json(json_text, diag,
+                             asset.binary ? std::optional<std::size_t>(static_cast<std::size_t>(
+                                                reinterpret_cast<const std::uint8_t*>(json_text.data()) - bytes.data()))
+                                          : std::nullopt);
   if (!document) return std::nullopt;
   if (!data_uris_within_cap(*document, limits, diag)) return std::nullopt;
   validate_document(*document, limits, diag);

@@ -52,6 +52,17 @@ std::vector<BadCase> cases() {
   all.push_back({"TruncatedGlb", raw_file("model.glb", glb_bytes().substr(0, 1000)), "@8"});
   all.push_back({"WrongMagic", raw_file("model.glb", "glTX" + glb_bytes().substr(4)), ""});
   {
+    // A stray character in a GLB's JSON chunk (its data starts at file offset 20): said in the
+    // chunk and in the file, whose "byte 9" alone pointed into the GLB header (s100err D6).
+    std::string bytes = glb_bytes();
+    bytes[20 + 8] = ',';
+    all.push_back({"GlbJsonChunkBroken", raw_file("model.glb", bytes), "of the JSON chunk, at offset 28 of the file"});
+  }
+  // A URDF given to a command that reads glTF says so, and what reads it (s100err D5).
+  all.push_back({"UrdfWhereGltfIsRead",
+                 raw_file("robot.urdf", "<?xml version=\"1.0\"?>\n<robot name=\"r\"><link name=\"a\"/></robot>\n"),
+                 "This is a URDF (XML), not glTF: convert it with `rdtf import FILE -o model.gltf`"});
+  {
     std::string bytes = glb_bytes();
     bytes[0] = 'G';
     // Not glTF's magic: a damaged GLB by its name, and by its header's version 2 whatever its
@@ -89,7 +100,8 @@ std::vector<BadCase> cases() {
     const std::string json = arm3().dump();
     const auto glb = make_glb(json + std::string(4 - json.size() % 4, '\0'), {});
     all.push_back({"GlbJsonChunkPaddedWithNuls", raw_file("model.glb", std::string(glb.begin(), glb.end())),
-                   "(byte " + std::to_string(json.size() + 1) + "): a NUL byte"});
+                   "(byte " + std::to_string(json.size() + 1) + " of the JSON chunk, at offset " +
+                       std::to_string(20 + json.size()) + " of the file): a NUL byte"});
   }
   // Valid JSON syntax, but beyond a double: placed like any other JSON error (it named no place).
   all.push_back({"NumberBeyondDouble",

@@ -591,7 +591,12 @@ Robot build_robot(const Json& document, const std::vector<NodeType>& types, std:
     }
     joint.source_node = source ? source->frame_node : -1;
     joint.source_is_entry = source && source->rdtf_entry;
-    if (source) read_joint_properties(*source, world[source->frame_node], child.X_SL, joint, diag);
+    // Read apart first: an entry with an invalid value holds a default in its place, which the
+    // comparison with node extras below must not state as what the file says (s100err D3).
+    Diagnostics read(diag.file());
+    if (source) read_joint_properties(*source, world[source->frame_node], child.X_SL, joint, read);
+    const bool entry_invalid = read.has_errors();
+    diag.append(read);
     // A frame link (no mesh, nothing below it but its inertial or visual nodes: a camera's empty)
     // on a fixed joint is its own frame, wherever the joint's properties sit (a fixed mount empty
     // above holding two cameras): a fixed joint turns about nothing, and the frame is the link.
@@ -602,7 +607,7 @@ Robot build_robot(const Json& document, const std::vector<NodeType>& types, std:
     }
     // The entry wins over node extras. A tool that keeps node extras only (Blender's importer)
     // would read the node extras instead, so say where they disagree.
-    for (std::size_t i = 0; joint.source_is_entry && i < extras_nodes.size(); ++i) {
+    for (std::size_t i = 0; joint.source_is_entry && !entry_invalid && i < extras_nodes.size(); ++i) {
       const int node = extras_nodes[i];
       const Json* extras = node_extras(document, node);
       if (!has_joint_keys(extras)) continue;

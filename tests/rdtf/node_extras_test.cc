@@ -171,6 +171,25 @@ TEST_F(NodeExtras, ANodeTypeThatDisagreesWithExtrasRdtfIsNamedAndRewritten) {
   expect_same_robot(robot_, blender->robot);
 }
 
+// An invalid value in the extras.RDTF entry is an error, and nothing compares the node extras
+// with the default put in its place: that warning said the file held [1,0,0] where its axis was
+// 'banana', and that an output not written was rewritten (s100err D3).
+TEST_F(NodeExtras, AnInvalidEntryValueIsNotComparedWithNodeExtras) {
+  json edited = rdtf_;
+  bool changed = false;
+  for (json& entry : edited["extras"]["RDTF"]["nodes"]) {
+    if (entry.contains("joint") && entry["joint"].contains("axis")) {
+      entry["joint"]["axis"] = "banana";
+      changed = true;
+    }
+  }
+  ASSERT_TRUE(changed);
+  Diagnostics diag;
+  EXPECT_FALSE(convert_json(dir_, "banana.gltf", edited, diag));
+  EXPECT_FALSE(with_code(diag, codes::RDTF_INVALID_VALUE).empty());
+  EXPECT_TRUE(with_code(diag, codes::RDTF_NODE_EXTRAS_IGNORED).empty());
+}
+
 TEST_F(NodeExtras, InvalidNodeExtrasBesideExtrasRdtfAreAWarningAndRewritten) {
   std::optional<Conversion> converted;
   const auto warnings = convert_edited(-0.5, -2.0, converted);

@@ -255,7 +255,11 @@ std::string Daemon::unique_model_id(const std::filesystem::path& source, const s
   std::string id = base;
   // Two names that sanitise alike ("a b.gltf", "a_b.gltf") must not share channels.
   for (int n = 2; registry_.find_id(id) != nullptr || not_these.count(id) != 0; ++n) {
-    id = base + "_" + std::to_string(n);
+    const std::string suffix = "_" + std::to_string(n);
+    // From the 100th on the suffix is longer than the room kept: the base is shortened for it, or
+    // RDTF/<id>/DESCRIPTION_CHUNK passed LCM's 63 characters, LCM refused every send on it and the
+    // send queue stopped behind it (s100java D6).
+    id = (suffix.size() <= 3 ? base : model_id_for(source, config_.watch, max_id - suffix.size())) + suffix;
   }
   return id;
 }

@@ -45,6 +45,15 @@ void Publisher::drop_oldest(const char* why) {
 }
 
 void Publisher::enqueue(std::string channel, std::vector<std::uint8_t> bytes, Priority priority) {
+  // LCM refuses a channel name longer than 63 characters on every try: queued, it would be retried
+  // for ever and hold back everything behind it (s100java D6). Said, counted, not sent.
+  if (channel.size() > kLcmMaxChannel) {
+    ++dropped_;
+    report(PublisherEvent::Kind::kUnencodable,
+           "not sent: channel " + channel + " is " + std::to_string(channel.size()) +
+               " characters, longer than LCM's 63 (a bug: please report it)");
+    return;
+  }
   // Only when LCM has refused every send for long, or more is queued than the rate sends.
   while (queued() >= kMaxQueued) drop_oldest("100,000 messages");
   while (queued() > 0 && queued_bytes_ + bytes.size() > kMaxQueuedBytes) drop_oldest("64 MiB");

@@ -40,6 +40,9 @@ struct PublisherEvent {
   std::string text;  // One line for the log, naming the channel and the error.
 };
 
+// The longest channel name LCM sends (LCM_MAX_CHANNEL_NAME_LENGTH).
+inline constexpr std::size_t kLcmMaxChannel = 63;
+
 // An upper bound of what a receiving socket's buffer is charged for one datagram of `size`
 // payload bytes (above every size class measured on loopback, from 1 to 64,000 bytes).
 constexpr double receive_buffer_cost(std::size_t size) {

@@ -1,6 +1,7 @@
 // rdtfd's loop stepped in-process (daemon_loop.h): models removed, recreated and renamed,
 // rescans, requests and republication, and reloads, as seen on the bus.
 #include <algorithm>
+#include <set>
 
 #include "daemon_loop.h"
 
@@ -85,6 +86,31 @@ TEST_F(DaemonLoop, ModelsWhoseNamesSanitiseAlikeGetDistinctChannels) {
   EXPECT_EQ(events("a_b.glb_2"), kRevision1);
   advance(1s);
   EXPECT_EQ(last_status().num_models, 2);
+}
+
+// From the 100th file whose name sanitises alike, "_N" is longer than the three characters kept
+// for it: the id is shortened for it, so that every channel stays within LCM's 63 characters
+// (RDTF/<id>/DESCRIPTION_CHUNK was 64 at "_100": LCM refused it, and the send queue stopped
+// behind it; s100java D6).
+TEST_F(DaemonLoop, AHundredAndMoreNamesThatSanitiseAlikeKeepChannelsLcmSends) {
+  // 11 x 11 names of 40 characters, each sanitising to "nnn_nnn_nnn...".
+  const std::string others = "_ #+!@$%^&=";
+  for (const char a : others) {
+    for (const char b : others) {
+      std::string name(40, 'n');
+      name[3] = a;
+      name[7] = b;
+      rdtf::testing::write_file(watch_ / (name + ".glb"), "");
+    }
+  }
+  start();
+  std::set<std::string> ids;
+  for (const auto& [source, record] : daemon_->registry().all()) {
+    ids.insert(record.id);
+    EXPECT_LE(std::string("RDTF/" + record.id + "/DESCRIPTION_CHUNK").size(), 63u) << record.id;
+  }
+  EXPECT_EQ(ids.size(), daemon_->registry().all().size());
+  EXPECT_EQ(ids.size(), 121u);
 }
 
 TEST_F(DaemonLoop, ModelsSettleIndependently) {

@@ -95,6 +95,24 @@ TEST(Publisher, AMessageWithANulInAStringIsNotSentAndIsReported) {
   EXPECT_EQ(events[0].text, "not sent on A: a text field of the message holds a NUL byte, which LCM cannot carry");
 }
 
+// LCM refuses a channel of more than 63 characters on every try: kept and retried, it held back
+// everything queued behind it for ever (s100java D6). It is not sent, and said so.
+TEST(Publisher, AChannelLongerThanLcmAllowsIsNotSentAndHoldsNothingBack) {
+  FakeLcm lcm;
+  Publisher publisher([&](const std::string& c, const std::uint8_t* d, unsigned int n) { return lcm.send(c, d, n); },
+                      1e9, 1 << 20);
+  std::vector<PublisherEvent> events;
+  publisher.on_event([&](const PublisherEvent& e) { events.push_back(e); });
+  const std::string longest(63, 'c'), too_long(64, 'c');
+  publisher.publish(too_long, request("1"));
+  publisher.publish(longest, request("2"));
+  EXPECT_EQ(publisher.drain(Clock::time_point{} + 1h), std::nullopt);
+  EXPECT_EQ(lcm.sent, (std::vector<std::string>{longest + " 2"}));
+  ASSERT_EQ(events.size(), 1u);
+  EXPECT_EQ(events[0].kind, PublisherEvent::Kind::kUnencodable);
+  EXPECT_NE(events[0].text.find("is 64 characters, longer than LCM's 63"), std::string::npos) << events[0].text;
+}
+
 TEST(Publisher, BackOffStopsGrowingAtHalfASecond) {
   FakeLcm lcm;
   lcm.refuse = true;

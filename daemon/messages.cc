@@ -162,23 +162,36 @@ namespace {
 template <typename Message>
 void fit_diagnostics(Message& message, std::size_t max_bytes) {
   if (static_cast<std::size_t>(message.getEncodedSize()) <= max_bytes) return;
+  const auto note_text = [](std::size_t left_out) {
+    return std::to_string(left_out) +
+           " more diagnostics not sent: they did not fit in one datagram, which keeps the most severe (rdtf "
+           "inspect or rdtf validate of the model lists every one)";
+  };
   // Sized with the longest count it can hold; the real count is put in below.
-  rdtf::diagnostic_t note = to_message(
-      Severity::kInfo, codes::DIAGNOSTICS_TRUNCATED,
-      "999999 more diagnostics not sent: they did not fit in one datagram (rdtfd's log has every one)");
+  rdtf::diagnostic_t note = to_message(Severity::kInfo, codes::DIAGNOSTICS_TRUNCATED, note_text(999999));
   std::vector<rdtf::diagnostic_t> all = std::move(message.diagnostics);
   message.diagnostics.clear();
   set_counts(message);
   std::size_t size = static_cast<std::size_t>(message.getEncodedSize()) + static_cast<std::size_t>(note._getEncodedSizeNoHash());
+  // The most severe first, each that fits, then sent in their own order: a report cut to size
+  // kept the infos that came first and dropped the warnings after them (s100java D2).
+  std::vector<std::size_t> by_severity(all.size());
+  for (std::size_t k = 0; k < all.size(); ++k) by_severity[k] = k;
+  std::stable_sort(by_severity.begin(), by_severity.end(),
+                   [&](std::size_t a, std::size_t b) { return all[a].severity > all[b].severity; });
+  std::vector<bool> keep(all.size(), false);
   std::size_t kept = 0;
-  for (; kept < all.size(); ++kept) {
-    const std::size_t row = static_cast<std::size_t>(all[kept]._getEncodedSizeNoHash());
+  for (const std::size_t k : by_severity) {
+    const std::size_t row = static_cast<std::size_t>(all[k]._getEncodedSizeNoHash());
     if (size + row > max_bytes) break;
     size += row;
-    message.diagnostics.push_back(std::move(all[kept]));
+    keep[k] = true;
+    ++kept;
   }
-  note.message = std::to_string(all.size() - kept) +
-                 " more diagnostics not sent: they did not fit in one datagram (rdtfd's log has every one)";
+  for (std::size_t k = 0; k < all.size(); ++k) {
+    if (keep[k]) message.diagnostics.push_back(std::move(all[k]));
+  }
+  note.message = note_text(all.size() - kept);
   message.diagnostics.push_back(std::move(note));
   set_counts(message);
 }

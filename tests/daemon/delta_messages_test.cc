@@ -5,6 +5,8 @@
 #include "delta_messages.h"
 #include "messages.h"
 #include "registry.h"
+#include "conversion.h"
+#include "rdtf/diagnostic_codes.h"
 
 namespace rdtf::daemon {
 namespace {
@@ -44,6 +46,38 @@ TEST(DeltaMessages, ManyChangesGoInPartsEachWithinTheLimit) {
     }
   }
   EXPECT_EQ(next, 500u);
+}
+
+// A report cut to one datagram keeps the most severe diagnostics, in their own order: it kept the
+// infos that came first and dropped the warnings after them (s100java D2: arm3's
+// URDF_REVOLUTE_WITHOUT_LIMITS lost at max_chunk_bytes 1400).
+TEST(ValidationMessages, AReportCutToSizeKeepsTheMostSevere) {
+  ValidationSummary summary;
+  summary.passed = true;
+  for (int k = 0; k < 20; ++k) {
+    summary.diagnostics.info(codes::LINK_MESH_SPLIT, "/nodes/" + std::to_string(k), std::string(60, 'i'));
+  }
+  for (int k = 0; k < 3; ++k) {
+    summary.diagnostics.warning(codes::URDF_REVOLUTE_WITHOUT_LIMITS, "/nodes/" + std::to_string(k), std::string(60, 'w'));
+  }
+  const auto report = make_validation_report("arm.gltf", 1, "aaa", summary, 1400);
+  EXPECT_LE(static_cast<std::size_t>(report.getEncodedSize()), 1400u);
+  ASSERT_GE(report.diagnostics.size(), 5u);
+  std::size_t warnings = 0, infos = 0;
+  for (std::size_t k = 0; k + 1 < report.diagnostics.size(); ++k) {
+    warnings += report.diagnostics[k].code == "URDF_REVOLUTE_WITHOUT_LIMITS";
+    infos += report.diagnostics[k].code == "LINK_MESH_SPLIT";
+    // Their own order: the infos kept come before the warnings, as found.
+    if (k > 0 && report.diagnostics[k].code == "LINK_MESH_SPLIT") {
+      EXPECT_EQ(report.diagnostics[k - 1].code, "LINK_MESH_SPLIT");
+    }
+  }
+  EXPECT_EQ(warnings, 3u);
+  EXPECT_GT(infos, 0u);
+  EXPECT_LT(infos, 20u);
+  const auto& note = report.diagnostics.back();
+  EXPECT_EQ(note.code, "DIAGNOSTICS_TRUNCATED");
+  EXPECT_EQ(note.message.substr(0, note.message.find(' ')), std::to_string(20 - infos)) << note.message;
 }
 
 TEST(DeltaMessages, NoChangeIsOneMessageWithNone) {

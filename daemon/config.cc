@@ -247,8 +247,11 @@ bool check_config(DaemonConfig& config, std::string& error) {
   // under the packaged unit's user) threw filesystem_error out of the start, an abort and a core
   // dump (s80cfg D4); it is a bad setting, named with the system's reason.
   std::error_code ec;
+  config.created_watch_folders.clear();
   for (auto& folder : config.watch) {
-    std::filesystem::create_directories(folder, ec);
+    std::error_code exists_error;
+    const bool existed = std::filesystem::exists(std::filesystem::symlink_status(folder, exists_error));
+    if (std::filesystem::create_directories(folder, ec) && !existed) config.created_watch_folders.push_back(folder);
     std::error_code status;
     if (!std::filesystem::is_directory(folder, status)) {
       error = "watch folder " + folder.string() +

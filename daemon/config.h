@@ -20,6 +20,9 @@ namespace rdtf::daemon {
 
 struct DaemonConfig {
   std::vector<std::filesystem::path> watch;  // Folders watched recursively.
+  // Not a setting: the watch folders check_config made because they did not exist, so that the
+  // log says so (a typo in --watch became a new, empty, silently watched folder; s100java D1).
+  std::vector<std::filesystem::path> created_watch_folders;
   std::filesystem::path output;              // Where RDTF and URDF files go (events there are ignored).
   std::string lcm_url;                       // "" = LCM's default (LCM_DEFAULT_URL or udpm).
   std::string channel_prefix = "RDTF";

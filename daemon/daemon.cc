@@ -156,6 +156,10 @@ bool Daemon::start(std::string& error) {
   next_status_ = clock_->now();
   std::string watched;
   for (const auto& folder : config_.watch) watched += " " + folder.string();
+  for (const auto& folder : config_.created_watch_folders) {
+    log_line("watched folder " + folder.string() + " did not exist: created it, empty (check --watch or the "
+             "config's watch if that is not the folder meant)");
+  }
   log_line("rdtfd started: watching" + watched + "; output " + config_.output.string() +
            "; LCM " + (config_.lcm_url.empty() ? std::string("default URL") : config_.lcm_url) +
            "; channels " + config_.channel_prefix + "/...");
@@ -380,6 +384,9 @@ void Daemon::reload_config() {
     }
     if (lock_fd_ >= 0) ::close(lock_fd_);
     lock_fd_ = fd;
+  }
+  for (const auto& folder : fresh->created_watch_folders) {
+    log_line("SIGHUP: watched folder " + folder.string() + " did not exist: created it, empty");
   }
   config_ = std::move(*fresh);
   // Results are keyed by the settings they were computed under: new settings, a new key.

@@ -189,6 +189,11 @@ TEST(DaemonConfig, RelativeFoldersAreRelativeToTheConfigFile) {
   EXPECT_EQ(config->watch[1], fs::canonical(top / "etc" / "more" / "models"));
   EXPECT_EQ(config->output, fs::canonical(top / "out"));
   EXPECT_TRUE(fs::is_directory(top / "etc" / "more" / "models"));
+  // Which watch folders it made is kept for the log (s100java D1); none the second time.
+  ASSERT_EQ(config->created_watch_folders.size(), 2u);
+  EXPECT_EQ(config->created_watch_folders[1].lexically_normal(), (top / "etc" / "more" / "models").lexically_normal());
+  ASSERT_TRUE(check_config(*config, error)) << error;
+  EXPECT_TRUE(config->created_watch_folders.empty());
 }
 
 TEST(DaemonConfig, CheckMakesCommandLineFoldersAbsolute) {

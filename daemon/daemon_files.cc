@@ -7,6 +7,7 @@
 #include <cerrno>
 #include <csignal>
 #include <fstream>
+#include <optional>
 #include <set>
 
 #include "daemon.h"
@@ -209,15 +210,29 @@ void Daemon::note_change(const std::filesystem::path& path, FileChange change) {
       // Ids that sanitise alike ("c 1.gltf", "c_1.gltf") are numbered as their files are found,
       // which after a restart may be the other order: an id an earlier run gave another file that
       // is still here stays that file's, or subscribers following it would switch robots.
+      // An id held by a file gone since is passed over too, for the id this file held itself
+      // further on: taking the first freed one moved a file from "_3" to "_2" when "_2"'s file was
+      // deleted while rdtfd was stopped, its channels silent and "_2" another robot (s100java D5).
+      // When this file held none (new to the folder), it takes the first freed id after all.
       std::set<std::string> held;
+      std::optional<std::string> freed;
       for (;;) {
         ModelRecord& record = registry_.ensure(path, unique_model_id(path, held));
         std::string held_by;
         const std::string refused = restore_revisions(config_.output, record, &held_by);
-        if (!held_by.empty() && held.size() < 8 && held_by_a_file_here(held_by)) {
+        if (!held_by.empty() && held.size() < 8) {
+          if (!held_by_a_file_here(held_by) && !freed) freed = record.id;
           held.insert(record.id);
           registry_.erase(path);
           continue;
+        }
+        if (freed && held_by.empty() && record.numbered == 0 && !record.restored) {
+          // A fresh id: this file held none of those looked at; it takes the first freed one.
+          registry_.erase(path);
+          ModelRecord& taken = registry_.ensure(path, *freed);
+          const std::string again = restore_revisions(config_.output, taken, nullptr);
+          if (!again.empty()) log_line(again);
+          break;
         }
         if (!refused.empty()) log_line(refused);
         break;

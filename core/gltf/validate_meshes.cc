@@ -79,7 +79,13 @@ bool DocumentCheck::check_primitive(const Json& primitive, const std::string& po
   if (attributes != nullptr)
     accessors = check_attributes(*attributes, pointer + "/attributes", false);
   const std::size_t indices = read_ref(primitive, "indices", pointer, "accessors");
-  if (indices != kNone && accessors_[indices].valid) check_indices(indices, pointer + "/indices");
+  // An accessor that failed its own checks is still checked for what it is (its type and
+  // component type, read before they failed): FLOAT indices, or a byteStride on an index view,
+  // were said only as the layout error they lead to, ACCESSOR_TOO_LONG, whose fix is another
+  // (s100err D2); the validator says both.
+  if (indices != kNone && (accessors_[indices].valid || !accessors_[indices].type.empty())) {
+    check_indices(indices, pointer + "/indices");
+  }
   const auto mode = read_uint(primitive, "mode", pointer).value_or(4);
   if (mode > 6) {
     diag_.error(codes::VALUE_NOT_IN_RANGE, pointer + "/mode",
@@ -128,7 +134,10 @@ std::map<std::string, std::size_t> DocumentCheck::check_attributes(const Json& a
     const std::size_t accessor = reference(value, here, "accessors");
     if (accessor == kNone || !semantic) continue;
     if (semantic->second >= 0) sets[semantic->first].push_back(semantic->second);
-    if (!accessors_[accessor].valid) continue;
+    if (!accessors_[accessor].valid) {
+      if (!accessors_[accessor].type.empty()) check_attribute_format(name, accessor, here);  // as for indices
+      continue;
+    }
     resolved[name] = accessor;
     check_attribute_format(name, accessor, here);
     check_attribute_alignment(name, accessor, here);

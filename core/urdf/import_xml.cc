@@ -249,8 +249,13 @@ void check_inertial(Checker& c, const TiXmlElement* inertial, const std::string&
     c.error(kInvalidInertial, pointer, inertial->Row(), "<inertial> has no <mass value=\"...\"/>");
   }
   if (const TiXmlElement* inertia = inertial->FirstChildElement("inertia")) {
+    // A moment (ixx, iyy, izz) of no body is negative; a product of inertia may be (s100err D7: a
+    // negative ixx imported without a word, and only the dynamics check refused it later).
     for (const char* term : {"ixx", "ixy", "ixz", "iyy", "iyz", "izz"}) {
-      c.numbers(inertia, pointer + "/inertia", term, {1, Range::kAny, "an inertia term"}, true, kInvalidInertial);
+      const bool moment = term[1] == term[2];
+      c.numbers(inertia, pointer + "/inertia", term,
+                {1, moment ? Range::kNonNegative : Range::kAny, moment ? "a moment of inertia" : "an inertia term"}, true,
+                kInvalidInertial);
     }
   } else {
     c.error(kInvalidInertial, pointer, inertial->Row(),

@@ -244,5 +244,40 @@ TEST_F(DaemonCache, FilesWhoseNamesSanitiseAlikeKeepTheirIdsAcrossARestart) {
   EXPECT_EQ(events("two/a_b.glb"), kRevision1);
 }
 
+// Three files whose names sanitise alike; the one with "_2" is deleted while rdtfd is stopped.
+// The others keep their ids: the third stays "_3" (it took the freed "_2", its channels silent
+// and "_2" another robot; s100java D5), and a new file of the same id takes the freed "_2".
+TEST_F(DaemonCache, AnIdFreedWhileStoppedIsNotTakenByAFileThatHadItsOwn) {
+  const std::vector<std::string> names{"a b.glb", "a#b.glb", "a+b.glb"};
+  for (const auto& name : names) rdtf::testing::write_file(watch_ / name, fixture("arm3.glb"));
+  start_full();
+  const auto id_of = [&](const std::string& file) {
+    const ModelRecord* record = const_cast<Registry&>(daemon_->registry()).find(watch_ / file);
+    return record != nullptr ? record->id : std::string("(none)");
+  };
+  std::map<std::string, std::string> before;
+  for (const auto& name : names) before[name] = id_of(name);
+  std::string freed;
+  for (const auto& [name, id] : before) {
+    if (id == "a_b.glb_2") freed = name;
+  }
+  ASSERT_FALSE(freed.empty());
+  daemon_.reset();
+  fs::remove(watch_ / freed);
+  restart();
+  for (const auto& [name, id] : before) {
+    if (name == freed) continue;
+    EXPECT_EQ(id_of(name), id) << name;
+  }
+  daemon_.reset();
+  rdtf::testing::write_file(watch_ / "a(b.glb", fixture("arm3.glb"));  // new to the folder
+  restart();
+  for (const auto& [name, id] : before) {
+    if (name == freed) continue;
+    EXPECT_EQ(id_of(name), id) << name;
+  }
+  EXPECT_EQ(id_of("a(b.glb"), "a_b.glb_2");
+}
+
 }  // namespace
 }  // namespace rdtf::daemon

@@ -148,6 +148,25 @@ TEST(ValidateDocument, WhatPassesThroughUnreadIsChecked) {
             0u);
 }
 
+// An accessor that fails its layout is still checked for its format: the cause is said beside the
+// consequence, as the validator says both (s100err D2: only ACCESSOR_TOO_LONG, whose fix is wrong).
+TEST(ValidateDocument, TheFormatIsSaidBesideTheLayoutItBreaks) {
+  Json document = triangle_document();
+  document["bufferViews"][1]["byteStride"] = 4;
+  Diagnostics diag = check_document(document);
+  EXPECT_DIAGNOSTIC(diag, "ACCESSOR_TOO_LONG", "/accessors/1");
+  EXPECT_DIAGNOSTIC(diag, "MESH_PRIMITIVE_INDICES_ACCESSOR_WITH_BYTESTRIDE", "/meshes/0/primitives/0/indices");
+  document = triangle_document();
+  document["accessors"][1]["componentType"] = 5126;
+  diag = check_document(document);
+  EXPECT_DIAGNOSTIC(diag, "ACCESSOR_TOO_LONG", "/accessors/1");
+  EXPECT_DIAGNOSTIC(diag, "MESH_PRIMITIVE_INDICES_ACCESSOR_INVALID_FORMAT", "/meshes/0/primitives/0/indices");
+  document = triangle_document();
+  document["accessors"][0]["type"] = "VEC2";
+  diag = check_document(document);
+  EXPECT_DIAGNOSTIC(diag, "MESH_PRIMITIVE_ATTRIBUTES_ACCESSOR_INVALID_FORMAT", "/meshes/0/primitives/0/attributes/POSITION");
+}
+
 // Schema errors on a node name it (a Blender user knows objects by name; s100err D4), and an index
 // beyond 2^64 is too large, not "not an integer".
 TEST(ValidateDocument, NodesAreNamedAndHugeIndicesAreOutOfRange) {

@@ -133,6 +133,11 @@ const BadUrdf kBadUrdfs[] = {
     {"inertia not finite",
      link_urdf(inertial("1", "<inertia ixx=\"inf\" ixy=\"0\" ixz=\"0\" iyy=\"1\" iyz=\"0\" izz=\"1\"/>")),
      "URDF_INVALID_INERTIAL", "/robot/link[@name='a']/inertial/inertia/@ixx", "line 3: <inertia ixx=\"inf\">"},
+    // No body has a negative moment; a product of inertia may be negative (s100err D7).
+    {"negative moment of inertia",
+     link_urdf(inertial("1", "<inertia ixx=\"-0.5\" ixy=\"-0.1\" ixz=\"0\" iyy=\"1\" iyz=\"0\" izz=\"1\"/>")),
+     "URDF_INVALID_INERTIAL", "/robot/link[@name='a']/inertial/inertia/@ixx",
+     "line 3: <inertia ixx=\"-0.5\">: '-0.5' is negative: a moment of inertia is 0 or more"},
     {"inertia term missing", link_urdf(inertial("1", "<inertia ixx=\"1\" ixy=\"0\" ixz=\"0\" iyy=\"1\" iyz=\"0\"/>")),
      "URDF_INVALID_INERTIAL", "/robot/link[@name='a']/inertial/inertia", "<inertia> has no izz attribute"},
     {"inertial without mass", link_urdf("<inertial>" + kInertia + "</inertial>"), "URDF_INVALID_INERTIAL",

@@ -77,7 +77,8 @@ class Daemon {
   void rescan(const char* why);
   void note_change(const std::filesystem::path& path, FileChange change);
   bool ignored(const std::filesystem::path& path) const;
-  std::string unique_model_id(const std::filesystem::path& source, const std::set<std::string>& not_these = {}) const;
+  std::string alike_id(const std::filesystem::path& source, int n) const;
+  std::string choose_model_id(const std::filesystem::path& source) const;
   // Whether `source` is a model file in a watched folder, not yet known: the file an earlier run
   // gave an id that another file now asks for.
   bool held_by_a_file_here(const std::filesystem::path& source) const;

@@ -207,36 +207,9 @@ void Daemon::note_change(const std::filesystem::path& path, FileChange change) {
   };
   if (is_model_file(path)) {
     if (registry_.find(path) == nullptr) {
-      // Ids that sanitise alike ("c 1.gltf", "c_1.gltf") are numbered as their files are found,
-      // which after a restart may be the other order: an id an earlier run gave another file that
-      // is still here stays that file's, or subscribers following it would switch robots.
-      // An id held by a file gone since is passed over too, for the id this file held itself
-      // further on: taking the first freed one moved a file from "_3" to "_2" when "_2"'s file was
-      // deleted while rdtfd was stopped, its channels silent and "_2" another robot (s100java D5).
-      // When this file held none (new to the folder), it takes the first freed id after all.
-      std::set<std::string> held;
-      std::optional<std::string> freed;
-      for (;;) {
-        ModelRecord& record = registry_.ensure(path, unique_model_id(path, held));
-        std::string held_by;
-        const std::string refused = restore_revisions(config_.output, record, &held_by);
-        if (!held_by.empty() && held.size() < 8) {
-          if (!held_by_a_file_here(held_by) && !freed) freed = record.id;
-          held.insert(record.id);
-          registry_.erase(path);
-          continue;
-        }
-        if (freed && held_by.empty() && record.numbered == 0 && !record.restored) {
-          // A fresh id: this file held none of those looked at; it takes the first freed one.
-          registry_.erase(path);
-          ModelRecord& taken = registry_.ensure(path, *freed);
-          const std::string again = restore_revisions(config_.output, taken, nullptr);
-          if (!again.empty()) log_line(again);
-          break;
-        }
-        if (!refused.empty()) log_line(refused);
-        break;
-      }
+      ModelRecord& record = registry_.ensure(path, choose_model_id(path));
+      const std::string refused = restore_revisions(config_.output, record, nullptr);
+      if (!refused.empty()) log_line(refused);
     }
     touch(path);
     return;
@@ -263,20 +236,51 @@ bool Daemon::held_by_a_file_here(const std::filesystem::path& source) const {
   return watched && ::lstat(source.c_str(), &info) == 0 && S_ISREG(info.st_mode);
 }
 
-std::string Daemon::unique_model_id(const std::filesystem::path& source, const std::set<std::string>& not_these) const {
+// The id of the n-th file (from 1) whose name sanitises to `source`'s: the name, then "_2", "_3", ...
+std::string Daemon::alike_id(const std::filesystem::path& source, int n) const {
   const std::size_t max_id = kMaxChannelLength - config_.channel_prefix.size() - 1 - kLongestKind;
-  // Three characters kept free for a "_N" that tells apart ids that sanitise alike.
-  const std::string base = model_id_for(source, config_.watch, max_id - 3);
-  std::string id = base;
-  // Two names that sanitise alike ("a b.gltf", "a_b.gltf") must not share channels.
-  for (int n = 2; registry_.find_id(id) != nullptr || not_these.count(id) != 0; ++n) {
-    const std::string suffix = "_" + std::to_string(n);
-    // From the 100th on the suffix is longer than the room kept: the base is shortened for it, or
-    // RDTF/<id>/DESCRIPTION_CHUNK passed LCM's 63 characters, LCM refused every send on it and the
-    // send queue stopped behind it (s100java D6).
-    id = (suffix.size() <= 3 ? base : model_id_for(source, config_.watch, max_id - suffix.size())) + suffix;
+  // Three characters kept free for a "_N" that tells apart ids that sanitise alike; from the 100th
+  // on the suffix is longer and the name is shortened for it, or RDTF/<id>/DESCRIPTION_CHUNK
+  // passed LCM's 63 characters, LCM refused every send on it and the send queue stopped behind it
+  // (s100java D6).
+  if (n <= 1) return model_id_for(source, config_.watch, max_id - 3);
+  const std::string suffix = "_" + std::to_string(n);
+  return (suffix.size() <= 3 ? model_id_for(source, config_.watch, max_id - 3)
+                             : model_id_for(source, config_.watch, max_id - suffix.size())) +
+         suffix;
+}
+
+// Ids that sanitise alike ("c 1.gltf", "c_1.gltf") are numbered as their files are found, which
+// after a restart may be another order. Each file keeps the id an earlier run gave it (its revision
+// state names the file), or subscribers following it would switch robots; an id whose state names
+// another file still here is that file's. A file new to the folder takes the first id free of both:
+// one whose file is gone (deleted while rdtfd was stopped), else one never used. Only names with
+// such a history read more than one state: up to 16 unused ids past the last used one.
+std::string Daemon::choose_model_id(const std::filesystem::path& source) const {
+  std::optional<std::string> first_free;
+  int unused_in_a_row = 0;
+  for (int n = 1; n < 100000 && unused_in_a_row < 16; ++n) {
+    const std::string id = alike_id(source, n);
+    const bool live = registry_.find_id(id) != nullptr;
+    ModelState state;
+    std::string why;
+    const auto loaded = RevisionStore::load(config_.output, id, state, why);
+    if (loaded == RevisionStore::LoadResult::kLoaded && state.source == source.string()) {
+      if (!live) return id;  // its own
+      continue;
+    }
+    const bool used = loaded != RevisionStore::LoadResult::kAbsent;
+    unused_in_a_row = used ? 0 : unused_in_a_row + 1;
+    // An id no file ever held, the first: nothing of this name has a history.
+    if (n == 1 && !used && !live) return id;
+    const bool reserved = used && loaded == RevisionStore::LoadResult::kLoaded && held_by_a_file_here(state.source);
+    if (!live && !reserved && !first_free) first_free = id;
   }
-  return id;
+  if (first_free) return *first_free;
+  // Past 100,000 alike names: the next id not live (ids may then move across restarts).
+  int n = 1;
+  while (registry_.find_id(alike_id(source, n)) != nullptr) ++n;
+  return alike_id(source, n);
 }
 
 void Daemon::rescan(const char* why) {

@@ -105,6 +105,30 @@ std::string without_bytes_read(std::string message) {
 
 // `chunk_offset`: where the text starts in its file, for a GLB's JSON chunk: a place is then said
 // in both (a chunk's "byte 9" alone read as the file's and pointed into the GLB header; s100err D6).
+// XML where glTF was expected: most likely a URDF given to a command that reads glTF (`rdtf
+// validate robot.urdf`), which a bare parse error at line 1 does not tell (s100err D5). A URDF's
+// root element is <robot> (an SDF's is <sdf>, whose plugins may hold <robotNamespace>).
+std::string not_json_hint(std::string_view text) {
+  const std::size_t first = text.find_first_not_of(" \t\r\n");
+  if (first == std::string_view::npos || text[first] != '<') return "";
+  std::size_t at = first;
+  // The root: the first element that is no declaration, comment or doctype.
+  while ((at = text.find('<', at)) != std::string_view::npos && at + 1 < text.size() &&
+         (text[at + 1] == '?' || text[at + 1] == '!')) {
+    ++at;
+  }
+  const auto root_is = [&](std::string_view name) {
+    return at != std::string_view::npos && text.substr(at + 1, name.size()) == name &&
+           at + 1 + name.size() < text.size() && std::string_view(" \t\r\n>/").find(text[at + 1 + name.size()]) != std::string_view::npos;
+  };
+  if (root_is("robot")) {
+    return ". This is a URDF (XML), not glTF: convert it with `rdtf import <this file> -o model.gltf`, then give "
+           "model.gltf to this command";
+  }
+  if (root_is("sdf")) return ". This is an SDF (XML), not glTF; rdtf reads glTF, and URDF through `rdtf import`";
+  return ". This is XML, not glTF JSON";
+}
+
 std::optional<Json> parse_json(std::string_view text, Diagnostics& diag,
                                std::optional<std::size_t> chunk_offset = std::nullopt) {
   const auto place_in = [&](std::string_view in, std::size_t byte) {
@@ -116,7 +140,10 @@ std::optional<Json> parse_json(std::string_view text, Diagnostics& diag,
     return place;
   };
   if (text.substr(0, 3) == "\xEF\xBB\xBF") {
-    diag.error(codes::JSON_BOM, "", "the JSON starts with a UTF-8 byte order mark, which glTF forbids");
+    const std::string hint = not_json_hint(text.substr(3));
+    diag.error(codes::JSON_BOM, "",
+               hint.empty() ? std::string("the JSON starts with a UTF-8 byte order mark, which glTF forbids")
+                            : "the file starts with a UTF-8 byte order mark" + hint);
     return std::nullopt;
   }
   // nlohmann's parser takes a NUL byte for the end of its input, so "{...}\0anything" would parse
@@ -153,15 +180,9 @@ std::optional<Json> parse_json(std::string_view text, Diagnostics& diag,
   } catch (const Json::parse_error& error) {
     // XML where glTF was expected: most likely a URDF given to a command that reads glTF
     // (`rdtf validate robot.urdf`), which a bare parse error at line 1 does not tell (s100err D5).
-    const std::size_t first = text.find_first_not_of(" \t\r\n");
-    const bool xml = first != std::string_view::npos && text[first] == '<';
-    const bool urdf = xml && text.find("<robot") != std::string_view::npos;
     diag.error(codes::INVALID_JSON, "",
                "invalid JSON at " + place_in(text, error.byte) + ": " + without_bytes_read(error.what()) +
-                   (urdf  ? ". This is a URDF (XML), not glTF: convert it with `rdtf import FILE -o model.gltf`, "
-                            "then give that to this command"
-                    : xml ? ". This is XML, not glTF JSON"
-                          : ""));
+                   not_json_hint(text));
     return std::nullopt;
   } catch (const Json::exception& error) {
     diag.error(codes::INVALID_JSON, "", "invalid JSON: " + without_bytes_read(error.what()));

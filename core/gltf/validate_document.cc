@@ -81,7 +81,8 @@ const Json* DocumentCheck::object_at(const Json& array, std::size_t i, const std
   if (array[i].is_object()) return &array[i];
   diag_.error(
       codes::TYPE_MISMATCH, json_pointer(pointer, i),
-      "must be an object, found " + std::string(array[i].type_name()) + " " + describe(array[i]));
+      "must be an object, found " + std::string(array[i].type_name()) +
+          (array[i].is_null() ? std::string() : " " + describe(array[i])));
   return nullptr;
 }
 
@@ -103,7 +104,8 @@ const Json* DocumentCheck::read_typed(const Json& object, const char* key,
   if (value == nullptr || ((*value).*is_type)()) return value;
   diag_.error(
       codes::TYPE_MISMATCH, json_pointer(pointer, key),
-      std::string("must be ") + type + ", found " + value->type_name() + " " + describe(*value));
+      std::string("must be ") + type + ", found " + value->type_name() +
+          (value->is_null() ? std::string() : " " + describe(*value)));
   return nullptr;
 }
 

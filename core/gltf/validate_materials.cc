@@ -106,27 +106,36 @@ void DocumentCheck::check_textures() {
   }
 }
 
-// Every glTF object's `extensions` is an object; the values under `extras` and inside an
-// extension are not glTF's to check.
+// Every glTF object's `extensions` is an object. Only the properties glTF defines are glTF
+// objects: an exporter's own property (`"myToolData": {"extensions": [...]}`) is not, nor is
+// anything under `extras` or inside an extension (s100rev D1: such a file, valid to the Khronos
+// validator, was refused).
 void DocumentCheck::check_extension_objects(const Json& value, const std::string& pointer, int depth) {
+  static const std::unordered_set<std::string> kGltfObjects{
+      "asset", "accessors", "animations", "buffers", "bufferViews", "cameras", "images", "materials", "meshes",
+      "nodes", "samplers", "scenes", "skins", "textures", "sparse", "indices", "values", "channels", "target",
+      "orthographic", "perspective", "pbrMetallicRoughness", "baseColorTexture", "metallicRoughnessTexture",
+      "normalTexture", "occlusionTexture", "emissiveTexture", "primitives"};
   if (depth > 8) return;  // glTF objects nest 5 deep (a material's texture info); deeper is data
   if (value.is_array()) {
     for (std::size_t k = 0; k < value.size(); ++k) {
-      if (value[k].is_object() || value[k].is_array()) check_extension_objects(value[k], json_pointer(pointer, k), depth + 1);
+      if (value[k].is_object()) check_extension_objects(value[k], json_pointer(pointer, k), depth + 1);
     }
     return;
   }
   if (!value.is_object()) return;
   for (const auto& [key, child] : value.items()) {
-    if (key == "extras") continue;
     if (key == "extensions") {
       if (!child.is_object()) {
         diag_.error(codes::TYPE_MISMATCH, json_pointer(pointer, key),
-                    "must be an object, found " + std::string(child.type_name()) + " " + describe(child));
+                    "must be an object, found " + std::string(child.type_name()) +
+                        (child.is_null() ? std::string() : " " + describe(child)));
       }
       continue;
     }
-    if (child.is_object() || child.is_array()) check_extension_objects(child, json_pointer(pointer, key), depth + 1);
+    if (kGltfObjects.count(key) != 0 && (child.is_object() || child.is_array())) {
+      check_extension_objects(child, json_pointer(pointer, key), depth + 1);
+    }
   }
 }
 

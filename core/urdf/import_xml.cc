@@ -249,13 +249,23 @@ void check_inertial(Checker& c, const TiXmlElement* inertial, const std::string&
     c.error(kInvalidInertial, pointer, inertial->Row(), "<inertial> has no <mass value=\"...\"/>");
   }
   if (const TiXmlElement* inertia = inertial->FirstChildElement("inertia")) {
-    // A moment (ixx, iyy, izz) of no body is negative; a product of inertia may be (s100err D7: a
-    // negative ixx imported without a word, and only the dynamics check refused it later).
+    std::map<std::string, double> moments;
     for (const char* term : {"ixx", "ixy", "ixz", "iyy", "iyz", "izz"}) {
-      const bool moment = term[1] == term[2];
-      c.numbers(inertia, pointer + "/inertia", term,
-                {1, moment ? Range::kNonNegative : Range::kAny, moment ? "a moment of inertia" : "an inertia term"}, true,
-                kInvalidInertial);
+      const auto value = c.numbers(inertia, pointer + "/inertia", term, {1, Range::kAny, "an inertia term"}, true,
+                                   kInvalidInertial);
+      if (value && term[1] == term[2]) moments[term] = value->front();
+    }
+    // A moment (ixx, iyy, izz) of no body is negative; a product of inertia may be (s100err D7: a
+    // negative ixx imported without a word, and only the dynamics check refused it later). A
+    // rounding's worth below 0 (1e-9 of the largest moment: an exporter's -1e-30 for a thin rod's
+    // axis) is not refused.
+    double largest = 0;
+    for (const auto& [term, value] : moments) largest = std::max(largest, std::abs(value));
+    for (const auto& [term, value] : moments) {
+      if (value >= -1e-9 * largest) continue;
+      c.error(kInvalidInertial, pointer + "/inertia/@" + term, inertia->Row(),
+              "<inertia " + term + "=\"" + inertia->Attribute(term.c_str()) + "\">: '" + inertia->Attribute(term.c_str()) +
+                  "' is negative: a moment of inertia is 0 or more (no body has a negative one)");
     }
   } else {
     c.error(kInvalidInertial, pointer, inertial->Row(),

@@ -58,10 +58,15 @@ std::vector<BadCase> cases() {
     bytes[20 + 8] = ',';
     all.push_back({"GlbJsonChunkBroken", raw_file("model.glb", bytes), "of the JSON chunk, at offset 28 of the file"});
   }
+  // A URDF saved with a byte order mark, and an SDF whose plugin names a robotNamespace.
+  all.push_back({"UrdfWithABom", raw_file("robot.urdf", "\xEF\xBB\xBF<?xml version=\"1.0\"?>\n<robot name=\"r\"/>\n"),
+                 "error JSON_BOM: the file starts with a UTF-8 byte order mark. This is a URDF"});
+  all.push_back({"Sdf", raw_file("model.sdf", "<?xml version=\"1.0\"?>\n<sdf version=\"1.6\"><model name=\"m\"><plugin><robotNamespace>/r</robotNamespace></plugin></model></sdf>\n"),
+                 "This is an SDF (XML), not glTF"});
   // A URDF given to a command that reads glTF says so, and what reads it (s100err D5).
   all.push_back({"UrdfWhereGltfIsRead",
                  raw_file("robot.urdf", "<?xml version=\"1.0\"?>\n<robot name=\"r\"><link name=\"a\"/></robot>\n"),
-                 "This is a URDF (XML), not glTF: convert it with `rdtf import FILE -o model.gltf`"});
+                 "This is a URDF (XML), not glTF: convert it with `rdtf import <this file> -o model.gltf`"});
   {
     std::string bytes = glb_bytes();
     bytes[0] = 'G';

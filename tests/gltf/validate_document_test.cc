@@ -133,10 +133,16 @@ TEST(ValidateDocument, WhatPassesThroughUnreadIsChecked) {
   document = triangle_document();
   document["meshes"][0]["primitives"][0]["extensions"] = Json::array({1});
   EXPECT_DIAGNOSTIC(check_document(document), "TYPE_MISMATCH", "/meshes/0/primitives/0/extensions");
-  // Extras hold anything.
+  // Extras hold anything, and so does a property glTF does not define (s100rev D1).
   document = triangle_document();
   document["nodes"][0]["extras"] = {{"extensions", 5}};
-  EXPECT_EQ(check_document(document).all().size(), 0u);
+  document["nodes"][0]["myToolData"] = {{"extensions", {"a", "b"}}};
+  EXPECT_EQ(check_document(document).all().size(), 0u) << listing(check_document(document));
+  document = triangle_document();
+  document["nodes"][0]["extensions"] = nullptr;
+  const Diagnostics null_diag = check_document(document);
+  ASSERT_FALSE(null_diag.all().empty());
+  EXPECT_EQ(null_diag.all()[0].message, "node 0 'base': must be an object, found null");
   // A materials, textures and samplers section as exporters write it is silent.
   EXPECT_EQ(one(R"({"materials": [{"pbrMetallicRoughness": {"baseColorFactor": [1, 0.5, 0, 1], "metallicFactor": 0,
                      "baseColorTexture": {"index": 0, "texCoord": 0}}, "alphaMode": "MASK", "alphaCutoff": 0.5,

@@ -138,6 +138,9 @@ const BadUrdf kBadUrdfs[] = {
      link_urdf(inertial("1", "<inertia ixx=\"-0.5\" ixy=\"-0.1\" ixz=\"0\" iyy=\"1\" iyz=\"0\" izz=\"1\"/>")),
      "URDF_INVALID_INERTIAL", "/robot/link[@name='a']/inertial/inertia/@ixx",
      "line 3: <inertia ixx=\"-0.5\">: '-0.5' is negative: a moment of inertia is 0 or more"},
+    {"negative moment beyond rounding only",
+     link_urdf(inertial("1", "<inertia ixx=\"1e-30\" ixy=\"0\" ixz=\"0\" iyy=\"-2e-3\" iyz=\"0\" izz=\"1\"/>")),
+     "URDF_INVALID_INERTIAL", "/robot/link[@name='a']/inertial/inertia/@iyy", "'-2e-3' is negative"},
     {"inertia term missing", link_urdf(inertial("1", "<inertia ixx=\"1\" ixy=\"0\" ixz=\"0\" iyy=\"1\" iyz=\"0\"/>")),
      "URDF_INVALID_INERTIAL", "/robot/link[@name='a']/inertial/inertia", "<inertia> has no izz attribute"},
     {"inertial without mass", link_urdf("<inertial>" + kInertia + "</inertial>"), "URDF_INVALID_INERTIAL",
@@ -311,6 +314,16 @@ void expect_unusable_mesh_is_a_warning(const std::string& code, const std::funct
   EXPECT_EQ(run.exit_code, 0) << run.err;
   EXPECT_NE(run.err.find("warning " + code), std::string::npos) << run.err;
   EXPECT_TRUE(fs::exists(dir / "out.gltf"));
+}
+
+// A moment a rounding below 0 (an exporter's -1e-30 for a thin rod's own axis) is no error.
+TEST(UrdfImportErrors, AMomentARoundingBelowZeroIsAccepted) {
+  TempDir dir;
+  const fs::path urdf = dir / "robot.urdf";
+  testing::write_file(urdf, link_urdf(inertial("1", "<inertia ixx=\"-1e-30\" ixy=\"0\" ixz=\"0\" iyy=\"1\" iyz=\"0\" izz=\"1\"/>")));
+  Diagnostics diag;
+  import_urdf(urdf, UrdfImportOptions{}, diag);
+  for (const Diagnostic& d : diag.all()) EXPECT_NE(d.code, "URDF_INVALID_INERTIAL") << d.message;
 }
 
 TEST(UrdfImportErrors, MissingMeshOfALinkWithAnInertialIsAWarning) {

@@ -208,7 +208,7 @@ void Daemon::note_change(const std::filesystem::path& path, FileChange change) {
   if (is_model_file(path)) {
     if (registry_.find(path) == nullptr) {
       ModelRecord& record = registry_.ensure(path, choose_model_id(path));
-      const std::string refused = restore_revisions(config_.output, record, nullptr);
+      const std::string refused = restore_revisions(config_.output, record);
       if (!refused.empty()) log_line(refused);
     }
     touch(path);

@@ -165,7 +165,7 @@ bool live_texts(const ModelRecord& record, LiveTexts& texts, std::string& why) {
 
 namespace rdtf::daemon {
 
-std::string restore_revisions(const std::filesystem::path& output_root, ModelRecord& record, std::string* held_by) {
+std::string restore_revisions(const std::filesystem::path& output_root, ModelRecord& record) {
   ModelState state;
   std::string why;
   switch (RevisionStore::load(output_root, record.id, state, why)) {
@@ -199,7 +199,6 @@ std::string restore_revisions(const std::filesystem::path& output_root, ModelRec
   // Another file under the same id (ids that sanitise alike are numbered in the order they are
   // found) keeps the id's numbers but not the other file's revision.
   if (state.live && state.source == record.source.string()) record.restored = std::move(state.live);
-  if (held_by != nullptr && state.source != record.source.string()) *held_by = state.source;
   return "";
 }
 

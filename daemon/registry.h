@@ -112,8 +112,7 @@ namespace rdtf::daemon {
 // any number it can have handed out. Returns a line for the log when it was refused, else "".
 // The file's `numbered` is trusted: after a possible power loss the start raised every file's
 // `numbered` to its `reserved` first (RevisionStore::number_from_reserves).
-std::string restore_revisions(const std::filesystem::path& output_root, ModelRecord& record,
-                              std::string* held_by = nullptr);
+std::string restore_revisions(const std::filesystem::path& output_root, ModelRecord& record);
 
 // The revision a record serves in its stored form: the live one, else the one of the earlier run.
 std::optional<StoredRevision> stored_live(const ModelRecord& record);

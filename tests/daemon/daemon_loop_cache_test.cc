@@ -36,6 +36,11 @@ class DaemonCache : public DaemonLoop {
     clear_bus();
     start_full(tweak);
   }
+  // The id the registry gives `file` (below the watched folder), "(none)" when it is not known.
+  std::string id_of(const fs::path& file) {
+    const ModelRecord* record = const_cast<Registry&>(daemon_->registry()).find(watch_ / file);
+    return record != nullptr ? record->id : std::string("(none)");
+  }
   void write_models() {
     rdtf::testing::write_file(watch_ / "arm3.glb", fixture("arm3.glb"));
     rdtf::testing::write_file(watch_ / "two_cylinder.gltf", fixture("two_cylinder.gltf"));
@@ -231,10 +236,6 @@ TEST_F(DaemonCache, FilesWhoseNamesSanitiseAlikeKeepTheirIdsAcrossARestart) {
   notify(Kind::kWritten, watch_ / "two" / "a b.glb");
   advance(50ms);
   convert();
-  const auto id_of = [&](const fs::path& file) {
-    const ModelRecord* record = const_cast<Registry&>(daemon_->registry()).find(watch_ / file);
-    return record != nullptr ? record->id : std::string("(none)");
-  };
   const std::map<std::string, std::string> expected{{"one/a b.glb", "one/a_b.glb"}, {"one/a_b.glb", "one/a_b.glb_2"},
                                                     {"two/a_b.glb", "two/a_b.glb"}, {"two/a b.glb", "two/a_b.glb_2"}};
   for (const auto& [file, id] : expected) ASSERT_EQ(id_of(file), id) << file << " before the restart";
@@ -254,10 +255,6 @@ TEST_F(DaemonCache, AnIdFreedWhileStoppedIsNotTakenByAFileThatHadItsOwn) {
   const std::vector<std::string> names{"a b.glb", "a#b.glb", "a+b.glb"};
   for (const auto& name : names) rdtf::testing::write_file(watch_ / name, fixture("arm3.glb"));
   start_full();
-  const auto id_of = [&](const std::string& file) {
-    const ModelRecord* record = const_cast<Registry&>(daemon_->registry()).find(watch_ / file);
-    return record != nullptr ? record->id : std::string("(none)");
-  };
   std::map<std::string, std::string> before;
   for (const auto& name : names) before[name] = id_of(name);
   std::string freed;
@@ -294,10 +291,6 @@ TEST_F(DaemonCache, ManyAlikeNamesKeepTheirIdsWhenSomeAreReplacedWhileStopped) {
   }
   for (const auto& name : names) rdtf::testing::write_file(watch_ / name, box);
   start_full();
-  const auto id_of = [&](const std::string& file) {
-    const ModelRecord* record = const_cast<Registry&>(daemon_->registry()).find(watch_ / file);
-    return record != nullptr ? record->id : std::string("(none)");
-  };
   std::map<std::string, std::string> before;
   for (const auto& name : names) before[name] = id_of(name);
   std::set<std::string> freed_ids{"bx_b_x.gltf_5", "bx_b_x.gltf_20"};

@@ -242,6 +242,60 @@ void add_hinge_limits(Simulation::Model& model, JointModel& jm, dBodyID child, d
   dJointSetFeedback(jm.limit_motor, &jm.feedback);
 }
 
+// A body's mobility (1 / (kg m^2)) about the scene axis `a_S`: the angular speed a unit angular
+// impulse about the axis gives it when nothing else holds it, a^T I^-1 a with a in the body's axes;
+// 0 for the world. A hinge's axis is fixed in both of its bodies, so this stays what it is at the
+// start. With `a_S` zero: the trace of I^-1, the sum over three orthonormal axes (a ball joint's).
+double mobility(const Simulation::Model& model, int body, const Eigen::Vector3d& a_S) {
+  if (body == kWorld) return 0;
+  const BodyModel& b = model.bodies[static_cast<std::size_t>(body)];
+  const Eigen::Matrix3d I_inverse = b.inertia.inverse();
+  if (a_S.isZero(0)) return I_inverse.trace();
+  const Eigen::Vector3d a_B = body_pose(b.id).linear().transpose() * a_S;
+  return a_B.dot(I_inverse * a_B);
+}
+
+// The joint's damper motor (JointModel::damper), idle until Simulation::step chooses it.
+void add_damper(Simulation::Model& model, JointModel& jm, dBodyID child, dBodyID parent, const Eigen::Vector3d& axis) {
+  const double c = jm.damping;
+  if (jm.kind == JointKind::kPrismatic) {
+    jm.damper = dJointCreateLMotor(model.world, nullptr);
+    dJointAttach(jm.damper, child, parent);
+    dJointSetLMotorNumAxes(jm.damper, 1);
+    dJointSetLMotorAxis(jm.damper, 0, 1, axis.x(), axis.y(), axis.z());
+    dJointSetLMotorParam(jm.damper, dParamVel, 0);
+    dJointSetLMotorParam(jm.damper, dParamCFM, 1 / c);
+    dJointSetLMotorParam(jm.damper, dParamFMax, 0);
+  } else {
+    jm.damper = dJointCreateAMotor(model.world, nullptr);
+    dJointAttach(jm.damper, child, parent);
+    const bool ball = jm.kind == JointKind::kBall;
+    dJointSetAMotorNumAxes(jm.damper, ball ? 3 : 1);
+    if (ball) {
+      // Three axes fixed in the child, its own: any three orthonormal axes damp the whole relative
+      // angular velocity.
+      const Eigen::Matrix3d R_SC = body_pose(child).linear();
+      for (int i = 0; i < 3; ++i) dJointSetAMotorAxis(jm.damper, i, 1, R_SC(0, i), R_SC(1, i), R_SC(2, i));
+    } else {
+      dJointSetAMotorAxis(jm.damper, 0, 1, axis.x(), axis.y(), axis.z());
+    }
+    for (const int group : {0, int{dParamGroup}, 2 * int{dParamGroup}}) {
+      dJointSetAMotorParam(jm.damper, group + dParamVel, 0);
+      dJointSetAMotorParam(jm.damper, group + dParamCFM, 1 / c);
+      dJointSetAMotorParam(jm.damper, group + dParamFMax, 0);
+    }
+  }
+  dJointSetFeedback(jm.damper, &jm.damper_feedback);
+  if (jm.kind == JointKind::kPrismatic) {
+    // What a slider moves along its axis depends on where it is once its parent turns: no bound
+    // fixed at the start, so its damper is always implicit.
+    jm.damper_rate = kInfinity;
+    return;
+  }
+  const Eigen::Vector3d about = jm.kind == JointKind::kBall ? Eigen::Vector3d::Zero() : axis;
+  jm.damper_rate = c * (mobility(model, jm.child_body, about) + mobility(model, jm.parent_body, about));
+}
+
 void add_joint(Simulation::Model& model, int j, const Eigen::Isometry3d& X_SJ, Diagnostics& diag) {
   const Joint& joint = model.robot.joints[j];
   JointModel& jm = model.joints[j];
@@ -330,6 +384,7 @@ void add_joint(Simulation::Model& model, int j, const Eigen::Isometry3d& X_SJ, D
       dJointSetLMotorParam(jm.friction_motor, dParamFMax, joint.friction);
     }
   }
+  if (joint.damping > 0 && (jm.dof || joint.kind == JointKind::kBall)) add_damper(model, jm, child, parent, axis);
   // Where the constraint holds, on each side, for measuring its error.
   const Eigen::Isometry3d X_SC = body_pose(child);
   const Eigen::Isometry3d X_SP = parent ? body_pose(parent) : Eigen::Isometry3d::Identity();

@@ -164,6 +164,19 @@ struct JointModel {
   // Within a step: the position before it and the damping effort applied in it (for the work).
   double q_before = 0;
   double damping_effort = 0;
+  // Damping (docs/dynamics.md, "Joint forces"). A torque -c qdot from the state before the step is
+  // forward Euler: it reverses the joint's speed once c h exceeds the inertia it moves and blows up
+  // past twice that (arm3 with a 6 cm forearm: c h / I = 3.1). Where that can happen the damper is
+  // this motor instead (angular on a hinge, three axes on a ball, linear on a slider): speed 0,
+  // unbounded force, constraint force mixing 1 / c, which the solver makes the implicit damper
+  // tau = -c qdot(t + h). Made for every damped joint, idle (no row) while the damping is explicit.
+  dJointID damper = nullptr;
+  dJointFeedback damper_feedback{};
+  // c times the joint's mobility with every constraint removed (1/s): a^T I^-1 a of its two bodies
+  // (on a ball, tr I^-1, its three axes summed); the constraints only lower the mobility. Infinite
+  // on a slider, which is always implicit (what it moves depends on where it is).
+  double damper_rate = 0;
+  bool damper_implicit = false;
 };
 
 }  // namespace rdtf::dynamics_internal
@@ -190,6 +203,7 @@ struct Simulation::Model {
   std::uint64_t steps = 0;
   double dissipated = 0;
   double actuator_work = 0;
+  double damper_step = 0;  // the step for which the dampers were last chosen explicit or implicit
   std::vector<std::string> messages;
   // The state left what ODE can step (a value not finite or beyond kStateBound), or ODE stopped a
   // step with an internal error: the state is unusable, health() reports it not finite, and

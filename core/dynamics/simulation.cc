@@ -1,5 +1,6 @@
 // The live simulation of one robot: stepping with the joint force model (docs/dynamics.md),
 // joint states and link poses in the scene frame, commands, and the health of the state.
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
@@ -127,23 +128,56 @@ void set_command_motor(Simulation::Model& m, JointModel& jm, const Drive& drive)
   }
 }
 
-// The effort the command motor applied in the last step, along the joint's axis (on the child):
-// the solver's force, at most `fmax` (the projection's rounding never reports more).
-double command_motor_effort(const JointModel& jm, double fmax) {
+// The force (slider) or torque (hinge) a one-axis motor of the joint applied on the child in the
+// last step, along the joint's axis.
+double motor_load(const JointModel& jm, dJointID motor, const dJointFeedback& feedback) {
   dVector3 axis;
-  const dReal* load = jm.command_feedback.t1;
+  const dReal* load = feedback.t1;
   if (jm.kind != JointKind::kPrismatic) {
-    dJointGetAMotorAxis(jm.command_motor, 0, axis);
+    dJointGetAMotorAxis(motor, 0, axis);
   } else {
     // The slider's axis in the scene frame, as the feedback is: dJointGetLMotorAxis returns the
     // motor's axis as stored, in the child's frame, and a turned parent scaled the effort by the
     // cosine of its turn, or flipped it (s90ctrl D1).
     dJointGetSliderAxis(jm.id, axis);
-    load = jm.command_feedback.f1;
+    load = feedback.f1;
   }
   const double along = load[0] * axis[0] + load[1] * axis[1] + load[2] * axis[2];
   const double length2 = axis[0] * axis[0] + axis[1] * axis[1] + axis[2] * axis[2];
-  return std::clamp(along / length2, -fmax, fmax);
+  return along / length2;
+}
+
+// Chooses, for a step of h, which dampers act as a torque from the state before the step and which
+// through their motor (JointModel::damper). Explicit damping is the iteration v' = (1 - h M^-1 C) v
+// in joint velocities (M the joint-space inertia, C the dampings, one per axis): every mode decays
+// without reversing while h lambda_max(M^-1 C) <= 1, and lambda_max(M^-1 C) <= trace(C^1/2 M^-1
+// C^1/2) = sum c_i (M^-1)_ii <= sum of the joints' damper_rate ((M^-1)_ii is the mobility of joint
+// i's axis under every other constraint, which only lower it). So the joints of least rate stay
+// explicit while h times their sum is at most 1, and the rest are implicit: each implicit damper is
+// one more row for the solver (a third more time on 24 bodies), and a light link's damper cannot
+// blow up (docs/dynamics.md).
+void choose_dampers(Simulation::Model& m, double h) {
+  if (m.damper_step == h) return;
+  m.damper_step = h;
+  std::vector<JointModel*> damped;
+  for (JointModel& jm : m.joints) {
+    if (jm.damper) damped.push_back(&jm);
+  }
+  std::sort(damped.begin(), damped.end(),
+            [](const JointModel* a, const JointModel* b) { return a->damper_rate < b->damper_rate; });
+  double explicit_sum = 0;
+  for (JointModel* jm : damped) {
+    explicit_sum += jm->damper_rate * h;
+    jm->damper_implicit = !(explicit_sum <= 1);
+    const double fmax = jm->damper_implicit ? dInfinity : 0;
+    if (jm->kind == JointKind::kPrismatic) {
+      dJointSetLMotorParam(jm->damper, dParamFMax, fmax);
+    } else {
+      for (int axis = 0; axis < dJointGetAMotorNumAxes(jm->damper); ++axis) {
+        dJointSetAMotorParam(jm->damper, axis * dParamGroup + dParamFMax, fmax);
+      }
+    }
+  }
 }
 
 Eigen::Vector3d angular_velocity(const Simulation::Model& model, int body) {
@@ -234,6 +268,7 @@ void Simulation::step(double dt) {
   init_ode();
   Model& m = *model_;
   if (m.failed) return;
+  choose_dampers(m, dt);
   // The state as of the last step (or the set-up), read once then (read_frames).
   for (std::size_t b = 0; b < m.bodies.size(); ++b) {
     if (!m.frames[b].steppable) {
@@ -253,7 +288,7 @@ void Simulation::step(double dt) {
       set_command_motor(m, jm, drive);
       jm.motor_fmax = drive.motor ? drive.fmax : 0.0;
       jm.effort = drive.feed_forward;
-      jm.damping_effort = -jm.damping * jm.qdot;
+      jm.damping_effort = jm.damper_implicit ? 0.0 : -jm.damping * jm.qdot;
       const double total = jm.effort + jm.damping_effort - jm.stiffness * jm.q;
       if (jm.kind == JointKind::kPrismatic) {
         dJointAddSliderForce(jm.id, total);
@@ -261,7 +296,7 @@ void Simulation::step(double dt) {
         dJointAddHingeTorque(jm.id, total);
       }
       jm.q_before = jm.q;
-    } else if (jm.kind == JointKind::kBall && jm.damping > 0) {
+    } else if (jm.kind == JointKind::kBall && jm.damping > 0 && !jm.damper_implicit) {
       const Eigen::Vector3d w = angular_velocity(m, jm.child_body) - angular_velocity(m, jm.parent_body);
       const Eigen::Vector3d tau = -jm.damping * w;
       dBodyAddTorque(m.bodies[jm.child_body].id, tau.x(), tau.y(), tau.z());
@@ -300,7 +335,11 @@ void Simulation::step(double dt) {
         jm.ode_angle = angle;
         jm.qdot = dJointGetHingeAngleRate(jm.id);
       }
-      if (jm.motor_fmax > 0) jm.effort += command_motor_effort(jm, jm.motor_fmax);
+      if (jm.motor_fmax > 0) {
+        // At most fmax: the projection's rounding never reports more.
+        jm.effort += std::clamp(motor_load(jm, jm.command_motor, jm.command_feedback), -jm.motor_fmax, jm.motor_fmax);
+      }
+      if (jm.damper_implicit) jm.damping_effort = motor_load(jm, jm.damper, jm.damper_feedback);
       const double dq = jm.q - jm.q_before;
       // A stop acts once the joint is past it: the step that crosses it can carry the joint its
       // whole travel beyond, and the stop's ERP (the world's) then takes back erp of the excess per
@@ -313,7 +352,8 @@ void Simulation::step(double dt) {
       m.actuator_work += jm.effort * dq;
     } else if (jm.kind == JointKind::kBall && jm.damping > 0) {
       const Eigen::Vector3d w = angular_velocity(m, jm.child_body) - angular_velocity(m, jm.parent_body);
-      m.dissipated += jm.damping * w.squaredNorm() * dt;
+      const Eigen::Vector3d tau = jm.damper_implicit ? vec(jm.damper_feedback.t1) : Eigen::Vector3d(-jm.damping * w);
+      m.dissipated -= tau.dot(w) * dt;
     }
   }
   m.time += dt;

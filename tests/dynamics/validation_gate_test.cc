@@ -135,10 +135,13 @@ TEST(DynamicsGate, DMassCheckRefusalIsAnError) {
       << refused[0].message;
 }
 
-// facts.md: arm3 with one link's inertia scaled by 1e-6 blows up in ODE without a NaN, and
-// dMassCheck accepts it. As computed, the physical checks already refuse it (no solid of that volume
-// and mass has so small an inertia); marked authored, only the run can catch it.
-TEST(DynamicsGate, Arm3WithInertiaScaledByOneMillionthIsCaught) {
+// arm3 with one link's inertia scaled by 1e-6: the forearm becomes a point mass on its rod, which
+// is a sound model. As computed, the physical checks refuse it (no solid of
+// that volume and mass has so small an inertia); marked authored, the run passes it. It blew up in
+// ODE (facts.md; its elbow 5e83 m apart within 25 ms) only because the elbow's damping (0.4 N m s)
+// acted as a torque from the last state on 6e-10 kg m^2 about its axis (c h / I = 6e5); the damper
+// is implicit there now (docs/dynamics.md).
+TEST(DynamicsGate, Arm3WithInertiaScaledByOneMillionthIsAPointMassOnItsRod) {
   Conversion conversion = convert_fixture(testing::data_dir() / "blender" / "arm3.gltf");
   Link& forearm = conversion.robot.links[2];
   ASSERT_EQ(forearm.name, "forearm");
@@ -153,19 +156,9 @@ TEST(DynamicsGate, Arm3WithInertiaScaledByOneMillionthIsCaught) {
   report = validate_dynamics(conversion, ValidationOptions{});
   std::printf("arm3, forearm inertia x 1e-6 (authored): %s\n", validation_summary_line(report).c_str());
   for (const Diagnostic& d : report.diagnostics.all()) std::printf("  %s\n", format(d).c_str());
-  EXPECT_FALSE(report.passed);
+  EXPECT_TRUE(report.passed) << all_text(report.diagnostics);
   EXPECT_TRUE(report.simulated);
-  EXPECT_FALSE(report.diagnostics.contains("LINK_INERTIA_BELOW_SOLID_BOUND"));
-  EXPECT_FALSE(report.diagnostics.contains("ODE_MASS_CHECK_FAILED"));
-  // Here it blows up within tens of milliseconds; the energy and separation checks fire well
-  // before the state leaves what can be stepped (SIM_NOT_FINITE, which ends the run).
-  const auto energy = with_code(report.diagnostics, "SIM_ENERGY_RISE");
-  const auto separation = with_code(report.diagnostics, "SIM_JOINT_SEPARATION");
-  ASSERT_EQ(energy.size(), 1u) << all_text(report.diagnostics);
-  ASSERT_EQ(separation.size(), 1u) << all_text(report.diagnostics);
-  EXPECT_EQ(separation[0].pointer, "/nodes/" + std::to_string(conversion.robot.joints[1].node));
-  EXPECT_NE(separation[0].message.find("joint 'elbow'"), std::string::npos);
-  EXPECT_EQ(report.worst_joint, "elbow");
+  EXPECT_LT(report.energy_drift, 1e-9);  // it blew up within 25 ms
 }
 
 // An explicit spring of 1e12 N/m on a 1 kg carriage at 1 ms steps (omega h = 1000) grows a
@@ -318,10 +311,11 @@ TEST(DynamicsGate, HundredLinkTreeStartedBentPasses) {
 }
 
 // The link's inertia authored 1e-6 of a 0.5 kg, 0.2 m box's, so that no physical check refuses it
-// (only computed inertials are held to the solid bound) and only the run can: the energy rises
-// and the joints of that link come apart. The defaults but for 2 s of the 3 (the tree's 3 s take
-// 20 s under ASan): the joints came apart within 25 ms and the energy rose within 0.4 s here, and
-// within 0.6 s in every order QuickStep visited the constraints in before the gate seeded it.
+// (only computed inertials are held to the solid bound) and only the run can: QuickStep's iterative
+// solve cannot hold a link that light (with dWorldStep it is a sound point mass, as in arm3 above),
+// and the joints of that link come apart by metres (within 40 ms here). The energy rose too while
+// that link's damper was explicit; implicit, it takes out what the torn joint makes, and the energy
+// need not rise. The defaults but for 2 s of the 3 (the tree's 3 s take 20 s under ASan).
 void expect_blow_up_caught(Robot robot, int link) {
   robot.links[link].inertial.inertia *= 1e-6;
   ValidationOptions options = started_bent();
@@ -337,10 +331,6 @@ void expect_blow_up_caught(Robot robot, int link) {
       EXPECT_EQ(d.code.rfind("SIM_", 0), 0u) << format(d);
     }
   }
-  const auto energy = with_code(report.diagnostics, "SIM_ENERGY_RISE");
-  ASSERT_EQ(energy.size(), 1u) << all_text(report.diagnostics);
-  EXPECT_EQ(energy[0].severity, Severity::kError);
-  EXPECT_GT(report.energy_drift, 1.0);  // more than the scale of the model's energy: a blow-up
   const auto separation = with_code(report.diagnostics, "SIM_JOINT_SEPARATION");
   ASSERT_EQ(separation.size(), 1u) << all_text(report.diagnostics);
   EXPECT_EQ(separation[0].severity, Severity::kError);

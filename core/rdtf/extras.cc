@@ -131,13 +131,26 @@ void write_node_extras(Json& document, const std::vector<NodeType>& types, const
   for (const Link& link : robot.links) {
     if (link.inertial_node >= 0) {
       Json* extras = extras_object(nodes[link.inertial_node]);
-      if (extras != nullptr && (!extras->contains("rdtf_inertial") || link.ignored_inertial_extras)) {
+      // A computed one already there is an earlier output's, which this conversion computed again
+      // (a part moved or rescaled since): it is never read as a source, and left as it was it
+      // would tell a reader of node extras the old body (s101fmt D6).
+      const bool stale = extras != nullptr && extras->contains("rdtf_inertial") &&
+                         (*extras)["rdtf_inertial"].is_object() &&
+                         (*extras)["rdtf_inertial"].value("source", "") == "computed";
+      if (extras != nullptr && (!extras->contains("rdtf_inertial") || link.ignored_inertial_extras || stale)) {
         (*extras)["rdtf_inertial"] = link.inertial_source == InertialSource::kComputed
                                          ? inertial_to_json(link.inertial)
                                          : authored_inertial_json(link.inertial);
       }
     }
     if (link.inertial_source != InertialSource::kComputed) continue;
+    // A link whose rdtf_mass scaled its meshes' densities keeps the densities as authored: read
+    // again, the link's rdtf_mass scales them alike once more. A scaled density written beside an
+    // authored one would change their ratio, and so the centre of mass (s101fmt D1).
+    const Json& link_node = nodes[static_cast<std::size_t>(link.node)];
+    if (link_node.contains("extras") && link_node["extras"].is_object() && link_node["extras"].contains("rdtf_mass")) {
+      continue;
+    }
     for (const LinkMesh& mesh : link.meshes) {
       Json* extras = extras_object(nodes[mesh.node]);
       if (extras == nullptr || has_any(*extras, {"rdtf_density", "rdtf_mass"}) || mesh.density <= 0) continue;
@@ -194,17 +207,34 @@ bool write_rdtf_extras(Json& document, const std::vector<NodeType>& types, const
     const auto found = existing.find(i);
     Json entry = found != existing.end() ? found->second : Json{{"node", i}};
     entry["type"] = to_string(types[i]);
-    if (types[i] == NodeType::kJoint && !entry.contains("joint")) {
-      if (const auto joint = joint_of_node.find(static_cast<int>(i)); joint != joint_of_node.end()) {
-        entry["joint"] = joint_to_json(*joint->second);
+    if (types[i] == NodeType::kJoint) {
+      const auto joint = joint_of_node.find(static_cast<int>(i));
+      if (!entry.contains("joint")) {
+        if (joint != joint_of_node.end()) entry["joint"] = joint_to_json(*joint->second);
+      } else if (entry["joint"].is_object() && entry["joint"].contains("axis") && entry["joint"]["axis"].is_array()) {
+        // An authored vector axis goes out as the unit vector it was read as (a named axis is kept
+        // as written): [0, 2, 0] read back by a tool taking q * axis as the motion doubled it.
+        Json& axis = entry["joint"]["axis"];
+        Eigen::Vector3d a = Eigen::Vector3d::Zero();
+        bool numbers = axis.size() == 3;
+        for (std::size_t k = 0; numbers && k < 3; ++k) {
+          numbers = axis[k].is_number();
+          if (numbers) a[static_cast<int>(k)] = axis[k].get<double>();
+        }
+        if (numbers && a.allFinite() && a.norm() > 0) axis = vector_to_json(a.normalized());
       }
     }
     if (types[i] == NodeType::kInertial) {
+      // Every link's inertial, authored ones too (from KHR motion or node extras, which a reader
+      // of extras.RDTF alone would not see: s101fmt D5); an authored one goes out without a
+      // source, so it reads back as authored.
       const auto link = link_of_inertial.find(static_cast<int>(i));
-      const bool authored = link != link_of_inertial.end() &&
-                            link->second->inertial_source == InertialSource::kAuthored;
-      if (link != link_of_inertial.end() && !authored) {
-        entry["inertial"] = inertial_to_json(link->second->inertial);
+      if (link != link_of_inertial.end()) {
+        if (link->second->inertial_source != InertialSource::kAuthored) {
+          entry["inertial"] = inertial_to_json(link->second->inertial);
+        } else if (!entry.contains("inertial")) {
+          entry["inertial"] = authored_inertial_json(link->second->inertial);
+        }
       }
     }
     nodes.push_back(std::move(entry));

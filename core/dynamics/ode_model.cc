@@ -211,26 +211,19 @@ void add_bodies(Simulation::Model& model, const WeldGroups& welds, const std::ve
   }
 }
 
-// ODE measures a hinge's angle in (-pi, pi] and its stops act only inside that window, and only
-// while the wrapped angle cannot step over the gap outside the range: from below `upper`, a step
-// of d lands at q + d - 2 pi, inside the range again, once d > 2 pi - (upper - lower). Limits of
-// +-3.14159 (common in published URDFs) left a gap of 2e-5 rad: a wrist swung 0.72 rad through its
-// stop (helper sweep s70rob D1). So the hinge's own stops take only a range narrower than pi,
-// whose gap (more than pi) no step that resolves the motion crosses. Any other range (near or
-// beyond pi, +-pi exactly, +-2 pi) is carried by a one-axis angular motor in user mode instead, on the unwrapped position that Simulation::step hands it before every step (ODE
-// tests the stops of both the same way: against the position at the start of the step). Moving
-// the hinge's window with dJointSetHingeAxisOffset instead is wrong in ODE 0.16 when the child
-// body is turned in the world: it composes the world axis with a rotation kept in body axes
-// (measured: an offset of 0.23 read 1.70, and turning the body by 0.1 rad changed it by 0.035).
+// Every limited hinge's stops are a one-axis angular motor in user mode, on the unwrapped position
+// that Simulation::step hands it before every step (ODE tests the stops of both kinds the same way:
+// against the position at the start of the step). The hinge's own stops act on ODE's angle, wrapped
+// to (-pi, pi]: a stop near +-pi is overrun into the wrap, where the angle reads beyond the other
+// stop and the stop's correction drives the joint on. +-3.14159 let a wrist through its stop by
+// 0.72 rad (s70rob D1); [-3.14, 0], kept on the hinge's stops as narrower than pi, let a rod that
+// overshot -pi by 2 mrad spin through its stop for ever (s101gate D2: 540 rad in 3 s). Moving the
+// hinge's window with dJointSetHingeAxisOffset instead is wrong in ODE 0.16 when the child body is
+// turned in the world: it composes the world axis with a rotation kept in body axes (measured: an
+// offset of 0.23 read 1.70, and turning the body by 0.1 rad changed it by 0.035).
 void add_hinge_limits(Simulation::Model& model, JointModel& jm, dBodyID child, dBodyID parent,
                       const Eigen::Vector3d& axis) {
   jm.stops = true;
-  if (jm.lower > -std::numbers::pi && jm.upper < std::numbers::pi && jm.upper - jm.lower < std::numbers::pi) {
-    dJointSetHingeParam(jm.id, dParamLoStop, jm.lower);
-    dJointSetHingeParam(jm.id, dParamHiStop, jm.upper);
-    dJointSetFeedback(jm.id, &jm.feedback);
-    return;
-  }
   jm.limit_motor = dJointCreateAMotor(model.world, nullptr);
   dJointAttach(jm.limit_motor, child, parent);
   dJointSetAMotorMode(jm.limit_motor, dAMotorUser);

@@ -119,8 +119,8 @@ struct JointModel {
   // the first such command; its feedback gives the effort it applied.
   dJointID command_motor = nullptr;
   dJointFeedback command_feedback{};
-  // A hinge range not inside (-pi, pi): a user-mode angular motor whose stops act on the
-  // unwrapped position (set before every step). Ranges inside it use the hinge's own stops.
+  // A limited hinge's stops: a user-mode angular motor whose stops act on the unwrapped position
+  // (set before every step), not the hinge's own, which act on the wrapped angle.
   dJointID limit_motor = nullptr;
   int child_body = -1;
   int parent_body = kWorld;

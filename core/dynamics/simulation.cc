@@ -234,18 +234,11 @@ bool update_exact_step_errors(Simulation::Model& m, JointModel& jm, double dt, d
 
 // The force (N) or torque (N m) a joint's stop carried in the last step, from the constraint
 // forces ODE reports on the child body. A slider's other rows act across its axis, so the force
-// along the axis is the stop's. A hinge's other rows are a force at the anchor (its moment about
-// the child's centre of mass, r x f, is in the reported torque, and is taken out) and a couple
-// across the axis. A limit motor has the stop's row only.
+// along the axis is the stop's. A hinge's stops are its limit motor, which has the stop's row only.
 double stop_load(const Simulation::Model& m, const JointModel& jm) {
-  const BodyFrame& child = frame_of(m, jm.child_body);
-  const BodyFrame& parent = frame_of(m, jm.parent_body);
-  const Eigen::Vector3d axis = parent.R * jm.axis_parent;
-  const Eigen::Vector3d f = vec(jm.feedback.f1), t = vec(jm.feedback.t1);
-  if (jm.kind == JointKind::kPrismatic) return std::abs(f.dot(axis));
-  if (jm.limit_motor) return std::abs(t.dot(axis));
-  const Eigen::Vector3d r = child.R * jm.anchor_child;
-  return std::abs((t - r.cross(f)).dot(axis));
+  const Eigen::Vector3d axis = frame_of(m, jm.parent_body).R * jm.axis_parent;
+  const Eigen::Vector3d load = jm.kind == JointKind::kPrismatic ? vec(jm.feedback.f1) : vec(jm.feedback.t1);
+  return std::abs(load.dot(axis));
 }
 
 }  // namespace

@@ -1,5 +1,5 @@
 // Hinge limits of any range are enforced (docs/dynamics.md, "Joints"): inside (-pi, pi), within
-// 1e-5 rad of +-pi, exactly +-pi, beyond pi on one side (Franka's joint 6), wider than 2 pi (UR's +-2 pi). A bar driven by a
+// 1e-5 rad of +-pi, narrower than pi with a stop near it, exactly +-pi, beyond pi on one side (Franka's joint 6), wider than 2 pi (UR's +-2 pi). A bar driven by a
 // constant torque against each stop stays within the documented bound of it and comes to rest on
 // it; a joint swinging freely inside a wide range is not judged as violating it.
 #include <gtest/gtest.h>
@@ -49,6 +49,10 @@ const Range kRanges[] = {
     // stepped over ODE's own stops (helper sweep s70rob D1).
     {"just inside +-pi", -3.14159, 3.14159},
     {"just inside pi on one side", -0.5, 3.1415},
+    // Narrower than pi, a stop 1.6 mrad inside +-pi (pi written 3.14): overrun into the wrap, the
+    // hinge's own stop read the angle beyond the other stop and drove the joint on (s101gate D2).
+    {"narrower than pi, -3.14", -3.14, 0.0},
+    {"narrower than pi, 3.14", 0.0, 3.14},
 };
 
 // 20 N m (eight times the bar's largest gravity torque, 2.45 N m) from rest towards one stop,

@@ -370,6 +370,40 @@ TEST(DynamicsGate, TwentyLinkChainStartedBentPasses) {
   EXPECT_TRUE(report.diagnostics.all().empty()) << all_text(report.diagnostics);
 }
 
+// The stepper follows the largest island, not the model: dWorldStep solves each island (bodies
+// joined by joints; the world joins none) on its own. Three 10-link chains hanging from a trunk the
+// world holds are 30 bodies in islands of 10 and step exactly; on a trunk that swings they are one
+// island of 31 and take QuickStep. A humanoid whose world-held pelvis carried a 19-body upper body
+// and two legs went to QuickStep at 27 bodies, and its chest chattered through its stop (s101gate D1).
+TEST(DynamicsGate, TheStepperFollowsTheLargestIsland) {
+  for (const bool trunk_moves : {false, true}) {
+    SCOPED_TRACE(trunk_moves ? "trunk on a hinge" : "trunk held by the world");
+    RobotBuilder b;
+    int trunk = b.root(trunk_moves ? "base" : "trunk", box_inertial(5.0, {0.3, 0.3, 0.3}));
+    if (trunk_moves) {
+      trunk = b.child(trunk, "waist", JointKind::kRevolute, Eigen::Isometry3d::Identity(), Eigen::Vector3d::UnitZ(),
+                      "trunk", box_inertial(5.0, {0.3, 0.3, 0.3}));
+      b.joint(0).limits = JointLimits{-1, 1, 0, 0};
+    }
+    for (int branch = 0; branch < 3; ++branch) {
+      int parent = trunk;
+      for (int l = 0; l < 10; ++l) {
+        const std::string name = "b" + std::to_string(branch) + "_" + std::to_string(l);
+        parent = b.child(parent, name + "_joint", JointKind::kRevolute,
+                         Eigen::Isometry3d(Eigen::Translation3d(l == 0 ? 0.1 * branch - 0.1 : 0.0, -0.2, 0)),
+                         l % 2 == 0 ? Eigen::Vector3d::UnitZ() : Eigen::Vector3d::UnitX(), name,
+                         box_inertial(0.5, {0.04, 0.2, 0.04}, {0, -0.1, 0}));
+        b.joint(static_cast<int>(b.robot().joints.size()) - 1).limits = JointLimits{-3, 3, 0, 0};
+      }
+    }
+    Diagnostics diag;
+    auto sim = Simulation::create(b.robot(), {}, {}, diag);
+    ASSERT_TRUE(sim) << all_text(diag);
+    EXPECT_EQ(sim->body_count(), trunk_moves ? 31 : 30);
+    EXPECT_EQ(sim->stepper_name(), trunk_moves ? "dWorldQuickStep" : "dWorldStep");
+  }
+}
+
 // What an exact step does to a joint, in closed form: the two sides turn by their own angular
 // velocities over the step, which leaves a hinge h^2/2 |w_parent x w_child| (across its axis) out
 // of line and the anchor points h^2/2 |w_c x (w_c x r_c) - w_p x (w_p x r_p)| apart per step; ERP

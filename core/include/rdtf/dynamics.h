@@ -92,9 +92,10 @@ struct SimulationOptions {
   bool floating_root = false;  // Default: every root link is fixed to the world.
   double time_step = 1e-3;     // s; step() without an argument.
   Stepper stepper = Stepper::kAuto;
-  // kAuto: dWorldStep below this many bodies, QuickStep from it. 27 is where QuickStep (50
-  // iterations) became the cheaper of the two per step, for chains and trees alike
-  // (docs/dynamics.md); below it dWorldStep is both cheaper and exact.
+  // kAuto: dWorldStep while the largest island (bodies joined by joints; the world joins none)
+  // has fewer bodies than this, QuickStep from it. dWorldStep solves each island on its own; 27 is
+  // where QuickStep (50 iterations) became the cheaper of the two per step for one island, chains
+  // and trees alike (docs/dynamics.md); below it dWorldStep is both cheaper and exact.
   int quickstep_min_bodies = 27;
   int quickstep_iterations = 50;  // Gazebo's defaults.
   double quickstep_sor = 1.3;

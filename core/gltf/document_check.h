@@ -104,6 +104,7 @@ class DocumentCheck {
   void check_texture_info(const Json& object, const char* key, const std::string& pointer);
   void check_materials();
   void check_textures();
+  void check_material_texcoords();
   void check_extension_objects(const Json& value, const std::string& pointer, int depth);
   void check_animation(const Json& animation, const std::string& pointer);
   void check_triangle_limit();

@@ -58,6 +58,7 @@ void DocumentCheck::run() {
   check_images_and_animations();
   check_materials();
   check_textures();
+  check_material_texcoords();
   check_triangle_limit();
 }
 

@@ -106,6 +106,50 @@ void DocumentCheck::check_textures() {
   }
 }
 
+// A primitive's material samples each of its textures with the TEXCOORD_n its texCoord names (0 by
+// default), which the primitive must have: a Blender material whose second UV map was deleted
+// went through into an output the Khronos validator refused (s100rev R2).
+void DocumentCheck::check_material_texcoords() {
+  const auto& materials = entries_["materials"];
+  const auto& meshes = entries_["meshes"];
+  for (std::size_t m = 0; m < meshes.size(); ++m) {
+    if (meshes[m] == nullptr || !meshes[m]->contains("primitives") || !(*meshes[m])["primitives"].is_array()) continue;
+    const Json& primitives = (*meshes[m])["primitives"];
+    for (std::size_t p = 0; p < primitives.size(); ++p) {
+      const Json& primitive = primitives[p];
+      if (!primitive.is_object() || !primitive.contains("material") || !primitive["material"].is_number_integer()) continue;
+      const std::int64_t material_index = primitive["material"].get<std::int64_t>();
+      if (material_index < 0 || static_cast<std::uint64_t>(material_index) >= materials.size()) continue;
+      const std::size_t index = static_cast<std::size_t>(material_index);
+      if (materials[index] == nullptr) continue;
+      const Json attributes = primitive.value("attributes", Json::object());
+      if (!attributes.is_object()) continue;
+      const Json& material = *materials[index];
+      const auto need = [&](const Json& owner, const char* key, const std::string& owner_pointer) {
+        if (!owner.contains(key) || !owner[key].is_object()) return;
+        const Json& info = owner[key];
+        const Json texcoord = info.value("texCoord", Json(0));
+        if (!texcoord.is_number_integer() || texcoord.get<std::int64_t>() < 0) return;  // said by check_texture_info
+        const std::string attribute = "TEXCOORD_" + std::to_string(texcoord.get<std::int64_t>());
+        if (attributes.contains(attribute)) return;
+        diag_.error(codes::MESH_PRIMITIVE_TOO_FEW_TEXCOORDS,
+                    json_pointer(json_pointer(json_pointer(json_pointer("/meshes", m), "primitives"), p), "material"),
+                    "material " + std::to_string(index) + "'s texture " + json_pointer(owner_pointer, key) +
+                        " is sampled with " + attribute +
+                        ", which this primitive does not have: add that UV map to the mesh, or point texCoord at "
+                        "one it has");
+      };
+      const std::string pointer = json_pointer("/materials", index);
+      if (material.contains("pbrMetallicRoughness") && material["pbrMetallicRoughness"].is_object()) {
+        const Json& pbr = material["pbrMetallicRoughness"];
+        need(pbr, "baseColorTexture", json_pointer(pointer, "pbrMetallicRoughness"));
+        need(pbr, "metallicRoughnessTexture", json_pointer(pointer, "pbrMetallicRoughness"));
+      }
+      for (const char* texture : {"normalTexture", "occlusionTexture", "emissiveTexture"}) need(material, texture, pointer);
+    }
+  }
+}
+
 // Every glTF object's `extensions` is an object. Only the properties glTF defines are glTF
 // objects: an exporter's own property (`"myToolData": {"extensions": [...]}`) is not, nor is
 // anything under `extras` or inside an extension (s100rev D1: such a file, valid to the Khronos

@@ -260,6 +260,24 @@ void read_joint_properties(const JointSource& source, const Eigen::Affine3d& X_S
   joint.spring_stiffness =
       read_amount(source, key_for(source, "springStiffness", "rdtf_spring_stiffness"), diag)
           .value_or(0);
+  // Properties of a moving joint without its type: the type is fixed by default, and they would do
+  // nothing without a word (an empty given an axis and limits but no rdtf_joint, s101fmt D8).
+  if (!source.values->contains(kind_key)) {
+    std::string given;
+    for (const auto& [entry_key, extras_key] :
+         {std::pair{"axis", "rdtf_axis"}, {"lower", "rdtf_lower"}, {"upper", "rdtf_upper"}, {"effort", "rdtf_effort"},
+          {"velocity", "rdtf_velocity"}, {"damping", "rdtf_damping"}, {"friction", "rdtf_friction"},
+          {"springStiffness", "rdtf_spring_stiffness"}}) {
+      const std::string key = key_for(source, entry_key, extras_key);
+      if (source.values->contains(key)) given += (given.empty() ? "" : ", ") + key;
+    }
+    if (!given.empty()) {
+      diag.warning(codes::JOINT_TYPE_MISSING, source.pointer,
+                   source.label + ": " + given + " given without " + kind_key +
+                       ", so the joint is fixed and they do nothing; set " + kind_key +
+                       " to revolute, continuous or prismatic, or remove them");
+    }
+  }
 }
 
 std::string vector_text(const Eigen::Vector3d& v) { return Json::array({v.x(), v.y(), v.z()}).dump(); }

@@ -34,7 +34,7 @@ std::string severity_text(unsigned severities) {
 const std::set<std::string>& not_codes() {
   static const std::set<std::string> names{
       "BLEND", "COLOR", "JOINTS", "JOINTS_", "JOINTS_0", "NORMAL", "POSITION", "TANGENT", "TEXCOORD", "TEXCOORD_0",
-      "WEIGHTS", "WEIGHTS_", "SCALAR", "VEC2", "VEC3", "VEC4", "MAT2", "MAT3", "MAT4", "POINTS", "LINES",
+      "WEIGHTS", "WEIGHTS_", "TEXCOORD_", "SCALAR", "VEC2", "VEC3", "VEC4", "MAT2", "MAT3", "MAT4", "POINTS", "LINES",
       "LINE_LOOP", "LINE_STRIP", "JSON", "RDTF", "DESCRIPTION", "DESCRIPTION_CHUNK", "URDF_CHUNK", "INERTIA",
       "VALIDATION", "ERROR", "REMOVED", "SAVING", "STATUS", "REQUEST", "JOINT_STATE", "JOINT_COMMAND", "LINK_STATE",
       "MANIFEST", "DELTA", "URDF", "BLOB", "BLOB_REQUEST", "BLOB_CHUNK", "BLOB_UNAVAILABLE", "HOME", "XDG_DATA_HOME",

@@ -2,6 +2,8 @@
 // thing and asserts the validator's issue code and JSON pointer for it.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include <array>
 #include <cmath>
 #include <cstring>
@@ -152,6 +154,32 @@ TEST(ValidateDocument, WhatPassesThroughUnreadIsChecked) {
                 .all()
                 .size(),
             0u);
+}
+
+// A material sampling a texture with a TEXCOORD_n its primitive does not have is the validator's
+// MESH_PRIMITIVE_TOO_FEW_TEXCOORDS, at the primitive's material; with the UV map, silent (s100rev R2).
+TEST(ValidateDocument, AMaterialsTextureNeedsItsUvMapOnThePrimitive) {
+  Json document = triangle_document();
+  document["materials"] = Json::parse(R"([{"pbrMetallicRoughness": {"baseColorTexture": {"index": 0, "texCoord": 1}},
+                                          "occlusionTexture": {"index": 0}}])");
+  document["textures"] = Json::parse(R"([{"source": 0}])");
+  document["images"] = Json::parse(R"([{"uri": "a.png"}])");
+  document["meshes"][0]["primitives"][0]["material"] = 0;
+  const Diagnostics diag = check_document(document);
+  const auto count = [](const Diagnostics& d) {
+    return std::count_if(d.all().begin(), d.all().end(),
+                         [](const Diagnostic& x) { return x.code == "MESH_PRIMITIVE_TOO_FEW_TEXCOORDS"; });
+  };
+  EXPECT_EQ(count(diag), 2) << listing(diag);
+  EXPECT_DIAGNOSTIC(diag, "MESH_PRIMITIVE_TOO_FEW_TEXCOORDS", "/meshes/0/primitives/0/material");
+  ASSERT_FALSE(diag.all().empty());
+  EXPECT_NE(diag.all()[0].message.find("/materials/0/pbrMetallicRoughness/baseColorTexture is sampled with TEXCOORD_1"),
+            std::string::npos)
+      << diag.all()[0].message;
+  document["accessors"].push_back(Json::parse(R"({"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC2"})"));
+  document["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_0"] = 2;
+  document["meshes"][0]["primitives"][0]["attributes"]["TEXCOORD_1"] = 2;
+  EXPECT_EQ(count(check_document(document)), 0) << listing(check_document(document));
 }
 
 // An accessor that fails its layout is still checked for its format: the cause is said beside the

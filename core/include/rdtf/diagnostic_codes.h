@@ -103,6 +103,7 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(MESH_PRIMITIVE_MORPH_TARGET_INVALID_ATTRIBUTE_COUNT, kSeverityError, "glTF") \
   X(MESH_PRIMITIVE_MORPH_TARGET_NO_BASE_ACCESSOR, kSeverityError, "glTF") \
   X(MESH_PRIMITIVE_POSITION_ACCESSOR_WITHOUT_BOUNDS, kSeverityError, "glTF") \
+  X(MESH_PRIMITIVE_TOO_FEW_TEXCOORDS, kSeverityError, "glTF") \
   X(MESH_PRIMITIVE_UNEQUAL_ACCESSOR_COUNT, kSeverityError, "glTF") \
   X(NODE_LOOP, kSeverityError, "glTF") \
   X(NODE_MATRIX_NON_TRS, kSeverityError, "glTF") \
@@ -144,6 +145,7 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(JOINT_LIMITS_INVERTED, kSeverityError, "model") \
   X(JOINT_MOVES_NOTHING, kSeverityWarning, "model") \
   X(JOINT_MOVES_SEVERAL_LINKS, kSeverityInfo, "model") \
+  X(JOINT_TYPE_MISSING, kSeverityWarning, "model") \
   X(KHR_JOINT_FRAMES_DISAGREE, kSeverityError, "model") \
   X(KHR_PHYSICS_IGNORED, kSeverityWarning, "model") \
   X(KHR_PHYSICS_INVALID, kSeverityError, "model") \

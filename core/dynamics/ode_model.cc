@@ -114,7 +114,8 @@ void check_mappable(const Robot& robot, const WeldGroups& welds, Diagnostics& di
     const std::string name = "joint '" + joint.name + "' (" + to_string(joint.kind) + "): ";
     if (joint.kind == JointKind::kPlanar) {
       diag.error(codes::ODE_UNSUPPORTED_JOINT, where,
-                 name + "ODE has no planar joint between two bodies; not simulated");
+                 name + "rdtf simulates no planar joint (ODE's only one, Plane2D, holds a body in the world's z = 0 "
+                        "plane); not simulated");
     }
     if (!joint.X_PJ.matrix().allFinite()) diag.error(codes::ODE_INVALID_JOINT, where, name + "origin is not finite");
     if (one_dof(joint.kind) && (!joint.axis.allFinite() || joint.axis.norm() < 1e-12)) {

@@ -81,8 +81,13 @@ void check_mass(const Robot& robot, std::size_t l, const WeldGroups& welds, cons
     if (group.welded_to_world) {
       diag.info(codes::LINK_MASSLESS, where(link), name + "has no mass; the world holds it (fixed joints)");
     } else if (group.bounded) {
-      const std::string message = name + "has no mass and moves with " + body_text(robot, group) +
-                                  ", which have none: simulated with the bound mass " +
+      // Alone in its body, it moves on its joint; with links fixed to it, with them (none has mass).
+      const std::string how = group.links.size() > 1 ? "moves with " + body_text(robot, group) + ", which have none"
+                              : link.parent_joint >= 0
+                                  ? "moves on joint '" + robot.joints[link.parent_joint].name + "' (" +
+                                        to_string(robot.joints[link.parent_joint].kind) + ")"
+                                  : std::string("is a floating root");
+      const std::string message = name + "has no mass and " + how + ": simulated with the bound mass " +
                                   number(options.bound_mass) + " kg and inertia " +
                                   number(options.bound_inertia) + " kg m^2";
       if (options.massless_link_error) {
@@ -318,7 +323,8 @@ void check_joint(const Robot& robot, const Joint& joint, const WeldGroups& welds
                  name + "joins " + body_text(robot, parent) + " (" + number(mp) + " kg) and " +
                      body_text(robot, child) + " (" + number(mc) + " kg): mass ratio " + number(ratio) +
                      " is above the bound " + number(options.max_mass_ratio) +
-                     " (ODE goes unstable)");
+                     " (max_mass_ratio): QuickStep, the stepper of islands of 27 bodies or more, does not "
+                     "hold joints between bodies this unequal; raise the bound for a model dWorldStep steps");
     }
   }
 }

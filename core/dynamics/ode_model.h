@@ -204,7 +204,6 @@ struct Simulation::Model {
   double dissipated = 0;
   double actuator_work = 0;
   double damper_step = 0;  // the step for which the dampers were last chosen explicit or implicit
-  double last_step = 0;    // s: the last step's length (0 before the first)
   std::vector<std::string> messages;
   // The state left what ODE can step (a value not finite or beyond kStateBound), or ODE stopped a
   // step with an internal error: the state is unusable, health() reports it not finite, and

@@ -350,7 +350,6 @@ void Simulation::step(double dt) {
     }
   }
   m.time += dt;
-  m.last_step = dt;
   ++m.steps;
   for (std::string& message : dynamics_internal::take_ode_messages()) {
     if (m.messages.size() < 100) m.messages.push_back(std::move(message));
@@ -463,12 +462,7 @@ SimulationHealth Simulation::health(const HealthTolerances& tolerances) const {
   }
   if (!h.finite) return h;
   for (const JointModel& jm : m.joints) {
-    // A joint spring's energy as the stepper keeps it. The spring's torque is taken from the
-    // position before the step and the position moves with the speed after it (symplectic Euler),
-    // which conserves 1/2 I qdot^2 + 1/2 k q^2 - 1/2 h k q qdot exactly, not the physical energy,
-    // which ripples about it by h omega / 2 of itself: a 20 g finger on a 0.2 N m/rad spring (h omega
-    // = 0.135) rose 6.7% and was refused (s101gate D8). The term is 0 at rest and before any step.
-    if (jm.dof) h.potential_energy += 0.5 * jm.stiffness * jm.q * (jm.q - m.last_step * jm.qdot);
+    if (jm.dof) h.potential_energy += 0.5 * jm.stiffness * jm.q * jm.q;
     if (jm.limited) {
       const double violation = std::max({jm.lower - jm.q, jm.q - jm.upper, 0.0});
       const double bound = (jm.kind == JointKind::kPrismatic ? tolerances.limit_linear : tolerances.limit_angular) +

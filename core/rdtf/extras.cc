@@ -1,5 +1,6 @@
 #include <initializer_list>
 #include <map>
+#include <optional>
 
 #include "rdtf/rdtf_extras.h"
 
@@ -77,6 +78,26 @@ void joint_to_extras(const Joint& joint, const Eigen::Matrix3d& R_FJ, Json& extr
   if (joint.spring_stiffness != 0) extras["rdtf_spring_stiffness"] = joint.spring_stiffness;
 }
 
+// A positive number under `key` in a node's extras.
+std::optional<double> positive_extra(const Json& node, const char* key) {
+  if (!node.contains("extras") || !node["extras"].is_object() || !node["extras"].contains(key)) return std::nullopt;
+  const Json& value = node["extras"][key];
+  if (!value.is_number() || !(value.get<double>() > 0)) return std::nullopt;
+  return value.get<double>();
+}
+
+// The factor by which the link's rdtf_mass scaled its meshes' densities: 1 without one; 0 when no
+// mesh tells it (none has an authored density or mass).
+double density_factor(const Json& nodes, const Link& link) {
+  if (!positive_extra(nodes[static_cast<std::size_t>(link.node)], "rdtf_mass")) return 1;
+  for (const LinkMesh& mesh : link.meshes) {
+    const Json& node = nodes[static_cast<std::size_t>(mesh.node)];
+    if (const auto density = positive_extra(node, "rdtf_density")) return mesh.density / *density;
+    if (const auto mass = positive_extra(node, "rdtf_mass"); mass && mesh.volume > 0) return mesh.density * mesh.volume / *mass;
+  }
+  return 0;
+}
+
 }  // namespace
 
 void write_node_extras(Json& document, const std::vector<NodeType>& types, const Robot& robot) {
@@ -136,7 +157,7 @@ void write_node_extras(Json& document, const std::vector<NodeType>& types, const
       // would tell a reader of node extras the old body (s101fmt D6).
       const bool stale = extras != nullptr && extras->contains("rdtf_inertial") &&
                          (*extras)["rdtf_inertial"].is_object() &&
-                         (*extras)["rdtf_inertial"].value("source", "") == "computed";
+                         (*extras)["rdtf_inertial"].value("source", Json()) == Json("computed");
       if (extras != nullptr && (!extras->contains("rdtf_inertial") || link.ignored_inertial_extras || stale)) {
         (*extras)["rdtf_inertial"] = link.inertial_source == InertialSource::kComputed
                                          ? inertial_to_json(link.inertial)
@@ -144,17 +165,18 @@ void write_node_extras(Json& document, const std::vector<NodeType>& types, const
       }
     }
     if (link.inertial_source != InertialSource::kComputed) continue;
-    // A link whose rdtf_mass scaled its meshes' densities keeps the densities as authored: read
-    // again, the link's rdtf_mass scales them alike once more. A scaled density written beside an
-    // authored one would change their ratio, and so the centre of mass (s101fmt D1).
-    const Json& link_node = nodes[static_cast<std::size_t>(link.node)];
-    if (link_node.contains("extras") && link_node["extras"].is_object() && link_node["extras"].contains("rdtf_mass")) {
-      continue;
-    }
+    // A link whose rdtf_mass scaled its meshes' densities by one factor gets them written as they
+    // were before it: read again, the link's rdtf_mass scales them alike once more. A scaled
+    // density written beside an authored one changed their ratio, and so the centre of mass
+    // (s101fmt D1); none written, a mesh of the default density took another --density when read
+    // again (s102rev D3). The factor is what scaled a mesh whose own density or mass is authored;
+    // with none, every density is the default or inherited one, whose ratios no reading changes.
+    const double factor = density_factor(nodes, link);
+    if (!(factor > 0)) continue;
     for (const LinkMesh& mesh : link.meshes) {
       Json* extras = extras_object(nodes[mesh.node]);
       if (extras == nullptr || has_any(*extras, {"rdtf_density", "rdtf_mass"}) || mesh.density <= 0) continue;
-      (*extras)["rdtf_density"] = mesh.density;
+      (*extras)["rdtf_density"] = mesh.density / factor;
     }
   }
 }
@@ -221,7 +243,10 @@ bool write_rdtf_extras(Json& document, const std::vector<NodeType>& types, const
           numbers = axis[k].is_number();
           if (numbers) a[static_cast<int>(k)] = axis[k].get<double>();
         }
-        if (numbers && a.allFinite() && a.norm() > 0) axis = vector_to_json(a.normalized());
+        // Divided by its largest component first: the norm of [0, 0, 1e200] overflows and that of
+        // [0, 0, 1e-200] underflows (s102rev D2).
+        const double largest = numbers && a.allFinite() ? a.cwiseAbs().maxCoeff() : 0.0;
+        if (largest > 0) axis = vector_to_json((a / largest).normalized());
       }
     }
     if (types[i] == NodeType::kInertial) {

@@ -28,8 +28,10 @@ const Json* entry_of(const Json& doc, std::size_t node) {
   return nullptr;
 }
 
-Conversion convert_again(const Conversion& first, Diagnostics& diag) {
-  auto again = convert(first.asset, ConvertOptions{}, diag);
+Conversion convert_again(const Conversion& first, Diagnostics& diag, double default_density = 1000.0) {
+  ConvertOptions options;
+  options.default_density = default_density;
+  auto again = convert(first.asset, options, diag);
   if (!again) throw std::runtime_error("the output did not convert again");
   return std::move(*again);
 }
@@ -63,10 +65,14 @@ TEST(OutputExtras, ALinkMassOverAMeshDensityConvertsAgainUnchanged) {
   EXPECT_NEAR(first.robot.links[0].inertial.center_of_mass.x(), 0.1, 1e-7);  // float32 corners
   const Json& out = first.asset.document;
   EXPECT_EQ(out["nodes"][node_named(out, "cube")]["extras"]["rdtf_density"], 4000);
-  EXPECT_FALSE(out["nodes"][node_named(out, "base_mesh")]["extras"].contains("rdtf_density"));
-  Diagnostics again_diag;
-  expect_same_inertials(first.robot, convert_again(first, again_diag).robot);
-  EXPECT_FALSE(again_diag.contains(codes::KHR_PHYSICS_IGNORED));
+  // The box's density as it was before the link's mass scaled it: the default's, so that read
+  // again with another default (--density) its ratio to the cube's stays (s102rev D3).
+  EXPECT_NEAR(out["nodes"][node_named(out, "base_mesh")]["extras"]["rdtf_density"].get<double>(), 1000.0, 1e-9);
+  for (const double density : {1000.0, 500.0}) {
+    Diagnostics again_diag;
+    expect_same_inertials(first.robot, convert_again(first, again_diag, density).robot);
+    EXPECT_FALSE(again_diag.contains(codes::KHR_PHYSICS_IGNORED));
+  }
 }
 
 // An inertial authored in node extras (arm_extras.gltf's arm) or KHR motion (arm_khr.gltf's base
@@ -100,6 +106,25 @@ TEST(OutputExtras, AuthoredInertialsAreInExtrasRdtf) {
   }
 }
 
+// An rdtf_inertial whose source is not a string is no computed one left by an output: read as
+// authored, as before, and the conversion goes on (the stale check threw a JSON type error, s102rev D4).
+TEST(OutputExtras, AnInertialSourceOfAnyTypeConverts) {
+  for (const Json& source : {Json(1), Json(nullptr), Json(true), Json::object()}) {
+    SCOPED_TRACE(source.dump());
+    GltfBuilder b;
+    const int base = b.node("base", -1, Json{{"mesh", b.box_mesh({0.2f, 0.1f, 0.2f})}});
+    b.node("base_inertial", base,
+           Json{{"extras",
+                 {{"rdtf_type", "inertial"},
+                  {"rdtf_inertial",
+                   {{"mass", 3.0}, {"gravityCenter", {0, 0, 0}}, {"inertia", {1, 0, 0, 1, 0, 1}}, {"source", source}}}}}});
+    Diagnostics diag;
+    const Conversion c = b.convert(diag);
+    ASSERT_EQ(c.robot.links.size(), 1u);
+    EXPECT_EQ(c.robot.links[0].inertial.mass, 3.0);
+  }
+}
+
 // A computed rdtf_inertial left by an earlier output (a part rescaled since, in Blender) is written
 // again: it stayed, telling a reader of node extras 99 kg where extras.RDTF said 4 (s101fmt D6).
 TEST(OutputExtras, AStaleComputedInertialInNodeExtrasIsRewritten) {
@@ -125,7 +150,8 @@ TEST(OutputExtras, AStaleComputedInertialInNodeExtrasIsRewritten) {
 // A vector axis authored in extras.RDTF goes out as the unit vector rdtf read it as ([0, 2, 0]
 // read back as q * axis doubled the slide, s101fmt D9); a named axis is kept as written.
 TEST(OutputExtras, AnAuthoredAxisGoesOutAsAUnitVector) {
-  for (const Json& axis : {Json::array({0, 2, 0}), Json("y")}) {
+  // Components beyond 1e154 or below 1e-154 square out of range: normalised all the same (s102rev D2).
+  for (const Json& axis : {Json::array({0, 2, 0}), Json("y"), Json::array({0, 1e200, 0}), Json::array({0, 1e-200, 0})}) {
     SCOPED_TRACE(axis.dump());
     GltfBuilder b;
     const int base = b.node("base", -1, Json{{"mesh", b.box_mesh({0.2f, 0.1f, 0.2f})}});

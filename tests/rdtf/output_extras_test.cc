@@ -106,20 +106,22 @@ TEST(OutputExtras, AuthoredInertialsAreInExtrasRdtf) {
   }
 }
 
+// A 0.2 x 0.1 x 0.2 m box link whose inertial node carries `rdtf_inertial` in its extras.
+Conversion box_with_inertial_extras(const Json& rdtf_inertial) {
+  GltfBuilder b;
+  const int base = b.node("base", -1, Json{{"mesh", b.box_mesh({0.2f, 0.1f, 0.2f})}});
+  b.node("base_inertial", base, Json{{"extras", {{"rdtf_type", "inertial"}, {"rdtf_inertial", rdtf_inertial}}}});
+  Diagnostics diag;
+  return b.convert(diag);
+}
+
 // An rdtf_inertial whose source is not a string is no computed one left by an output: read as
 // authored, as before, and the conversion goes on (the stale check threw a JSON type error, s102rev D4).
 TEST(OutputExtras, AnInertialSourceOfAnyTypeConverts) {
   for (const Json& source : {Json(1), Json(nullptr), Json(true), Json::object()}) {
     SCOPED_TRACE(source.dump());
-    GltfBuilder b;
-    const int base = b.node("base", -1, Json{{"mesh", b.box_mesh({0.2f, 0.1f, 0.2f})}});
-    b.node("base_inertial", base,
-           Json{{"extras",
-                 {{"rdtf_type", "inertial"},
-                  {"rdtf_inertial",
-                   {{"mass", 3.0}, {"gravityCenter", {0, 0, 0}}, {"inertia", {1, 0, 0, 1, 0, 1}}, {"source", source}}}}}});
-    Diagnostics diag;
-    const Conversion c = b.convert(diag);
+    const Conversion c = box_with_inertial_extras(
+        {{"mass", 3.0}, {"gravityCenter", {0, 0, 0}}, {"inertia", {1, 0, 0, 1, 0, 1}}, {"source", source}});
     ASSERT_EQ(c.robot.links.size(), 1u);
     EXPECT_EQ(c.robot.links[0].inertial.mass, 3.0);
   }
@@ -128,16 +130,9 @@ TEST(OutputExtras, AnInertialSourceOfAnyTypeConverts) {
 // A computed rdtf_inertial left by an earlier output (a part rescaled since, in Blender) is written
 // again: it stayed, telling a reader of node extras 99 kg where extras.RDTF said 4 (s101fmt D6).
 TEST(OutputExtras, AStaleComputedInertialInNodeExtrasIsRewritten) {
-  GltfBuilder b;
-  const int base = b.node("base", -1, Json{{"mesh", b.box_mesh({0.2f, 0.1f, 0.2f})}});
-  b.node("base_inertial", base,
-         Json{{"extras",
-               {{"rdtf_type", "inertial"},
-                {"rdtf_inertial",
-                 {{"mass", 99.0}, {"gravityCenter", {0, 0.5, 0}}, {"inertia", {1, 0, 0, 1, 0, 1}},
-                  {"frame", "link"}, {"source", "computed"}}}}}});
-  Diagnostics diag;
-  const Conversion first = b.convert(diag);
+  const Conversion first = box_with_inertial_extras({{"mass", 99.0}, {"gravityCenter", {0, 0.5, 0}},
+                                                     {"inertia", {1, 0, 0, 1, 0, 1}}, {"frame", "link"},
+                                                     {"source", "computed"}});
   ASSERT_EQ(first.robot.links.size(), 1u);
   EXPECT_EQ(first.robot.links[0].inertial_source, InertialSource::kComputed);
   const Json& out = first.asset.document;

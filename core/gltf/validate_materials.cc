@@ -122,8 +122,8 @@ void DocumentCheck::check_material_texcoords() {
       if (material_index < 0 || static_cast<std::uint64_t>(material_index) >= materials.size()) continue;
       const std::size_t index = static_cast<std::size_t>(material_index);
       if (materials[index] == nullptr) continue;
-      const Json attributes = primitive.value("attributes", Json::object());
-      if (!attributes.is_object()) continue;
+      if (!primitive.contains("attributes") || !primitive["attributes"].is_object()) continue;
+      const Json& attributes = primitive["attributes"];
       const Json& material = *materials[index];
       const auto need = [&](const Json& owner, const char* key, const std::string& owner_pointer) {
         if (!owner.contains(key) || !owner[key].is_object()) return;

@@ -233,20 +233,12 @@ bool write_rdtf_extras(Json& document, const std::vector<NodeType>& types, const
       const auto joint = joint_of_node.find(static_cast<int>(i));
       if (!entry.contains("joint")) {
         if (joint != joint_of_node.end()) entry["joint"] = joint_to_json(*joint->second);
-      } else if (entry["joint"].is_object() && entry["joint"].contains("axis") && entry["joint"]["axis"].is_array()) {
+      } else if (joint != joint_of_node.end() && joint->second->source_is_entry && entry["joint"].is_object() &&
+                 entry["joint"].contains("axis") && entry["joint"]["axis"].is_array()) {
         // An authored vector axis goes out as the unit vector it was read as (a named axis is kept
-        // as written): [0, 2, 0] read back by a tool taking q * axis as the motion doubled it.
-        Json& axis = entry["joint"]["axis"];
-        Eigen::Vector3d a = Eigen::Vector3d::Zero();
-        bool numbers = axis.size() == 3;
-        for (std::size_t k = 0; numbers && k < 3; ++k) {
-          numbers = axis[k].is_number();
-          if (numbers) a[static_cast<int>(k)] = axis[k].get<double>();
-        }
-        // Divided by its largest component first: the norm of [0, 0, 1e200] overflows and that of
-        // [0, 0, 1e-200] underflows (s102rev D2).
-        const double largest = numbers && a.allFinite() ? a.cwiseAbs().maxCoeff() : 0.0;
-        if (largest > 0) axis = vector_to_json((a / largest).normalized());
+        // as written): [0, 2, 0] read back by a tool taking q * axis as the motion doubled it. The
+        // entry's axis is in the child link frame, as the joint's.
+        entry["joint"]["axis"] = vector_to_json(joint->second->axis);
       }
     }
     if (types[i] == NodeType::kInertial) {

@@ -111,7 +111,12 @@ struct ValidationSummary {
   double wall_time = 0;
   Diagnostics diagnostics;
   std::string summary_line;
+  // The stepper the live simulation takes (ValidationReport::live_stepper): kWorldStep when the
+  // verdict is dWorldStep's after the automatic choice's QuickStep run failed.
+  Stepper live_stepper = Stepper::kAuto;
 };
+// The live simulation's stepper for a revision: its verdict's, where the verdict chose one.
+
 
 // What a good conversion leaves behind: all a publisher needs, no reference to the document.
 //
@@ -134,6 +139,11 @@ struct ConvertedModel {
   // Every file the revision's output folder holds (the manifest); empty when not written.
   std::vector<OutputFile> files;
 };
+
+// The live simulation's stepper for a revision: its verdict's, where the verdict chose one.
+inline Stepper live_stepper(const ConvertedModel& revision) {
+  return revision.validation ? revision.validation->live_stepper : Stepper::kAuto;
+}
 
 // Where a conversion's time went, for the log's "converted" line (docs/benchmarks.md breaks a
 // save's latency down by these).

@@ -337,7 +337,8 @@ void Daemon::start_simulation_host() {
   simulation_ = std::make_unique<SimulationHost>(options);
   for (const auto& [source, record] : registry_.all()) {
     const bool usable = record.live && !(record.live->validation && !record.live->validation->passed);
-    if (usable) simulation_->load(record.id, record.revisions, record.live->content_hash, record.live->robot);
+    if (usable) simulation_->load(record.id, record.revisions, record.live->content_hash, record.live->robot,
+                                  live_stepper(*record.live));
   }
 }
 

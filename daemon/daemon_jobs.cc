@@ -374,7 +374,8 @@ void Daemon::apply_converted(ConversionOutcome& outcome, ModelRecord& record) {
       log_line("stopped the simulation of " + id + ": revision " + std::to_string(number) +
                " failed the dynamics check");
     } else {
-      simulation_->load(id, record.revisions, record.live->content_hash, record.live->robot);
+      simulation_->load(id, record.revisions, record.live->content_hash, record.live->robot,
+                        live_stepper(*record.live));
     }
   }
   if (!kept) {

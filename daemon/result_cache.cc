@@ -20,7 +20,7 @@ namespace rdtf::daemon {
 namespace {
 
 // Raised whenever what an entry holds, or how the key is made, changes meaning.
-constexpr const char* kCacheFormat = "rdtfd-results 3";  // 2: joint limits say whether a range was given; 3: node extras ignored
+constexpr const char* kCacheFormat = "rdtfd-results 4";  // 2: joint limits say whether a range was given; 3: node extras ignored; 4: the verdict's live stepper
 // An entry is a few KiB for a small robot; one of a robot with thousands of links is far below this.
 constexpr std::uint64_t kMaxEntryBytes = std::uint64_t{64} << 20;
 

@@ -50,7 +50,7 @@ struct CachedResult {
   RobotFacts facts;
 };
 
-// The entry as its file holds it: "rdtfd-results 3 <hex SHA-256 of the body>\n" then the body (JSON).
+// The entry as its file holds it: "rdtfd-results 4 <hex SHA-256 of the body>\n" then the body (JSON).
 std::string cache_entry_text(const CachedResult& result);
 // Refuses (nothing, with `why`) a torn, altered or malformed entry.
 std::optional<CachedResult> cache_entry_from_text(std::string_view text, std::string& why);

@@ -14,7 +14,7 @@ namespace {
 
 using Json = nlohmann::json;
 
-constexpr std::string_view kFormat = "rdtfd-results 3";  // As kCacheFormat (result_cache.cc)
+constexpr std::string_view kFormat = "rdtfd-results 4";  // As kCacheFormat (result_cache.cc)
 
 struct Refused {
   std::string why;
@@ -224,6 +224,7 @@ Json validation_json(const ValidationSummary& v) {
   return {{"passed", v.passed}, {"simulated_time", v.simulated_time}, {"steps", v.steps},
           {"energy_drift", v.energy_drift}, {"worst_joint_error", v.worst_joint_error},
           {"wall_time", v.wall_time}, {"summary_line", v.summary_line},
+          {"live_world_step", v.live_stepper == Stepper::kWorldStep},
           {"diagnostics", diagnostics_json(v.diagnostics)}};
 }
 
@@ -237,6 +238,7 @@ ValidationSummary validation_from(const Json& j) {
   v.worst_joint_error = number(at(j, "worst_joint_error"));
   v.wall_time = number(at(j, "wall_time"));
   v.summary_line = text(at(j, "summary_line"));
+  v.live_stepper = flag(at(j, "live_world_step")) ? Stepper::kWorldStep : Stepper::kAuto;
   v.diagnostics = diagnostics_from(at(j, "diagnostics"), "");
   return v;
 }

@@ -124,12 +124,15 @@ SimulationHost::~SimulationHost() {
 }
 
 void SimulationHost::load(const std::string& model_id, std::int64_t revision,
-                          const std::string& content_hash, const Robot& robot) {
+                          const std::string& content_hash, const Robot& robot, Stepper stepper) {
   // The ODE world is built on the host thread (ODE keeps per-thread data); here only the inputs.
   auto model = std::make_unique<LiveModel>();
   model->revision = revision;
   model->content_hash = content_hash;
   model->command_lifetime = options_.joint_command_lifetime;
+  model->options = options_.simulation;
+  // The verdict's stepper is what the check saw hold; a stepper the settings force stays forced.
+  if (model->options.stepper == Stepper::kAuto) model->options.stepper = stepper;
   Robot renamed = with_urdf_names(robot, model->names);
   std::lock_guard lock(mutex_);
   joint_counts_[model_id] = robot.joints.size();
@@ -203,13 +206,18 @@ void SimulationHost::apply_inbox() {
       }
     }
     Diagnostics diag;
-    model->simulation = Simulation::create(robot->second, options_.simulation, positions, diag);
+    model->simulation = Simulation::create(robot->second, model->options, positions, diag);
     model->states.emplace(options_.real_time_factor / options_.state_rate_hz, options_.simulation.time_step);
     if (!model->simulation) {
       log_line("simulation of " + id + " revision " + std::to_string(model->revision) +
                " not started: " + (diag.all().empty() ? std::string("unknown reason") : format(diag.all().front())));
       models_.erase(id);
       continue;
+    }
+    if (model->options.stepper != options_.simulation.stepper) {
+      log_line("simulation of " + id + " revision " + std::to_string(model->revision) + " steps with " +
+               std::string(model->simulation->stepper_name()) +
+               ", the stepper its dynamics check passed it with (SIM_QUICKSTEP_FAILED)");
     }
     model->robot = std::make_shared<const Robot>(robot->second);
     models_[id] = std::move(model);
@@ -405,7 +413,7 @@ void SimulationHost::restart(const std::string& model_id, LiveModel& model, Cloc
   Diagnostics diag;
   // Simulated time goes on from where it was, so that subscribers see it keep advancing.
   const double offset = model.sim_time();
-  auto fresh = Simulation::create(*model.robot, options_.simulation, {}, diag);
+  auto fresh = Simulation::create(*model.robot, model.options, {}, diag);
   if (!fresh) {
     log_line("simulation of " + model_id + " could not be started again: " +
              (diag.all().empty() ? std::string("unknown reason") : format(diag.all().front())));

@@ -1,6 +1,7 @@
 // rdtf validate IN: the dynamics gate (docs/dynamics.md) on the command line. Exit code 0 when
 // the model passes, 2 when it fails or cannot be converted, 1 on an internal error.
 #include <iostream>
+#include <map>
 
 #include "../cli_numbers.h"
 #include "commands.h"
@@ -78,6 +79,14 @@ void add_validate_command(CLI::App& app, int& exit_code) {
   command->add_option("--time-step", args->validation.simulation.time_step, "ODE time step (s)")
       ->check(rdtf::cli_numbers::kPositive)
       ->capture_default_str();
+  command->add_option("--stepper", args->validation.simulation.stepper,
+                      "auto (dWorldStep while the largest island has fewer than 27 bodies, QuickStep from "
+                      "27, and dWorldStep again up to 40 bodies if QuickStep's run fails), world_step or "
+                      "quick_step (rdtfd's stepper)")
+      ->transform(CLI::CheckedTransformer(std::map<std::string, Stepper>{{"auto", Stepper::kAuto},
+                                                                          {"world_step", Stepper::kWorldStep},
+                                                                          {"quick_step", Stepper::kQuickStep}}))
+      ->default_str("auto");
   command->add_flag("--floating", args->validation.simulation.floating_root,
                     "Let the root link float instead of fixing it to the world");
   command->add_option("--gravity", args->gravity,

@@ -548,8 +548,9 @@ std::unique_ptr<Simulation::Model> build_model(const Robot& robot, const Simulat
     model->joint_index.emplace(robot.joints[j].name, static_cast<int>(j));
   }
   for (std::size_t l = 0; l < robot.links.size(); ++l) model->link_index.emplace(robot.links[l].name, static_cast<int>(l));
+  model->largest_island = largest_island(*model);
   model->quickstep = options.stepper == Stepper::kQuickStep ||
-                     (options.stepper == Stepper::kAuto && largest_island(*model) >= options.quickstep_min_bodies);
+                     (options.stepper == Stepper::kAuto && model->largest_island >= options.quickstep_min_bodies);
   return model;
 }
 

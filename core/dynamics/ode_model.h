@@ -199,6 +199,7 @@ struct Simulation::Model {
   std::map<std::string, int, std::less<>> joint_index;
   std::map<std::string, int, std::less<>> link_index;
   bool quickstep = false;
+  int largest_island = 0;  // Bodies of the largest island (ode_model.cc, largest_island).
   double time = 0;
   std::uint64_t steps = 0;
   double dissipated = 0;

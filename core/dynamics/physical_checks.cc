@@ -260,6 +260,37 @@ void check_center_of_mass(const Link& link, const std::optional<Eigen::AlignedBo
   }
 }
 
+// An authored inertia no mass inside the link's geometry can have: about the centre of mass c,
+// tr(I)/2 = integral of |p - c|^2 dm <= m R^2, R the farthest corner of the geometry's bounds from c.
+// A CAD export in kg mm^2 read as kg m^2 is 1e6 times too large, and its link barely moves, so the
+// run tests nothing. A warning, and only beyond options.inertia_geometry_factor times the bound:
+// the geometry may be a simplified visual smaller than the body. (Computed inertials are integrals
+// over that geometry, inside by construction.)
+void check_inertia_within_geometry(const Link& link, const std::optional<Eigen::AlignedBox3d>& box,
+                                   const PhysicalCheckOptions& options, Diagnostics& diag) {
+  const MassProperties& inertial = link.inertial;
+  if (link.inertial_source == InertialSource::kComputed || !box || box->isEmpty() || !(inertial.mass > 0) ||
+      !std::isfinite(inertial.mass) || !inertial.center_of_mass.allFinite() || !inertial.inertia.allFinite()) {
+    return;
+  }
+  double reach_squared = 0;
+  for (int corner = 0; corner < 8; ++corner) {
+    const auto which = static_cast<Eigen::AlignedBox3d::CornerType>(corner);
+    reach_squared = std::max(reach_squared, (box->corner(which) - inertial.center_of_mass).squaredNorm());
+  }
+  const double polar = 0.5 * inertial.inertia.trace();
+  const double bound = inertial.mass * reach_squared;
+  if (polar <= options.inertia_geometry_factor * bound) return;
+  diag.warning(codes::LINK_INERTIA_ABOVE_GEOMETRY_BOUND, where(link),
+               "link '" + link.name + "': polar moment tr(I)/2 = " + number(polar) + " kg m^2 is " +
+                   number(polar / bound) + " times " + number(bound) + " kg m^2, the most " + number(inertial.mass) +
+                   " kg inside the bounds " + vector_text(box->min()) + " - " + vector_text(box->max()) +
+                   " of its geometry can have about its centre of mass (m R^2, R = " + number(std::sqrt(reach_squared)) +
+                   " m to the farthest corner; warned beyond " + number(options.inertia_geometry_factor) +
+                   " times) (authored inertial): an inertia in kg mm^2 or g cm^2 written as kg m^2 is 1e6 or 1e7 "
+                   "times too large, a placeholder inertia far from the body's, and the link moves unlike the body");
+}
+
 void check_joint(const Robot& robot, const Joint& joint, const WeldGroups& welds, const PhysicalCheckOptions& options,
                  Diagnostics& diag) {
   const std::string name = "joint '" + joint.name + "' (" + to_string(joint.kind) + "): ";
@@ -350,6 +381,7 @@ void check_physics(const Robot& robot, const PhysicalCheckOptions& options, cons
     }
     const std::optional<Eigen::AlignedBox3d> none;
     check_center_of_mass(link, bounds && l < bounds->size() ? (*bounds)[l] : none, options, diag);
+    check_inertia_within_geometry(link, bounds && l < bounds->size() ? (*bounds)[l] : none, options, diag);
   }
   for (const WeldGroup& group : welds.groups) check_combined_inertia(robot, group, options, diag);
   for (const Joint& joint : robot.joints) check_joint(robot, joint, welds, options, diag);

@@ -234,6 +234,41 @@ void run_scenario(Simulation& sim, const Simulation::Model& model, const Validat
   for (const std::string& message : sim.ode_messages()) diag.warning(codes::ODE_MESSAGE, "", message);
 }
 
+// Builds the ODE model and runs the scenario into `report`; the largest island's bodies (0 when
+// the model could not be built).
+int simulate(const Robot& robot, const SimulationOptions& simulation, const ValidationOptions& options,
+             const Limits& limits, ValidationReport& report) {
+  auto sim = Simulation::create(robot, simulation, report.start_pose, report.diagnostics);
+  if (!sim) return 0;
+  report.simulated = true;
+  report.stepper = std::string(sim->stepper_name());
+  report.bodies = sim->body_count();
+  const Simulation::Model& model = ValidationRun::model(*sim);
+  run_scenario(*sim, model, options, limits, report);
+  return model.largest_island;
+}
+
+// The first error the run added (after the checks' `checked` diagnostics).
+const Diagnostic* first_run_error(const Diagnostics& diagnostics, std::size_t checked) {
+  const std::vector<Diagnostic>& all = diagnostics.all();
+  for (std::size_t i = checked; i < all.size(); ++i) {
+    if (all[i].severity == Severity::kError) return &all[i];
+  }
+  return nullptr;
+}
+
+// Whether the automatic stepper's QuickStep run failed a model that the checks passed, on what the
+// run watches (not its budget or a cancellation), in an island dWorldStep can afford.
+bool rerun_exactly(const ValidationOptions& options, const ValidationReport& checked, const ValidationReport& run,
+                   int island) {
+  if (options.simulation.stepper != Stepper::kAuto || !run.simulated || island < options.simulation.quickstep_min_bodies ||
+      island > options.exact_rerun_max_bodies || checked.diagnostics.has_errors() || run.cancelled ||
+      run.diagnostics.contains(codes::SIM_BUDGET_EXCEEDED)) {
+    return false;
+  }
+  return first_run_error(run.diagnostics, checked.diagnostics.all().size()) != nullptr;
+}
+
 }  // namespace
 
 // Off the rest pose so that gravity sets the model moving: a chain hanging straight is at
@@ -282,12 +317,23 @@ ValidationReport validate_dynamics(const Robot& robot, const ValidationOptions& 
     report.diagnostics.error(codes::SIM_CANCELLED, "", "the validation was cancelled before the run: the model is not judged");
   } else if (!report.diagnostics.contains(codes::ROBOT_INVALID_REFERENCE)) {
     report.start_pose = validation_start_pose(robot, options);
-    auto sim = Simulation::create(robot, options.simulation, report.start_pose, report.diagnostics);
-    if (sim) {
-      report.simulated = true;
-      report.stepper = std::string(sim->stepper_name());
-      report.bodies = sim->body_count();
-      run_scenario(*sim, ValidationRun::model(*sim), options, limits, report);
+    const ValidationReport checked = report;  // Before the run: what a second run starts from.
+    const int island = simulate(robot, options.simulation, options, limits, report);
+    if (rerun_exactly(options, checked, report, island)) {
+      // The verdict is the exact stepper's; what QuickStep did stays on record, as an info.
+      const Diagnostic* failure = first_run_error(report.diagnostics, checked.diagnostics.all().size());
+      ValidationReport exact = checked;
+      exact.diagnostics.info(codes::SIM_QUICKSTEP_FAILED, failure->pointer,
+                             "under dWorldQuickStep (" + std::to_string(island) + " bodies in one island, " +
+                                 std::to_string(options.simulation.quickstep_iterations) +
+                                 " iterations) the run failed (" + failure->code + ": " + failure->message +
+                                 "); judged again with dWorldStep, which solves the joints exactly: the "
+                                 "verdict is that run's, and rdtfd simulates the model live with dWorldStep");
+      SimulationOptions world_step = options.simulation;
+      world_step.stepper = Stepper::kWorldStep;
+      simulate(robot, world_step, options, limits, exact);
+      exact.live_stepper = Stepper::kWorldStep;
+      report = std::move(exact);
     }
   }
   report.passed = !report.diagnostics.has_errors();

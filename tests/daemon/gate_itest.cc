@@ -7,6 +7,7 @@
 #include <rdtf/joint_state_t.hpp>
 
 #include "daemon/harness.h"
+#include "support/harness/fs_support.h"
 
 namespace rdtf::itest {
 namespace {
@@ -210,6 +211,39 @@ TEST(DaemonGate, WarningsOfAGoodConversionAreLoggedAndPublishedWithTheVerdict) {
   second.erase("utime");
   EXPECT_EQ(second, first);
   EXPECT_GE(again.utime, reports[0].utime);
+}
+
+// A robot whose QuickStep run fails and whose dWorldStep run passes (docs/dynamics.md, "When
+// QuickStep fails": one island of 29 bodies, a finger overrunning its stop under QuickStep) is
+// published with the exact run's verdict and QuickStep's failure as an info, and its live simulation
+// steps with dWorldStep, as the check did. The model is imported before rdtfd starts; its 3 s check
+// is the default's.
+TEST(DaemonGate, AModelOnlyQuickStepFailsIsPublishedAndSimulatedWithDWorldStep) {
+  Session s;
+  const std::string id = "hand.gltf";
+  const std::string import = std::string(RDTF_CLI_PATH) + " import " + RDTF_TEST_DATA_DIR +
+                             "/robots/ur5_five_finger_hand.urdf -o " + (s.watch / id).string() + " 2>" +
+                             (s.root / "import.log").string();
+  ASSERT_EQ(run_shell(import), 0) << read(s.root / "import.log");
+  auto& daemon = s.start(gated().with("validation_seconds", 3.0).with("simulate", true).with("state_rate_hz", 100));
+  ASSERT_TRUE(s.wait_for([&](const auto& all) { return !on_kind(all, "DESCRIPTION", id).empty(); }, 60s))
+      << daemon.log();
+  const auto reports = decoded<rdtf::validation_report_t>(s.messages(), "VALIDATION", id);
+  ASSERT_EQ(reports.size(), 1u);
+  EXPECT_TRUE(reports[0].passed);
+  int notes = 0;
+  for (const auto& d : reports[0].diagnostics) {
+    if (d.code != "SIM_QUICKSTEP_FAILED") continue;
+    ++notes;
+    EXPECT_EQ(d.severity, rdtf::diagnostic_t::INFO);
+    EXPECT_NE(d.message.find("(29 bodies in one island, 50 iterations) the run failed"), std::string::npos) << d.message;
+  }
+  EXPECT_EQ(notes, 1);
+  ASSERT_TRUE(s.wait_for([&](const auto& all) { return states(all, id).size() >= 5; }, 10s)) << daemon.log();
+  EXPECT_NE(daemon.log().find("simulation of " + id +
+                              " revision 1 steps with dWorldStep, the stepper its dynamics check passed it with"),
+            std::string::npos)
+      << daemon.log();
 }
 
 TEST(DaemonGate, WarningsAreLoggedWithoutValidationToo) {

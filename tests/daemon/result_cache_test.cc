@@ -135,7 +135,25 @@ TEST(ResultCache, AConversionIsStoredAndTheNextOneIsTheCachedResultBitForBit) {
   EXPECT_EQ(cached.validation->worst_joint_error, first.validation->worst_joint_error);
   EXPECT_EQ(cached.validation->summary_line, first.validation->summary_line);
   EXPECT_EQ(formatted(cached.validation->diagnostics), formatted(first.validation->diagnostics));
+  EXPECT_EQ(cached.validation->live_stepper, first.validation->live_stepper);
   EXPECT_EQ(formatted(again.diagnostics), formatted(c->outcome.diagnostics));
+}
+
+// The stepper a verdict chose for the live simulation (dWorldStep where QuickStep failed the model)
+// comes back with it, so that a restart simulates the model as its check did.
+TEST(ResultCache, TheVerdictsLiveStepperReadsBack) {
+  auto c = convert_arm3();
+  ASSERT_EQ(c->outcome.kind, ConversionOutcome::Kind::kConverted);
+  std::string why;
+  auto entry = cache_entry_from_text(rdtf::testing::read_file(c->job.cache->file_for(c->job.source.string())), why);
+  ASSERT_TRUE(entry && entry->validation) << why;
+  EXPECT_EQ(entry->validation->live_stepper, Stepper::kAuto);  // arm3's 2 bodies: dWorldStep by itself
+  for (const Stepper stepper : {Stepper::kWorldStep, Stepper::kAuto}) {
+    entry->validation->live_stepper = stepper;
+    const auto again = cache_entry_from_text(cache_entry_text(*entry), why);
+    ASSERT_TRUE(again && again->validation) << why;
+    EXPECT_EQ(again->validation->live_stepper, stepper);
+  }
 }
 
 TEST(ResultCache, EveryTruncationAndEveryFlippedBitIsRefused) {

@@ -218,6 +218,44 @@ TEST(PhysicsChecks, CentreOfMassOutsideTheGeometry) {
   EXPECT_NE(with_code(diag, "LINK_COM_OUTSIDE_GEOMETRY")[0].message.find("0.3 m outside"), std::string::npos);
 }
 
+// An authored inertia against the most its mass can have inside the geometry's bounds: about the
+// centre of mass, tr(I)/2 <= m R^2, R the farthest corner. The upper arm is a 0.05 x 0.4 x 0.05 m
+// box of 1 kg whose bounds are the box itself: a solid box's tr(I)/2 = m (a^2 + b^2 + c^2) / 12 is
+// exactly a third of m R^2 = m (a^2 + b^2 + c^2) / 4 (all the mass in the corners), so up to three
+// times its inertia is possible and beyond is not. The warning allows a visual smaller than the
+// body: it comes beyond inertia_geometry_factor (10) times the bound, 30 times the box's inertia
+// (1 to tolerate none). 1e6 times is the kg mm^2 slip. A computed inertial is an integral over that
+// geometry.
+TEST(PhysicsChecks, AnAuthoredInertiaBeyondWhatItsGeometryAllows) {
+  RobotBuilder b = arm_builder();
+  LinkBounds bounds(3);
+  bounds[kUpperArm] = Eigen::AlignedBox3d(Eigen::Vector3d(-0.025, -0.4, -0.025), Eigen::Vector3d(0.025, 0, 0.025));
+  const Eigen::Matrix3d solid = b.link(kUpperArm).inertial.inertia;
+  PhysicalCheckOptions options;
+  const auto above = [&](double scale) {
+    b.link(kUpperArm).inertial.inertia = scale * solid;
+    return with_code(checked(b.robot(), options, &bounds), "LINK_INERTIA_ABOVE_GEOMETRY_BOUND");
+  };
+  EXPECT_TRUE(above(1).empty());
+  EXPECT_TRUE(above(30 * (1 - 1e-9)).empty());
+  EXPECT_EQ(above(30 * (1 + 1e-9)).size(), 1u);
+  options.inertia_geometry_factor = 1;  // the bound itself
+  EXPECT_TRUE(above(3 * (1 - 1e-9)).empty());
+  EXPECT_EQ(above(3 * (1 + 1e-9)).size(), 1u);
+  options.inertia_geometry_factor = 10;
+  const auto slip = above(1e6);
+  ASSERT_EQ(slip.size(), 1u);
+  EXPECT_EQ(slip[0].severity, Severity::kWarning);
+  EXPECT_EQ(slip[0].pointer, "/nodes/" + std::to_string(kUpperArmNode));
+  for (const char* part : {"link 'upper_arm': polar moment tr(I)/2 = 13750 kg m^2 is 333333 times 0.04125 kg m^2",
+                           "R = 0.203101 m", "kg mm^2"}) {
+    EXPECT_NE(slip[0].message.find(part), std::string::npos) << part << "\n" << slip[0].message;
+  }
+  EXPECT_FALSE(checked(b.robot(), {}, nullptr).contains("LINK_INERTIA_ABOVE_GEOMETRY_BOUND"));  // no geometry
+  b.link(kUpperArm).inertial_source = InertialSource::kComputed;
+  EXPECT_TRUE(above(1e6).empty());
+}
+
 // A massless link fixed to a body with mass is part of that body (info), not an error.
 TEST(PhysicsChecks, MasslessLinkOnAFixedJointIsCarried) {
   RobotBuilder b = arm_builder();

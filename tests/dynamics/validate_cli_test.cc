@@ -220,6 +220,15 @@ TEST(ValidateCli, OptionsChangeTheRun) {
   EXPECT_EQ(report["steps"], 250);
   EXPECT_EQ(report["timeStep"], 0.002);
   EXPECT_EQ(report["startPose"], json::object());  // the rest pose
+  EXPECT_EQ(report["stepper"], "dWorldStep");      // auto, 2 bodies
+
+  // --stepper forces one, as rdtfd's setting does; a name it does not know is refused.
+  const auto quick = validate("--json --seconds 0.1 --stepper quick_step " + quoted(testing::data_dir() / "blender" / "arm3.gltf"));
+  ASSERT_EQ(quick.exit_code, 0) << quick.out << quick.err;
+  EXPECT_EQ(json::parse(quick.out)["stepper"], "dWorldQuickStep");
+  const auto bad = validate("--stepper rk4 " + quoted(testing::data_dir() / "blender" / "arm3.gltf"));
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE((bad.out + bad.err).find("rk4"), std::string::npos) << bad.out << bad.err;
 }
 
 // --start-offset bends every revolute joint without a named start (arm3: shoulder and elbow, whose

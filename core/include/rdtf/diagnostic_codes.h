@@ -227,6 +227,7 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(JOINT_REST_OUTSIDE_LIMITS, kSeverityWarning, "dynamics") \
   X(LINK_COM_NOT_FINITE, kSeverityError, "dynamics") \
   X(LINK_COM_OUTSIDE_GEOMETRY, kSeverityError | kSeverityWarning, "dynamics") \
+  X(LINK_INERTIA_ABOVE_GEOMETRY_BOUND, kSeverityWarning, "dynamics") \
   X(LINK_INERTIA_BELOW_SOLID_BOUND, kSeverityError, "dynamics") \
   X(LINK_INERTIA_NOT_FINITE, kSeverityError, "dynamics") \
   X(LINK_INERTIA_NOT_POSITIVE_DEFINITE, kSeverityError | kSeverityWarning, "dynamics") \
@@ -262,6 +263,7 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(SIM_JOINT_SEPARATION, kSeverityError, "dynamics") \
   X(SIM_LIMIT_VIOLATED, kSeverityError, "dynamics") \
   X(SIM_NOT_FINITE, kSeverityError, "dynamics") \
+  X(SIM_QUICKSTEP_FAILED, kSeverityInfo, "dynamics") \
   X(SIM_UNKNOWN_JOINT, kSeverityInfo, "dynamics") \
   X(WRITE_FAILED, kSeverityError, "output") \
   X(COMMAND_REJECTED, kSeverityError, "daemon") \

@@ -53,6 +53,13 @@ struct PhysicalCheckOptions {
   // The centre of mass may lie this far outside its link's geometry bounds, relative to the
   // bounds' diagonal.
   double geometry_tolerance = 1e-6;
+  // An authored inertia's polar moment may reach this many times m R^2, the most a mass m inside
+  // the geometry's bounds can have (LINK_INERTIA_ABOVE_GEOMETRY_BOUND). Published robots' visuals
+  // are often simpler and smaller than the body (1.0 to 3.6 times the bound in a UR-like, a PR2-like
+  // and a Gen3-like arm's links): 10 lets a body reach about 3 times further than its geometry, and
+  // still flags what is wrong by orders (kg mm^2 as kg m^2: 1e6; placeholder inertias of 1 kg m^2
+  // on a 1 kg, 7 cm wheel: 300).
+  double inertia_geometry_factor = 10;
   // Whether the root links will float: a massless root is then not held by the world.
   bool floating_root = false;
   // A moving body without mass (a link, or links welded by fixed joints, with no mass at all) is
@@ -272,6 +279,13 @@ struct ValidationOptions {
   // CPU time (s, of the thread that validates) the checks, the model and the run may take
   // together; beyond it the run stops with the error SIM_BUDGET_EXCEEDED. 0: no limit.
   double cpu_budget = 30;
+  // With Stepper::kAuto, a run that QuickStep failed is run again with dWorldStep when the largest
+  // island has at most this many bodies, and that run is the verdict (SIM_QUICKSTEP_FAILED):
+  // QuickStep's iterations let a sound robot's loaded stop or light finger overrun, dWorldStep
+  // solves the joints exactly. The live simulation then steps with dWorldStep too, and must keep
+  // real time: a 1 ms step of a 40-body chain costs about 0.38 ms of CPU with dWorldStep, of 50
+  // bodies 0.67 ms, of 63 bodies 1.6 ms (docs/dynamics.md, "When QuickStep fails"). 0: never.
+  int exact_rerun_max_bodies = 40;
   // When another thread sets it, the run stops with the error SIM_CANCELLED (e.g. rdtfd stopping).
   const std::atomic<bool>* cancel = nullptr;
 };
@@ -284,6 +298,10 @@ struct ValidationReport {
   std::uint64_t steps = 0;
   std::string stepper;
   int bodies = 0;
+  // The stepper a live simulation of the model takes to behave as judged: kWorldStep when the
+  // automatic choice's QuickStep run failed and dWorldStep's run is the verdict
+  // (ValidationOptions::exact_rerun_max_bodies); else kAuto, the options' own choice.
+  Stepper live_stepper = Stepper::kAuto;
   double time_step = 0;
   // (E(t) + dissipated(t) - E(0)) / scale, E kinetic + potential; scale: the larger of the total
   // weight times the reach and the largest kinetic energy so far. Largest value over the run

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <fcntl.h>
+#include <pwd.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -21,11 +22,33 @@
 namespace rdtf::daemon {
 namespace {
 
+// The user's home folder: $HOME when it is an absolute path, else the password database's entry;
+// nothing when neither is. (Without HOME the defaults were under /tmp/.local, which any local user
+// can create first and fill with models of their own, and an empty HOME made them relative to the
+// working folder: s103env D8.)
+std::optional<std::filesystem::path> home_folder() {
+  if (const char* home = std::getenv("HOME"); home != nullptr && *home == '/') return std::filesystem::path(home);
+  std::vector<char> buffer(16384);
+  passwd entry{};
+  passwd* found = nullptr;
+  if (getpwuid_r(geteuid(), &entry, buffer.data(), buffer.size(), &found) == 0 && found != nullptr &&
+      found->pw_dir != nullptr && found->pw_dir[0] == '/') {
+    return std::filesystem::path(found->pw_dir);
+  }
+  return std::nullopt;
+}
+
+// $variable when it is an absolute path (the XDG base directory rule), else `fallback` in the home
+// folder; empty when there is no home folder either (check_config then asks for the folder).
 std::filesystem::path xdg_folder(const char* variable, const char* fallback) {
   if (const char* value = std::getenv(variable); value != nullptr && *value == '/') return value;
-  const char* home = std::getenv("HOME");
-  return std::filesystem::path(home != nullptr ? home : "/tmp") / fallback;
+  const auto home = home_folder();
+  return home ? *home / fallback : std::filesystem::path();
 }
+
+constexpr const char* kNoHome =
+    " (there is no default: HOME is unset or not an absolute path, the user has no home folder in the "
+    "password database, and XDG_DATA_HOME / XDG_STATE_HOME are not set)";
 
 }  // namespace
 
@@ -146,8 +169,11 @@ std::optional<std::string> read_config_text(const std::filesystem::path& path, s
 
 DaemonConfig default_config() {
   DaemonConfig config;
-  config.watch = {xdg_folder("XDG_DATA_HOME", ".local/share") / "rdtf" / "models"};
-  config.output = xdg_folder("XDG_STATE_HOME", ".local/state") / "rdtf" / "output";
+  const std::filesystem::path data = xdg_folder("XDG_DATA_HOME", ".local/share");
+  const std::filesystem::path state = xdg_folder("XDG_STATE_HOME", ".local/state");
+  config.watch.clear();
+  if (!data.empty()) config.watch = {data / "rdtf" / "models"};
+  config.output = state.empty() ? std::filesystem::path() : state / "rdtf" / "output";
   return config;
 }
 
@@ -220,7 +246,13 @@ nlohmann::json value_from_text(const ConfigKey& key, const std::vector<std::stri
 
 bool check_config(DaemonConfig& config, std::string& error) {
   if (config.watch.empty()) {
-    error = "nothing to watch: give --watch DIR or \"watch\" in the config";
+    error = std::string("nothing to watch: give --watch DIR or \"watch\" in the config") +
+            (xdg_folder("XDG_DATA_HOME", ".").empty() ? kNoHome : "");
+    return false;
+  }
+  if (config.output.empty()) {
+    error = std::string("no output folder: give --output DIR or \"output\" in the config") +
+            (xdg_folder("XDG_STATE_HOME", ".").empty() ? kNoHome : "");
     return false;
   }
   // The checks of values first: a config refused for one of them (a reload, most often) must not

@@ -7,6 +7,7 @@
 #include "delta_messages.h"
 #include "messages.h"
 #include "rdtf/diagnostic_codes.h"
+#include "rdtf/glb.h"
 
 namespace rdtf::daemon {
 namespace {
@@ -152,7 +153,7 @@ ConversionJob Daemon::make_job(const ModelRecord& record) const {
 // Whether the model and the files it named when last converted hold at most kExpressBytes. A .gltf
 // never converted is not: the .bin beside it is not known yet, and may be large.
 bool Daemon::is_small(const ModelRecord& record) const {
-  if (record.dependencies.empty() && record.source.extension() != ".glb") return false;
+  if (record.dependencies.empty() && !has_glb_extension(record.source)) return false;
   std::uint64_t bytes = 0;
   std::error_code error;
   for (const std::filesystem::path& file : record.dependencies) {

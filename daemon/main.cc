@@ -136,6 +136,10 @@ int main(int argc, char** argv) {
   for (int s : {SIGTERM, SIGINT, SIGHUP}) sigaddset(&held, s);
   pthread_sigmask(SIG_BLOCK, &held, nullptr);
   std::signal(SIGPIPE, SIG_IGN);
+  // A file-size limit (ulimit -f, systemd's LimitFSIZE) fails an output's write with EFBIG, which
+  // rejects that revision (WRITE_FAILED, retried later) and keeps the last good one served; its
+  // signal would kill the daemon, and again on the same model after every restart.
+  std::signal(SIGXFSZ, SIG_IGN);
   CLI::App app{"rdtfd: watches folders of glTF models, converts each save to RDTF and publishes "
                "it over LCM"};
   app.set_version_flag("--version", rdtf::version_line("rdtfd"));

@@ -110,6 +110,11 @@ int main(int argc, char** argv) {
   while (!g_stop && (count == 0 || printed < count)) {
     lcm.handleTimeout(50);
     client->tick();
+    // Its reader gone (SIGPIPE ignored, as under systemd) or its disk full: lines are lost, so stop.
+    if (!std::cout) {
+      std::cerr << "rdtf-echo: could not write to standard output (its reader went away, or the disk is full)\n";
+      return 1;
+    }
   }
   return 0;
 }

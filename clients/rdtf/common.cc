@@ -194,6 +194,14 @@ bool check_output_file(const fs::path& target, const std::string& example, Diagn
     diag.error(kOutputInvalid, "", "the output path is empty");
     return false;
   }
+  // Unix tools read "-" as standard output: a file named "-" (and "-.bin" beside it) is not what
+  // was meant.
+  if (target == "-") {
+    diag.error(kOutputInvalid, "",
+               "'-' (standard output): rdtf writes no model to standard output, since a .gltf has files "
+               "beside it; give a file to write (./- for a file named '-')");
+    return false;
+  }
   std::error_code error;
   const fs::file_status status = fs::status(target, error);
   if (name.empty() || name == "." || name == ".." || fs::is_directory(status)) {

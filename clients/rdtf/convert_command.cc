@@ -1,4 +1,5 @@
 #include "commands.h"
+#include "rdtf/glb.h"
 
 namespace rdtf::cli {
 namespace {
@@ -20,7 +21,7 @@ std::filesystem::path default_output(const std::filesystem::path& input, bool gl
 
 int run_convert(ConvertArguments& args) {
   bool glb = args.glb;
-  if (!args.output.empty() && std::filesystem::path(args.output).extension() == ".glb") glb = true;
+  if (!args.output.empty() && has_glb_extension(args.output)) glb = true;  // ARM.GLB too
   const std::filesystem::path target = args.output.empty() ? default_output(args.input, glb)
                                                            : std::filesystem::path(args.output);
   // The output first: a folder given as the output would fail only after the .bin was written.

@@ -1,4 +1,5 @@
 #include "commands.h"
+#include "rdtf/glb.h"
 #include "rdtf/urdf.h"
 
 namespace rdtf::cli {
@@ -15,7 +16,7 @@ struct ImportArguments {
 
 int run_import(ImportArguments& args) {
   const std::filesystem::path target(args.output);
-  const bool glb = args.glb || target.extension() == ".glb";
+  const bool glb = args.glb || has_glb_extension(target);  // R2.GLB too
   // The output first: a folder given as the output would fail only after the .bin was written.
   Diagnostics output_diag(target.string());
   if (!check_output_file(target, glb ? "robot.glb" : "robot.gltf", output_diag)) {

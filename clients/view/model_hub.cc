@@ -83,6 +83,9 @@ std::vector<JointInfo> joints_of_urdf(const std::string& urdf, std::string* erro
     if (error) *error = "the URDF does not parse";
     return out;
   }
+  // A urdfdom Link owns its children: freed from the root, a long chain would recurse once per link
+  // (core/urdf/urdf_internal.h, FlatRelease). Each link is also held by the model's map.
+  for (auto& [name, link] : model->links_) link->child_links.clear();
   for (const auto& [name, joint] : model->joints_) {
     JointInfo j;
     j.name = name;

@@ -1,6 +1,7 @@
 #include "rdtf/glb.h"
 #include "rdtf/diagnostic_codes.h"
 
+#include <cctype>
 #include <cstring>
 #include <string>
 
@@ -25,6 +26,12 @@ void write_u32(std::vector<std::uint8_t>& out, std::uint32_t value) {
 }
 
 }  // namespace
+
+bool has_glb_extension(const std::filesystem::path& path) {
+  std::string extension = path.extension().string();
+  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return extension == ".glb";
+}
 
 std::optional<GlbChunks> parse_glb(std::span<const std::uint8_t> bytes, Diagnostics& diag) {
   if (bytes.size() < kHeaderBytes) {

@@ -409,9 +409,7 @@ namespace {
 bool glb_by_name_or_header(const std::filesystem::path& display_path, const std::vector<std::uint8_t>& bytes) {
   const bool json_start = bytes[0] == '{' || bytes[0] == 0xEF || std::isspace(bytes[0]) != 0;
   if (json_start) return false;  // JSON, whatever its name: read as JSON.
-  std::string extension = display_path.extension().string();
-  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  if (extension == ".glb") return true;
+  if (has_glb_extension(display_path)) return true;
   return bytes.size() >= 8 && bytes[4] == 2 && bytes[5] == 0 && bytes[6] == 0 && bytes[7] == 0;
 }
 

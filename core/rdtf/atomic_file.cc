@@ -63,7 +63,9 @@ bool write_file_atomically(const std::filesystem::path& path,
   const std::filesystem::path temporary =
       folder / ("." + path.filename().string() + "." + std::to_string(::getpid()) + "-" +
                 std::to_string(random()) + ".tmp");
-  const int fd = ::open(temporary.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
+  // 0666 less the umask, as cp and compilers create files: under umask 002 a group shares the
+  // outputs as it shares their folders, under 077 they stay private (s103env D6).
+  const int fd = ::open(temporary.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
   if (fd < 0) {
     why = errno_text(("create " + temporary.string()).c_str());
     return false;
@@ -101,7 +103,7 @@ bool write_file_atomically(const std::filesystem::path& path,
 bool write_staged_file(const std::filesystem::path& path, std::span<const std::span<const std::uint8_t>> pieces,
                        std::string& why) {
   // O_NOFOLLOW: the stage is ours, but a name made from the model must not lead out of it.
-  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC | O_NOFOLLOW, 0644);
+  const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC | O_NOFOLLOW, 0666);  // as above
   if (fd < 0) {
     why = errno_text(("create " + path.string()).c_str());
     return false;

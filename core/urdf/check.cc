@@ -81,6 +81,7 @@ void compare_joint(const urdf::Joint& ours, const urdf::Joint& read, Comparison&
 
 bool reads_back_exactly(const std::string& text, const urdf::ModelInterface& model, std::string& why) {
   urdf::ModelInterfaceSharedPtr read;
+  const urdf_internal::FlatRelease flat_release(read);
   const std::string messages = with_console_captured([&] { read = urdf::parseURDF(text); });
   if (!read) {
     why = "urdfdom cannot parse it: " + messages;

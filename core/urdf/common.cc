@@ -127,6 +127,15 @@ std::string with_console_captured(const std::function<void()>& body) {
   return text;
 }
 
+FlatRelease::~FlatRelease() {
+  if (!model_) return;
+  for (auto& [name, link] : model_->links_) {
+    if (!link) continue;
+    link->child_links.clear();
+    link->child_joints.clear();
+  }
+}
+
 ConsoleMessages capture_console(const std::function<void()>& body) {
   Capture capture;
   run_captured(body, capture);

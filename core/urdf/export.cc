@@ -332,6 +332,7 @@ std::optional<UrdfExport> export_urdf(const Conversion& conversion, const UrdfOp
   }
 
   auto model = std::make_shared<urdf::ModelInterface>();
+  const urdf_internal::FlatRelease flat_release(model);
   // The robot's name as given (spaces and all), but no control character: XML 1.0 has no way to
   // write most of them (expat and libxml2 refused "arm&#x01;"), and urdfdom cut a name at a
   // newline (s90urdf D2).

@@ -397,6 +397,7 @@ std::optional<Conversion> import_urdf(const fs::path& urdf, const UrdfImportOpti
   const auto xml = scan_urdf_xml(*text, diag);
   if (!xml) return std::nullopt;
   urdf::ModelInterfaceSharedPtr model;
+  const urdf_internal::FlatRelease flat_release(model);
   const ConsoleMessages messages = capture_console([&] { model = urdf::parseURDF(*text); });
   // urdfdom 3.0 keeps a link whose <inertial>, <visual> or <collision> it could not read (without
   // it): that is a failure too. The scan above catches what we know of first.

@@ -2,12 +2,14 @@
 #pragma once
 
 #include <functional>
+#include <memory>
 #include <mutex>
 #include <string>
 #include <vector>
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <urdf_model/model.h>
 
 #include "rdtf/diagnostics.h"
 #include "rdtf/gltf.h"
@@ -52,5 +54,20 @@ std::vector<LinkSurface> link_surfaces(const GltfAsset& asset, const Robot& robo
 // Runs `body` with urdfdom's console_bridge messages captured (one lock for the whole process:
 // console_bridge's handler is global) and returns them, one per line.
 std::string with_console_captured(const std::function<void()>& body);
+
+// urdfdom's Link owns its children (child_links): a model whose root is freed last frees a chain
+// with one nested destructor per link, and 20,000 links overflowed a 1 MiB stack, 200,000 the
+// default 8 MiB (s103env D4). Held over a model, this clears every link's child lists when it
+// goes, so that the model's map then frees the links one by one.
+class FlatRelease {
+ public:
+  explicit FlatRelease(const std::shared_ptr<urdf::ModelInterface>& model) : model_(model) {}
+  FlatRelease(const FlatRelease&) = delete;
+  FlatRelease& operator=(const FlatRelease&) = delete;
+  ~FlatRelease();
+
+ private:
+  const std::shared_ptr<urdf::ModelInterface>& model_;
+};
 
 }  // namespace rdtf::urdf_internal

@@ -1,6 +1,7 @@
 // The rdtf command line as users and scripts run it.
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -44,6 +45,20 @@ TEST(Cli, ConvertToGlbByFlagOrByName) {
   run = testing::run_command(cli() + " convert " + fixture("arm3.gltf") + " -o '" + by_name.string() + "'");
   EXPECT_EQ(run.exit_code, 0) << run.err;
   EXPECT_EQ(testing::read_file(by_name).substr(0, 4), "glTF");
+  // The name's case does not matter (the loader and rdtfd read ARM.GLB as a GLB): it was written as
+  // JSON with a .bin beside it.
+  const auto upper = folder / "ARM.GLB";
+  run = testing::run_command(cli() + " convert " + fixture("arm3.gltf") + " -o '" + upper.string() + "'");
+  EXPECT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_EQ(testing::read_file(upper).substr(0, 4), "glTF");
+  const auto imported = folder / "R2.Glb";
+  run = testing::run_command(cli() + " import '" + (testing::data_dir() / "robots" / "r2d2.urdf").string() + "' -o '" +
+                             imported.string() + "'");
+  EXPECT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_EQ(testing::read_file(imported).substr(0, 4), "glTF");
+  for (const auto& entry : std::filesystem::directory_iterator(folder.path())) {
+    EXPECT_NE(entry.path().extension(), ".bin") << entry.path();
+  }
 }
 
 TEST(Cli, InspectPrintsLinksJointsAndMass) {
@@ -155,6 +170,49 @@ TEST(Cli, UnknownOptionIsAUsageError) {
   }
 }
 
+// urdfdom's links own their children, so freeing its model of a long chain recursed once per link,
+// inside import (its parse), the URDF export (its model) and the export's check (its parse again):
+// a 20,000-link chain overflowed a 1 MiB stack (ulimit -s 1024; systemd's LimitSTACK, the threads
+// of programs that embed librdtf), and 200,000 links the default 8 MiB. Each link is 0.1 m below the
+// last, welded, 1 kg.
+TEST(Cli, ALongChainOfLinksNeedsNoDeepStack) {
+  testing::TempDir folder;
+  std::string urdf = "<?xml version=\"1.0\"?>\n<robot name=\"chain\">\n";
+  constexpr int kLinks = 20000;
+  for (int i = 0; i < kLinks; ++i) {
+    urdf += "<link name=\"l" + std::to_string(i) +
+            "\"><inertial><mass value=\"1\"/><inertia ixx=\"0.01\" ixy=\"0\" ixz=\"0\" iyy=\"0.01\" iyz=\"0\" "
+            "izz=\"0.01\"/></inertial></link>\n";
+    if (i > 0) {
+      urdf += "<joint name=\"j" + std::to_string(i) + "\" type=\"fixed\"><parent link=\"l" + std::to_string(i - 1) +
+              "\"/><child link=\"l" + std::to_string(i) + "\"/><origin xyz=\"0 0 0.1\"/></joint>\n";
+    }
+  }
+  testing::write_file(folder / "chain.urdf", urdf + "</robot>\n");
+  const std::string small_stack = "cd '" + folder.path().string() + "' && ulimit -s 1024 && " + cli();
+  const auto imported = testing::run_command(small_stack + " import chain.urdf -o chain.glb");
+  ASSERT_EQ(imported.exit_code, 0) << imported.err.substr(0, 2000);
+  EXPECT_NE(imported.err.find("20000 links, 19999 joints"), std::string::npos) << imported.err.substr(0, 2000);
+  const auto exported = testing::run_command(small_stack + " urdf chain.glb -o out");
+  ASSERT_EQ(exported.exit_code, 0) << exported.err.substr(0, 2000);
+  EXPECT_TRUE(std::filesystem::is_regular_file(folder / "out" / "robot.urdf"));
+}
+
+// A file whose name starts with '-' is read as an option; the error names the file and the way
+// to give it (CLI11 said only "input is required").
+TEST(Cli, AFileNamedLikeAnOptionIsNamed) {
+  testing::TempDir folder;
+  std::filesystem::copy_file(testing::data_dir() / "blender" / "arm3.glb", folder / "-model.glb");
+  const std::string in_folder = "cd '" + folder.path().string() + "' && " + cli();
+  const auto run = testing::run_command(in_folder + " inspect -model.glb");
+  EXPECT_NE(run.exit_code, 0);
+  EXPECT_NE(run.err.find("rdtf: '-model.glb' was read as an option; for the file of that name write ./-model.glb"),
+            std::string::npos)
+      << run.err;
+  EXPECT_EQ(testing::run_command(in_folder + " inspect ./-model.glb").exit_code, 0);
+  EXPECT_EQ(testing::run_command(in_folder + " inspect -- -model.glb").exit_code, 0);
+}
+
 // A number an option refuses says what it must be (CLI11's own check printed a range of 309 digits).
 TEST(Cli, ANumberOutOfRangeSaysWhatItMustBe) {
   for (const auto& [value, says] : {std::pair{"0", "--density: is 0; it must be more than 0"},
@@ -223,6 +281,17 @@ TEST(Cli, ConvertOntoUnwritablePlacesIsExitTwoAndWritesNothing) {
   }
   EXPECT_EQ(testing::read_file(folder / "target.glb"), "the user's");
   EXPECT_TRUE(std::filesystem::is_symlink(folder / "stdout"));
+  // "-" is standard output to Unix tools: it made files named "-" and "-.bin" in the working folder.
+  for (const char* command : {" convert ", " import "}) {
+    const std::string input = std::string(command) == " import " ? "'" + (testing::data_dir() / "robots" / "r2d2.urdf").string() + "'"
+                                                                 : fixture("arm3.gltf");
+    const auto run = testing::run_command("cd '" + folder.path().string() + "' && " + cli() + command + input + " -o -");
+    EXPECT_EQ(run.exit_code, 2) << run.err;
+    EXPECT_NE(run.err.find("-: error OUTPUT_PATH_INVALID: '-' (standard output): rdtf writes no model to standard output"),
+              std::string::npos)
+        << run.err;
+    EXPECT_EQ(contents(folder.path()), before) << command;
+  }
 }
 
 // An image the model names through a link in its own folder is read, and not written again when
@@ -299,6 +368,56 @@ TEST(Cli, FailedWriteLeavesNothingBehind) {
   EXPECT_NE(run.err.find("error WRITE_FAILED: cannot write " + (folder / "new").string() + "/aaaa"), std::string::npos)
       << run.err;
   EXPECT_TRUE(contents(folder.path()).empty());
+}
+
+// Under a file-size limit (ulimit -f, systemd's LimitFSIZE) a write fails with EFBIG, reported as
+// any failed write, with nothing left behind; SIGXFSZ killed rdtf mid-write (exit 153) and left
+// its stage folder. bash's ulimit -f counts 1024-byte blocks: arm3's outputs are larger.
+TEST(Cli, AFileSizeLimitIsAFailedWriteNotASignal) {
+  testing::TempDir folder;
+  const std::filesystem::path output = folder / "out" / "arm3.rdtf.glb";
+  const auto run =
+      testing::run_command("ulimit -f 2; " + cli() + " convert " + fixture("arm3.gltf") + " -o '" + output.string() + "'");
+  EXPECT_EQ(run.exit_code, 1) << run.err;
+  EXPECT_NE(run.err.find("error WRITE_FAILED: cannot write " + (folder / "out").string()), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find("File too large"), std::string::npos) << run.err;
+  EXPECT_TRUE(contents(folder.path()).empty());
+}
+
+// What a script reads on stdout is whole or the command fails: a report that could not be written
+// (a full disk; /dev/full here, or a closed stdout) was exit 0 with its JSON cut short.
+TEST(Cli, AnUnwritableStdoutIsAFailure) {
+  for (const char* redirect : {">/dev/full", ">&-"}) {
+    SCOPED_TRACE(redirect);
+    const auto run = testing::run_command(cli() + " inspect --json " + fixture("arm3.gltf") + " " + redirect);
+    EXPECT_EQ(run.exit_code, 1) << run.err;
+    EXPECT_NE(run.err.find("rdtf: could not write to standard output"), std::string::npos) << run.err;
+  }
+  // A command that prints nothing on stdout does not care where it goes.
+  testing::TempDir folder;
+  const auto converted = testing::run_command(cli() + " convert " + fixture("arm3.gltf") + " -o '" +
+                                              (folder / "a.rdtf.glb").string() + "' >&-");
+  EXPECT_EQ(converted.exit_code, 0) << converted.err;
+}
+
+// Outputs are created 0666 less the umask, as cp makes files: under umask 002 a group shares them
+// as it shares the folders made for them; under 077 they stay private (they were always 0644).
+TEST(Cli, OutputsFollowTheUmask) {
+  for (const auto& [umask, mode] : {std::pair{"002", 0664}, std::pair{"077", 0600}, std::pair{"022", 0644}}) {
+    SCOPED_TRACE(umask);
+    testing::TempDir folder;
+    const auto run = testing::run_command(std::string("umask ") + umask + "; " + cli() + " convert " + fixture("arm3.gltf") +
+                                          " -o '" + (folder / "out" / "arm3.rdtf.gltf").string() + "'");
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    int files = 0;
+    for (const auto& entry : std::filesystem::directory_iterator(folder / "out")) {
+      struct stat info {};
+      ASSERT_EQ(::stat(entry.path().c_str(), &info), 0);
+      EXPECT_EQ(info.st_mode & 0777, static_cast<unsigned>(mode)) << entry.path();
+      ++files;
+    }
+    EXPECT_EQ(files, 2);  // the JSON and its .bin
+  }
 }
 
 // The system calls that make data durable, as strace logged them (one line each).

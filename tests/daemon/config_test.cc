@@ -6,10 +6,14 @@
 #include <sys/stat.h>
 
 #include <gtest/gtest.h>
+#include <pwd.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cstdlib>
 #include <functional>
+#include <map>
+#include <optional>
 
 #include "support/test_support.h"
 
@@ -399,6 +403,38 @@ TEST(DaemonConfig, DefaultsFollowXdgFolders) {
   EXPECT_EQ(config.republish_period, 5000ms);
   EXPECT_EQ(config.lcm_url, "");
   EXPECT_EQ(config.channel_prefix, "RDTF");
+}
+
+// Without a usable HOME (unset under some service managers, empty, or relative) the defaults come
+// from the user's entry in the password database: they were /tmp/.local/..., which any local user
+// can create first and fill with models, or relative to the working folder. An empty output folder
+// (no home at all) is refused by name.
+TEST(DaemonConfig, DefaultsWithoutHomeUseThePasswordDatabase) {
+  std::map<std::string, std::optional<std::string>> saved;
+  for (const char* name : {"HOME", "XDG_DATA_HOME", "XDG_STATE_HOME"}) {
+    const char* value = std::getenv(name);
+    saved[name] = value ? std::optional<std::string>(value) : std::nullopt;
+  }
+  const passwd* user = getpwuid(geteuid());
+  ASSERT_TRUE(user != nullptr && user->pw_dir != nullptr && user->pw_dir[0] == '/');
+  const fs::path home = user->pw_dir;
+  ::unsetenv("XDG_DATA_HOME");
+  ::unsetenv("XDG_STATE_HOME");
+  std::vector<DaemonConfig> configs;
+  for (const char* value : {static_cast<const char*>(nullptr), "", "relative/home"}) {
+    value ? ::setenv("HOME", value, 1) : ::unsetenv("HOME");
+    configs.push_back(default_config());
+  }
+  for (const auto& [name, value] : saved) value ? ::setenv(name.c_str(), value->c_str(), 1) : ::unsetenv(name.c_str());
+  for (const DaemonConfig& config : configs) {
+    EXPECT_EQ(config.watch, std::vector<fs::path>{home / ".local/share/rdtf/models"});
+    EXPECT_EQ(config.output, home / ".local/state/rdtf/output");
+  }
+  DaemonConfig no_output = configs[0];
+  no_output.output.clear();
+  std::string error;
+  EXPECT_FALSE(check_config(no_output, error));
+  EXPECT_EQ(error.rfind("no output folder: give --output DIR", 0), 0u) << error;
 }
 
 // The shipped file is the reference a user copies: it names every key, and apart from the folders

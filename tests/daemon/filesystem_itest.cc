@@ -3,6 +3,7 @@
 // watched folder deleted and made again, a disk that fills up between two files of an output,
 // a model naming one huge sparse file many times, names too long for the output file system.
 // Each must be refused or recovered from with a clear report, the live revision's files intact.
+#include <sys/resource.h>
 #include <sys/stat.h>
 
 #include <iostream>
@@ -272,6 +273,40 @@ TEST(DaemonFilesystem, ADiskFullBetweenTheGltfAndTheUrdfLeavesTheLiveRevisionWho
   EXPECT_EQ(read(folder / "arm.rdtf.gltf"), now_live.rdtf_json);
   EXPECT_EQ(read(folder / "urdf" / "robot.urdf"), now_live.urdf);
   expect_files_of(now_live, snapshot(folder), folder);
+  EXPECT_TRUE(s.daemon->running());
+}
+
+// Under a file-size limit (systemd's LimitFSIZE=, ulimit -f), an output larger than the limit fails
+// its write (EFBIG) like a full disk: the revision is not published, the live one stays, rdtfd
+// retries and keeps serving. SIGXFSZ killed it, and again after every restart on the same model.
+// The limit is set in this process only while rdtfd is started (a child inherits it); 64 KiB holds
+// rdtfd's log, state and a one-box model's outputs, not the RDTF JSON and URDF of a chain of 400
+// boxes (hundreds of KiB).
+TEST(DaemonFilesystem, AFileSizeLimitFailsTheWriteNotTheDaemon) {
+  Session s;
+  const auto first = box_model("first_base", 0.1, 1, "arm.bin");
+  write_model(s.watch, "arm.gltf", first);
+  rlimit before{};
+  ASSERT_EQ(getrlimit(RLIMIT_FSIZE, &before), 0);
+  rlimit limit = before;
+  limit.rlim_cur = 64 * 1024;
+  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &limit), 0);
+  s.start();
+  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &before), 0);
+  ASSERT_TRUE(s.wait_revision("arm.gltf", 1, content_hash(first)));
+  const auto big = box_model("big_base", 0.1, 400, "arm.bin");
+  write_model(s.watch, "arm.gltf", big);
+  ASSERT_TRUE(s.daemon->wait_log("could not write the outputs of arm.gltf", 10s));
+  ASSERT_TRUE(s.daemon->wait_log("(attempt 2)", 10s));
+  EXPECT_TRUE(s.daemon->running());
+  EXPECT_FALSE(has_revision(s.messages(), "arm.gltf", 2, content_hash(big)));
+  // Still serving revision 1: a request is answered with it.
+  s.request("arm.gltf", "after");
+  ASSERT_TRUE(s.wait_for([&](const auto& all) {
+    const auto d = last_description(all, "arm.gltf");
+    return d && d->revision == 1 && d->content_hash == content_hash(first) &&
+           on_kind(all, "DESCRIPTION", "arm.gltf").size() >= 2;
+  }));
   EXPECT_TRUE(s.daemon->running());
 }
 

@@ -111,9 +111,13 @@ struct ValidationSummary {
   double wall_time = 0;
   Diagnostics diagnostics;
   std::string summary_line;
-  // The stepper the live simulation takes (ValidationReport::live_stepper): kWorldStep when the
-  // verdict is dWorldStep's after the automatic choice's QuickStep run failed.
+  // The stepper of the run that is the verdict (kWorldStep or kQuickStep; kAuto when nothing was
+  // simulated), which the live simulation of the revision takes: a model is simulated as it was
+  // judged, whatever the settings say later (a reload to quick_step kept a revision that only
+  // dWorldStep holds live, and simulated it with QuickStep: s104rev D1).
   Stepper live_stepper = Stepper::kAuto;
+  // Judged with dWorldStep after the automatic stepper's QuickStep run failed (SIM_QUICKSTEP_FAILED).
+  bool after_quickstep_failed = false;
 };
 // The live simulation's stepper for a revision: its verdict's, where the verdict chose one.
 
@@ -140,9 +144,12 @@ struct ConvertedModel {
   std::vector<OutputFile> files;
 };
 
-// The live simulation's stepper for a revision: its verdict's, where the verdict chose one.
+// The live simulation's stepper for a revision: its verdict's, where it was simulated.
 inline Stepper live_stepper(const ConvertedModel& revision) {
   return revision.validation ? revision.validation->live_stepper : Stepper::kAuto;
+}
+inline bool after_quickstep_failed(const ConvertedModel& revision) {
+  return revision.validation && revision.validation->after_quickstep_failed;
 }
 
 // Where a conversion's time went, for the log's "converted" line (docs/benchmarks.md breaks a

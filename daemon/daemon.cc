@@ -338,7 +338,7 @@ void Daemon::start_simulation_host() {
   for (const auto& [source, record] : registry_.all()) {
     const bool usable = record.live && !(record.live->validation && !record.live->validation->passed);
     if (usable) simulation_->load(record.id, record.revisions, record.live->content_hash, record.live->robot,
-                                  live_stepper(*record.live));
+                                  live_stepper(*record.live), after_quickstep_failed(*record.live));
   }
 }
 

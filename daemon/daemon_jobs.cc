@@ -376,7 +376,7 @@ void Daemon::apply_converted(ConversionOutcome& outcome, ModelRecord& record) {
                " failed the dynamics check");
     } else {
       simulation_->load(id, record.revisions, record.live->content_hash, record.live->robot,
-                        live_stepper(*record.live));
+                        live_stepper(*record.live), after_quickstep_failed(*record.live));
     }
   }
   if (!kept) {

@@ -224,7 +224,10 @@ Json validation_json(const ValidationSummary& v) {
   return {{"passed", v.passed}, {"simulated_time", v.simulated_time}, {"steps", v.steps},
           {"energy_drift", v.energy_drift}, {"worst_joint_error", v.worst_joint_error},
           {"wall_time", v.wall_time}, {"summary_line", v.summary_line},
-          {"live_world_step", v.live_stepper == Stepper::kWorldStep},
+          {"live_stepper", v.live_stepper == Stepper::kWorldStep   ? "world_step"
+                           : v.live_stepper == Stepper::kQuickStep ? "quick_step"
+                                                                   : "auto"},
+          {"after_quickstep_failed", v.after_quickstep_failed},
           {"diagnostics", diagnostics_json(v.diagnostics)}};
 }
 
@@ -238,7 +241,10 @@ ValidationSummary validation_from(const Json& j) {
   v.worst_joint_error = number(at(j, "worst_joint_error"));
   v.wall_time = number(at(j, "wall_time"));
   v.summary_line = text(at(j, "summary_line"));
-  v.live_stepper = flag(at(j, "live_world_step")) ? Stepper::kWorldStep : Stepper::kAuto;
+  const std::string stepper = text(at(j, "live_stepper"));
+  if (stepper != "world_step" && stepper != "quick_step" && stepper != "auto") throw Refused{"live_stepper is no stepper"};
+  v.live_stepper = stepper == "world_step" ? Stepper::kWorldStep : stepper == "quick_step" ? Stepper::kQuickStep : Stepper::kAuto;
+  v.after_quickstep_failed = flag(at(j, "after_quickstep_failed"));
   v.diagnostics = diagnostics_from(at(j, "diagnostics"), "");
   return v;
 }

@@ -124,15 +124,19 @@ SimulationHost::~SimulationHost() {
 }
 
 void SimulationHost::load(const std::string& model_id, std::int64_t revision,
-                          const std::string& content_hash, const Robot& robot, Stepper stepper) {
+                          const std::string& content_hash, const Robot& robot, Stepper stepper,
+                          bool after_quickstep_failed) {
   // The ODE world is built on the host thread (ODE keeps per-thread data); here only the inputs.
   auto model = std::make_unique<LiveModel>();
   model->revision = revision;
   model->content_hash = content_hash;
   model->command_lifetime = options_.joint_command_lifetime;
   model->options = options_.simulation;
-  // The verdict's stepper is what the check saw hold; a stepper the settings force stays forced.
-  if (model->options.stepper == Stepper::kAuto) model->options.stepper = stepper;
+  // Simulated as it was judged: the check saw the model hold under the verdict's stepper, and may
+  // not have under the settings' (a reload that forces quick_step keeps a revision judged under
+  // dWorldStep live when its new check fails).
+  if (stepper != Stepper::kAuto) model->options.stepper = stepper;
+  model->after_quickstep_failed = after_quickstep_failed;
   Robot renamed = with_urdf_names(robot, model->names);
   std::lock_guard lock(mutex_);
   joint_counts_[model_id] = robot.joints.size();
@@ -214,7 +218,7 @@ void SimulationHost::apply_inbox() {
       models_.erase(id);
       continue;
     }
-    if (model->options.stepper != options_.simulation.stepper) {
+    if (model->after_quickstep_failed) {
       log_line("simulation of " + id + " revision " + std::to_string(model->revision) + " steps with " +
                std::string(model->simulation->stepper_name()) +
                ", the stepper its dynamics check passed it with (SIM_QUICKSTEP_FAILED)");

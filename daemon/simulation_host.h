@@ -90,6 +90,7 @@ struct LiveModel {
   std::optional<StateSchedule> states;
   std::shared_ptr<const Robot> robot;  // To start again from rest after a failure.
   SimulationOptions options;           // The host's, with the verdict's stepper.
+  bool after_quickstep_failed = false;  // The verdict's stepper is dWorldStep because QuickStep failed.
   double time_offset = 0;              // s: simulated time of the runs before a restart.
   bool failed = false;                 // Its state became non-finite or blew up (not stepped).
   int failure_streak = 0;              // Failures in a row (runs shorter than kFailureStreakReset).
@@ -191,9 +192,10 @@ class SimulationHost {
 
   // A new live revision. A model already simulated keeps its joint positions by name where the
   // joint still exists (hot reload).
-  // `stepper`: the verdict's (ValidationSummary::live_stepper); it replaces the options' kAuto.
+  // `stepper`: the verdict's (ValidationSummary::live_stepper), which replaces the options' own
+  // unless it is kAuto (not simulated when checked, or not checked).
   void load(const std::string& model_id, std::int64_t revision, const std::string& content_hash,
-            const Robot& robot, Stepper stepper = Stepper::kAuto);
+            const Robot& robot, Stepper stepper = Stepper::kAuto, bool after_quickstep_failed = false);
   void remove(const std::string& model_id);
   // A controller's command; rejected (reported on <prefix>/<model>/ERROR) when its revision or
   // content hash is not the live one or it names unknown joints. One with more joints than the

@@ -188,20 +188,23 @@ void report_failure(const std::string& input, const char* verb, const Diagnostic
             << (diag.error_count() == 1 ? "" : "s") << ")\n";
 }
 
+// Unix tools read "-" as standard output: a file or folder named "-" (and "-.bin" beside it) is
+// not what was meant.
+static bool not_standard_output(const fs::path& target, Diagnostics& diag) {
+  if (target != "-") return true;
+  diag.error(kOutputInvalid, "",
+             "'-' (standard output): rdtf writes no model to standard output, since a .gltf or a URDF has "
+             "files beside it; give a path to write (./- for one named '-')");
+  return false;
+}
+
 bool check_output_file(const fs::path& target, const std::string& example, Diagnostics& diag) {
   const std::string name = target.filename().string();
   if (target.empty()) {
     diag.error(kOutputInvalid, "", "the output path is empty");
     return false;
   }
-  // Unix tools read "-" as standard output: a file named "-" (and "-.bin" beside it) is not what
-  // was meant.
-  if (target == "-") {
-    diag.error(kOutputInvalid, "",
-               "'-' (standard output): rdtf writes no model to standard output, since a .gltf has files "
-               "beside it; give a file to write (./- for a file named '-')");
-    return false;
-  }
+  if (!not_standard_output(target, diag)) return false;
   std::error_code error;
   const fs::file_status status = fs::status(target, error);
   if (name.empty() || name == "." || name == ".." || fs::is_directory(status)) {
@@ -215,6 +218,7 @@ bool check_output_file(const fs::path& target, const std::string& example, Diagn
 }
 
 bool check_output_folder(const fs::path& dir, const std::vector<std::string>& files, Diagnostics& diag) {
+  if (!not_standard_output(dir, diag)) return false;
   std::error_code error;
   const fs::file_status status = fs::status(dir, error);
   if (fs::exists(status) && !fs::is_directory(status)) {

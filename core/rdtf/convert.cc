@@ -109,7 +109,7 @@ std::optional<Conversion> convert(GltfAsset asset, const ConvertOptions& options
   if (diag.has_errors() || !check_finite_inertials(asset.document, robot, diag)) return std::nullopt;
   check_units(asset.document, robot, diag);
   check_animations(asset, diag);
-  if (options.khr_physics) write_khr_physics(asset.document, types, robot);
+  if (options.khr_physics) write_khr_physics(asset.document, types, robot, diag);
   if (!write_rdtf_extras(asset.document, types, robot, diag)) return std::nullopt;
   return Conversion{std::move(asset), std::move(robot)};
 }

@@ -7,6 +7,7 @@
 
 #include "khr_physics_frames.h"
 #include "rdtf/completion.h"
+#include "rdtf/diagnostic_codes.h"
 #include "rdtf/geometry.h"
 #include "rdtf/khr_physics.h"
 #include "rdtf/rdtf_extras.h"
@@ -176,7 +177,7 @@ Eigen::Matrix3d inertia_from_principal(const Eigen::Vector3d& moments, const Eig
   return R * moments.asDiagonal() * R.transpose();
 }
 
-void write_khr_physics(Json& document, std::vector<NodeType>& types, const Robot& robot) {
+void write_khr_physics(Json& document, std::vector<NodeType>& types, const Robot& robot, Diagnostics& diag) {
   if (!document.contains("nodes") || robot.links.empty()) return;
   if (document.contains("extensions") && !document["extensions"].is_object()) return;
   const auto existing = khr_joints_of_robot(document, types, robot);
@@ -221,7 +222,19 @@ void write_khr_physics(Json& document, std::vector<NodeType>& types, const Robot
     X_SA.linear() = child.X_SL.linear() * R_LA;
     const auto X_PA = attachment_local(world[static_cast<std::size_t>(parent.node)], X_SA);
     const auto X_CA = attachment_local(world[static_cast<std::size_t>(child.node)], X_SA);
-    if (!X_PA || !X_CA) continue;
+    if (!X_PA || !X_CA) {
+      // Under a mirror (a negative scale) a node of translation and rotation has a mirrored frame,
+      // which no KHR joint frame may be. The joint is in extras.RDTF and the URDF; a tool reading
+      // KHR physics alone sees its two bodies unjoined, so say so.
+      const Link& mirrored = X_PA ? child : parent;
+      diag.warning(codes::KHR_JOINT_NOT_WRITTEN, "/nodes/" + std::to_string(joint.node),
+                   "joint '" + joint.name + "' (" + to_string(joint.kind) + "): no KHR_physics_rigid_bodies joint is "
+                   "written for it: link '" + mirrored.name + "' is mirrored (a negative scale on its node or above), "
+                   "and no attachment node of translation and rotation has a proper joint frame there. extras.RDTF "
+                   "and the URDF have the joint; a tool reading only KHR physics sees its two bodies unjoined. "
+                   "Apply the scale (Blender: Ctrl+A > Scale) to keep it");
+      continue;
+    }
     if (!extension.contains("physicsJoints") || !extension["physicsJoints"].is_array()) {
       extension["physicsJoints"] = Json::array();
     }

@@ -547,12 +547,14 @@ std::optional<XmlRobot> scan_urdf_xml(const std::string& text, Diagnostics& diag
                            " deep here: no URDF does, and the XML parser would run out of stack; is this a URDF?");
     return std::nullopt;
   }
-  // TinyXML reports an empty document at "line 0, column 0" as "Error document empty".
-  if (text.find_first_not_of(" \t\r\n") == std::string::npos) {
+  // TinyXML reports an empty document at "line 0, column 0" as "Error document empty". A byte order
+  // mark alone (Notepad's "empty" UTF-8 file) is empty too.
+  const std::size_t bom = text.rfind("\xEF\xBB\xBF", 0) == 0 ? 3 : 0;
+  if (text.find_first_not_of(" \t\r\n", bom) == std::string::npos) {
     diag.error(codes::URDF_MALFORMED_XML, "",
                text.empty() ? std::string("the file is empty (0 bytes): a URDF is one <robot> element")
-                            : "the file holds only whitespace (" + std::to_string(text.size()) +
-                                  " bytes): a URDF is one <robot> element");
+                            : "the file holds only " + std::string(bom != 0 ? "a byte order mark and " : "") +
+                                  "whitespace (" + std::to_string(text.size()) + " bytes): a URDF is one <robot> element");
     return std::nullopt;
   }
   TiXmlDocument document;

@@ -282,7 +282,7 @@ TEST(Cli, ConvertOntoUnwritablePlacesIsExitTwoAndWritesNothing) {
   EXPECT_EQ(testing::read_file(folder / "target.glb"), "the user's");
   EXPECT_TRUE(std::filesystem::is_symlink(folder / "stdout"));
   // "-" is standard output to Unix tools: it made files named "-" and "-.bin" in the working folder.
-  for (const char* command : {" convert ", " import "}) {
+  for (const char* command : {" convert ", " import ", " urdf "}) {
     const std::string input = std::string(command) == " import " ? "'" + (testing::data_dir() / "robots" / "r2d2.urdf").string() + "'"
                                                                  : fixture("arm3.gltf");
     const auto run = testing::run_command("cd '" + folder.path().string() + "' && " + cli() + command + input + " -o -");

@@ -3,6 +3,7 @@
 // publish_failed publishes it and stops the simulation, and warnings of good conversions are
 // logged and published with the verdict.
 #include <set>
+#include <sstream>
 
 #include <rdtf/joint_state_t.hpp>
 
@@ -244,6 +245,82 @@ TEST(DaemonGate, AModelOnlyQuickStepFailsIsPublishedAndSimulatedWithDWorldStep) 
                               " revision 1 steps with dWorldStep, the stepper its dynamics check passed it with"),
             std::string::npos)
       << daemon.log();
+}
+
+// A 30-link chain of 1 kg, 10 cm rods on revolute joints limited to +-1 rad about X and Y in turn,
+// three of them with their inertia x 1e-6 (point masses on their rods): QuickStep blows it up,
+// dWorldStep steps it soundly (s104rev's c30_tiny3).
+std::string chain_with_point_masses() {
+  std::string urdf = "<?xml version=\"1.0\"?>\n<robot name=\"chain\">\n<link name=\"base\"><inertial><mass value=\"1\"/>"
+                     "<inertia ixx=\"0.01\" iyy=\"0.01\" izz=\"0.01\" ixy=\"0\" ixz=\"0\" iyz=\"0\"/></inertial></link>\n";
+  const auto text = [](double value) {
+    std::ostringstream out;
+    out.precision(17);
+    out << value;
+    return out.str();
+  };
+  for (int i = 0; i < 30; ++i) {
+    const double scale = (i == 5 || i == 15 || i == 25) ? 1e-6 : 1.0;
+    const double across = (3 * 0.01 * 0.01 + 0.1 * 0.1) / 12 * scale, along = 0.01 * 0.01 / 2 * scale;
+    const std::string name = "l" + std::to_string(i);
+    urdf += "<link name=\"" + name + "\"><inertial><origin xyz=\"0 0 -0.05\"/><mass value=\"1\"/><inertia ixx=\"" +
+            text(across) + "\" iyy=\"" + text(across) + "\" izz=\"" + text(along) +
+            "\" ixy=\"0\" ixz=\"0\" iyz=\"0\"/></inertial><visual><origin xyz=\"0 0 -0.05\"/><geometry><cylinder "
+            "radius=\"0.01\" length=\"0.1\"/></geometry></visual></link>\n";
+    urdf += "<joint name=\"j" + std::to_string(i) + "\" type=\"revolute\"><parent link=\"" +
+            (i == 0 ? std::string("base") : "l" + std::to_string(i - 1)) + "\"/><child link=\"" + name +
+            "\"/><origin xyz=\"0 0 " + (i == 0 ? "0" : "-0.1") + "\"/><axis xyz=\"" + (i % 2 == 0 ? "1 0 0" : "0 1 0") +
+            "\"/><limit lower=\"-1\" upper=\"1\" effort=\"100\" velocity=\"10\"/></joint>\n";
+  }
+  return urdf + "</robot>\n";
+}
+
+// A reload that forces quick_step checks every model again, and QuickStep fails this one: its
+// revision 1, judged with dWorldStep after QuickStep failed, stays live, and its simulation,
+// restarted with the new settings, still steps with the stepper it was judged with. With QuickStep
+// it blew up: joints limited to +-1 rad wound to 158 rad (s104rev D1). Every state now stays near
+// its range: 0.5 rad, far below a blow-up and far above the 0.01 rad plus a step's travel past a
+// stop that the check allows.
+TEST(DaemonGate, AReloadToQuickStepKeepsSimulatingARevisionWithTheStepperItWasJudgedWith) {
+  Session s;
+  const std::string id = "chain.glb";
+  testing::write_file(s.root / "chain.urdf", chain_with_point_masses());
+  const std::string import = std::string(RDTF_CLI_PATH) + " import " + (s.root / "chain.urdf").string() + " -o " +
+                             (s.watch / id).string() + " 2>" + (s.root / "import.log").string();
+  ASSERT_EQ(run_shell(import), 0) << read(s.root / "import.log");
+  auto& daemon = s.start(gated()
+                             .with("validation_seconds", 3.0)
+                             .with("validation_start_offset_rad", 0.3)
+                             .with("gravity", Json::array({0, 0, -9.80665}))
+                             .with("simulate", true)
+                             .with("state_rate_hz", 100));
+  ASSERT_TRUE(s.wait_for([&](const auto& all) { return !on_kind(all, "DESCRIPTION", id).empty(); }, 60s))
+      << daemon.log();
+  ASSERT_TRUE(daemon.wait_log("simulation of " + id + " revision 1 steps with dWorldStep")) << daemon.log();
+
+  const fs::path config = daemon.config_path();
+  Json changed = Json::parse(read(config));
+  changed["stepper"] = "quick_step";
+  fs::remove(config);
+  testing::write_file(config, changed.dump());
+  daemon.signal(SIGHUP);
+  ASSERT_TRUE(daemon.wait_log("SIGHUP: config reloaded")) << daemon.log();
+  ASSERT_TRUE(daemon.wait_log("rejected " + id + " revision 2 (dynamics)", 60s)) << daemon.log();
+  const auto reloaded = Clock::now();
+  ASSERT_TRUE(s.wait_for([&](const auto& all) {
+    const auto st = states(all, id);
+    return !st.empty() && st.back().first > reloaded + 3s;
+  }, 10s));
+  std::size_t after = 0;
+  for (const auto& [at, state] : states(s.messages(), id)) {
+    if (at < reloaded) continue;
+    ++after;
+    EXPECT_EQ(state.revision, 1);
+    for (int j = 0; j < state.num_joints; ++j) {
+      ASSERT_LT(std::abs(state.position[j]), 1.5) << state.name[j] << " wound past its stop";
+    }
+  }
+  EXPECT_GT(after, 100u);
 }
 
 TEST(DaemonGate, WarningsAreLoggedWithoutValidationToo) {

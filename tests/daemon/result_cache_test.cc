@@ -139,20 +139,25 @@ TEST(ResultCache, AConversionIsStoredAndTheNextOneIsTheCachedResultBitForBit) {
   EXPECT_EQ(formatted(again.diagnostics), formatted(c->outcome.diagnostics));
 }
 
-// The stepper a verdict chose for the live simulation (dWorldStep where QuickStep failed the model)
-// comes back with it, so that a restart simulates the model as its check did.
+// The stepper of the run that is the verdict (dWorldStep where QuickStep failed the model) comes
+// back with it, so that a restart simulates the model as its check did.
 TEST(ResultCache, TheVerdictsLiveStepperReadsBack) {
   auto c = convert_arm3();
   ASSERT_EQ(c->outcome.kind, ConversionOutcome::Kind::kConverted);
   std::string why;
   auto entry = cache_entry_from_text(rdtf::testing::read_file(c->job.cache->file_for(c->job.source.string())), why);
   ASSERT_TRUE(entry && entry->validation) << why;
-  EXPECT_EQ(entry->validation->live_stepper, Stepper::kAuto);  // arm3's 2 bodies: dWorldStep by itself
-  for (const Stepper stepper : {Stepper::kWorldStep, Stepper::kAuto}) {
-    entry->validation->live_stepper = stepper;
-    const auto again = cache_entry_from_text(cache_entry_text(*entry), why);
-    ASSERT_TRUE(again && again->validation) << why;
-    EXPECT_EQ(again->validation->live_stepper, stepper);
+  EXPECT_EQ(entry->validation->live_stepper, Stepper::kWorldStep);  // arm3's 2 bodies: dWorldStep by itself
+  EXPECT_FALSE(entry->validation->after_quickstep_failed);
+  for (const Stepper stepper : {Stepper::kQuickStep, Stepper::kWorldStep, Stepper::kAuto}) {
+    for (const bool rerun : {false, true}) {
+      entry->validation->live_stepper = stepper;
+      entry->validation->after_quickstep_failed = rerun;
+      const auto again = cache_entry_from_text(cache_entry_text(*entry), why);
+      ASSERT_TRUE(again && again->validation) << why;
+      EXPECT_EQ(again->validation->live_stepper, stepper);
+      EXPECT_EQ(again->validation->after_quickstep_failed, rerun);
+    }
   }
 }
 

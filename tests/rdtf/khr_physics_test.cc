@@ -238,6 +238,33 @@ TEST(KhrPhysicsWrite, MotionGivesTheExactTensorAndTheFileValidates) {
   EXPECT_EQ(again->asset.document["nodes"].size(), conversion->asset.document["nodes"].size());
 }
 
+// Under a mirror no attachment node (translation and rotation) has a proper joint frame: the joint
+// of transforms.gltf's mirrored wheel gets no KHR joint, and the conversion says so by name (it was
+// left out silently, and a KHR reader saw the wheel as a free body: s101fmt D3). The other joints
+// keep theirs.
+TEST(KhrPhysicsWrite, AJointUnderAMirrorIsNamedWhenItGetsNoKhrJoint) {
+  Diagnostics diag;
+  auto conversion = convert_file(testing::data_dir() / "blender" / "transforms.gltf", ConvertOptions{}, diag);
+  ASSERT_TRUE(conversion) << all_text(diag);
+  std::vector<Diagnostic> missing;
+  for (const Diagnostic& d : diag.all()) {
+    if (d.code == codes::KHR_JOINT_NOT_WRITTEN) missing.push_back(d);
+  }
+  ASSERT_EQ(missing.size(), 1u) << all_text(diag);
+  EXPECT_EQ(missing[0].severity, Severity::kWarning);
+  const Robot& robot = conversion->robot;
+  const auto joint = std::find_if(robot.joints.begin(), robot.joints.end(),
+                                  [](const Joint& j) { return j.name == "chassis_wheel_r_mirrored_joint"; });
+  ASSERT_NE(joint, robot.joints.end());
+  EXPECT_EQ(missing[0].pointer, "/nodes/" + std::to_string(joint->node));
+  EXPECT_NE(missing[0].message.find("joint 'chassis_wheel_r_mirrored_joint' (fixed): no KHR_physics_rigid_bodies joint"),
+            std::string::npos)
+      << missing[0].message;
+  EXPECT_NE(missing[0].message.find("is mirrored"), std::string::npos) << missing[0].message;
+  const json& physics_joints = conversion->asset.document["extensions"][kKhrPhysics]["physicsJoints"];
+  EXPECT_EQ(physics_joints.size(), robot.joints.size() - 1);
+}
+
 // A joint that turns without end - continuous, or revolute with no lower and upper, with or
 // without effort and speed limits - is written with its angular axis free, and read back as the
 // same joint, without a disagreement (rdtf used to lock a continuous joint that had an effort

@@ -97,6 +97,8 @@ const BadUrdf kBadUrdfs[] = {
     // Not TinyXML's "line 0: column 0: ... Error document empty".
     {"empty file", "", "URDF_MALFORMED_XML", "", "the file is empty (0 bytes): a URDF is one <robot> element"},
     {"only whitespace", "\n \t\r\n", "URDF_MALFORMED_XML", "", "the file holds only whitespace (5 bytes)"},
+    {"only a byte order mark", "\xEF\xBB\xBF\r\n", "URDF_MALFORMED_XML", "",
+     "the file holds only a byte order mark and whitespace (5 bytes)"},
     {"not a robot", "<sdf version=\"1.6\"/>\n", "URDF_NOT_A_ROBOT", "", "<sdf>"},
     {"loop",
      "<robot name=\"r\">\n<link name=\"root\"/>\n<link name=\"b\"/>\n<link name=\"c\"/>\n"

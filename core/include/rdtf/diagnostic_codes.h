@@ -147,6 +147,7 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(JOINT_MOVES_SEVERAL_LINKS, kSeverityInfo, "model") \
   X(JOINT_TYPE_MISSING, kSeverityWarning, "model") \
   X(KHR_JOINT_FRAMES_DISAGREE, kSeverityError, "model") \
+  X(KHR_JOINT_NOT_WRITTEN, kSeverityWarning, "model") \
   X(KHR_PHYSICS_IGNORED, kSeverityWarning, "model") \
   X(KHR_PHYSICS_INVALID, kSeverityError, "model") \
   X(KHR_PHYSICS_UNSUPPORTED, kSeverityWarning, "model") \

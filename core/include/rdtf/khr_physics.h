@@ -52,7 +52,8 @@ void read_khr_physics(const Json& document, const std::vector<NodeType>& types, 
 
 // Writes motion on every link node and a KHR joint for every robot joint that has none, with two
 // attachment nodes (appended, typed visual: `types` grows to match), and lists the extension in
-// extensionsUsed (never extensionsRequired).
-void write_khr_physics(Json& document, std::vector<NodeType>& types, const Robot& robot);
+// extensionsUsed (never extensionsRequired). A joint whose attachment frames no node of translation
+// and rotation can give (a link under a mirror) gets none, with the warning KHR_JOINT_NOT_WRITTEN.
+void write_khr_physics(Json& document, std::vector<NodeType>& types, const Robot& robot, Diagnostics& diag);
 
 }  // namespace rdtf

@@ -119,8 +119,6 @@ struct ValidationSummary {
   // Judged with dWorldStep after the automatic stepper's QuickStep run failed (SIM_QUICKSTEP_FAILED).
   bool after_quickstep_failed = false;
 };
-// The live simulation's stepper for a revision: its verdict's, where the verdict chose one.
-
 
 // What a good conversion leaves behind: all a publisher needs, no reference to the document.
 //

@@ -405,6 +405,11 @@ void add_joint(Simulation::Model& model, int j, const Eigen::Isometry3d& X_SJ, D
     }
   }
   if (joint.damping > 0 && (jm.dof || joint.kind == JointKind::kBall)) add_damper(model, jm, child, parent, axis);
+  if (jm.dof && joint.spring_stiffness > 0) {
+    jm.spring_rate = jm.kind == JointKind::kPrismatic
+                         ? kInfinity
+                         : joint.spring_stiffness * (mobility(model, jm.child_body, axis) + mobility(model, jm.parent_body, axis));
+  }
   // Where the constraint holds, on each side, for measuring its error.
   const Eigen::Isometry3d X_SC = body_pose(child);
   const Eigen::Isometry3d X_SP = parent ? body_pose(parent) : Eigen::Isometry3d::Identity();

@@ -161,8 +161,10 @@ struct JointModel {
   std::optional<JointCommand> command;
   double effort = 0;  // actuator effort applied in the last step
   double motor_fmax = 0;  // the command motor's force bound in the last step (0: idle)
-  // Within a step: the position before it and the damping effort applied in it (for the work).
+  // Within a step: the position and speed before it and the damping effort applied in it (for the
+  // work).
   double q_before = 0;
+  double qdot_before = 0;
   double damping_effort = 0;
   // Damping (docs/dynamics.md, "Joint forces"). A torque -c qdot from the state before the step is
   // forward Euler: it reverses the joint's speed once c h exceeds the inertia it moves and blows up
@@ -177,6 +179,16 @@ struct JointModel {
   // on a slider, which is always implicit (what it moves depends on where it is).
   double damper_rate = 0;
   bool damper_implicit = false;
+  // The spring's share of the energy balance (docs/dynamics.md, "Energy balance"). ODE applies the
+  // spring from the position before the step and moves the position with the speed after it
+  // (symplectic Euler), which keeps 1/2 k q^2 - 1/2 h k q qdot, not 1/2 k q^2: the latter ripples
+  // by about h omega / 2 of the energy, and a 20 g finger on a spring of 0.2 N m/rad (omega 135
+  // rad/s) read as 7% of energy created (s101gate D8). The kept form is positive definite only
+  // while h^2 k / I < 4; `spring_rate`, k times the joint's mobility with every constraint removed
+  // (1/s^2, an upper bound of k / I, as damper_rate bounds c / I), says which springs are safely
+  // inside that (Simulation::step, choose_spring_energy). Infinite on a slider (as damper_rate).
+  double spring_rate = 0;
+  bool spring_energy_kept = false;  // the balance counts this spring as symplectic Euler keeps it
 };
 
 }  // namespace rdtf::dynamics_internal
@@ -205,6 +217,7 @@ struct Simulation::Model {
   double dissipated = 0;
   double actuator_work = 0;
   double damper_step = 0;  // the step for which the dampers were last chosen explicit or implicit
+  double spring_step = 0;  // the step for which the springs' energy was last chosen (0: none yet)
   std::vector<std::string> messages;
   // The state left what ODE can step (a value not finite or beyond kStateBound), or ODE stopped a
   // step with an internal error: the state is unusable, health() reports it not finite, and

@@ -180,6 +180,28 @@ void choose_dampers(Simulation::Model& m, double h) {
   }
 }
 
+// Chooses, for a step of h, which springs the energy balance counts as symplectic Euler keeps them
+// (JointModel::spring_energy_kept). Explicit springs move as x' = x + h A x with eigenvalues of
+// h^2 M^-1 K at most h^2 sum k_i (M^-1)_ii <= h^2 times the sum of their spring_rate (as for the
+// dampers); the kept energy is positive definite while that is below 4, so the springs of least
+// rate are kept while h^2 times their sum is at most 1. A stiffer spring keeps 1/2 k q^2, whose
+// rise still shows it blowing up.
+void choose_spring_energy(Simulation::Model& m, double h) {
+  if (m.spring_step == h) return;
+  m.spring_step = h;
+  std::vector<JointModel*> springs;
+  for (JointModel& jm : m.joints) {
+    if (jm.spring_rate > 0) springs.push_back(&jm);
+  }
+  std::sort(springs.begin(), springs.end(),
+            [](const JointModel* a, const JointModel* b) { return a->spring_rate < b->spring_rate; });
+  double sum = 0;
+  for (JointModel* jm : springs) {
+    sum += jm->spring_rate * h * h;
+    jm->spring_energy_kept = sum <= 1;
+  }
+}
+
 Eigen::Vector3d angular_velocity(const Simulation::Model& model, int body) {
   return body == kWorld ? Eigen::Vector3d::Zero() : vec(dBodyGetAngularVel(model.bodies[body].id));
 }
@@ -251,6 +273,11 @@ std::unique_ptr<Simulation> Simulation::create(const Robot& robot, const Simulat
                                                Diagnostics& diag) {
   auto model = dynamics_internal::build_model(robot, options, initial_positions, diag);
   if (!model) return nullptr;
+  // The energy at the start counts the springs as the steps will (a start speed makes the kept
+  // form differ from 1/2 k q^2 already).
+  if (model->options.time_step > 0 && std::isfinite(model->options.time_step)) {
+    choose_spring_energy(*model, model->options.time_step);
+  }
   return std::unique_ptr<Simulation>(new Simulation(std::move(model)));
 }
 
@@ -262,6 +289,7 @@ void Simulation::step(double dt) {
   Model& m = *model_;
   if (m.failed) return;
   choose_dampers(m, dt);
+  choose_spring_energy(m, dt);
   // The state as of the last step (or the set-up), read once then (read_frames).
   for (std::size_t b = 0; b < m.bodies.size(); ++b) {
     if (!m.frames[b].steppable) {
@@ -289,6 +317,7 @@ void Simulation::step(double dt) {
         dJointAddHingeTorque(jm.id, total);
       }
       jm.q_before = jm.q;
+      jm.qdot_before = jm.qdot;
     } else if (jm.kind == JointKind::kBall && jm.damping > 0 && !jm.damper_implicit) {
       const Eigen::Vector3d w = angular_velocity(m, jm.child_body) - angular_velocity(m, jm.parent_body);
       const Eigen::Vector3d tau = -jm.damping * w;
@@ -341,8 +370,14 @@ void Simulation::step(double dt) {
       const bool past = jm.stops && (jm.q < jm.lower || jm.q > jm.upper);
       jm.stop_overshoot = (1 - erp) * jm.stop_overshoot + (past && resolved ? std::abs(dq) : 0.0);
       if (jm.stops) jm.stop_yield = stop_load(m, jm) * dt * m.options.cfm / erp;
-      m.dissipated -= jm.damping_effort * dq;
-      m.actuator_work += jm.effort * dq;
+      // The work of a force over a step: symplectic Euler changes the speed by h F / M and the
+      // kinetic energy by exactly h F (qdot before + qdot after) / 2, and that (not F dq = h F qdot
+      // after) is what the kept energy of the springs balances against (choose_spring_energy): a
+      // damped 20 g finger on a stiff spring read F dq's difference, h^2 F^2 / 2M a step, as 1%
+      // of energy created.
+      const double travel = 0.5 * dt * (jm.qdot_before + jm.qdot);
+      m.dissipated -= jm.damping_effort * travel;
+      m.actuator_work += jm.effort * travel;
     } else if (jm.kind == JointKind::kBall && jm.damping > 0) {
       const Eigen::Vector3d w = angular_velocity(m, jm.child_body) - angular_velocity(m, jm.parent_body);
       const Eigen::Vector3d tau = jm.damper_implicit ? vec(jm.damper_feedback.t1) : Eigen::Vector3d(-jm.damping * w);
@@ -462,7 +497,10 @@ SimulationHealth Simulation::health(const HealthTolerances& tolerances) const {
   }
   if (!h.finite) return h;
   for (const JointModel& jm : m.joints) {
-    if (jm.dof) h.potential_energy += 0.5 * jm.stiffness * jm.q * jm.q;
+    if (jm.dof) {
+      h.potential_energy += 0.5 * jm.stiffness * jm.q * jm.q;
+      if (jm.spring_energy_kept) h.potential_energy -= 0.5 * m.spring_step * jm.stiffness * jm.q * jm.qdot;
+    }
     if (jm.limited) {
       const double violation = std::max({jm.lower - jm.q, jm.q - jm.upper, 0.0});
       const double bound = (jm.kind == JointKind::kPrismatic ? tolerances.limit_linear : tolerances.limit_angular) +

@@ -383,11 +383,11 @@ TEST(DynamicsGate, AModelQuickStepFailsIsJudgedAgainWithDWorldStep) {
   const auto notes = with_code(report.diagnostics, "SIM_QUICKSTEP_FAILED");
   ASSERT_EQ(notes.size(), 1u) << all_text(report.diagnostics);
   EXPECT_EQ(notes[0].severity, Severity::kInfo);
-  for (const char* part : {"dWorldQuickStep (29 bodies in one island, 50 iterations)", "(SIM_JOINT_SEPARATION: joint '",
+  // QuickStep's first error is quoted: the energy it created as the chain tore (85% of the scale).
+  for (const char* part : {"dWorldQuickStep (29 bodies in one island, 50 iterations)", "the run failed (SIM_ENERGY_RISE: ",
                            "judged again with dWorldStep"}) {
     EXPECT_NE(notes[0].message.find(part), std::string::npos) << part << "\n" << notes[0].message;
   }
-  EXPECT_EQ(notes[0].pointer.rfind("/nodes/", 0), 0u) << notes[0].pointer;  // QuickStep's torn joint
 
   options.simulation.stepper = Stepper::kQuickStep;
   const ValidationReport forced = validate_dynamics(robot, options, nullptr, "chain.gltf");

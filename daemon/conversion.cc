@@ -693,10 +693,8 @@ ConversionOutcome run_conversion(const ConversionJob& job) {
       summary.worst_joint_error = report.worst_joint_error;
       summary.wall_time = report.wall_time;
       summary.summary_line = validation_summary_line(report);
-      summary.live_stepper = !report.simulated                   ? Stepper::kAuto
-                             : report.stepper == "dWorldQuickStep" ? Stepper::kQuickStep
-                                                                   : Stepper::kWorldStep;
-      summary.after_quickstep_failed = report.live_stepper == Stepper::kWorldStep;
+      summary.live_stepper = report.verdict_stepper;
+      summary.after_quickstep_failed = report.judged_again_exactly;
       summary.diagnostics = std::move(report.diagnostics);
       // A verdict the machine's load decided (the check ran out of its CPU budget) is not kept.
       if (memo && !summary.diagnostics.contains(codes::SIM_BUDGET_EXCEEDED)) {

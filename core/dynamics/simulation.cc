@@ -395,6 +395,7 @@ double Simulation::time() const { return model_->time; }
 std::uint64_t Simulation::steps() const { return model_->steps; }
 const Robot& Simulation::robot() const { return model_->robot; }
 const SimulationOptions& Simulation::options() const { return model_->options; }
+Stepper Simulation::stepper() const { return model_->quickstep ? Stepper::kQuickStep : Stepper::kWorldStep; }
 std::string_view Simulation::stepper_name() const {
   return model_->quickstep ? "dWorldQuickStep" : "dWorldStep";
 }

@@ -242,6 +242,7 @@ int simulate(const Robot& robot, const SimulationOptions& simulation, const Vali
   if (!sim) return 0;
   report.simulated = true;
   report.stepper = std::string(sim->stepper_name());
+  report.verdict_stepper = sim->stepper();
   report.bodies = sim->body_count();
   const Simulation::Model& model = ValidationRun::model(*sim);
   run_scenario(*sim, model, options, limits, report);
@@ -332,7 +333,7 @@ ValidationReport validate_dynamics(const Robot& robot, const ValidationOptions& 
       SimulationOptions world_step = options.simulation;
       world_step.stepper = Stepper::kWorldStep;
       simulate(robot, world_step, options, limits, exact);
-      exact.live_stepper = Stepper::kWorldStep;
+      exact.judged_again_exactly = true;
       report = std::move(exact);
     }
   }

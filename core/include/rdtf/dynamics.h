@@ -221,6 +221,7 @@ class Simulation {
   const Robot& robot() const;
   const SimulationOptions& options() const;
   std::string_view stepper_name() const;  // of the last (or next) step: "dWorldStep" or "dWorldQuickStep"
+  Stepper stepper() const;                // the same: kWorldStep or kQuickStep
   int body_count() const;
 
   std::vector<JointState> joint_states() const;  // robot.joints order, one-dof joints only
@@ -298,10 +299,12 @@ struct ValidationReport {
   std::uint64_t steps = 0;
   std::string stepper;
   int bodies = 0;
-  // The stepper a live simulation of the model takes to behave as judged: kWorldStep when the
-  // automatic choice's QuickStep run failed and dWorldStep's run is the verdict
-  // (ValidationOptions::exact_rerun_max_bodies); else kAuto, the options' own choice.
-  Stepper live_stepper = Stepper::kAuto;
+  // The stepper of the run that is the verdict, kWorldStep or kQuickStep (kAuto: nothing was
+  // stepped): a live simulation of the model takes it to behave as judged.
+  Stepper verdict_stepper = Stepper::kAuto;
+  // The automatic choice's QuickStep run failed and a dWorldStep run is the verdict
+  // (ValidationOptions::exact_rerun_max_bodies; SIM_QUICKSTEP_FAILED says what failed).
+  bool judged_again_exactly = false;
   double time_step = 0;
   // (E(t) + dissipated(t) - E(0)) / scale, E kinetic + potential; scale: the larger of the total
   // weight times the reach and the largest kinetic energy so far. Largest value over the run

@@ -70,22 +70,21 @@ std::vector<Eigen::Affine3d> node_world_transforms(const Json& document) {
   return world;
 }
 
+Eigen::Matrix3d orthogonal_part(const Eigen::Matrix3d& A) {
+  if ((A.transpose() * A - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() < 1e-12) return A;
+  Eigen::JacobiSVD<Eigen::Matrix3d> svd(A, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  return svd.matrixU() * svd.matrixV().transpose();
+}
+
 Eigen::Isometry3d rigid_part(const Eigen::Affine3d& X) {
   Eigen::Isometry3d rigid = Eigen::Isometry3d::Identity();
   rigid.translation() = X.translation();
-  const Eigen::Matrix3d A = X.linear();
-  if ((A - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() == 0.0) return rigid;
-  Eigen::JacobiSVD<Eigen::Matrix3d> svd(A, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  Eigen::Matrix3d U = svd.matrixU();
-  const Eigen::Matrix3d V = svd.matrixV();
-  // A proper rotation: if U V^T mirrors, flip the axis of the smallest singular value.
-  if ((U * V.transpose()).determinant() < 0) U.col(2) = -U.col(2);
-  rigid.linear() = U * V.transpose();
-  // Pure rotations (orthonormal A) come back exactly as given.
-  if ((A.transpose() * A - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() < 1e-12 &&
-      A.determinant() > 0) {
-    rigid.linear() = A;
-  }
+  Eigen::Matrix3d Q = orthogonal_part(X.linear());
+  // A mirror is not a rotation: the frame's Z axis reversed makes it one. (Flipping the axis of the
+  // smallest singular value, as before, left the frame to the SVD's order when the scales tie, as
+  // Blender's mirrored wheel's -1, 1, 1 do: s101fmt D4.)
+  if (Q.determinant() < 0) Q.col(2) = -Q.col(2);
+  rigid.linear() = Q;
   return rigid;
 }
 

@@ -107,6 +107,9 @@ Json* node_physics(Json& node) {
 // guards against rounding. Nothing when it fails: such a joint gets no KHR joint rather than one
 // whose frames disagree.
 std::optional<Eigen::Isometry3d> attachment_local(const Eigen::Affine3d& X_SP, const Eigen::Isometry3d& X_SA) {
+  // Under a mirror a node of translation and rotation is mirrored too, and a KHR reader takes a
+  // joint's frame as the node's: its angles would turn the other way.
+  if (X_SP.linear().determinant() < 0) return std::nullopt;
   const Eigen::Affine3d X_PS = X_SP.inverse();
   Eigen::Isometry3d X_PA = Eigen::Isometry3d::Identity();
   X_PA.translation() = X_PS * X_SA.translation();

@@ -749,19 +749,21 @@ TEST(Transforms, RigidPartOfScaledRotationIsTheRotation) {
   }
 }
 
-// A mirrored frame: the result is still a proper rotation; when the mirror is along the axis of
-// the smallest scale it is the rotation the frame was built from (the mirror goes to the rest).
-TEST(Transforms, RigidPartOfMirroredFrameIsProperRotation) {
+// A mirrored frame: its axes with the scale removed (the signs of the scale kept), then its own Z
+// axis reversed, whatever the scales (s101fmt D4: with the scales tied, as Blender's mirrored
+// wheel's -1, 1, 1, the axis reversed was the SVD's choice).
+TEST(Transforms, RigidPartOfMirroredFrameReversesItsZAxis) {
   const Eigen::Matrix3d R = test_rotation();
   Eigen::Affine3d X = Eigen::Affine3d::Identity();
-  X.linear() = R * Vector3d(2, 3, -0.5).asDiagonal();
-  const Eigen::Isometry3d rigid = rigid_part(X);
-  EXPECT_LE(max_abs(rigid.linear() - R), 1e-12) << rigid.linear();
-  for (const Vector3d& s : {Vector3d(-1, 1, 1), Vector3d(-1, -1, -1), Vector3d(-3, 2, 1)}) {
+  for (const Vector3d& s : {Vector3d(2, 3, -0.5), Vector3d(-1, 1, 1), Vector3d(1, -1, 1), Vector3d(-1, -1, -1),
+                            Vector3d(-3, 2, 1), Vector3d(0.01, -100, 1)}) {
+    SCOPED_TRACE(::testing::Message() << "scale " << s.transpose());
     X.linear() = R * s.asDiagonal();
     const Eigen::Matrix3d Q = rigid_part(X).linear();
-    EXPECT_LE(max_abs(Q.transpose() * Q - Eigen::Matrix3d::Identity()), 1e-14) << Q;
+    const Vector3d signs(s.x() > 0 ? 1 : -1, s.y() > 0 ? 1 : -1, s.z() > 0 ? -1 : 1);
+    EXPECT_LE(max_abs(Q - R * signs.asDiagonal()), 1e-12) << Q;
     EXPECT_NEAR(Q.determinant(), 1.0, 1e-14);
+    EXPECT_LE(max_abs(orthogonal_part(X.linear()) - R * s.cwiseSign().asDiagonal()), 1e-12);
   }
 }
 

@@ -5,6 +5,8 @@
 
 #include <cmath>
 
+#include <Eigen/Eigenvalues>
+
 #include "rdtf/completion.h"
 #include "rdtf/convert.h"
 #include "rdtf/diagnostic_codes.h"
@@ -121,6 +123,14 @@ std::string all_text(const Diagnostics& diag) {
   return out;
 }
 
+// The axes of a node with its scale removed, as the draft's node space has them for a tensor: the
+// orthogonal factor of the polar decomposition, A (A^T A)^-1/2 (a mirror kept), computed here from
+// the symmetric square root rather than the SVD rdtf takes.
+Eigen::Matrix3d node_axes(const Eigen::Matrix3d& A) {
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(A.transpose() * A);
+  return A * solver.operatorInverseSqrt();
+}
+
 // The tensor each link's written motion gives, back in the link frame, from the file as written.
 void expect_motion_is_robot(const json& written, const Robot& robot) {
   const auto world = node_world_transforms(written);
@@ -135,7 +145,7 @@ void expect_motion_is_robot(const json& written, const Robot& robot) {
     const Eigen::Vector3d moments(motion["inertiaDiagonal"][0].get<double>(), motion["inertiaDiagonal"][1].get<double>(),
                                   motion["inertiaDiagonal"][2].get<double>());
     const Eigen::Affine3d& X_SN = world[static_cast<std::size_t>(link.node)];
-    const Eigen::Matrix3d R_NL = rigid_part(X_SN).linear().transpose() * link.X_SL.linear();
+    const Eigen::Matrix3d R_NL = node_axes(X_SN.linear()).transpose() * link.X_SL.linear();
     const Eigen::Matrix3d I_L = R_NL.transpose() * inertia_from_principal(moments, rotation) * R_NL;
     EXPECT_LE((I_L - link.inertial.inertia).cwiseAbs().maxCoeff(), 1e-12 * largest(link.inertial.inertia))
         << "written\n" << I_L << "\nrobot\n" << link.inertial.inertia;
@@ -263,6 +273,22 @@ TEST(KhrPhysicsWrite, AJointUnderAMirrorIsNamedWhenItGetsNoKhrJoint) {
   EXPECT_NE(missing[0].message.find("is mirrored"), std::string::npos) << missing[0].message;
   const json& physics_joints = conversion->asset.document["extensions"][kKhrPhysics]["physicsJoints"];
   EXPECT_EQ(physics_joints.size(), robot.joints.size() - 1);
+}
+
+// A mirrored link's motion (transforms.gltf's wheel_r_mirrored: scale -2, -3.3, -10 on a turned
+// node) is in its node's own axes, the mirror kept, as for every other link: it was in the link
+// frame's (the mirror taken out), which put the wheel's spin moment on the wrong axis (s101fmt D2).
+TEST(KhrPhysicsWrite, AMirroredLinksMotionIsInItsNodesOwnAxes) {
+  Diagnostics diag;
+  auto conversion = convert_file(testing::data_dir() / "blender" / "transforms.gltf", ConvertOptions{}, diag);
+  ASSERT_TRUE(conversion) << all_text(diag);
+  const json& document = conversion->asset.document;
+  const auto world = node_world_transforms(document);
+  const auto mirrored = std::find_if(conversion->robot.links.begin(), conversion->robot.links.end(), [&](const Link& l) {
+    return world[static_cast<std::size_t>(l.node)].linear().determinant() < 0;
+  });
+  ASSERT_NE(mirrored, conversion->robot.links.end());
+  expect_motion_is_robot(document, conversion->robot);
 }
 
 // A joint that turns without end - continuous, or revolute with no lower and upper, with or

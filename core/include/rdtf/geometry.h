@@ -70,8 +70,14 @@ std::vector<int> node_parents(const Json& document);
 // scene or not) is placed in the scene frame.
 std::vector<Eigen::Affine3d> node_world_transforms(const Json& document);
 
-// The rigid part of an affine transform: its translation and the rotation nearest its linear
-// part (polar decomposition; a mirrored frame keeps its rotation, the mirror goes into the rest).
+// The orthogonal factor Q of the polar decomposition A = Q P (P symmetric positive definite): the
+// frame's axes with the scale removed, a mirror kept (det Q = -1 then). Unique for an invertible A;
+// an orthonormal A comes back exactly.
+Eigen::Matrix3d orthogonal_part(const Eigen::Matrix3d& A);
+
+// The rigid part of an affine transform: its translation and the rotation of orthogonal_part,
+// under a mirror with the frame's own Z axis reversed (docs/format.md, "The link frame"), so a
+// mirrored frame has one rotation whatever its scale.
 Eigen::Isometry3d rigid_part(const Eigen::Affine3d& X);
 
 }  // namespace rdtf

@@ -82,7 +82,7 @@ std::string joint_pointer(const std::string& name);
 std::optional<std::string> degenerate_shape(const urdf::Geometry& geometry);
 TriangleMesh box_mesh(const Eigen::Vector3d& size);
 TriangleMesh cylinder_mesh(double radius, double length, int segments = 32);
-TriangleMesh sphere_mesh(double radius, int stacks = 16, int slices = 32);
+TriangleMesh sphere_mesh(double radius, int subdivisions = 3);
 
 // Where a <mesh filename> is on disk: a path relative to the URDF's folder, an absolute path,
 // file://, or package://NAME/rest (found as rest under a folder named NAME among the URDF's folder

@@ -161,6 +161,23 @@ TEST(UrdfImport, PrimitivesHaveTheClosedFormVolumesAndBoxInertia) {
   const Eigen::Vector3d expected = m / 12 * Eigen::Vector3d(0.01 + 0.04, 0.36 + 0.04, 0.36 + 0.01);
   EXPECT_LE(relative_error(Eigen::Matrix3d(C * box.inertial.inertia * C.transpose()), Eigen::Matrix3d(expected.asDiagonal())),
             1e-6);
+  // The sphere's inertia is a ball's, 2/5 m r^2 about every axis, to the 3.2e-6 of its polyhedron
+  // (an icosahedron split three times: the UV sphere it replaced was 2.1e-3 off about its poles),
+  // and the cylinder's m/12 (3 r^2 + l^2) across and m r^2 / 2 along its axis, to its polygon's
+  // 32 sides (9e-6).
+  const auto link = [&](const std::string& name) {
+    return *std::find_if(conversion.robot.links.begin(), conversion.robot.links.end(),
+                         [&](const Link& l) { return l.name == name; });
+  };
+  const Link sphere = link("sphere");
+  const double ball = 0.4 * sphere.inertial.mass * 0.3 * 0.3;
+  EXPECT_LE(relative_error(sphere.inertial.inertia, Eigen::Matrix3d(ball * Eigen::Matrix3d::Identity())), 4e-6)
+      << sphere.inertial.inertia;
+  const Link cylinder = link("cylinder");
+  const double mc = cylinder.inertial.mass;
+  const Eigen::Vector3d along_z(mc / 12 * (3 * 0.04 + 0.36), mc / 12 * (3 * 0.04 + 0.36), mc * 0.04 / 2);
+  EXPECT_LE(relative_error(Eigen::Matrix3d(C * cylinder.inertial.inertia * C.transpose()), Eigen::Matrix3d(along_z.asDiagonal())),
+            1e-5);
   expect_valid_gltf(conversion, dir / "shapes.glb");
 }
 

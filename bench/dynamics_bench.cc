@@ -174,7 +174,7 @@ void BM_StepChain(benchmark::State& state) {
   }
   state.SetLabel(std::string(simulation->stepper_name()));
 }
-BENCHMARK(BM_StepChain)->ArgsProduct({{10, 15, 20, 25, 27, 30, 35, 40, 50}, {0, 1}})->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_StepChain)->ArgsProduct({{10, 15, 20, 25, 27, 30, 35, 40, 50, 60, 80, 100}, {0, 1}})->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 

@@ -313,7 +313,7 @@ std::vector<ConfigKey> make_registry() {
              .doc = "step of the check and of the live simulation"},
             RDTF_FIELD(time_step)),
       key<StepperName>({.name = "stepper", .reload = kDynamics,
-                        .doc = "`auto` (dWorldStep while the largest island, bodies joined by joints, has fewer than 27 bodies; QuickStep from 27, and dWorldStep again, in the check and live, for a model of up to 40 bodies in one island whose QuickStep run fails: SIM_QUICKSTEP_FAILED), `world_step` or `quick_step`"},
+                        .doc = "`auto` (dWorldStep while the largest island, bodies joined by joints, has fewer than 27 bodies; QuickStep from 27, and dWorldStep again, in the check and live, for a model of up to 100 bodies in one island whose QuickStep run fails: SIM_QUICKSTEP_FAILED), `world_step` or `quick_step`"},
                        RDTF_FIELD(stepper)),
       plain({.name = "max_mass_ratio", .min = 1, .max = 1e12, .reload = kReconvert,
              .doc = "largest mass ratio across a joint before the check fails"},

@@ -237,12 +237,13 @@ void add_hinge_limits(Simulation::Model& model, JointModel& jm, dBodyID child, d
   dJointSetFeedback(jm.limit_motor, &jm.feedback);
 }
 
-// The bodies of the largest island: bodies joined by joints, the world joining none. dWorldStep
+// Each body's island (a body index standing for it): bodies joined by joints, the world joining
+// none; largest_island counts the bodies of the largest. dWorldStep
 // solves each island's constraints on their own, at a cost that grows as the cube of its rows, so
 // the island, not the model, is what makes QuickStep the cheaper stepper: a humanoid whose pelvis
 // the world holds is islands of 6, 6 and 19 bodies, which dWorldStep steps exactly in 188 ms of a
 // 3 s validation where QuickStep took 353 ms and let the chest chatter on its stop (s101gate D1).
-int largest_island(const Simulation::Model& model) {
+std::vector<std::size_t> islands(const Simulation::Model& model) {
   std::vector<std::size_t> root(model.bodies.size());
   for (std::size_t b = 0; b < root.size(); ++b) root[b] = b;
   const auto find = [&root](std::size_t b) {
@@ -256,9 +257,14 @@ int largest_island(const Simulation::Model& model) {
     if (jm.id == nullptr || jm.child_body < 0 || jm.parent_body < 0) continue;
     root[find(static_cast<std::size_t>(jm.child_body))] = find(static_cast<std::size_t>(jm.parent_body));
   }
-  std::vector<int> size(root.size(), 0);
+  for (std::size_t b = 0; b < root.size(); ++b) root[b] = find(b);
+  return root;
+}
+
+int largest_island(const std::vector<std::size_t>& island) {
+  std::vector<int> size(island.size(), 0);
   int largest = 0;
-  for (std::size_t b = 0; b < root.size(); ++b) largest = std::max(largest, ++size[find(b)]);
+  for (const std::size_t root : island) largest = std::max(largest, ++size[root]);
   return largest;
 }
 
@@ -406,9 +412,13 @@ void add_joint(Simulation::Model& model, int j, const Eigen::Isometry3d& X_SJ, D
   }
   if (joint.damping > 0 && (jm.dof || joint.kind == JointKind::kBall)) add_damper(model, jm, child, parent, axis);
   if (jm.dof && joint.spring_stiffness > 0) {
-    jm.spring_rate = jm.kind == JointKind::kPrismatic
-                         ? kInfinity
-                         : joint.spring_stiffness * (mobility(model, jm.child_body, axis) + mobility(model, jm.parent_body, axis));
+    // A slider's force acts on its bodies' centres of mass along the axis: 1/m of each.
+    const auto linear = [&model](int body) {
+      return body == kWorld ? 0.0 : 1 / model.bodies[static_cast<std::size_t>(body)].mass;
+    };
+    jm.spring_rate = joint.spring_stiffness * (jm.kind == JointKind::kPrismatic
+                                                   ? linear(jm.child_body) + linear(jm.parent_body)
+                                                   : mobility(model, jm.child_body, axis) + mobility(model, jm.parent_body, axis));
   }
   // Where the constraint holds, on each side, for measuring its error.
   const Eigen::Isometry3d X_SC = body_pose(child);
@@ -553,7 +563,11 @@ std::unique_ptr<Simulation::Model> build_model(const Robot& robot, const Simulat
     model->joint_index.emplace(robot.joints[j].name, static_cast<int>(j));
   }
   for (std::size_t l = 0; l < robot.links.size(); ++l) model->link_index.emplace(robot.links[l].name, static_cast<int>(l));
-  model->largest_island = largest_island(*model);
+  const std::vector<std::size_t> island = islands(*model);
+  model->largest_island = largest_island(island);
+  for (JointModel& jm : model->joints) {
+    if (jm.child_body >= 0) jm.island = static_cast<int>(island[static_cast<std::size_t>(jm.child_body)]);
+  }
   model->quickstep = options.stepper == Stepper::kQuickStep ||
                      (options.stepper == Stepper::kAuto && model->largest_island >= options.quickstep_min_bodies);
   return model;

@@ -185,10 +185,11 @@ struct JointModel {
   // by about h omega / 2 of the energy, and a 20 g finger on a spring of 0.2 N m/rad (omega 135
   // rad/s) read as 7% of energy created (s101gate D8). The kept form is positive definite only
   // while h^2 k / I < 4; `spring_rate`, k times the joint's mobility with every constraint removed
-  // (1/s^2, an upper bound of k / I, as damper_rate bounds c / I), says which springs are safely
-  // inside that (Simulation::step, choose_spring_energy). Infinite on a slider (as damper_rate).
+  // (1/s^2, an upper bound of k / I, as damper_rate bounds c / I; on a slider k (1/m_c + 1/m_p)),
+  // says which springs are inside that (Simulation::step, choose_spring_energy).
   double spring_rate = 0;
   bool spring_energy_kept = false;  // the balance counts this spring as symplectic Euler keeps it
+  int island = -1;  // the island of the joint's bodies (ode_model.cc, islands): springs of two never meet
 };
 
 }  // namespace rdtf::dynamics_internal

@@ -168,6 +168,7 @@ struct SimulationHealth {
   bool finite = true;                   // Every body's position, orientation and velocities.
   double kinetic_energy = 0;            // J
   double potential_energy = 0;          // J: gravity (relative to the scene origin) and springs
+  double spring_energy = 0;             // J: sum 1/2 k q^2 of the joint springs (in potential_energy)
   double dissipated_energy = 0;         // J: work of the joint damping so far
   double actuator_work = 0;             // J: work of the commands so far
   double worst_joint_separation = 0;    // m between a joint's anchor points on its two bodies
@@ -283,10 +284,12 @@ struct ValidationOptions {
   // With Stepper::kAuto, a run that QuickStep failed is run again with dWorldStep when the largest
   // island has at most this many bodies, and that run is the verdict (SIM_QUICKSTEP_FAILED):
   // QuickStep's iterations let a sound robot's loaded stop or light finger overrun, dWorldStep
-  // solves the joints exactly. The live simulation then steps with dWorldStep too, and must keep
-  // real time: a 1 ms step of a 40-body chain costs about 0.38 ms of CPU with dWorldStep, of 50
-  // bodies 0.67 ms, of 63 bodies 1.6 ms (docs/dynamics.md, "When QuickStep fails"). 0: never.
-  int exact_rerun_max_bodies = 40;
+  // solves the joints exactly. A refusal withholds the whole model, so the bound is the CPU the
+  // exact run takes, not real time: a 1 ms step of a chain of 40 / 60 / 80 / 100 bodies costs
+  // about 0.28 / 0.9 / 2.2 / 4.8 ms with dWorldStep (3 s: 14 s of CPU at 100, inside the 30 s
+  // budget). The live simulation then steps with dWorldStep and, beyond about 60 bodies, falls
+  // behind real time, logged (docs/dynamics.md, "When QuickStep fails"). 0: never.
+  int exact_rerun_max_bodies = 100;
   // When another thread sets it, the run stops with the error SIM_CANCELLED (e.g. rdtfd stopping).
   const std::atomic<bool>* cancel = nullptr;
 };
@@ -299,6 +302,7 @@ struct ValidationReport {
   std::uint64_t steps = 0;
   std::string stepper;
   int bodies = 0;
+  int largest_island = 0;  // bodies of the largest island (what chooses the stepper)
   // The stepper of the run that is the verdict, kWorldStep or kQuickStep (kAuto: nothing was
   // stepped): a live simulation of the model takes it to behave as judged.
   Stepper verdict_stepper = Stepper::kAuto;

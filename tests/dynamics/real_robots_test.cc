@@ -45,6 +45,7 @@ const std::vector<RealRobot>& corpus() {
       {"double_pendulum.urdf", "double pendulum", true, {}},
       {"ur5_damped_spindle.urdf", "industrial arm, a 0.1 kg spindle damped 0.4 N m s (c h / I = 9.6)", true, {}},
       {"ur5_five_finger_hand.urdf", "arm with a five-finger hand, one island of 29 bodies (QuickStep fails it)", true, {}},
+      {"arm_dexterous_hand_41.urdf", "arm with a 24-joint hand, one island of 41 bodies (QuickStep fails it)", true, {}},
       {"allegro_right_hand.urdf", "hand, 16 joints (published inertias impossible)", false,
        {"link_3.0", "link_7.0", "link_11.0", "link_15.0"}},
       {"finger_edu.urdf", "finger (manipulator), a thin-rod link (published)", false, {"finger_lower_link"}},

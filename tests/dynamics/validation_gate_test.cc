@@ -360,6 +360,13 @@ TEST(DynamicsGate, ThirtyLinkChainWithOneInertiaScaledByOneMillionthFails) {
   expect_blow_up_caught(benchmark_robots::chain_robot(30), 15, quickstep_only);
 }
 
+// `robot` with link `link` a point mass (inertia x 1e-6), let go bent, for 2 s.
+ValidationReport validate_with_point_mass(Robot robot, int link, ValidationOptions options, const std::string& file) {
+  robot.links[link].inertial.inertia *= 1e-6;
+  options.duration = 2.0;
+  return validate_dynamics(robot, options, nullptr, file);
+}
+
 // Islands of 63 and 36 bodies (the root is held by the world). Beyond exact_rerun_max_bodies (40
 // here) QuickStep's verdict stands, and an info says whose the failure may be and what judges it
 // exactly (s105big D3: a 41-body hand's refusal read as a finger's fault).
@@ -367,10 +374,7 @@ TEST(DynamicsGate, HundredLinkTreeWithOneInertiaScaledByOneMillionthFailsBeyondT
   ValidationOptions options = started_bent();
   options.exact_rerun_max_bodies = 40;
   expect_blow_up_caught(benchmark_robots::tree_robot(100), 50, options);
-  Robot robot = benchmark_robots::tree_robot(100);
-  robot.links[50].inertial.inertia *= 1e-6;
-  options.duration = 2.0;
-  const ValidationReport report = validate_dynamics(robot, options, nullptr, "tree_100.gltf");
+  const ValidationReport report = validate_with_point_mass(benchmark_robots::tree_robot(100), 50, options, "tree_100.gltf");
   EXPECT_EQ(report.largest_island, 63);
   const auto notes = with_code(report.diagnostics, "SIM_QUICKSTEP_FAILED");
   ASSERT_EQ(notes.size(), 1u) << all_text(report.diagnostics);
@@ -384,11 +388,8 @@ TEST(DynamicsGate, HundredLinkTreeWithOneInertiaScaledByOneMillionthFailsBeyondT
 // holds it: a refusal withholds the whole model, and sound hands of 41 to 62 bodies were refused
 // for QuickStep's overrun of their finger stops (s105big D1). 2 s of 63 bodies under dWorldStep.
 TEST(DynamicsGate, HundredLinkTreeWithOneInertiaScaledByOneMillionthIsJudgedAgainExactly) {
-  Robot robot = benchmark_robots::tree_robot(100);
-  robot.links[50].inertial.inertia *= 1e-6;
-  ValidationOptions options = started_bent();
-  options.duration = 2.0;
-  const ValidationReport report = validate_dynamics(robot, options, nullptr, "tree_100.gltf");
+  const ValidationReport report =
+      validate_with_point_mass(benchmark_robots::tree_robot(100), 50, started_bent(), "tree_100.gltf");
   std::printf("tree_100, link_50 inertia x 1e-6, auto: %s\n", validation_summary_line(report).c_str());
   EXPECT_TRUE(report.passed) << all_text(report.diagnostics);
   EXPECT_TRUE(report.judged_again_exactly);
@@ -397,7 +398,7 @@ TEST(DynamicsGate, HundredLinkTreeWithOneInertiaScaledByOneMillionthIsJudgedAgai
   EXPECT_EQ(report.bodies, 99);
 }
 
-// What QuickStep fails, dWorldStep judges again while the island has at most 40 bodies. The
+// What QuickStep fails, dWorldStep judges again while the island has at most 100 bodies. The
 // 30-link chain whose link 15 is a point mass (inertia x 1e-6) tears apart under QuickStep and steps
 // soundly under dWorldStep (docs/dynamics.md: a light link is implausible, not unstable): the verdict
 // is dWorldStep's, QuickStep's failure is kept as an info, and the live simulation is told to take

@@ -242,23 +242,29 @@ bool same_bytes(const std::filesystem::path& a, const std::filesystem::path& b) 
 // power loss then never names a file whose data did not. Writeback of a batch of them is started
 // first, so that the fsyncs wait for one round of the disk a batch instead of one a file; batches,
 // because a descriptor a file held 20,001 meshes open at once and failed with "Too many open files"
-// under any usual open-file limit (s104rev N1).
+// under any usual open-file limit (s104rev N1). A batch also ends where the process's limit is
+// reached (EMFILE, or the system's: ENFILE): a daemon already holding descriptors may have fewer
+// than kBatch free, and a batch of one still makes progress. Only a file that cannot be opened
+// with no other held is an error.
 bool sync_files(const std::filesystem::path& folder, const std::vector<std::filesystem::path>& files,
                 std::string& why) {
-  constexpr std::size_t kBatch = 128;  // well inside the usual limit of 1,024 descriptors
-  for (std::size_t first = 0; first < files.size(); first += kBatch) {
-    const std::size_t end = std::min(files.size(), first + kBatch);
+  constexpr std::size_t kBatch = 128;
+  std::size_t next = 0;
+  while (next < files.size()) {
+    const std::size_t first = next;
     std::vector<int> fds;
     bool ok = true;
-    for (std::size_t i = first; i < end; ++i) {
-      const int fd = ::open((folder / files[i]).c_str(), O_RDONLY | O_CLOEXEC | O_NOFOLLOW);
+    while (next < files.size() && fds.size() < kBatch) {
+      const int fd = ::open((folder / files[next]).c_str(), O_RDONLY | O_CLOEXEC | O_NOFOLLOW);
       if (fd < 0) {
-        why = errno_text(("open " + (folder / files[i]).string()).c_str());
+        if ((errno == EMFILE || errno == ENFILE) && !fds.empty()) break;  // Sync what is held, go on.
+        why = errno_text(("open " + (folder / files[next]).string()).c_str());
         ok = false;
         break;
       }
       ::sync_file_range(fd, 0, 0, SYNC_FILE_RANGE_WRITE);  // Only a hint: the fsync below decides.
       fds.push_back(fd);
+      ++next;
     }
     for (std::size_t i = 0; i < fds.size(); ++i) {
       if (ok && ::fsync(fds[i]) != 0) {

@@ -1,8 +1,11 @@
 #include "support/test_support.h"
 
+#include <fcntl.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cstdlib>
 #include <fstream>
@@ -80,6 +83,34 @@ std::string base64(const std::vector<std::uint8_t>& bytes) {
     out += i + 2 < bytes.size() ? kAlphabet[n & 63] : '=';
   }
   return out;
+}
+
+DescriptorHeadroom::DescriptorHeadroom(int headroom) {
+  int highest = 0;
+  for (const auto& entry : std::filesystem::directory_iterator("/proc/self/fd")) {
+    highest = std::max(highest, std::stoi(entry.path().filename().string()));
+  }
+  for (;;) {
+    const int fd = ::open("/dev/null", O_RDONLY | O_CLOEXEC);
+    if (fd < 0) break;
+    fillers_.push_back(fd);
+    if (fd >= highest) break;
+  }
+  rlimit limit{};
+  if (fillers_.empty() || ::getrlimit(RLIMIT_NOFILE, &limit) != 0) return;
+  limit_before_ = limit.rlim_cur;
+  limit.rlim_cur = static_cast<rlim_t>(fillers_.back()) + 1 + static_cast<rlim_t>(headroom);
+  ok_ = ::setrlimit(RLIMIT_NOFILE, &limit) == 0;
+}
+
+DescriptorHeadroom::~DescriptorHeadroom() {
+  if (ok_) {
+    rlimit limit{};
+    ::getrlimit(RLIMIT_NOFILE, &limit);
+    limit.rlim_cur = static_cast<rlim_t>(limit_before_);
+    ::setrlimit(RLIMIT_NOFILE, &limit);
+  }
+  for (const int fd : fillers_) ::close(fd);
 }
 
 }  // namespace rdtf::testing

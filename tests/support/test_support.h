@@ -43,6 +43,24 @@ CommandResult run_command(const std::string& command);
 
 std::string cli_path();  // The built `rdtf` executable.
 
+// Leaves the process exactly `headroom` descriptors free until destroyed: every free slot up to
+// the highest descriptor open is filled (with /dev/null) and the open-file limit set `headroom`
+// above. The headroom is then the same on any machine: a CI runner holds descriptors 0-3, a
+// terminal may hold 255 with 250 free slots below it. The destructor restores limit and slots.
+class DescriptorHeadroom {
+ public:
+  explicit DescriptorHeadroom(int headroom);
+  ~DescriptorHeadroom();
+  DescriptorHeadroom(const DescriptorHeadroom&) = delete;
+  DescriptorHeadroom& operator=(const DescriptorHeadroom&) = delete;
+  bool ok() const { return ok_; }  // false (and nothing changed) if the limit could not be set
+
+ private:
+  std::vector<int> fillers_;
+  std::uint64_t limit_before_ = 0;
+  bool ok_ = false;
+};
+
 // RFC 4648 base64 with padding: the payload of a glTF data: URI.
 std::string base64(const std::vector<std::uint8_t>& bytes);
 

@@ -1,5 +1,6 @@
 #include "server.h"
 
+#include <cerrno>
 #include <chrono>
 #include <deque>
 #include <map>
@@ -8,6 +9,7 @@
 #include <sstream>
 #include <variant>
 
+#include <boost/asio/steady_timer.hpp>
 #include <boost/asio/strand.hpp>
 #include <boost/beast/core.hpp>
 #include <boost/beast/http.hpp>
@@ -64,6 +66,8 @@ struct Server::Impl {
   std::set<std::shared_ptr<SocketSession>> sockets;
   bool stopped = false;
   std::weak_ptr<Impl> self;
+  asio::steady_timer accept_retry{io};
+  std::uint64_t failures_in_a_row = 0;
   void accept();
 };
 
@@ -334,16 +338,42 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   std::optional<http::request_parser<http::string_body>> parser_;
 };
 
+// An accept that fails for want of a descriptor (EMFILE, ENFILE) or of memory leaves the
+// connection waiting in the backlog, so accepting again at once fails again at once: a loop that
+// holds a core until some descriptor is freed. Those are retried after kAcceptRetry, and said once
+// when they start and once when they end.
+static bool out_of_resources(const beast::error_code& ec) {
+  return ec == asio::error::no_descriptors || ec == asio::error::no_buffer_space || ec == asio::error::no_memory ||
+         ec == beast::error_code(ENFILE, beast::system_category());
+}
+
 void Server::Impl::accept() {
   // The handler holds the Impl: the acceptor's pending accept never outlives it.
   acceptor.async_accept([impl = self.lock()](beast::error_code ec, tcp::socket socket) {
     if (impl->stopped) return;
     if (!ec) {
+      ++impl->stats.connections_accepted;
+      if (impl->failures_in_a_row > 0) {
+        std::cerr << "rdtf-view: accepting connections again after " << impl->failures_in_a_row
+                  << " attempts failed\n";
+        impl->failures_in_a_row = 0;
+      }
       // Without TCP_NODELAY a small message (a state, a revision) sent while an earlier one is
       // unacknowledged waits for the browser's delayed ACK: 40 ms on Linux (Nagle's algorithm).
       beast::error_code ignored;
       socket.set_option(tcp::no_delay(true), ignored);
       std::make_shared<HttpSession>(std::move(socket), impl)->read();
+    } else if (out_of_resources(ec)) {
+      ++impl->stats.accept_failures;
+      if (impl->failures_in_a_row++ == 0) {
+        std::cerr << "rdtf-view: cannot accept a connection: " << ec.message() << "; trying again every "
+                  << kAcceptRetry.count() << " ms\n";
+      }
+      impl->accept_retry.expires_after(kAcceptRetry);
+      impl->accept_retry.async_wait([impl](beast::error_code wait_ec) {
+        if (!wait_ec && !impl->stopped) impl->accept();
+      });
+      return;
     }
     impl->accept();
   });
@@ -363,6 +393,7 @@ Server::~Server() {
   impl_->stopped = true;
   beast::error_code ignored;
   impl_->acceptor.close(ignored);
+  impl_->accept_retry.cancel();
   const auto sockets = impl_->sockets;
   for (const auto& socket : sockets) socket->close();
 }

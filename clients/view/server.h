@@ -14,6 +14,7 @@
 // (a slow page must not make the viewer hold the bus's traffic for it).
 #pragma once
 
+#include <chrono>
 #include <cstdint>
 #include <filesystem>
 #include <memory>
@@ -38,7 +39,14 @@ struct ServerStats {
   std::uint64_t sockets_opened = 0;
   std::uint64_t page_messages = 0;
   std::uint64_t refused = 0;
+  std::uint64_t connections_accepted = 0;
+  // Accepts that failed for want of a resource (descriptors, buffers): each is retried after
+  // kAcceptRetry, not at once, or the failing accept would spin a core until a descriptor frees.
+  std::uint64_t accept_failures = 0;
 };
+
+// How long the server waits before accepting again after running out of descriptors or memory.
+inline constexpr std::chrono::milliseconds kAcceptRetry{100};
 
 class Server {
  public:

@@ -8,6 +8,7 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include "config.h"
+#include "lcm_ready.h"
 #include "rdtf/diagnostic_codes.h"
 
 namespace rdtf::daemon {
@@ -195,10 +196,8 @@ class LcmBus final : public Bus {
 
 std::unique_ptr<Bus> open_lcm_bus(const DaemonConfig& config, BusHandlers handlers, std::string& error) {
   auto lcm = std::make_unique<lcm::LCM>(config.lcm_url);
-  if (!lcm->good()) {
-    error = "cannot open LCM at '" + (config.lcm_url.empty() ? std::string("default URL") : config.lcm_url) + "'";
-    return nullptr;
-  }
+  error = lcm_safe::lcm_receive_problem(*lcm, config.lcm_url);
+  if (!error.empty()) return nullptr;
   auto bus = std::make_unique<LcmBus>(std::move(lcm), std::move(handlers));
   bus->subscribe(config.channel_prefix);
   return bus;

@@ -115,12 +115,19 @@ std::vector<double> budget_step_rates(const std::vector<double>& step_seconds, d
 
 SimulationHost::SimulationHost(SimulationHostOptions options)
     : options_(std::move(options)), lcm_(options_.lcm_url) {
+  if (!lcm_.good()) {
+    // Not errno: LCM's clean-up has replaced it. LCM printed the failing call and why.
+    open_error_ = "cannot open LCM at " +
+                  (options_.lcm_url.empty() ? std::string("LCM's default URL") : "'" + options_.lcm_url + "'") +
+                  " (LCM's message above says why)";
+    return;  // No thread: a host that cannot publish steps nothing.
+  }
   thread_ = std::thread([this] { run(); });
 }
 
 SimulationHost::~SimulationHost() {
   stop_ = true;
-  thread_.join();
+  if (thread_.joinable()) thread_.join();
 }
 
 void SimulationHost::load(const std::string& model_id, std::int64_t revision,

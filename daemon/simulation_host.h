@@ -188,7 +188,10 @@ class SimulationHost {
   SimulationHost(const SimulationHost&) = delete;
   SimulationHost& operator=(const SimulationHost&) = delete;
 
+  // Whether its LCM opened (publishing needs a socket and a pipe: a process out of descriptors has
+  // none); if not, open_error() says why and nothing is simulated.
   bool ok() const { return lcm_.good(); }
+  const std::string& open_error() const { return open_error_; }
 
   // A new live revision. A model already simulated keeps its joint positions by name where the
   // joint still exists (hot reload).
@@ -245,6 +248,7 @@ class SimulationHost {
 
   SimulationHostOptions options_;
   lcm::LCM lcm_;
+  std::string open_error_;
   mutable std::mutex mutex_;
   Inbox inbox_;
   std::map<std::string, Robot> pending_robots_;  // Under mutex_: robots of inbox_.loads.

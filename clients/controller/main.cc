@@ -34,6 +34,7 @@
 #include "../cli_numbers.h"
 #include "pd_controller.h"
 #include "rdtf/client.h"
+#include "lcm_ready.h"
 #include "safe_decode.h"
 #include "rdtf/version.h"
 
@@ -173,8 +174,8 @@ int main(int argc, char** argv) {
   }
 
   lcm::LCM lcm(url);
-  if (!lcm.good()) {
-    std::cerr << "rdtf-pd-controller: cannot open LCM" << (url.empty() ? "" : " at " + url) << "\n";
+  if (const std::string problem = rdtf::lcm_safe::lcm_receive_problem(lcm, url); !problem.empty()) {
+    std::cerr << "rdtf-pd-controller: " << problem << "\n";
     return 1;
   }
   ControllerNode node(lcm, prefix, options);

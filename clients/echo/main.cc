@@ -13,6 +13,7 @@
 
 #include "message_json.h"
 #include "rdtf/client.h"
+#include "lcm_ready.h"
 #include "safe_decode.h"
 #include "rdtf/version.h"
 
@@ -45,8 +46,8 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
 
   lcm::LCM lcm(url);
-  if (!lcm.good()) {
-    std::cerr << "rdtf-echo: cannot open LCM" << (url.empty() ? "" : " at " + url) << "\n";
+  if (const std::string problem = rdtf::lcm_safe::lcm_receive_problem(lcm, url); !problem.empty()) {
+    std::cerr << "rdtf-echo: " << problem << "\n";
     return 1;
   }
   std::int64_t printed = 0;

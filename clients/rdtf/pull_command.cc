@@ -16,6 +16,7 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include "commands.h"
+#include "lcm_ready.h"
 #include "rdtf/client.h"
 
 namespace rdtf::cli {
@@ -110,8 +111,8 @@ int run_pull(const PullArguments& args) {
     return kExitInvalidInput;
   }
   lcm::LCM lcm(args.url);
-  if (!lcm.good()) {
-    std::cerr << "rdtf pull: cannot open LCM" << (args.url.empty() ? "" : " at " + args.url) << "\n";
+  if (const std::string problem = rdtf::lcm_safe::lcm_receive_problem(lcm, args.url); !problem.empty()) {
+    std::cerr << "rdtf pull: " << problem << "\n";
     return kExitInternalError;
   }
   rdtf::client::Options options;

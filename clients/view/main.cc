@@ -27,6 +27,7 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include "../cli_numbers.h"
+#include "lcm_ready.h"
 #include "model_hub.h"
 #include "rdtf/client.h"
 #include "server.h"
@@ -100,7 +101,7 @@ std::string default_web_dir() {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+static int run_view(int argc, char** argv) {
   CLI::App app{"rdtf-view: every rdtf model on the bus in a browser, live"};
   app.set_version_flag("--version", rdtf::version_line("rdtf-view"));
   std::string bind = "127.0.0.1";
@@ -146,8 +147,8 @@ int main(int argc, char** argv) {
   }
 
   lcm::LCM lcm(url);
-  if (!lcm.good()) {
-    std::cerr << "rdtf-view: cannot open LCM" << (url.empty() ? "" : " at " + url) << "\n";
+  if (const std::string problem = rdtf::lcm_safe::lcm_receive_problem(lcm, url); !problem.empty()) {
+    std::cerr << "rdtf-view: " << problem << "\n";
     return 1;
   }
 
@@ -237,4 +238,15 @@ int main(int argc, char** argv) {
   io.run();
   server.reset();
   return pump.failed() ? 1 : 0;
+}
+
+// What asio throws where the system runs out (signal_set's pipe, a descriptor for LCM's socket)
+// ends rdtf-view with the reason, never std::terminate's abort.
+int main(int argc, char** argv) {
+  try {
+    return run_view(argc, argv);
+  } catch (const std::exception& e) {
+    std::cerr << "rdtf-view: " << e.what() << "\n";
+    return 1;
+  }
 }

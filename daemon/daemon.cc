@@ -151,6 +151,10 @@ bool Daemon::start(std::string& error) {
   open_result_cache();
   if (!runner_) runner_ = std::make_unique<ThreadJobRunner>(config_.workers);
   start_simulation_host();
+  if (config_.simulate && !simulation_) {
+    error = "the live simulation: " + simulation_error_;
+    return false;
+  }
   rescan("start");
   next_republish_ = clock_->now() + config_.republish_period;
   next_status_ = clock_->now();
@@ -273,6 +277,12 @@ void Daemon::secure_revision_numbers(bool stopped_cleanly) {
 }
 
 void Daemon::leave_clean_stop_mark() {
+  // A stage folder that could not be removed is a leftover the next start must look for.
+  if (const auto left = StagedOutput::remove_left_behind(); !left.empty()) {
+    log_line("could not remove " + std::to_string(left.size()) + " stage folders (" + left.front().string() +
+             (left.size() > 1 ? ", ..." : "") + "): the stop is not marked clean, so the next start removes them");
+    return;
+  }
   std::string why;
   const auto folder = RevisionStore::folder_for(config_.output);
   std::error_code ec;
@@ -335,6 +345,17 @@ void Daemon::start_simulation_host() {
   options.joint_command_lifetime =
       std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(config_.joint_command_timeout_s));
   simulation_ = std::make_unique<SimulationHost>(options);
+  if (!simulation_->ok()) {
+    // Said and dropped: with no LCM the host would step models whose states go nowhere (and LCM
+    // printed a line for every publish it ignored). start() refuses to run so; a reload goes on
+    // without the live simulation until the next reload or restart.
+    simulation_error_ = simulation_->open_error();
+    log_line("the live simulation cannot start: " + simulation_error_ +
+             "; no joint or link states are published and no joint command is taken until a reload or restart");
+    simulation_.reset();
+    return;
+  }
+  simulation_error_.clear();
   for (const auto& [source, record] : registry_.all()) {
     const bool usable = record.live && !(record.live->validation && !record.live->validation->passed);
     if (usable) simulation_->load(record.id, record.revisions, record.live->content_hash, record.live->robot,
@@ -498,6 +519,14 @@ void Daemon::periodic(Clock::time_point now) {
   if (now >= next_status_) {
     publish_status();
     next_status_ = now + config_.status_period;
+    // Stage folders a failed write could not remove (out of descriptors) go once they can.
+    const std::size_t left_before = stages_left_behind_;
+    stages_left_behind_ = StagedOutput::remove_left_behind().size();
+    if (stages_left_behind_ < left_before) {
+      log_line("removed " + std::to_string(left_before - stages_left_behind_) +
+               " stage folders a failed write had left behind" +
+               (stages_left_behind_ > 0 ? "; " + std::to_string(stages_left_behind_) + " still there" : ""));
+    }
   }
 }
 

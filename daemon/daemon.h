@@ -150,7 +150,9 @@ class Daemon {
   std::set<std::pair<Clock::time_point, std::filesystem::path>> timers_;
   std::unique_ptr<Bus> lcm_;
   std::unique_ptr<Publisher> publisher_;
-  std::unique_ptr<SimulationHost> simulation_;  // Null when `simulate` is off.
+  std::unique_ptr<SimulationHost> simulation_;  // Null when `simulate` is off, or its LCM did not open.
+  std::size_t stages_left_behind_ = 0;  // Stage folders a failed write could not remove, at the last look.
+  std::string simulation_error_;                 // Why the last host did not start; empty when it did.
   BusInput bus_;
   BlobServer blobs_;  // The files of every live revision, by SHA-256 (blob_server.h).
   RequestThrottle request_throttle_;

@@ -314,8 +314,22 @@ void remove_stale_stages(const fs::path& folder) {
 
 // The output and every file beside it written into a stage folder next to the target first, then
 // moved into place (the .gltf last): a disk that fills up midway leaves the previous output whole.
+bool write_through_stage(const Conversion& conversion, const fs::path& target, bool glb, Durability durability,
+                         Diagnostics& diag);
+
+// The stage is removed when write_through_stage returns; one that could not be (out of descriptors:
+// removing a tree lists it) is tried once more and else named, never left without a word.
 bool write_staged(const Conversion& conversion, const fs::path& target, bool glb, Durability durability,
                   Diagnostics& diag) {
+  const bool written = write_through_stage(conversion, target, glb, durability, diag);
+  for (const fs::path& left : StagedOutput::remove_left_behind()) {
+    diag.warning(codes::IO_ERROR, "", "could not remove the temporary folder " + left.string() + ": remove it by hand");
+  }
+  return written;
+}
+
+bool write_through_stage(const Conversion& conversion, const fs::path& target, bool glb, Durability durability,
+                         Diagnostics& diag) {
   const fs::path folder = target.has_parent_path() ? target.parent_path() : fs::path(".");
   std::string why;
   remove_stale_stages(folder);

@@ -8,6 +8,7 @@
 #include <cerrno>
 #include <cstring>
 #include <fstream>
+#include <mutex>
 #include <random>
 #include <regex>
 #include <stdexcept>
@@ -210,10 +211,33 @@ std::optional<StagedOutput> StagedOutput::create(const std::filesystem::path& fo
   return StagedOutput(stage);
 }
 
+namespace {
+
+std::mutex left_behind_mutex;
+std::vector<std::filesystem::path> left_behind;  // Stages a destructor could not remove.
+
+}  // namespace
+
 StagedOutput::~StagedOutput() {
   if (folder_.empty()) return;
   std::error_code error;
   std::filesystem::remove_all(folder_, error);
+  std::error_code exists_error;
+  if (error && std::filesystem::exists(std::filesystem::symlink_status(folder_, exists_error))) {
+    const std::lock_guard<std::mutex> lock(left_behind_mutex);
+    left_behind.push_back(folder_);
+  }
+}
+
+std::vector<std::filesystem::path> StagedOutput::remove_left_behind() {
+  const std::lock_guard<std::mutex> lock(left_behind_mutex);
+  std::erase_if(left_behind, [](const std::filesystem::path& folder) {
+    std::error_code error;
+    std::filesystem::remove_all(folder, error);
+    std::error_code exists_error;
+    return !std::filesystem::exists(std::filesystem::symlink_status(folder, exists_error));
+  });
+  return left_behind;
 }
 
 namespace {

@@ -153,6 +153,51 @@ TEST(StagedOutput, CommitsWithFewerDescriptorsFreeThanABatch) { commit_under_des
 
 TEST(StagedOutput, CommitsWithFourDescriptorsFree) { commit_under_descriptor_headroom(4); }
 
+// Removing a stage lists it, which takes a descriptor: out of them, a failed write's stage stayed
+// behind for good (s106fd D2: 169 stage folders after recovery, after a clean stop and after a
+// restart, which did not look for leftovers). The destructor keeps what it could not remove, and
+// remove_left_behind() removes it once it can, saying what is still there until then.
+TEST(StagedOutput, AStageThatCannotBeRemovedIsKeptForLaterNotForgotten) {
+  testing::TempDir out;
+  std::string why;
+  std::filesystem::path folder;
+  {
+    auto stage = StagedOutput::create(out.path(), "stage", why);
+    ASSERT_TRUE(stage) << why;
+    folder = stage->folder();
+    std::filesystem::create_directories(folder / "urdf");
+    ASSERT_TRUE(write_staged_file(folder / "urdf" / "robot.urdf", std::string_view("<robot/>"), why)) << why;
+    const testing::DescriptorHeadroom none(0);
+    ASSERT_TRUE(none.ok());
+    stage.reset();
+  }
+  ASSERT_TRUE(std::filesystem::exists(folder));
+  EXPECT_EQ(StagedOutput::remove_left_behind(), std::vector<std::filesystem::path>{});
+  EXPECT_FALSE(std::filesystem::exists(folder));
+  EXPECT_EQ(files_below(out.path()), std::set<std::string>{});
+}
+
+// ...and while descriptors are still short, it is named as still there.
+TEST(StagedOutput, AStageStillThereIsNamed) {
+  testing::TempDir out;
+  std::string why;
+  std::filesystem::path folder;
+  std::vector<std::filesystem::path> still;
+  {
+    auto stage = StagedOutput::create(out.path(), "stage", why);
+    ASSERT_TRUE(stage) << why;
+    folder = stage->folder();
+    std::filesystem::create_directories(folder / "meshes");
+    const testing::DescriptorHeadroom none(0);
+    ASSERT_TRUE(none.ok());
+    stage.reset();
+    still = StagedOutput::remove_left_behind();
+  }
+  EXPECT_EQ(still, std::vector<std::filesystem::path>{folder});
+  EXPECT_EQ(StagedOutput::remove_left_behind(), std::vector<std::filesystem::path>{});
+  EXPECT_FALSE(std::filesystem::exists(folder));
+}
+
 TEST(StagedOutput, SyncRefusesALinkInTheStageAndNamesIt) {
   testing::TempDir out;
   std::string why;

@@ -110,6 +110,12 @@ class StagedOutput {
   // by it (commit() syncs those). False with `why` when a sync fails.
   bool sync(std::string& why);
 
+  // A stage the destructor could not remove (out of descriptors: removing a tree lists it) is kept
+  // in a list for the process, not forgotten: this tries each again and returns the paths still
+  // there. rdtfd calls it now and then and before it marks a stop clean (the next start looks for
+  // leftovers when any remain); `rdtf` before it exits.
+  static std::vector<std::filesystem::path> remove_left_behind();
+
  private:
   explicit StagedOutput(std::filesystem::path folder) : folder_(std::move(folder)) {}
   std::filesystem::path folder_;

@@ -601,6 +601,12 @@ ConversionOutcome run_conversion(const ConversionJob& job) {
     case internal::ReadBeneath::kRefused:
       outcome.diagnostics.error(codes::IO_ERROR, "", "cannot read the model: it " + why);
       return finish();
+    case internal::ReadBeneath::kUnavailable:
+      // The environment's failure, as a full disk is for a write: the same content is tried again
+      // after a back-off, and the live revision is served meanwhile.
+      outcome.diagnostics.error(codes::IO_ERROR, "", "cannot read the model now: it " + why);
+      outcome.retry = true;
+      return finish();
   }
   // Lexically, not canonically: no folder on the way is a symlink (read_beneath checked), and a
   // file the model names must really lie below this path (confined_files.h).

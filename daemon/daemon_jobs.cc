@@ -268,7 +268,10 @@ void Daemon::apply(ConversionOutcome outcome) {
     return schedule.job_finished(clock_->now(), result, record->live.has_value());
   });
   if (actions.retry_in) {
-    log_line("could not write the outputs of " + id + ": " + first_error(outcome.diagnostics) + "; trying again in " +
+    const Diagnostic* failure = outcome.diagnostics.first_error();
+    const bool unread = failure != nullptr && failure->code == codes::IO_ERROR;
+    log_line((unread ? "could not read " + id + " now: " : "could not write the outputs of " + id + ": ") +
+             first_error(outcome.diagnostics) + "; trying again in " +
              std::to_string(std::chrono::duration_cast<std::chrono::milliseconds>(*actions.retry_in).count()) +
              " ms (attempt " + std::to_string(record->schedule.attempts()) + ")");
   }

@@ -58,6 +58,8 @@ enum class ReadBeneath {
   kGone,     // Not there (any more): missing, a directory, or a folder on the way is no folder.
   kRefused,  // There, but not readable as a model (or behind a folder that cannot be searched): `why`
              // says why (never the file's content).
+  kUnavailable,  // Not read for want of the system's (descriptors, memory): there or not, a later
+                 // attempt may read it. `why` says which.
 };
 ReadBeneath read_beneath(const std::filesystem::path& root, const std::filesystem::path& path,
                          std::uint64_t max_bytes, std::vector<std::uint8_t>& out, std::string& why);

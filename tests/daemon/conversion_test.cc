@@ -134,6 +134,29 @@ TEST(ConversionReads, AFileNamedTwiceIsReadOnceAndHashedAsOftenAsNamed) {
 // A file missing (or refused) hashes apart from an empty one: an empty texture, converted and
 // cached, then deleted while rdtfd was stopped, came back from the result cache without the
 // warning a cold conversion gives (helper sweep s70cache D1).
+// A model that cannot be read for want of descriptors is the environment's failure, as a full
+// disk is for a write: rejected for now with the reason, and marked to be tried again (it was
+// rejected for good until the next save, s106fd D1).
+TEST(ConversionReads, AModelNotReadForWantOfDescriptorsIsTriedAgain) {
+  Folders folders;
+  testing::write_file(folders.root / "arm.gltf", testing::read_file(testing::data_dir() / "blender" / "arm3.gltf"));
+  testing::write_file(folders.root / "arm3.bin", testing::read_file(testing::data_dir() / "blender" / "arm3.bin"));
+  const ConversionJob job = job_for(folders, "arm.gltf");
+  std::optional<ConversionOutcome> starved;
+  {
+    const testing::DescriptorHeadroom none(0);
+    ASSERT_TRUE(none.ok());
+    starved = run_conversion(job);
+  }
+  EXPECT_EQ(starved->kind, ConversionOutcome::Kind::kRejected);
+  EXPECT_TRUE(starved->retry);
+  EXPECT_NE(messages(starved->diagnostics).find("cannot read the model now: it the watched folder"), std::string::npos)
+      << messages(starved->diagnostics);
+  EXPECT_NE(messages(starved->diagnostics).find("Too many open files"), std::string::npos);
+  const ConversionOutcome again = run_conversion(job);
+  EXPECT_EQ(again.kind, ConversionOutcome::Kind::kConverted) << messages(again.diagnostics);
+}
+
 TEST(ConversionReads, AFileThatCannotBeReadIsHashedApartFromAnEmptyOne) {
   Folders folders;
   const std::string model = testing::read_file(testing::data_dir() / "blender" / "arm3.gltf");

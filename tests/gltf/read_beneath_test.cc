@@ -70,5 +70,37 @@ TEST(ReadBeneath, AModelBehindAFolderThatCannotBeSearchedIsRefusedNotGone) {
   EXPECT_EQ(why, "is in folder s1, which cannot be opened: Permission denied");
 }
 
+// Out of descriptors, a model that is there is neither gone (rdtfd published REMOVED for "the
+// watched folder: Too many open files") nor refused for good (helper sweep s106fd D1: 51 models
+// rejected until someone saved them again): it is unavailable, and rdtfd tries it again. Each open
+// on the way fails in turn: the watched folder (0 free), the folder below it (1 free: the watched
+// folder holds it), the file itself (1 free, a model in the watched folder). With 2 free the model
+// below a folder is read: the watched folder's descriptor is closed once the next one is open.
+TEST(ReadBeneath, OutOfDescriptorsAModelIsUnavailableNeitherGoneNorRefused) {
+  testing::TempDir dir;
+  const fs::path root = fs::canonical(dir.path());
+  fs::create_directories(root / "s1");
+  testing::write_file(root / "s1" / "m.gltf", "{}");
+  testing::write_file(root / "top.gltf", "{}");
+  const auto read_with = [&](int headroom, const fs::path& path) {
+    std::vector<std::uint8_t> out;
+    std::string why;
+    const testing::DescriptorHeadroom limited(headroom);
+    EXPECT_TRUE(limited.ok());
+    const ReadBeneath result = read_beneath(root, path, 1 << 20, out, why);
+    return std::pair{result, why};
+  };
+  const auto [root_result, root_why] = read_with(0, root / "s1" / "m.gltf");
+  EXPECT_EQ(root_result, ReadBeneath::kUnavailable) << root_why;
+  EXPECT_EQ(root_why, "the watched folder " + root.string() + ": Too many open files");
+  const auto [folder_result, folder_why] = read_with(1, root / "s1" / "m.gltf");
+  EXPECT_EQ(folder_result, ReadBeneath::kUnavailable) << folder_why;
+  EXPECT_EQ(folder_why, "is in folder s1, which cannot be opened: Too many open files");
+  const auto [file_result, file_why] = read_with(1, root / "top.gltf");
+  EXPECT_EQ(file_result, ReadBeneath::kUnavailable) << file_why;
+  EXPECT_EQ(file_why, "cannot be opened: Too many open files");
+  EXPECT_EQ(read_with(2, root / "s1" / "m.gltf").first, ReadBeneath::kRead);
+}
+
 }  // namespace
 }  // namespace rdtf::internal

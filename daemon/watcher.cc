@@ -114,6 +114,16 @@ void InotifyWatcher::add_folder(const std::filesystem::path& folder,
       files.push_back(it->path());
     }
   }
+  // A folder watched but not listed whole (out of descriptors: each level of the walk holds one)
+  // hides its subfolders, which then went unwatched without a word (s106fd D4). It counts as not
+  // watched, so that it is said and the walk is tried again, as for a watch that failed. A folder
+  // gone meanwhile is its parent's event, not this.
+  if (ec && wd >= 0 && ec != std::errc::no_such_file_or_directory && ec != std::errc::not_a_directory) {
+    const std::string why = "cannot list " + folder.string() + ": " + ec.message();
+    if (!error.empty()) error += "; ";
+    error += why;
+    unwatched_.push_back({folder, false, why});
+  }
 }
 
 std::vector<std::filesystem::path> InotifyWatcher::watch_tree(const std::filesystem::path& root,

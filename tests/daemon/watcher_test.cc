@@ -64,6 +64,32 @@ TEST_F(Watcher, TheInitialScanListsEveryFileBelowTheRoot) {
   EXPECT_TRUE(events().empty());
 }
 
+// Each level of the walk holds a descriptor. Out of them, a folder that is watched but cannot be
+// listed hid its subfolders, which went unwatched without a word (s106fd D4): now it is unwatched,
+// with the reason, so rdtfd says so and walks again; with descriptors back, every folder is seen.
+TEST_F(Watcher, AFolderThatCannotBeListedIsUnwatchedNotSkipped) {
+  fs::create_directories(root_ / "sub" / "deep");
+  rdtf::testing::write_file(root_ / "a.gltf", "a");
+  rdtf::testing::write_file(root_ / "sub" / "deep" / "b.glb", "b");
+  std::string error;
+  std::vector<fs::path> files;
+  {
+    const rdtf::testing::DescriptorHeadroom one(1);  // the root's listing only
+    ASSERT_TRUE(one.ok());
+    files = watcher_.watch_tree(root_, error);
+  }
+  EXPECT_EQ(files, (std::vector<fs::path>{root_ / "a.gltf"}));
+  ASSERT_EQ(watcher_.unwatched().size(), 1u) << error;
+  EXPECT_EQ(watcher_.unwatched()[0].folder, root_ / "sub");
+  EXPECT_FALSE(watcher_.unwatched()[0].missing);
+  EXPECT_EQ(watcher_.unwatched()[0].why, "cannot list " + (root_ / "sub").string() + ": Too many open files");
+  EXPECT_EQ(error, watcher_.unwatched()[0].why);
+  watcher_.clear();
+  EXPECT_EQ(watch(), (Events{"a.gltf", "sub/deep/b.glb"}));
+  EXPECT_TRUE(watcher_.unwatched().empty());
+  EXPECT_EQ(watcher_.watch_count(), 3u);
+}
+
 TEST_F(Watcher, AnInPlaceSaveIsModifiedWhileOpenThenWrittenWhenClosed) {
   watch();
   const int fd = ::open((root_ / "a.gltf").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);

@@ -1,4 +1,6 @@
 // URDF -> RDTF: a glTF whose every node is typed in extras.RDTF, then the ordinary conversion.
+#include <unistd.h>
+
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -178,7 +180,22 @@ class Builder {
     if (!path) return unusable(codes::URDF_MESH_NOT_FOUND, why);
     Diagnostics read_diag(path->string());
     const auto bytes = read_text(*path, options.convert.limits.max_file_bytes, read_diag);
-    if (!bytes) return unusable(codes::URDF_MESH_NOT_FOUND, "mesh '" + mesh.filename + "': " + read_diag.all().front().message);
+    if (!bytes) {
+      const Diagnostic& failure = read_diag.all().front();
+      const std::string message = "mesh '" + mesh.filename + "': " + failure.message;
+      // A mesh that is there, a regular file this process may read, and still could not be read
+      // failed for a reason of the system's (out of descriptors or memory, an I/O error), not of the
+      // robot's: the import fails rather than leave the geometry out of a model that looks whole.
+      std::error_code type_error;
+      if (failure.code == codes::URDF_READ_FAILED && fs::is_regular_file(*path, type_error) &&
+          ::access(path->c_str(), R_OK) == 0) {
+        diag.error_at_line(codes::URDF_READ_FAILED, pointer, row,
+                           message + " (the file is there and readable: the system could not read it now)");
+        ok = false;
+        return std::nullopt;
+      }
+      return unusable(codes::URDF_MESH_NOT_FOUND, message);
+    }
     auto triangles_read = parse_stl(std::vector<std::uint8_t>(bytes->begin(), bytes->end()), why);
     if (!triangles_read) return unusable(codes::URDF_MESH_INVALID, "mesh '" + path->string() + "': " + why);
     if (triangles_read->triangles.empty()) return skip("mesh '" + path->string() + "' has no triangles");

@@ -8,6 +8,7 @@
 #include <cstdio>
 
 #include <cctype>
+#include <cstdint>
 #include <functional>
 #include <regex>
 
@@ -333,6 +334,38 @@ TEST(UrdfImportErrors, AMomentARoundingBelowZeroIsAccepted) {
 
 TEST(UrdfImportErrors, MissingMeshOfALinkWithAnInertialIsAWarning) {
   expect_unusable_mesh_is_a_warning("URDF_MESH_NOT_FOUND", [](const fs::path&) {});
+}
+
+// A mesh that is there and readable but cannot be read now (the process is out of descriptors:
+// strace makes its open fail with EMFILE) fails the import, exit 2 and no output, even on a link
+// with an <inertial>: it was "not found", a warning, and the model went out without its geometry.
+TEST(UrdfImportErrors, AMeshThatIsThereButCannotBeReadNowFailsTheImport) {
+  TempDir dir;
+  // One triangle, binary STL: 80-byte header, count, then normal, three corners and attribute.
+  std::string stl(80, '\0');
+  const auto put_u32 = [&](std::uint32_t v) { stl.append(reinterpret_cast<const char*>(&v), 4); };
+  const auto put_f32 = [&](float v) { stl.append(reinterpret_cast<const char*>(&v), 4); };
+  put_u32(1);
+  for (const float v : {0.f, 0.f, 1.f, 0.f, 0.f, 0.f, 1.f, 0.f, 0.f, 0.f, 1.f, 0.f}) put_f32(v);
+  stl.append(2, '\0');
+  testing::write_file(dir / "tri.stl", stl);
+  testing::write_file(dir / "robot.urdf", link_urdf(inertial("2.5") + visual("<mesh filename=\"tri.stl\"/>")));
+  const auto run_import = [&](const std::string& prefix, const std::string& out) {
+    return testing::run_command("cd '" + dir.path().string() + "' && " + prefix + "'" + testing::cli_path() +
+                                "' import robot.urdf -o " + out);
+  };
+  testing::CommandResult run = run_import("", "plain.gltf");  // untraced, as the control
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  // strace -P matches the path as rdtf passes it to openat: beside a relative URDF, ./tri.stl.
+  run = run_import("ASAN_OPTIONS=\"${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0\" strace -f -qq -o /dev/null "
+                   "-P ./tri.stl -e trace=openat -e inject=openat:error=EMFILE ",
+                   "out.gltf");
+  EXPECT_EQ(run.exit_code, 2) << run.err;
+  EXPECT_NE(run.err.find("error URDF_READ_FAILED"), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find("too many open files"), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find("/robot/link[@name='a']/visual[1]"), std::string::npos) << run.err;
+  EXPECT_FALSE(fs::exists(dir / "out.gltf"));
+  EXPECT_FALSE(fs::exists(dir / "out.bin"));
 }
 
 TEST(UrdfImportErrors, MeshThatIsNoStlOfALinkWithAnInertialIsAWarning) {

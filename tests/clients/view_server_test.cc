@@ -12,6 +12,7 @@
 
 #include "model_hub.h"
 #include "server.h"
+#include "support/sanitized.h"
 #include "support/test_support.h"
 
 namespace rdtf::view {
@@ -26,6 +27,11 @@ using namespace std::chrono_literals;
 // accepting again at once held a core. The server waits kAcceptRetry after each such failure, so
 // in `elapsed` it can fail at most 1 + elapsed / kAcceptRetry times (a loaded machine only makes
 // it fewer); and once descriptors are free again, the waiting connections are served.
+// Not in the sanitizer build: UBSan's vptr check, at the first call through a vtable it has not
+// seen, opens a pipe to test that the vtable is readable; with no descriptor free that fails and
+// it reports a false "invalid vptr" (docs/notes/ubsan-descriptors.md). This test calls through
+// such vtables (std::cerr, std::error_category) while no descriptor is free.
+#if !RDTF_SANITIZED
 TEST(ViewServer, RunningOutOfDescriptorsRetriesTheAcceptInsteadOfSpinning) {
   testing::TempDir web;
   asio::io_context io;
@@ -63,6 +69,7 @@ TEST(ViewServer, RunningOutOfDescriptorsRetriesTheAcceptInsteadOfSpinning) {
   }
   EXPECT_EQ(server.stats().connections_accepted, clients.size());
 }
+#endif
 
 }  // namespace
 }  // namespace rdtf::view

@@ -14,6 +14,7 @@
 
 #include "daemon/harness.h"
 #include "support/harness/fs_support.h"
+#include "support/sanitized.h"
 
 namespace rdtf::itest {
 namespace {
@@ -59,6 +60,10 @@ TEST(LcmOpen, RdtfdThatCannotReceiveOnLcmRefusesToStart) {
   EXPECT_EQ(daemon.output().find("rdtfd started"), std::string::npos) << daemon.output();
 }
 
+// Not in the sanitizer build: UBSan's vptr check opens pipes of its own (one at the first call
+// through each vtable it has not seen; docs/notes/ubsan-descriptors.md), so the third pipe2 is
+// not the one meant, and a failed one is reported as a false "invalid vptr".
+#if !RDTF_SANITIZED
 TEST(LcmOpen, RdtfdWhoseLiveSimulationCannotOpenLcmRefusesToStart) {
   Folders f;
   ChildProcess daemon(traced("pipe2:error=EMFILE:when=3", f.rdtfd()), f.root / "rdtfd.log");
@@ -71,6 +76,7 @@ TEST(LcmOpen, RdtfdWhoseLiveSimulationCannotOpenLcmRefusesToStart) {
   EXPECT_EQ(daemon.output().find("Ignoring call to publish"), std::string::npos) << daemon.output();
   EXPECT_EQ(daemon.output().find("rdtfd started"), std::string::npos) << daemon.output();
 }
+#endif
 
 TEST(LcmOpen, RdtfViewThatCannotReceiveOnLcmSaysSoInsteadOfCrashing) {
   testing::TempDir root;
@@ -85,6 +91,10 @@ TEST(LcmOpen, RdtfViewThatCannotReceiveOnLcmSaysSoInsteadOfCrashing) {
       << view.output();
 }
 
+// Not in the sanitizer build: UBSan's vptr check opens pipes of its own (one at the first call
+// through each vtable it has not seen; docs/notes/ubsan-descriptors.md), so the third pipe2 is
+// not the one meant, and a failed one is reported as a false "invalid vptr".
+#if !RDTF_SANITIZED
 TEST(LcmOpen, RdtfViewWithoutADescriptorForItsSignalsSaysSoInsteadOfAborting) {
   testing::TempDir root;
   ChildProcess view(traced("pipe2:error=EMFILE:when=3",
@@ -96,6 +106,7 @@ TEST(LcmOpen, RdtfViewWithoutADescriptorForItsSignalsSaysSoInsteadOfAborting) {
   EXPECT_NE(view.output().find("rdtf-view: signal_set_service pipe: Too many open files"), std::string::npos)
       << view.output();
 }
+#endif
 
 }  // namespace
 }  // namespace rdtf::itest

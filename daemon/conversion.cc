@@ -587,6 +587,11 @@ ConversionOutcome run_conversion(const ConversionJob& job) {
     return std::move(outcome);
   };
 
+  if (!job.not_now.empty()) {
+    outcome.diagnostics.error(codes::IO_ERROR, "", job.not_now);
+    outcome.retry = true;
+    return finish();
+  }
   std::error_code ec;
   // The model is read without following any symlink from the watched folder down: a link named
   // like a model, or a folder swapped for a link to another folder, leads nowhere.
@@ -633,6 +638,16 @@ ConversionOutcome run_conversion(const ConversionJob& job) {
   // Every file the model names is read once, here: the content hash covers these bytes (so a new
   // .bin alone counts), and the loader converts the same bytes, whatever is written meanwhile.
   SourceFiles files = read_source_files(outcome.dependencies, folder, job.options.limits, job.read_file);
+  for (const auto& [path, file] : files) {
+    if (!file.unavailable) continue;
+    // As for the model file above: the same content is tried again after a back-off, not rejected
+    // until the next save (s106fd: a .bin not opened for want of descriptors kept its model
+    // unpublished after the limit was raised).
+    outcome.diagnostics.error(codes::IO_ERROR, "",
+                              "cannot read " + path.lexically_relative(folder).string() + " now: " + file.why);
+    outcome.retry = true;
+    return finish();
+  }
   outcome.content_hash = content_hash(model_bytes, outcome.dependencies, files);
   // A file named through a symlink in the watched folder (current.bin -> meshes/arm3.bin, or a
   // linked folder) is saved at its target, which is what inotify reports: that path is a

@@ -97,6 +97,9 @@ struct ConversionJob {
   // the express worker may take it, so that a save of a small model never waits behind large
   // conversions that hold every worker (ThreadJobRunner).
   bool express = false;
+  // Why the loop cannot number a result of this model now (its revision state not read for want of
+  // descriptors): the job reads and writes nothing and comes back as a failure to try again.
+  std::string not_now;
 };
 
 inline constexpr std::uint64_t kExpressBytes = std::uint64_t{16} << 20;

@@ -96,6 +96,9 @@ class Daemon {
   ConversionJob make_job(const ModelRecord& record) const;
   bool is_small(const ModelRecord& record) const;
   void start_job(ModelRecord& record);
+  // Whether the record's revision numbers are known: its state file read (again, if it could not
+  // be read for want of descriptors when the model was found). If not, `*why` says so.
+  bool state_known(ModelRecord& record, std::string* why);
   // Converting while settling: what a file event's or a prepared job's transition asks for, and
   // a prepared job started when the model may have one.
   void on_settling(ModelRecord& record, const ModelActions& actions);
@@ -120,7 +123,9 @@ class Daemon {
   void publish_error(ModelRecord& record, rdtf::model_error_t error);
   void republish_refusal(const ModelRecord& record);
   void on_publisher_event(const PublisherEvent& event);
-  std::size_t publish_model(const ModelRecord& record);  // 1 when it has a live revision.
+  // 1 when it has a live revision and published it. One whose texts cannot be read is logged, or
+  // said in `*unpublished` when given.
+  std::size_t publish_model(const ModelRecord& record, std::string* unpublished = nullptr);
   std::size_t publish_all();                             // How many models were published.
   void publish_status();
   void on_request(const rdtf::request_t& request);

@@ -82,6 +82,7 @@ void Daemon::start_prepared_jobs(Clock::time_point now) {
   for (const auto& source : to_prepare_) {
     ModelRecord* record = registry_.find(source);
     if (record == nullptr || !record->schedule.can_prepare() || waiting_for_writer(*record, now)) continue;
+    if (!state_known(*record, nullptr)) continue;  // The deadline's job says why, and tries again.
     record->schedule.begin_prepare();
     ConversionJob job = make_job(*record);
     job.prepare = true;
@@ -112,7 +113,24 @@ void Daemon::drop_model(const std::filesystem::path& source, std::chrono::micros
   registry_.erase(source);
 }
 
-void Daemon::start_job(ModelRecord& record) { runner_->submit(make_job(record)); }
+void Daemon::start_job(ModelRecord& record) {
+  ConversionJob job = make_job(record);
+  // Numbers known before anything of this run is written: read after this job's outputs, a state
+  // still absent would find them and take them for an earlier run's (numbered from the clock).
+  state_known(record, &job.not_now);
+  runner_->submit(std::move(job));
+}
+
+bool Daemon::state_known(ModelRecord& record, std::string* why) {
+  if (!record.state_unread) return true;
+  const std::string line = restore_revisions(config_.output, record);
+  if (record.state_unread) {
+    if (why != nullptr) *why = line;
+    return false;
+  }
+  if (!line.empty()) log_line(line);
+  return true;
+}
 
 ConversionJob Daemon::make_job(const ModelRecord& record) const {
   ConversionJob job;

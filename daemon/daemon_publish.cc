@@ -61,12 +61,17 @@ std::string Daemon::channel(const std::string& model_id, const char* kind) const
   return config_.channel_prefix + "/" + model_id + "/" + kind;
 }
 
-std::size_t Daemon::publish_model(const ModelRecord& record) {
+std::size_t Daemon::publish_model(const ModelRecord& record, std::string* unpublished) {
   if (!record.live) return 0;
   LiveTexts texts;
   std::string why;
   if (!live_texts(record, texts, why)) {
-    log_line("not publishing " + record.id + " revision " + std::to_string(record.revisions) + ": " + why);
+    why = "not publishing " + record.id + " revision " + std::to_string(record.revisions) + ": " + why;
+    if (unpublished != nullptr) {
+      *unpublished = std::move(why);
+    } else {
+      log_line(why);
+    }
     return 0;
   }
   // The report comes first: a description is only ever published with its verdict.
@@ -94,7 +99,19 @@ std::size_t Daemon::publish_model(const ModelRecord& record) {
 
 std::size_t Daemon::publish_all() {
   std::size_t count = 0;
-  for (const auto& [source, record] : registry_.all()) count += publish_model(record);
+  std::size_t failed = 0;
+  std::string first_failure;
+  for (const auto& [source, record] : registry_.all()) {
+    std::string why;
+    const std::size_t published = publish_model(record, &why);
+    count += published;
+    if (published == 0 && !why.empty() && failed++ == 0) first_failure = std::move(why);
+  }
+  // One line a republication, not one a model: out of descriptors, every model's texts fail to
+  // read at once (s106fd D5: 66 lines every period).
+  if (failed > 0) {
+    log_line(first_failure + (failed > 1 ? " (and " + std::to_string(failed - 1) + " more models not published now)" : ""));
+  }
   return count;
 }
 

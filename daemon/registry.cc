@@ -1,6 +1,11 @@
 #include "registry.h"
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <fstream>
 #include <iterator>
 
@@ -104,12 +109,27 @@ const OutputFile* file_of_role(const ConvertedModel& model, const char* role) {
 }
 
 bool read_checked(const std::filesystem::path& path, const OutputFile& expected, std::string& text, std::string& why) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) {
-    why = "cannot read " + path.string();
+  // With the reason: at the open-file limit every model's republication failed here, and the log
+  // said only "cannot read" (s106fd D5).
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) {
+    why = "cannot read " + path.string() + ": " + std::strerror(errno);
     return false;
   }
-  text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  text.clear();
+  char block[65536];
+  for (;;) {
+    const ssize_t n = ::read(fd, block, sizeof block);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) {
+      why = "cannot read " + path.string() + ": " + std::strerror(errno);
+      ::close(fd);
+      return false;
+    }
+    if (n == 0) break;
+    text.append(block, static_cast<std::size_t>(n));
+  }
+  ::close(fd);
   if (static_cast<std::int64_t>(text.size()) != expected.size || sha256_hex(text) != expected.sha256) {
     why = path.string() + " is no longer the file rdtfd wrote (" + std::to_string(text.size()) + " bytes, " +
           std::to_string(expected.size) + " written)";
@@ -168,7 +188,12 @@ namespace rdtf::daemon {
 std::string restore_revisions(const std::filesystem::path& output_root, ModelRecord& record) {
   ModelState state;
   std::string why;
+  record.state_unread = false;
   switch (RevisionStore::load(output_root, record.id, state, why)) {
+    case RevisionStore::LoadResult::kUnavailable:
+      record.state_unread = true;
+      return "revision state of " + record.id + " cannot be read now: " + why +
+             "; it is read again before a revision of it is numbered";
     case RevisionStore::LoadResult::kAbsent: {
       // No state, but the outputs of an earlier run under this id (`.rdtfd-state` deleted, or the
       // outputs copied without it): that run handed out numbers nothing here remembers, and

@@ -38,6 +38,9 @@ struct ModelRecord {
   // The live revision of an earlier run (the state file), until the first conversion: the same
   // result keeps its number, another one is diffed against it.
   std::optional<StoredRevision> restored;
+  // Its state file could not be read for want of descriptors or memory: read again before any
+  // number is handed out (numbering from the clock for good would answer a failure that passes).
+  bool state_unread = false;
   std::string live_result;  // result_digest() of `live`, computed once.
   // `live`'s rdtf_json and urdf were released after its first publication (release_live_texts):
   // live_texts() reads them from its output files.
@@ -109,7 +112,9 @@ namespace rdtf::daemon {
 // Seeds a record just made from its state file: the highest number handed out and the live
 // revision of the earlier run (ModelRecord::restored, when the model file is the same). A state
 // file that cannot be trusted is ignored, and the record numbers from revision_floor_now(), above
-// any number it can have handed out. Returns a line for the log when it was refused, else "".
+// any number it can have handed out. A state file that cannot be read now (out of descriptors)
+// sets `state_unread` and changes nothing else; a later call reads it again. Returns a line for
+// the log when it was refused or not read, else "".
 // The file's `numbered` is trusted: after a possible power loss the start raised every file's
 // `numbered` to its `reserved` first (RevisionStore::number_from_reserves).
 std::string restore_revisions(const std::filesystem::path& output_root, ModelRecord& record);

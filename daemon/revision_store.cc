@@ -14,6 +14,7 @@
 
 #include "../core/gltf/confined_files.h"
 #include "rdtf/atomic_file.h"
+#include "rdtf/shortage.h"
 
 namespace rdtf::daemon {
 namespace {
@@ -246,12 +247,14 @@ RevisionStore::LoadResult RevisionStore::load(const std::filesystem::path& outpu
   if (fd < 0) {
     if (errno == ENOENT) return LoadResult::kAbsent;
     why = path.string() + ": cannot open: " + std::strerror(errno);
-    return LoadResult::kRefused;
+    return is_shortage(errno) ? LoadResult::kUnavailable : LoadResult::kRefused;
   }
   struct stat info {};
   std::string bytes;
   bool ok = ::fstat(fd, &info) == 0;
+  bool for_now = false;
   if (!ok) {
+    for_now = is_shortage(errno);
     why = path.string() + ": cannot stat: " + std::strerror(errno);
   } else if (!S_ISREG(info.st_mode)) {
     ok = false;
@@ -275,7 +278,7 @@ RevisionStore::LoadResult RevisionStore::load(const std::filesystem::path& outpu
     }
   }
   ::close(fd);
-  if (!ok) return LoadResult::kRefused;
+  if (!ok) return for_now ? LoadResult::kUnavailable : LoadResult::kRefused;
   std::string parse_why;
   auto parsed = state_from_json(bytes, parse_why);
   if (!parsed) {

@@ -73,9 +73,10 @@ class RevisionStore {
   static std::filesystem::path folder_for(const std::filesystem::path& output_root);
   static std::filesystem::path file_for(const std::filesystem::path& output_root, const std::string& model_id);
 
-  enum class LoadResult { kAbsent, kLoaded, kRefused };
+  enum class LoadResult { kAbsent, kLoaded, kRefused, kUnavailable };
   // Reads the state of `model_id`: kAbsent when there is no file, kRefused (with `why`) when it is
-  // not a regular file, larger than 64 MiB, torn, malformed or about another model.
+  // not a regular file, larger than 64 MiB, torn, malformed or about another model, kUnavailable
+  // (with `why`) when it could not be read for want of descriptors or memory (rdtf/shortage.h).
   static LoadResult load(const std::filesystem::path& output_root, const std::string& model_id, ModelState& state,
                          std::string& why);
   // After a power loss may have taken back saves made without an fsync: every state file's

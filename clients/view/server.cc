@@ -18,6 +18,7 @@
 
 #include "http_paths.h"
 #include "page_protocol.h"
+#include "rdtf/shortage.h"
 
 namespace rdtf::view {
 namespace {
@@ -338,13 +339,12 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
   std::optional<http::request_parser<http::string_body>> parser_;
 };
 
-// An accept that fails for want of a descriptor (EMFILE, ENFILE) or of memory leaves the
+// An accept that fails for want of a descriptor or of memory (rdtf/shortage.h) leaves the
 // connection waiting in the backlog, so accepting again at once fails again at once: a loop that
 // holds a core until some descriptor is freed. Those are retried after kAcceptRetry, and said once
 // when they start and once when they end.
 static bool out_of_resources(const beast::error_code& ec) {
-  return ec == asio::error::no_descriptors || ec == asio::error::no_buffer_space || ec == asio::error::no_memory ||
-         ec == beast::error_code(ENFILE, beast::system_category());
+  return ec.category() == beast::system_category() && rdtf::is_shortage(ec.value());
 }
 
 void Server::Impl::accept() {

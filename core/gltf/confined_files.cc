@@ -11,6 +11,7 @@
 
 #include "../geometry/big_arrays.h"
 #include "rdtf/percent_decode.h"
+#include "rdtf/shortage.h"
 
 namespace rdtf::internal {
 namespace {
@@ -51,16 +52,18 @@ class Fd {
 std::optional<std::uint64_t> open_checked(const std::filesystem::path* folder,
                                           const std::filesystem::path& path,
                                           std::uint64_t max_bytes, int& fd_out,
-                                          std::string& why) {
+                                          std::string& why, int* error = nullptr) {
   // O_NONBLOCK: opening a FIFO must not wait for a writer.
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK | O_NOCTTY);
   if (fd < 0) {
+    if (error != nullptr) *error = errno;
     why = std::string(std::strerror(errno));
     return std::nullopt;
   }
   fd_out = fd;
   struct stat info {};
   if (::fstat(fd, &info) != 0) {
+    if (error != nullptr) *error = errno;
     why = std::string(std::strerror(errno));
     return std::nullopt;
   }
@@ -69,11 +72,12 @@ std::optional<std::uint64_t> open_checked(const std::filesystem::path* folder,
     return std::nullopt;
   }
   if (folder != nullptr) {
-    std::error_code error;
+    std::error_code where_error;
     const auto real =
-        std::filesystem::read_symlink("/proc/self/fd/" + std::to_string(fd), error);
-    if (error) {
-      why = "cannot tell where it really is: " + error.message();
+        std::filesystem::read_symlink("/proc/self/fd/" + std::to_string(fd), where_error);
+    if (where_error) {
+      if (error != nullptr) *error = where_error.value();
+      why = "cannot tell where it really is: " + where_error.message();
       return std::nullopt;
     }
     // The target is not named: a message must not tell where a link points (it may be a probe).
@@ -98,13 +102,14 @@ std::optional<std::uint64_t> open_checked(const std::filesystem::path* folder,
   return size;
 }
 
-bool read_all(int fd, std::uint64_t size, std::vector<std::uint8_t>& out, std::string& why) {
+bool read_all(int fd, std::uint64_t size, std::vector<std::uint8_t>& out, std::string& why, int* error = nullptr) {
   out.resize(static_cast<std::size_t>(size));
   std::size_t done = 0;
   while (done < out.size()) {
     const ssize_t n = ::read(fd, out.data() + done, out.size() - done);
     if (n < 0) {
       if (errno == EINTR) continue;
+      if (error != nullptr) *error = errno;
       why = std::string(std::strerror(errno));
       return false;
     }
@@ -192,15 +197,17 @@ bool read_confined_file(const std::filesystem::path& folder, const std::filesyst
 std::optional<std::uint64_t> read_confined_file_within(const std::filesystem::path& folder,
                                                        const std::filesystem::path& path,
                                                        std::uint64_t max_bytes,
-                                                       std::vector<std::uint8_t>& out, std::string& why) {
+                                                       std::vector<std::uint8_t>& out, std::string& why,
+                                                       int* error) {
+  if (error != nullptr) *error = 0;
   int raw_fd = -1;
   const auto size =
-      open_checked(&folder, path, std::numeric_limits<std::uint64_t>::max(), raw_fd, why);
+      open_checked(&folder, path, std::numeric_limits<std::uint64_t>::max(), raw_fd, why, error);
   Fd fd(raw_fd);
   if (!size || *size > max_bytes) return size;
   // A buffer is kept as it is read (the loader moves it into the asset): huge pages for a large one.
   reserve_huge(out, static_cast<std::size_t>(*size));
-  if (!read_all(fd.get(), *size, out, why)) {
+  if (!read_all(fd.get(), *size, out, why, error)) {
     out.clear();
     return std::nullopt;
   }
@@ -226,10 +233,9 @@ bool read_regular_file(const std::filesystem::path& path, std::uint64_t max_byte
   return read_all(fd.get(), *size, out, why);
 }
 
-// An open that failed for want of the system's, not because of the file: the process is out of
-// descriptors (EMFILE), the system is (ENFILE), or memory is short. The file may well be there:
-// neither gone (rdtfd would publish REMOVED) nor refused for good.
-static bool for_now(int error) { return error == EMFILE || error == ENFILE || error == ENOMEM || error == ENOBUFS; }
+// An open that failed for want of the system's, not because of the file (rdtf/shortage.h): the file
+// may well be there, neither gone (rdtfd would publish REMOVED) nor refused for good.
+static bool for_now(int error) { return is_shortage(error); }
 
 ReadBeneath read_beneath(const std::filesystem::path& root, const std::filesystem::path& path,
                          std::uint64_t max_bytes, std::vector<std::uint8_t>& out, std::string& why) {

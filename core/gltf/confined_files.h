@@ -40,11 +40,13 @@ std::optional<std::uint64_t> confined_file_size(const std::filesystem::path& fol
 
 // One open of a confined file, with the checks of read_confined_file: its size (nothing and `why`
 // when refused), and its bytes in `out` when that size is at most `max_bytes` (a larger file is
-// sized, not read). A read that fails after the checks gives nothing and `why` too.
+// sized, not read). A read that fails after the checks gives nothing and `why` too, and the
+// failing call's errno in `*error` when given (0 when a check refused the file).
 std::optional<std::uint64_t> read_confined_file_within(const std::filesystem::path& folder,
                                                        const std::filesystem::path& path,
                                                        std::uint64_t max_bytes,
-                                                       std::vector<std::uint8_t>& out, std::string& why);
+                                                       std::vector<std::uint8_t>& out, std::string& why,
+                                                       int* error = nullptr);
 
 // Reads any regular file (the model itself), refusing non-regular files and files over max_bytes.
 bool read_regular_file(const std::filesystem::path& path, std::uint64_t max_bytes,

@@ -1,4 +1,5 @@
 #include "rdtf/atomic_file.h"
+#include "rdtf/shortage.h"
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -267,7 +268,7 @@ bool same_bytes(const std::filesystem::path& a, const std::filesystem::path& b) 
 // first, so that the fsyncs wait for one round of the disk a batch instead of one a file; batches,
 // because a descriptor a file held 20,001 meshes open at once and failed with "Too many open files"
 // under any usual open-file limit (s104rev N1). A batch also ends where the process's limit is
-// reached (EMFILE, or the system's: ENFILE): a daemon already holding descriptors may have fewer
+// reached, or memory is short (rdtf/shortage.h): a daemon already holding descriptors may have fewer
 // than kBatch free, and a batch of one still makes progress. Only a file that cannot be opened
 // with no other held is an error.
 bool sync_files(const std::filesystem::path& folder, const std::vector<std::filesystem::path>& files,
@@ -281,7 +282,7 @@ bool sync_files(const std::filesystem::path& folder, const std::vector<std::file
     while (next < files.size() && fds.size() < kBatch) {
       const int fd = ::open((folder / files[next]).c_str(), O_RDONLY | O_CLOEXEC | O_NOFOLLOW);
       if (fd < 0) {
-        if ((errno == EMFILE || errno == ENFILE) && !fds.empty()) break;  // Sync what is held, go on.
+        if (is_shortage(errno) && !fds.empty()) break;  // Sync what is held, go on.
         why = errno_text(("open " + (folder / files[next]).string()).c_str());
         ok = false;
         break;

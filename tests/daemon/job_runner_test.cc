@@ -91,13 +91,12 @@ TEST_F(JobRunnerTest, ASmallJobIsNotHeldBehindLargeOnesThatHoldEveryWorker) {
     big.root = root_;
     big.source = root_ / name;
     big.output_dir = tmp_.path() / "out" / name;
-    big.read_file = [&reading, released](const fs::path&, const fs::path& path, std::uint64_t,
-                                         std::vector<std::uint8_t>& out, std::string&) -> std::optional<std::uint64_t> {
+    big.read_file = [&reading, released](const fs::path&, const fs::path& path, std::uint64_t, SourceFile& file) {
       ++reading;
       released.wait();
       const std::string bytes = rdtf::testing::read_file(path);
-      out.assign(bytes.begin(), bytes.end());
-      return bytes.size();
+      file.bytes.assign(bytes.begin(), bytes.end());
+      file.size = bytes.size();
     };
     runner.submit(std::move(big));
   }
@@ -178,14 +177,12 @@ TEST_F(JobRunnerTest, ACommitRunsBeforeTheConversionsQueuedAheadOfIt) {
   std::atomic<bool> once{false};
   std::promise<void> release;
   std::shared_future<void> released = release.get_future().share();
-  held.read_file = [&entered, &once, released](const fs::path& root, const fs::path& path, std::uint64_t limit,
-                                        std::vector<std::uint8_t>& out, std::string& why) -> std::optional<std::uint64_t> {
+  held.read_file = [&entered, &once, released](const fs::path&, const fs::path& path, std::uint64_t, SourceFile& file) {
     if (!once.exchange(true)) entered.set_value();
     released.wait();
     const std::string bytes = rdtf::testing::read_file(path);
-    (void)root, (void)limit, (void)why;
-    out.assign(bytes.begin(), bytes.end());
-    return bytes.size();
+    file.bytes.assign(bytes.begin(), bytes.end());
+    file.size = bytes.size();
   };
   ThreadJobRunner runner(1);
   runner.submit(std::move(held));

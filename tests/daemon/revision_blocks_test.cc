@@ -61,6 +61,30 @@ TEST(RevisionBlocks, AStartGoesOnFromNumberedWithinTheReserve) {
   EXPECT_EQ(again.reserved, 100);  // Still within the block: no durable save was needed.
 }
 
+// A state file not read for want of descriptors is neither refused nor absent: the model is not
+// numbered from the clock for good (s106fd D5: a failure that passes), and the next read, with
+// descriptors free, goes on from the file's numbers.
+TEST(RevisionBlocks, AStateNotReadForWantOfDescriptorsIsReadAgain) {
+  testing::TempDir output;
+  ModelRecord first = record_of("m.gltf");
+  hand_out(output.path(), first, 7);
+  ModelRecord again = record_of("m.gltf");
+  std::string line;
+  {
+    const testing::DescriptorHeadroom none(0);
+    ASSERT_TRUE(none.ok());
+    line = restore_revisions(output.path(), again);
+  }
+  EXPECT_TRUE(again.state_unread);
+  EXPECT_EQ(again.numbered, 0);
+  EXPECT_NE(line.find("revision state of m.gltf cannot be read now: "), std::string::npos) << line;
+  EXPECT_NE(line.find("Too many open files"), std::string::npos) << line;
+  EXPECT_EQ(restore_revisions(output.path(), again), "");
+  EXPECT_FALSE(again.state_unread);
+  EXPECT_EQ(again.numbered, 7);
+  EXPECT_EQ(again.reserved, 100);
+}
+
 // After a power loss a file may be older than the numbers the bus saw (7 was saved, 8 to 50 handed
 // out and their saves lost): every file numbers on from its reserve, and says so, before any model
 // is restored, so that no start after it can go back below that.

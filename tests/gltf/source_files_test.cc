@@ -34,16 +34,15 @@ fs::path write_arm3(const fs::path& folder, const std::function<void(Json&)>& ed
 struct CountingReader {
   std::map<fs::path, int> reads;
   ConfinedReader reader() {
-    return [this](const fs::path&, const fs::path& path, std::uint64_t max_bytes, std::vector<std::uint8_t>& out,
-                  std::string& why) -> std::optional<std::uint64_t> {
+    return [this](const fs::path&, const fs::path& path, std::uint64_t max_bytes, SourceFile& file) {
       ++reads[path];
       if (!fs::exists(path)) {
-        why = "missing";
-        return std::nullopt;
+        file.why = "missing";
+        return;
       }
       const std::string text = testing::read_file(path);
-      if (text.size() <= max_bytes) out = bytes_of(text);
-      return text.size();
+      if (text.size() <= max_bytes) file.bytes = bytes_of(text);
+      file.size = text.size();
     };
   }
 };

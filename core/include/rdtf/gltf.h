@@ -55,6 +55,10 @@ struct SourceFile {
   std::optional<std::uint64_t> size;  // Nothing: refused or unreadable (`why` says why).
   std::vector<std::uint8_t> bytes;    // The file, when its size is within max_file_bytes.
   std::string why;
+  // Not read for want of the system's (descriptors, memory: rdtf/shortage.h), not for anything of
+  // the file's: a later read may succeed, so rdtfd tries the same content again instead of
+  // rejecting it until the next save.
+  bool unavailable = false;
 };
 
 // Every file a model names (referenced_files), each read once, by its path in the model's folder:
@@ -62,10 +66,14 @@ struct SourceFile {
 using SourceFiles = std::map<std::filesystem::path, SourceFile>;
 
 // Reads one confined file (the checks of the loader: no symlink out of the folder, one hard link,
-// a regular file): its size, and its bytes in `out` when the size is within `max_bytes`.
-using ConfinedReader = std::function<std::optional<std::uint64_t>(
-    const std::filesystem::path& folder, const std::filesystem::path& path, std::uint64_t max_bytes,
-    std::vector<std::uint8_t>& out, std::string& why)>;
+// a regular file) into `file`: its size, and its bytes when the size is within `max_bytes`; or
+// nothing, with `why` (and `unavailable` when the system, not the file, was the reason).
+using ConfinedReader = std::function<void(const std::filesystem::path& folder, const std::filesystem::path& path,
+                                          std::uint64_t max_bytes, SourceFile& file)>;
+
+// The loader's own ConfinedReader.
+void read_confined(const std::filesystem::path& folder, const std::filesystem::path& path, std::uint64_t max_bytes,
+                   SourceFile& file);
 
 // Reads each of `files` once (a file named twice is read once) under limits.max_file_bytes, through
 // `reader` when given (tests count reads with it), else the loader's own.

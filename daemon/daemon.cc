@@ -155,6 +155,7 @@ bool Daemon::start(std::string& error) {
     error = "the live simulation: " + simulation_error_;
     return false;
   }
+  started_once_ = true;
   rescan("start");
   next_republish_ = clock_->now() + config_.republish_period;
   next_status_ = clock_->now();
@@ -326,7 +327,11 @@ void Daemon::open_result_cache() {
 
 void Daemon::start_simulation_host() {
   simulation_.reset();
-  if (!config_.simulate) return;
+  if (!config_.simulate) {
+    simulation_error_.clear();  // Nothing to try again.
+    simulation_attempts_ = 0;
+    return;
+  }
   SimulationHostOptions options;
   options.lcm_url = config_.lcm_url;
   options.channel_prefix = config_.channel_prefix;
@@ -347,20 +352,38 @@ void Daemon::start_simulation_host() {
   simulation_ = std::make_unique<SimulationHost>(options);
   if (!simulation_->ok()) {
     // Said and dropped: with no LCM the host would step models whose states go nowhere (and LCM
-    // printed a line for every publish it ignored). start() refuses to run so; a reload goes on
-    // without the live simulation until the next reload or restart.
+    // printed a line for every publish it ignored). start() refuses to run so; after a reload it is
+    // tried again with a back-off, since what failed (descriptors, the network not up yet) may pass.
     simulation_error_ = simulation_->open_error();
-    log_line("the live simulation cannot start: " + simulation_error_ +
-             "; no joint or link states are published and no joint command is taken until a reload or restart");
     simulation_.reset();
+    ++simulation_attempts_;
+    simulation_retry_delay_ = simulation_attempts_ == 1 ? kSimulationRetryFirst
+                                                        : std::min(simulation_retry_delay_ * 2, kSimulationRetryLongest);
+    next_simulation_retry_ = clock_->now() + simulation_retry_delay_;
+    // At start rdtfd refuses to run (start() says why); later it serves on and tries again.
+    if (started_once_) {
+      log_line("the live simulation cannot start: " + simulation_error_ +
+               "; no joint or link states are published and no joint command is taken; trying again in " +
+               std::to_string(std::chrono::duration_cast<std::chrono::milliseconds>(simulation_retry_delay_).count()) +
+               " ms (attempt " + std::to_string(simulation_attempts_) + ")");
+    }
     return;
   }
+  if (simulation_attempts_ > 0) {
+    log_line("the live simulation started after " + std::to_string(simulation_attempts_) + " failed attempts");
+  }
+  simulation_attempts_ = 0;
   simulation_error_.clear();
   for (const auto& [source, record] : registry_.all()) {
     const bool usable = record.live && !(record.live->validation && !record.live->validation->passed);
     if (usable) simulation_->load(record.id, record.revisions, record.live->content_hash, record.live->robot,
                                   live_stepper(*record.live), after_quickstep_failed(*record.live));
   }
+}
+
+void Daemon::retry_simulation_host(Clock::time_point now) {
+  if (!config_.simulate || simulation_ || simulation_error_.empty() || now < next_simulation_retry_) return;
+  start_simulation_host();
 }
 
 void Daemon::reload_config() {
@@ -464,6 +487,7 @@ void Daemon::step(std::chrono::milliseconds max_wait) {
   if (auto send = publisher_->drain(now)) wake = std::min(wake, *send);
   if (config_.republish_period.count() > 0) wake = std::min(wake, next_republish_);
   if (watches_failing_) wake = std::min(wake, next_watch_retry_);
+  if (config_.simulate && !simulation_ && !simulation_error_.empty()) wake = std::min(wake, next_simulation_retry_);
   if (!pending_events_.empty()) wake = now;  // A burst still being handled: no sleep.
   wake = std::min(wake, next_status_);
   if (auto deferred = request_throttle_.next_due()) wake = std::min(wake, *deferred);
@@ -508,6 +532,7 @@ void Daemon::trim_after_burst() {
 
 void Daemon::periodic(Clock::time_point now) {
   bus_.flush_drops();
+  retry_simulation_host(now);
   if (config_.republish_period.count() > 0 && now >= next_republish_) {
     const auto start = clock_->now();
     const std::size_t count = publish_all();

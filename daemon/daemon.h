@@ -66,6 +66,7 @@ class Daemon {
   // For tests that step the loop: the models and what the daemon counted.
   const Registry& registry() const { return registry_; }
   const DaemonCounters& counters() const { return counters_; }
+  bool simulating() const { return simulation_ != nullptr; }  // The live simulation runs.
 
  private:
   // File events and the watched tree (daemon_files.cc).
@@ -135,7 +136,12 @@ class Daemon {
 
   // The loop (daemon.cc).
   void handle_signals();
+  // Starts the live simulation when `simulate` is on. One whose LCM does not open is dropped and
+  // tried again from periodic(), with a back-off (kSimulationRetryFirst doubling to ...Longest).
   void start_simulation_host();
+  void retry_simulation_host(Clock::time_point now);
+  static constexpr Clock::duration kSimulationRetryFirst = std::chrono::seconds(1);
+  static constexpr Clock::duration kSimulationRetryLongest = std::chrono::seconds(30);
   void periodic(Clock::time_point now);
   // Once the send queue is empty after holding at least kTrimAfterQueuedBytes, the memory freed
   // meanwhile goes back to the system (malloc_trim). A restart over thousands of cached models
@@ -158,6 +164,10 @@ class Daemon {
   std::unique_ptr<SimulationHost> simulation_;  // Null when `simulate` is off, or its LCM did not open.
   std::size_t stages_left_behind_ = 0;  // Stage folders a failed write could not remove, at the last look.
   std::string simulation_error_;                 // Why the last host did not start; empty when it did.
+  Clock::time_point next_simulation_retry_;      // When simulation_error_ is set: the next attempt.
+  Clock::duration simulation_retry_delay_{};
+  int simulation_attempts_ = 0;                  // Failed attempts since it last ran.
+  bool started_once_ = false;                    // start() succeeded: failures are retried, not fatal.
   BusInput bus_;
   BlobServer blobs_;  // The files of every live revision, by SHA-256 (blob_server.h).
   RequestThrottle request_throttle_;

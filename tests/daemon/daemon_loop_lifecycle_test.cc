@@ -321,5 +321,40 @@ TEST_F(DaemonLoop, AReloadToAnUnopenableBusKeepsTheRunningConfig) {
   EXPECT_EQ(on("RDTF/STATUS"), 0);
 }
 
+// A reload that restarts the live simulation while its LCM cannot open (the robot's network not up
+// yet, no descriptor free; here LCM's file provider, whose folder is not there) left rdtfd without
+// live states until the next reload or restart (stop 48's leftover). Now it is tried again after
+// 1 s, then 2 s, and runs once it opens. (The file provider keeps the test off any network; the
+// live simulation only publishes, and with no model nothing.)
+TEST_F(DaemonLoop, ALiveSimulationThatCannotOpenAfterAReloadIsTriedAgain) {
+  const std::filesystem::path folder = tmp_.path() / "bus";
+  std::filesystem::create_directories(folder);
+  double rate = 100;
+  start(
+      [&](DaemonConfig& config) {
+        config.simulate = true;
+        config.lcm_url = "file://" + (folder / "states.lcm").string() + "?mode=w";
+      },
+      [this, &rate](std::string&) -> std::optional<DaemonConfig> {
+        DaemonConfig fresh = config_;
+        fresh.state_rate_hz = rate;  // A setting that restarts the live simulation.
+        return fresh;
+      });
+  ASSERT_TRUE(daemon_->simulating());
+  std::filesystem::remove_all(folder);
+  rate = 50;
+  daemon_->reload_config();
+  EXPECT_FALSE(daemon_->simulating());
+  advance(999ms);
+  EXPECT_FALSE(daemon_->simulating());
+  advance(1ms);  // The first attempt: the folder is still not there.
+  EXPECT_FALSE(daemon_->simulating());
+  std::filesystem::create_directories(folder);
+  advance(1999ms);
+  EXPECT_FALSE(daemon_->simulating());
+  advance(1ms);
+  EXPECT_TRUE(daemon_->simulating());
+}
+
 }  // namespace
 }  // namespace rdtf::daemon

@@ -341,7 +341,7 @@ void Daemon::start_simulation_host() {
   // At most one state a step: a higher rate is not refused (it depends on two other settings) but
   // said, since the states then come at the step rate.
   const double step_rate = options.real_time_factor / options.simulation.time_step;
-  if (options.state_rate_hz > step_rate) {
+  if (options.state_rate_hz > step_rate && simulation_attempts_ == 0) {  // Said once, not at each retry.
     log_line("state_rate_hz " + format_number(options.state_rate_hz) + " is above one state per step (time_step " +
              format_number(options.simulation.time_step) + " s at real_time_factor " +
              format_number(options.real_time_factor) + "): states are published at " + format_number(step_rate) +
@@ -454,7 +454,10 @@ void Daemon::reload_config() {
   publisher_->set_rate(config_.chunk_rate_bytes_per_s);
   blobs_.set_max_message_bytes(config_.max_chunk_bytes);
   read_budget_->set_capacity(config_.max_read_bytes_in_flight);
-  if (simulation_changed) start_simulation_host();
+  if (simulation_changed) {
+    simulation_attempts_ = 0;  // New settings: a failure is their first, tried again after 1 s.
+    start_simulation_host();
+  }
   // New conversion settings (density, limits) may change any model: convert them all again. A
   // model whose result comes out the same keeps its revision (apply), and a reload that changes
   // no conversion setting converts nothing: the rescan finds every content unchanged.

@@ -265,6 +265,10 @@ std::string Daemon::choose_model_id(const std::filesystem::path& source) const {
     ModelState state;
     std::string why;
     const auto loaded = RevisionStore::load(config_.output, id, state, why);
+    // Out of descriptors no state says anything, and every one would fail alike (100,000 of them,
+    // on the loop): the first id free of live models, as for a name without a history. Its state is
+    // read when its first conversion starts (Daemon::state_known).
+    if (loaded == RevisionStore::LoadResult::kUnavailable) break;
     if (loaded == RevisionStore::LoadResult::kLoaded && state.source == source.string()) {
       if (!live) return id;  // its own
       continue;

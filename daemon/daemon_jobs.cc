@@ -251,6 +251,17 @@ void Daemon::apply(ConversionOutcome outcome) {
     result = JobResult::kRecreated;  // Settles from now, then converts: what a new save gets.
   } else switch (outcome.kind) {
     case ConversionOutcome::Kind::kConverted:
+      if (!state_known(*record, nullptr)) {
+        // A job started before this record's state became unreadable (the record made again under
+        // the same path meanwhile): never numbered blind. Its outputs are written; the same
+        // content comes again as a job once the state can be read.
+        outcome.diagnostics = Diagnostics{};
+        outcome.diagnostics.error(codes::IO_ERROR, "",
+                                  "revision state of " + id + " cannot be read now; it is read again before a "
+                                  "revision of it is numbered");
+        result = JobResult::kRetryable;
+        break;
+      }
       apply_converted(outcome, *record);
       break;
     case ConversionOutcome::Kind::kUnchanged:

@@ -9,6 +9,8 @@
 #include <fstream>
 #include <iterator>
 
+#include "rdtf/shortage.h"
+
 namespace rdtf::daemon {
 
 bool is_model_file(const std::filesystem::path& path) {
@@ -203,10 +205,14 @@ std::string restore_revisions(const std::filesystem::path& output_root, ModelRec
       // refuses to write through).
       std::error_code ec;
       const std::filesystem::path earlier = output_root / record.id;
-      if (!std::filesystem::is_directory(std::filesystem::symlink_status(earlier, ec)) ||
-          std::filesystem::is_empty(earlier, ec) || ec) {
-        return "";
+      if (!std::filesystem::is_directory(std::filesystem::symlink_status(earlier, ec)) || ec) return "";
+      const bool empty = std::filesystem::is_empty(earlier, ec);
+      if (ec && is_shortage(ec.value())) {
+        record.state_unread = true;  // Whether an earlier run numbered it is not known yet.
+        return "revision state of " + record.id + " cannot be read now: cannot list " + earlier.string() + ": " +
+               std::strerror(ec.value()) + "; it is read again before a revision of it is numbered";
       }
+      if (empty || ec) return "";
       record.numbered = std::max(record.numbered, revision_floor_now());
       return "revision state of " + record.id + " missing while " + earlier.string() +
              " holds an earlier run's outputs; its revisions are numbered from " + std::to_string(record.numbered + 1) +

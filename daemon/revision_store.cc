@@ -245,17 +245,19 @@ RevisionStore::LoadResult RevisionStore::load(const std::filesystem::path& outpu
   // No symlink followed, no FIFO or device read: only a regular file of ours.
   const int fd = ::open(path.c_str(), O_RDONLY | O_NOFOLLOW | O_CLOEXEC | O_NONBLOCK);
   if (fd < 0) {
-    if (errno == ENOENT) return LoadResult::kAbsent;
-    why = path.string() + ": cannot open: " + std::strerror(errno);
-    return is_shortage(errno) ? LoadResult::kUnavailable : LoadResult::kRefused;
+    const int error = errno;
+    if (error == ENOENT) return LoadResult::kAbsent;
+    why = path.string() + ": cannot open: " + std::strerror(error);
+    return is_shortage(error) ? LoadResult::kUnavailable : LoadResult::kRefused;
   }
   struct stat info {};
   std::string bytes;
   bool ok = ::fstat(fd, &info) == 0;
   bool for_now = false;
   if (!ok) {
-    for_now = is_shortage(errno);
-    why = path.string() + ": cannot stat: " + std::strerror(errno);
+    const int error = errno;
+    for_now = is_shortage(error);
+    why = path.string() + ": cannot stat: " + std::strerror(error);
   } else if (!S_ISREG(info.st_mode)) {
     ok = false;
     why = path.string() + ": not a regular file";
@@ -269,6 +271,7 @@ RevisionStore::LoadResult RevisionStore::load(const std::filesystem::path& outpu
     while (done < bytes.size()) {
       const auto n = ::read(fd, bytes.data() + done, bytes.size() - done);
       if (n < 0 && errno == EINTR) continue;
+      if (n < 0) for_now = is_shortage(errno);
       if (n <= 0) break;
       done += static_cast<std::size_t>(n);
     }

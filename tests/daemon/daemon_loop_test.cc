@@ -297,20 +297,33 @@ TEST_F(DaemonLoop, AFullDiskIsReportedOnceAndRetriedWithABackOffUntilItWorks) {
   EXPECT_EQ(phase("arm3.glb"), ModelPhase::kLive);
 }
 
-// A new model whose revision state could not be opened for want of descriptors (EMFILE, not
-// ENOENT) was taken for one with a refused state and numbered from the clock for good (s106fd D5).
-// Now the state is read again when its conversion starts; still unreadable then, the job does
-// nothing and is retried like a full disk's, and the model, its state absent, starts at revision 1
-// (read after the job had written its outputs, an absent state would have taken them for an
-// earlier run's and numbered from the clock all the same).
-TEST_F(DaemonLoop, ARevisionStateNotReadForWantOfDescriptorsIsReadBeforeNumbering) {
-  start();
+// A model whose revision state could not be opened for want of descriptors (EMFILE, not ENOENT)
+// when it was found was taken for one with a refused state and numbered from the clock for good
+// (s106fd D5). Now the state is read again when its conversion starts; still unreadable then, the
+// job reads and writes nothing and is retried like a full disk's, and the model goes on from its
+// state's numbers (7 here: revision 8). Read after the job had written its outputs, a state
+// absent would have taken them for an earlier run's and numbered from the clock all the same.
+// Both ways of starting a conversion: at the deadline, and while settling (rdtfd's default),
+// where no prepared job starts until the state is read.
+class DaemonStateUnread : public DaemonLoop, public ::testing::WithParamInterface<bool> {};
+
+TEST_P(DaemonStateUnread, ARevisionStateNotReadForWantOfDescriptorsIsReadBeforeNumbering) {
+  const bool while_settling = GetParam();
+  ModelRecord earlier;
+  earlier.id = "arm3.glb";
+  earlier.source = watch_ / "arm3.glb";
+  earlier.numbered = 7;
+  ASSERT_EQ(save_revisions(out_, earlier, std::nullopt), "");
+  // That run stopped cleanly: the start numbers on from 7, not from the end of its reserve.
+  rdtf::testing::write_file(RevisionStore::folder_for(out_) / "clean-stop", "");
+  start([&](DaemonConfig& config) { config.convert_while_settling = while_settling; });
   // The same steps once with descriptors free: under the sanitizers, UBSan's vptr check needs a
   // pipe at the first call through each vtable (docs/notes/ubsan-descriptors.md), so every call
   // the starved steps make is made here first.
   save("warm.glb", fixture("arm3.glb"));
   advance(50ms);
   convert();
+  convert();  // While settling: the prepared job, then the commit.
   ASSERT_EQ(events("warm.glb"), kRevision1);
   rdtf::testing::write_file(watch_ / "arm3.glb", fixture("arm3.glb"));
   {
@@ -320,7 +333,9 @@ TEST_F(DaemonLoop, ARevisionStateNotReadForWantOfDescriptorsIsReadBeforeNumberin
   }
   const ModelRecord* record = const_cast<Registry&>(daemon_->registry()).find(watch_ / "arm3.glb");
   ASSERT_NE(record, nullptr);
+  EXPECT_EQ(record->id, "arm3.glb");
   EXPECT_TRUE(record->state_unread);
+  EXPECT_EQ(runner_->waiting(), 0u);  // Nothing prepared while its numbers are unknown.
   {
     const rdtf::testing::DescriptorHeadroom none(0);
     ASSERT_TRUE(none.ok());
@@ -329,15 +344,20 @@ TEST_F(DaemonLoop, ARevisionStateNotReadForWantOfDescriptorsIsReadBeforeNumberin
   ASSERT_EQ(runner_->waiting(), 1u);
   convert();
   EXPECT_EQ(events("arm3.glb"), std::vector<std::string>{"ERROR live r0"});
-  EXPECT_FALSE(std::filesystem::exists(out_ / "arm3.glb"));  // Nothing written.
   EXPECT_EQ(phase("arm3.glb"), ModelPhase::kRetryAfter);
+  EXPECT_FALSE(std::filesystem::exists(out_ / "arm3.glb"));  // Nothing written.
   advance(200ms);
   advance(50ms);
-  ASSERT_EQ(runner_->waiting(), 1u);
   convert();
-  EXPECT_EQ(events("arm3.glb"), (std::vector<std::string>{"ERROR live r0", "DESCRIPTION r1", "INERTIA"}));
+  convert();
+  EXPECT_EQ(events("arm3.glb"), (std::vector<std::string>{"ERROR live r0", "DESCRIPTION r8", "INERTIA"}));
   EXPECT_FALSE(const_cast<Registry&>(daemon_->registry()).find(watch_ / "arm3.glb")->state_unread);
 }
+
+INSTANTIATE_TEST_SUITE_P(BothWays, DaemonStateUnread, ::testing::Bool(),
+                         [](const ::testing::TestParamInfo<bool>& param_info) {
+                           return param_info.param ? "WhileSettling" : "AtTheDeadline";
+                         });
 
 }  // namespace
 }  // namespace rdtf::daemon

@@ -118,8 +118,11 @@ void InotifyWatcher::add_folder(const std::filesystem::path& folder,
   // hides its subfolders, which then went unwatched without a word (s106fd D4). It counts as not
   // watched, so that it is said and the walk is tried again, as for a watch that failed. A folder
   // gone meanwhile is its parent's event, not this.
-  if (ec && wd >= 0 && ec != std::errc::no_such_file_or_directory && ec != std::errc::not_a_directory) {
-    const std::string why = "cannot list " + folder.string() + ": " + ec.message();
+  // errno values (the directory iterator's are the system's), compared and said without asking
+  // the error's category: no call through a vtable where descriptors may have run out
+  // (docs/notes/ubsan-descriptors.md).
+  if (ec && wd >= 0 && ec.value() != ENOENT && ec.value() != ENOTDIR) {
+    const std::string why = "cannot list " + folder.string() + ": " + std::strerror(ec.value());
     if (!error.empty()) error += "; ";
     error += why;
     unwatched_.push_back({folder, false, why});

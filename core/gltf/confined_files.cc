@@ -233,10 +233,9 @@ bool read_regular_file(const std::filesystem::path& path, std::uint64_t max_byte
   return read_all(fd.get(), *size, out, why);
 }
 
-// An open that failed for want of the system's, not because of the file (rdtf/shortage.h): the file
-// may well be there, neither gone (rdtfd would publish REMOVED) nor refused for good.
-static bool for_now(int error) { return is_shortage(error); }
 
+// An open that failed for want of the system's, not because of the file (is_shortage): the file may
+// well be there, neither gone (rdtfd would publish REMOVED) nor refused for good.
 ReadBeneath read_beneath(const std::filesystem::path& root, const std::filesystem::path& path,
                          std::uint64_t max_bytes, std::vector<std::uint8_t>& out, std::string& why) {
   const auto relative = path.lexically_normal().lexically_relative(root);
@@ -248,7 +247,7 @@ ReadBeneath read_beneath(const std::filesystem::path& root, const std::filesyste
   if (raw_dir < 0) {
     const int error = errno;
     why = "the watched folder " + root.string() + ": " + std::strerror(error);
-    return for_now(error) ? ReadBeneath::kUnavailable : ReadBeneath::kGone;
+    return is_shortage(error) ? ReadBeneath::kUnavailable : ReadBeneath::kGone;
   }
   auto dir = std::make_unique<Fd>(raw_dir);
   std::vector<std::string> parts;
@@ -264,7 +263,7 @@ ReadBeneath read_beneath(const std::filesystem::path& root, const std::filesyste
                                                 : "cannot be opened: " + std::string(std::strerror(error)));
       // A folder that cannot be searched (chmod 000) still holds the model: refused, not gone, so
       // that rdtfd keeps serving its last good revision until the folder is readable again.
-      if (for_now(error)) return ReadBeneath::kUnavailable;
+      if (is_shortage(error)) return ReadBeneath::kUnavailable;
       return error == EACCES || error == EPERM ? ReadBeneath::kRefused : ReadBeneath::kGone;
     }
     dir = std::make_unique<Fd>(next);
@@ -278,7 +277,7 @@ ReadBeneath read_beneath(const std::filesystem::path& root, const std::filesyste
       return ReadBeneath::kRefused;
     }
     why = std::string("cannot be opened: ") + std::strerror(error);
-    if (for_now(error)) return ReadBeneath::kUnavailable;
+    if (is_shortage(error)) return ReadBeneath::kUnavailable;
     return error == ENOENT || error == ENOTDIR ? ReadBeneath::kGone : ReadBeneath::kRefused;
   }
   Fd fd(raw_fd);

@@ -163,7 +163,10 @@ void run_scenario(Simulation& sim, const Simulation::Model& model, const Validat
       report.worst_joint = robot.joints[h.worst_separation_joint].name;
     }
     report.worst_joint_misalignment = std::max(report.worst_joint_misalignment, h.worst_joint_misalignment);
-    if (h.worst_limit_ratio > 0 && h.worst_limit_violation > report.worst_limit_violation) {
+    // Ranked by ratio, as SIM_LIMIT_VIOLATED is: a violation in rad and one in m do not compare,
+    // and the joint named must be the one that fails the model when one does.
+    if (h.worst_limit_ratio > report.worst_limit_ratio) {
+      report.worst_limit_ratio = h.worst_limit_ratio;
       report.worst_limit_violation = h.worst_limit_violation;
       report.worst_limit_joint = robot.joints[h.worst_limit_joint].name;
     }
@@ -385,6 +388,7 @@ Json validation_report_json(const ValidationReport& report) {
           {"worstJointMisalignment", report.worst_joint_misalignment},
           {"worstLimitViolation", report.worst_limit_violation},
           {"worstLimitJoint", report.worst_limit_joint},
+          {"worstLimitRatio", report.worst_limit_ratio},
           {"wallTime", report.wall_time},
           {"cpuTime", report.cpu_time},
           {"cancelled", report.cancelled},

@@ -144,6 +144,51 @@ TEST(JointLimits, SlideRestingOnItsStopUnderGravity) {
   EXPECT_NEAR(health.limit_bound, 1e-3 + 50 * kStandardGravity / k, 1e-15);
 }
 
+// The report names the joint furthest past its limit relative to its bound, as SIM_LIMIT_VIOLATED
+// does, not the largest number: a hinge's violation in rad and a slide's in m do not compare. The
+// bar of Franka's joint 6 swings onto its stop (mrad past it) beside a slide that rests its weight
+// on its stop (a fraction of a nanometre past it) under a linear tolerance of 0.1 nm: the slide is
+// the further past relative to its bound. The two hang from a frame the world holds, so each is
+// an island of its own and moves as it does alone.
+TEST(JointLimits, TheReportNamesTheJointFurthestPastRelativeToItsBound) {
+  auto add_bar = [](RobotBuilder& b, int root) {
+    b.child(root, "pivot", JointKind::kRevolute, Eigen::Isometry3d::Identity(), Eigen::Vector3d::UnitZ(), "bar",
+            box_inertial(1.0, {0.05, 0.5, 0.05}, {0, -0.25, 0}));
+    b.joint(b.robot().joints.size() - 1).limits = JointLimits{-0.0175, 3.7525, 0, 0};
+  };
+  auto add_slide = [](RobotBuilder& b, int root) {
+    b.child(root, "lift", JointKind::kPrismatic, Eigen::Isometry3d(Eigen::Translation3d(2, 0, 0)),
+            Eigen::Vector3d::UnitY(), "carriage", box_inertial(50.0, {0.2, 0.2, 0.2}));
+    b.joint(b.robot().joints.size() - 1).limits = JointLimits{0.0, 0.5, 0, 0};
+  };
+  ValidationOptions options;
+  options.initial_positions = {{"pivot", 3.0}};
+  options.limit_tolerance_linear = 1e-10;
+  auto validate = [&](bool bar, bool slide) {
+    RobotBuilder b;
+    const int root = b.root("frame", MassProperties{});
+    if (bar) add_bar(b, root);
+    if (slide) add_slide(b, root);
+    return validate_dynamics(b.robot(), options);
+  };
+  const ValidationReport bar_alone = validate(true, false);
+  const ValidationReport slide_alone = validate(false, true);
+  const ValidationReport both = validate(true, true);
+  std::printf("bar: %.6g rad past (ratio %.4g); slide: %.6g m past (ratio %.4g); both: %s %.6g (ratio %.4g)\n",
+              bar_alone.worst_limit_violation, bar_alone.worst_limit_ratio, slide_alone.worst_limit_violation,
+              slide_alone.worst_limit_ratio, both.worst_limit_joint.c_str(), both.worst_limit_violation,
+              both.worst_limit_ratio);
+  // What makes the case: the bar's number is the larger, the slide's ratio is.
+  ASSERT_EQ(bar_alone.worst_limit_joint, "pivot");
+  ASSERT_EQ(slide_alone.worst_limit_joint, "lift");
+  ASSERT_GT(bar_alone.worst_limit_violation, 1e6 * slide_alone.worst_limit_violation);
+  ASSERT_GT(slide_alone.worst_limit_ratio, bar_alone.worst_limit_ratio);
+  EXPECT_EQ(both.worst_limit_joint, "lift");
+  EXPECT_EQ(both.worst_limit_violation, slide_alone.worst_limit_violation);
+  EXPECT_EQ(both.worst_limit_ratio, slide_alone.worst_limit_ratio);
+  EXPECT_EQ(both.passed, slide_alone.passed && bar_alone.passed) << all_text(both.diagnostics);
+}
+
 // Effort and speed limits without lower and upper (a wheel's URDF <limit effort velocity/>, an
 // rdtf_effort hint alone) bound no motion: the joint turns freely, on a revolute joint as on a
 // continuous one. (They were read as the range [0, 0], which locked the joint.) A 1 kg bar 0.5 m

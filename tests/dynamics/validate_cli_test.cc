@@ -169,7 +169,7 @@ TEST(ValidateCli, OpenMeshIsNamed) {
 void expect_report_fields(const json& report) {
   for (const char* key : {"passed", "simulated", "cancelled"}) EXPECT_TRUE(report.at(key).is_boolean()) << key;
   for (const char* key : {"simulatedTime", "timeStep", "energyDrift", "finalEnergyDrift", "worstJointError",
-                          "worstJointMisalignment", "worstLimitViolation", "wallTime", "cpuTime"}) {
+                          "worstJointMisalignment", "worstLimitViolation", "worstLimitRatio", "wallTime", "cpuTime"}) {
     EXPECT_TRUE(report.at(key).is_number()) << key;
   }
   for (const char* key : {"steps", "bodies"}) EXPECT_TRUE(report.at(key).is_number_integer()) << key;

@@ -543,13 +543,14 @@ TEST(DynamicsGate, ReportJsonHasTheDocumentedFields) {
     EXPECT_EQ(json["worstJointMisalignment"], report.worst_joint_misalignment);
     EXPECT_EQ(json["worstLimitViolation"], report.worst_limit_violation);
     EXPECT_EQ(json["worstLimitJoint"], report.worst_limit_joint);
+    EXPECT_EQ(json["worstLimitRatio"], report.worst_limit_ratio);
     EXPECT_EQ(json["wallTime"], report.wall_time);
     EXPECT_EQ(json["startPose"], Json(report.start_pose));
     EXPECT_TRUE(json["startPose"].is_object());
     ASSERT_EQ(json["diagnostics"].size(), report.diagnostics.all().size());
     EXPECT_EQ(json["cpuTime"], report.cpu_time);
     EXPECT_EQ(json["cancelled"], report.cancelled);
-    EXPECT_EQ(json.size(), 20u) << json.dump(1);
+    EXPECT_EQ(json.size(), 21u) << json.dump(1);
   }
 }
 

@@ -318,8 +318,11 @@ struct ValidationReport {
   double worst_joint_error = 0;          // m, separation
   std::string worst_joint;               // its joint
   double worst_joint_misalignment = 0;   // rad
-  double worst_limit_violation = 0;      // rad or m beyond a limit
+  // The joint furthest beyond a limit relative to its bound (SimulationHealth::worst_limit_ratio,
+  // > 1: SIM_LIMIT_VIOLATED), over the run: how far past (rad or m, by its kind), and its name.
+  double worst_limit_violation = 0;
   std::string worst_limit_joint;
+  double worst_limit_ratio = 0;
   double wall_time = 0;                  // s, checks + model + run
   double cpu_time = 0;                   // s of the validating thread's CPU, the same
   bool cancelled = false;                // Stopped by ValidationOptions::cancel (SIM_CANCELLED)
@@ -340,7 +343,7 @@ ValidationReport validate_dynamics(const Conversion& conversion, const Validatio
 
 // {"passed", "simulated", "simulatedTime", "steps", "stepper", "bodies", "timeStep",
 //  "energyDrift", "finalEnergyDrift", "worstJointError", "worstJoint", "worstJointMisalignment",
-//  "worstLimitViolation", "worstLimitJoint", "wallTime", "cpuTime", "cancelled",
+//  "worstLimitViolation", "worstLimitJoint", "worstLimitRatio", "wallTime", "cpuTime", "cancelled",
 //  "startPose": {joint: position},
 //  "diagnostics": [...]}
 Json validation_report_json(const ValidationReport& report);

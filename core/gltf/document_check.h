@@ -1,7 +1,8 @@
 // The checks behind validate_document (rdtf/validate.h), one class split over files by what
 // they check: validate_document.cc (reading properties; asset, extensions, images, animations,
 // limits), validate_accessors.cc (buffers, buffer views, accessors), validate_meshes.cc (meshes)
-// validate_nodes.cc (nodes, the node graph, skins, scenes) and validate_materials.cc (materials,
+// validate_nodes.cc (nodes, the node graph, skins, scenes), validate_usage.cc (what each accessor
+// and buffer view is used for) and validate_materials.cc (materials,
 // textures, samplers, every object's extensions: what rdtf writes out unread).
 //
 // The document is untrusted and may be fuzzed: every property is type-checked before it is read
@@ -31,10 +32,15 @@ struct BufferFacts {
   std::uint64_t byte_length = 0;
 };
 
+// What an accessor or a buffer view is used for, named as the Khronos validator names them
+// (validate_usage.cc).
+enum class AccessorUsage : std::uint8_t { kUnused, kVertexAttribute, kPrimitiveIndices, kIbm, kAnimationInput, kAnimationOutput };
+enum class ViewUsage : std::uint8_t { kUnused, kVertexBuffer, kIndexBuffer, kIbm, kImage, kOther };
+
 struct ViewFacts {
   bool valid = false;
   std::uint64_t byte_offset = 0, byte_length = 0, byte_stride = 0;  // stride 0: not given
-  std::uint64_t usage = 0;  // Its target, else how a mesh first used it (34962 or 34963).
+  ViewUsage usage = ViewUsage::kUnused;  // Its target, else its first use (validate_usage.cc).
 };
 
 struct AccessorFacts {
@@ -136,9 +142,14 @@ class DocumentCheck {
   void check_attribute_format(const std::string& name, std::size_t accessor,
                               const std::string& pointer);
   void check_indices(std::size_t accessor, const std::string& pointer);
-  void use_view(std::size_t view, std::uint64_t usage, const std::string& pointer);
   void check_target(const Json& target, const std::string& pointer,
                     const std::map<std::string, std::size_t>& base);
+
+  // validate_usage.cc
+  void check_usages();
+  std::size_t resolved(const Json& object, const char* key, const char* array);
+  void use_accessor(std::size_t accessor, AccessorUsage usage, const std::string& pointer);
+  void use_view(std::size_t view, ViewUsage usage, const std::string& pointer);
 
   // validate_nodes.cc
   void check_nodes();
@@ -162,6 +173,7 @@ class DocumentCheck {
   std::vector<BufferFacts> buffers_;
   std::vector<ViewFacts> views_;
   std::vector<AccessorFacts> accessors_;
+  std::vector<AccessorUsage> accessor_usage_;  // check_usages
   std::vector<MeshFacts> meshes_;
   std::vector<NodeFacts> nodes_;
   std::vector<std::size_t> parents_;

@@ -122,8 +122,10 @@ void DocumentCheck::check_buffer_views() {
                         " is neither 34962 (vertices) nor 34963 (indices); ignored");
     }
     ViewFacts& facts = views_[i];
-    facts = {false, offset.value_or(0), length.value_or(0), stride.value_or(0),
-             known_target ? *target : 0};
+    const ViewUsage usage = !known_target ? ViewUsage::kUnused
+                            : *target == kArrayBuffer ? ViewUsage::kVertexBuffer
+                                                      : ViewUsage::kIndexBuffer;
+    facts = {false, offset.value_or(0), length.value_or(0), stride.value_or(0), usage};
     if (buffer == kNone || !length || !stride || (view.contains("byteOffset") && !offset) ||
         !buffers_[buffer].valid) {
       continue;
@@ -222,6 +224,14 @@ bool DocumentCheck::check_accessor(const Json& accessor, const std::string& poin
   }
   facts.view = read_ref(accessor, "bufferView", pointer, "bufferViews");
   const auto offset = read_uint(accessor, "byteOffset", pointer);
+  // The validator asks a matrix's own offset to be a multiple of 4 whatever its components (a
+  // float matrix off it is misaligned as floats too, ACCESSOR_OFFSET_ALIGNMENT below).
+  if (type && type->rfind("MAT", 0) == 0 && known_type && accessor.contains("bufferView") && offset &&
+      *offset % 4 != 0) {
+    diag_.error(codes::ACCESSOR_MATRIX_ALIGNMENT, pointer + "/byteOffset",
+                "byteOffset " + std::to_string(*offset) + " of a " + *type +
+                    " accessor is not a multiple of 4: matrices must start on 4-byte boundaries");
+  }
   if (!known_component || !known_type || !within_limit ||
       (accessor.contains("bufferView") && facts.view == kNone) ||
       (accessor.contains("byteOffset") && !offset)) {

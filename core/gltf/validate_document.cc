@@ -56,6 +56,7 @@ void DocumentCheck::run() {
   check_skins();
   check_scenes();
   check_images_and_animations();
+  check_usages();
   check_materials();
   check_textures();
   check_material_texcoords();

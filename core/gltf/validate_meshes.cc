@@ -141,7 +141,6 @@ std::map<std::string, std::size_t> DocumentCheck::check_attributes(const Json& a
     resolved[name] = accessor;
     check_attribute_format(name, accessor, here);
     check_attribute_alignment(name, accessor, here);
-    use_view(accessors_[accessor].view, kArrayBuffer, here);
     if (count != 0 && accessors_[accessor].count != count) {
       diag_.error(codes::MESH_PRIMITIVE_UNEQUAL_ACCESSOR_COUNT, here,
                   "has " + std::to_string(accessors_[accessor].count) +
@@ -248,18 +247,6 @@ void DocumentCheck::check_indices(std::size_t accessor, const std::string& point
                 "buffer view " + std::to_string(facts.view) +
                     " holds indices, so it must not have a byteStride");
   }
-  use_view(facts.view, kElementArrayBuffer, pointer);
-}
-
-// A buffer view holds either vertices or indices: its target, else its first use, says which.
-void DocumentCheck::use_view(std::size_t view, std::uint64_t usage, const std::string& pointer) {
-  if (view == kNone) return;
-  if (views_[view].usage == 0) views_[view].usage = usage;
-  if (views_[view].usage == usage) return;
-  const auto kind = [](std::uint64_t u) { return u == kArrayBuffer ? "vertex" : "index"; };
-  diag_.error(codes::BUFFER_VIEW_TARGET_OVERRIDE, pointer,
-              "buffer view " + std::to_string(view) + " holds " + kind(views_[view].usage) +
-                  " data, but is used here for " + kind(usage) + " data");
 }
 
 void DocumentCheck::check_target(const Json& target, const std::string& pointer,

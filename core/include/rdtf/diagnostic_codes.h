@@ -29,6 +29,7 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(ACCESSOR_INVALID_IBM, kSeverityError, "glTF") \
   X(ACCESSOR_JOINTS_INDEX_DUPLICATE, kSeverityError, "glTF") \
   X(ACCESSOR_JOINTS_INDEX_OOB, kSeverityError, "glTF") \
+  X(ACCESSOR_MATRIX_ALIGNMENT, kSeverityError, "glTF") \
   X(ACCESSOR_MAX_MISMATCH, kSeverityWarning, "glTF") \
   X(ACCESSOR_MIN_MISMATCH, kSeverityWarning, "glTF") \
   X(ACCESSOR_NORMALIZED_INVALID, kSeverityError, "glTF") \
@@ -39,6 +40,7 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(ACCESSOR_SPARSE_INDICES_NON_INCREASING, kSeverityError, "glTF") \
   X(ACCESSOR_TOO_LONG, kSeverityError, "glTF") \
   X(ACCESSOR_TOTAL_OFFSET_ALIGNMENT, kSeverityError, "glTF") \
+  X(ACCESSOR_USAGE_OVERRIDE, kSeverityError, "glTF") \
   X(ACCESSOR_WEIGHTS_NEGATIVE, kSeverityError, "glTF") \
   X(ACCESSOR_WEIGHTS_NON_NORMALIZED, kSeverityError, "glTF") \
   X(ANIMATION_CHANNEL_TARGET_NODE_MATRIX, kSeverityError, "glTF") \

@@ -153,10 +153,11 @@ double motor_load(const JointModel& jm, dJointID motor, const dJointFeedback& fe
 // in joint velocities (M the joint-space inertia, C the dampings, one per axis): every mode decays
 // without reversing while h lambda_max(M^-1 C) <= 1, and lambda_max(M^-1 C) <= trace(C^1/2 M^-1
 // C^1/2) = sum c_i (M^-1)_ii <= sum of the joints' damper_rate ((M^-1)_ii is the mobility of joint
-// i's axis under every other constraint, which only lower it). So the joints of least rate stay
-// explicit while h times their sum is at most 1, and the rest are implicit: each implicit damper is
-// one more row for the solver (a third more time on 24 bodies), and a light link's damper cannot
-// blow up (docs/dynamics.md).
+// i's axis under every other constraint, which only lower it). M is block diagonal over islands (the
+// world joins none), so M^-1 C is too and its eigenvalues are those of its blocks: the bound holds
+// island by island. So in each island the joints of least rate stay explicit while h times their
+// sum is at most 1, and the rest are implicit: each implicit damper is one more row for the solver
+// (a third more time on 24 bodies), and a light link's damper cannot blow up (docs/dynamics.md).
 void choose_dampers(Simulation::Model& m, double h) {
   if (m.damper_step == h) return;
   m.damper_step = h;
@@ -166,10 +167,11 @@ void choose_dampers(Simulation::Model& m, double h) {
   }
   std::sort(damped.begin(), damped.end(),
             [](const JointModel* a, const JointModel* b) { return a->damper_rate < b->damper_rate; });
-  double explicit_sum = 0;
+  std::map<int, double> explicit_sum;  // by island
   for (JointModel* jm : damped) {
-    explicit_sum += jm->damper_rate * h;
-    jm->damper_implicit = !(explicit_sum <= 1);
+    double& island = explicit_sum[jm->island];
+    island += jm->damper_rate * h;
+    jm->damper_implicit = !(island <= 1);
     const double fmax = jm->damper_implicit ? dInfinity : 0;
     if (jm->kind == JointKind::kPrismatic) {
       dJointSetLMotorParam(jm->damper, dParamFMax, fmax);

@@ -7,6 +7,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <string>
+
+#include <Eigen/LU>
 
 #include "dynamics/dynamics_models.h"
 
@@ -101,28 +104,62 @@ TEST(JointDamping, AHeavyLinkKeepsTheExplicitDamper) {
   EXPECT_NEAR(h.kinetic_energy + h.dissipated_energy - h.actuator_work, 0.0, 1e-9 * h.actuator_work);
 }
 
-// The rule for several dampers: the explicit ones' rates c / I, summed, times h, at most 1 (every
-// mode then decays without reversing). Two cubes of c h / I = 0.6 and 0.7: the first stays
-// explicit, the second, which would take the sum to 1.3, is implicit; with h halved both fit.
-TEST(JointDamping, TheLeastRatesStayExplicitWhileTheirSumIsOne) {
+// The rule for several dampers: in each island, the explicit ones' rates, summed, times h, at most 1
+// (every mode then decays without reversing). One island: cube A on a joint to the world, cube B on
+// a joint to A about the same axis through both centres (the joint space inertia M = [[I_A + I_B,
+// I_B], [I_B, I_B]] in (qdot_a, qdot_b), no gyroscopic or gravity torque). Their rates, c_a / I_A and
+// c_b (1 / I_B + 1 / I_A), times h are 0.6 and 0.7: A stays explicit, B, which would take the sum
+// to 1.3, is implicit, and the speeds follow (M + h C_implicit) x' = M x + h (tau - C_explicit x) to
+// rounding; with h halved both fit and both are explicit.
+TEST(JointDamping, TheLeastRatesOfAnIslandStayExplicitWhileTheirSumIsOne) {
+  const Cube cube_a{0.2, 0.06}, cube_b{0.1, 0.05};
+  const double I_A = cube_a.inertia(), I_B = cube_b.inertia(), tau_a = 0.05, tau_b = -0.02;
+  const double c_a = 0.6 / (kStep / I_A), c_b = 0.7 / (kStep * (1 / I_B + 1 / I_A));
+  RobotBuilder b;
+  add_cube(b, "a", cube_a, JointKind::kContinuous, c_a);
+  b.child(b.robot().joints[0].child_link, "b", JointKind::kContinuous, Eigen::Isometry3d::Identity(),
+          Eigen::Vector3d::UnitZ(), "b_cube", box_inertial(cube_b.mass, Eigen::Vector3d::Constant(cube_b.edge)));
+  b.joint(1).damping = c_b;
+  Eigen::Matrix2d M;
+  M << I_A + I_B, I_B, I_B, I_B;
+  const Eigen::Vector2d tau(tau_a, tau_b);
+  for (const double h : {kStep, kStep / 2}) {
+    SCOPED_TRACE("h " + std::to_string(h));
+    auto sim = simulate(b.robot(), {});
+    ASSERT_TRUE(sim->set_command(torque("a", tau_a)));
+    ASSERT_TRUE(sim->set_command(torque("b", tau_b)));
+    const Eigen::Matrix2d C_explicit = Eigen::Vector2d(c_a, h == kStep ? 0 : c_b).asDiagonal();
+    const Eigen::Matrix2d C_implicit = Eigen::Vector2d(0, h == kStep ? c_b : 0).asDiagonal();
+    Eigen::Vector2d x = Eigen::Vector2d::Zero();
+    for (int n = 1; n <= 50; ++n) {
+      sim->step(h);
+      x = (M + h * C_implicit).lu().solve(M * x + h * (tau - C_explicit * x));
+      const double scale = x.cwiseAbs().maxCoeff();
+      ASSERT_NEAR(sim->joint_state("a")->velocity, x(0), 1e-12 * scale) << "step " << n;
+      ASSERT_NEAR(sim->joint_state("b")->velocity, x(1), 1e-12 * scale) << "step " << n;
+    }
+  }
+}
+
+// Separate islands are bounded each on its own: two cubes of c h / I = 0.6 and 0.7, each on a joint
+// to the world, both stay explicit (their sum, 1.3, is no bound on either: M is block diagonal).
+TEST(JointDamping, DampersOfSeparateIslandsAreBoundedEachOnItsOwn) {
   const Cube cube{0.2, 0.06};
   const double I = cube.inertia(), tau = 0.05;
   const double c_a = 0.6 * I / kStep, c_b = 0.7 * I / kStep;
   RobotBuilder b;
   add_cube(b, "a", cube, JointKind::kContinuous, c_a);
   add_cube(b, "b", cube, JointKind::kContinuous, c_b);
-  for (const double h : {kStep, kStep / 2}) {
-    auto sim = simulate(b.robot(), {});
-    ASSERT_TRUE(sim->set_command(torque("a", tau)));
-    ASSERT_TRUE(sim->set_command(torque("b", tau)));
-    double v_a = 0, v_b = 0;
-    for (int n = 1; n <= 50; ++n) {
-      sim->step(h);
-      v_a = v_a + h * (tau - c_a * v_a) / I;  // explicit at both steps
-      v_b = h == kStep ? (v_b + h * tau / I) / (1 + c_b * h / I) : v_b + h * (tau - c_b * v_b) / I;
-      ASSERT_NEAR(sim->joint_state("a")->velocity, v_a, 1e-12 * std::abs(v_a)) << "h " << h << " step " << n;
-      ASSERT_NEAR(sim->joint_state("b")->velocity, v_b, 1e-12 * std::abs(v_b)) << "h " << h << " step " << n;
-    }
+  auto sim = simulate(b.robot(), {});
+  ASSERT_TRUE(sim->set_command(torque("a", tau)));
+  ASSERT_TRUE(sim->set_command(torque("b", tau)));
+  double v_a = 0, v_b = 0;
+  for (int n = 1; n <= 50; ++n) {
+    sim->step();
+    v_a = v_a + kStep * (tau - c_a * v_a) / I;
+    v_b = v_b + kStep * (tau - c_b * v_b) / I;
+    ASSERT_NEAR(sim->joint_state("a")->velocity, v_a, 1e-12 * std::abs(v_a)) << "step " << n;
+    ASSERT_NEAR(sim->joint_state("b")->velocity, v_b, 1e-12 * std::abs(v_b)) << "step " << n;
   }
 }
 

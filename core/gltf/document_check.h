@@ -147,7 +147,7 @@ class DocumentCheck {
 
   // validate_usage.cc
   void check_usages();
-  std::size_t resolved(const Json& object, const char* key, const char* array);
+  std::size_t index_at(const Json& object, const char* key, const char* array);
   void use_accessor(std::size_t accessor, AccessorUsage usage, const std::string& pointer);
   void use_view(std::size_t view, ViewUsage usage, const std::string& pointer);
 

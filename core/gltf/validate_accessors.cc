@@ -114,7 +114,14 @@ void DocumentCheck::check_buffer_views() {
     const auto offset = read_uint(view, "byteOffset", pointer);
     const auto length = read_uint(view, "byteLength", pointer, true, 1);
     const auto stride = read_stride(view, pointer, length.value_or(0));
-    const auto target = read_uint(view, "target", pointer);
+    // A negative target is, for the validator, one more value not in the list (a warning).
+    const bool negative_target = view.contains("target") && view["target"].is_number_integer() &&
+                                 view["target"].get<std::int64_t>() < 0;
+    if (negative_target) {
+      diag_.warning(codes::VALUE_NOT_IN_LIST, pointer + "/target",
+                    "target " + view["target"].dump() + " is neither 34962 (vertices) nor 34963 (indices); ignored");
+    }
+    const auto target = negative_target ? std::nullopt : read_uint(view, "target", pointer);
     const bool known_target = target && (*target == kArrayBuffer || *target == kElementArrayBuffer);
     if (target && !known_target) {
       diag_.warning(codes::VALUE_NOT_IN_LIST, pointer + "/target",
@@ -226,7 +233,7 @@ bool DocumentCheck::check_accessor(const Json& accessor, const std::string& poin
   const auto offset = read_uint(accessor, "byteOffset", pointer);
   // The validator asks a matrix's own offset to be a multiple of 4 whatever its components (a
   // float matrix off it is misaligned as floats too, ACCESSOR_OFFSET_ALIGNMENT below).
-  if (type && type->rfind("MAT", 0) == 0 && known_type && accessor.contains("bufferView") && offset &&
+  if (type && type->rfind("MAT", 0) == 0 && known_type && uint_at(accessor, "bufferView") && offset &&
       *offset % 4 != 0) {
     diag_.error(codes::ACCESSOR_MATRIX_ALIGNMENT, pointer + "/byteOffset",
                 "byteOffset " + std::to_string(*offset) + " of a " + *type +

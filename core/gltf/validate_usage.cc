@@ -1,6 +1,6 @@
 // What each accessor and buffer view is used for. glTF lets an accessor serve one purpose (vertex
 // data, indices, inverse bind matrices, animation keys or values) and a buffer view hold one kind
-// of data (vertices, indices, matrices, an image, other data): a GPU binds a buffer view as one
+// of data (vertices, indices, inverse bind matrices, an image, sparse or animation data): a GPU binds a buffer view as one
 // target, and the Khronos validator refuses a file whose references give one two
 // (ACCESSOR_USAGE_OVERRIDE, BUFFER_VIEW_TARGET_OVERRIDE). rdtf copies these references into its
 // output as they are, so it refuses them too, or it would write a file the validator refuses.
@@ -84,7 +84,7 @@ ViewUsage view_usage_of(AccessorUsage usage) {
 
 // Reads an index without reporting it: the checks that read these references have said what is
 // wrong with one that does not resolve.
-std::size_t DocumentCheck::resolved(const Json& object, const char* key, const char* array) {
+std::size_t DocumentCheck::index_at(const Json& object, const char* key, const char* array) {
   if (!object.is_object()) return kNone;
   const auto index = uint_at(object, key);
   if (!index || *index >= entries_[array].size()) return kNone;
@@ -121,19 +121,28 @@ void DocumentCheck::check_usages() {
   const auto& accessors = entries_["accessors"];
   for (std::size_t i = 0; i < accessors.size() && i < accessors_.size(); ++i) {
     if (accessors[i] == nullptr || !accessors[i]->contains("sparse")) continue;
-    const Json& sparse = (*accessors[i])["sparse"];
+    // The validator links an accessor's sparse parts only when its componentType, count and type
+    // could be read (it skips them otherwise; VALUE_NOT_IN_LIST of a componentType is its warning).
+    const Json& accessor = *accessors[i];
+    const auto component_type = uint_at(accessor, "componentType");
+    const auto count = uint_at(accessor, "count");
+    if (!component_type || component_size(*component_type) == 0 || !count || *count < 1 ||
+        !accessor.contains("type") || !accessor["type"].is_string()) {
+      continue;
+    }
+    const Json& sparse = accessor["sparse"];
     if (!sparse.is_object()) continue;
     const std::string here = json_pointer("/accessors", i) + "/sparse";
     for (const char* part : {"indices", "values"}) {
       if (!sparse.contains(part)) continue;
-      use_view(resolved(sparse[part], "bufferView", "bufferViews"), ViewUsage::kOther,
+      use_view(index_at(sparse[part], "bufferView", "bufferViews"), ViewUsage::kOther,
                here + "/" + part + "/bufferView");
     }
   }
   const auto& images = entries_["images"];
   for (std::size_t i = 0; i < images.size(); ++i) {
     if (images[i] == nullptr) continue;
-    use_view(resolved(*images[i], "bufferView", "bufferViews"), ViewUsage::kImage,
+    use_view(index_at(*images[i], "bufferView", "bufferViews"), ViewUsage::kImage,
              json_pointer("/images", i) + "/bufferView");
   }
   const auto& meshes = entries_["meshes"];
@@ -149,13 +158,13 @@ void DocumentCheck::check_usages() {
         if (!attributes.is_object()) return;
         for (const auto& [name, value] : attributes.items()) {
           const auto index = as_uint(value);
-          if (!index || *index >= accessors_.size()) continue;
+          if (!index) continue;
           use_accessor(static_cast<std::size_t>(*index), AccessorUsage::kVertexAttribute,
                        json_pointer(pointer, name));
         }
       };
       if (primitive.contains("attributes")) use_attributes(primitive["attributes"], here + "/attributes");
-      use_accessor(resolved(primitive, "indices", "accessors"), AccessorUsage::kPrimitiveIndices,
+      use_accessor(index_at(primitive, "indices", "accessors"), AccessorUsage::kPrimitiveIndices,
                    here + "/indices");
       if (primitive.contains("targets") && primitive["targets"].is_array()) {
         const Json& targets = primitive["targets"];
@@ -168,7 +177,7 @@ void DocumentCheck::check_usages() {
   const auto& skins = entries_["skins"];
   for (std::size_t s = 0; s < skins.size(); ++s) {
     if (skins[s] == nullptr) continue;
-    use_accessor(resolved(*skins[s], "inverseBindMatrices", "accessors"), AccessorUsage::kIbm,
+    use_accessor(index_at(*skins[s], "inverseBindMatrices", "accessors"), AccessorUsage::kIbm,
                  json_pointer("/skins", s) + "/inverseBindMatrices");
   }
   const auto& animations = entries_["animations"];
@@ -178,8 +187,8 @@ void DocumentCheck::check_usages() {
     if (!samplers.is_array()) continue;
     for (std::size_t i = 0; i < samplers.size(); ++i) {
       const std::string here = json_pointer(json_pointer("/animations", a) + "/samplers", i);
-      use_accessor(resolved(samplers[i], "input", "accessors"), AccessorUsage::kAnimationInput, here + "/input");
-      use_accessor(resolved(samplers[i], "output", "accessors"), AccessorUsage::kAnimationOutput,
+      use_accessor(index_at(samplers[i], "input", "accessors"), AccessorUsage::kAnimationInput, here + "/input");
+      use_accessor(index_at(samplers[i], "output", "accessors"), AccessorUsage::kAnimationOutput,
                    here + "/output");
     }
   }

@@ -10,7 +10,7 @@
 // then references in the validator's fixed order: accessors' sparse parts, images, meshes
 // (per primitive its attributes in the file's key order, its indices, its morph targets),
 // skins, animations (per sampler its input, then its output).
-#include <array>
+#include <iterator>
 #include <string>
 
 #include "document_check.h"
@@ -20,52 +20,33 @@
 namespace rdtf::internal {
 namespace {
 
-const char* name_of(AccessorUsage usage) {
-  switch (usage) {
-    case AccessorUsage::kVertexAttribute: return "VertexAttribute";
-    case AccessorUsage::kPrimitiveIndices: return "PrimitiveIndices";
-    case AccessorUsage::kIbm: return "IBM";
-    case AccessorUsage::kAnimationInput: return "AnimationInput";
-    case AccessorUsage::kAnimationOutput: return "AnimationOutput";
-    case AccessorUsage::kUnused: break;
-  }
-  return "none";
-}
+// Each usage's name as the validator prints it, and what it is in words; by enumerator.
+struct UsageText {
+  const char* name;
+  const char* what;
+};
+constexpr UsageText kAccessorUsageText[] = {{"none", "nothing"},
+                                            {"VertexAttribute", "vertex data"},
+                                            {"PrimitiveIndices", "indices"},
+                                            {"IBM", "inverse bind matrices"},
+                                            {"AnimationInput", "animation key times"},
+                                            {"AnimationOutput", "animation values"}};
+constexpr UsageText kViewUsageText[] = {{"none", "nothing"},
+                                        {"VertexBuffer", "vertices (target 34962, ARRAY_BUFFER)"},
+                                        {"IndexBuffer", "indices (target 34963, ELEMENT_ARRAY_BUFFER)"},
+                                        {"IBM", "inverse bind matrices"},
+                                        {"Image", "an image"},
+                                        {"Other", "sparse or animation data"}};
+static_assert(std::size(kAccessorUsageText) == static_cast<std::size_t>(AccessorUsage::kAnimationOutput) + 1);
+static_assert(std::size(kViewUsageText) == static_cast<std::size_t>(ViewUsage::kOther) + 1);
 
-const char* what_of(AccessorUsage usage) {
-  switch (usage) {
-    case AccessorUsage::kVertexAttribute: return "vertex data";
-    case AccessorUsage::kPrimitiveIndices: return "indices";
-    case AccessorUsage::kIbm: return "inverse bind matrices";
-    case AccessorUsage::kAnimationInput: return "animation key times";
-    case AccessorUsage::kAnimationOutput: return "animation values";
-    case AccessorUsage::kUnused: break;
-  }
-  return "nothing";
-}
+const UsageText& text_of(AccessorUsage usage) { return kAccessorUsageText[static_cast<std::size_t>(usage)]; }
+const UsageText& text_of(ViewUsage usage) { return kViewUsageText[static_cast<std::size_t>(usage)]; }
 
-const char* name_of(ViewUsage usage) {
-  switch (usage) {
-    case ViewUsage::kVertexBuffer: return "VertexBuffer";
-    case ViewUsage::kIndexBuffer: return "IndexBuffer";
-    case ViewUsage::kIbm: return "IBM";
-    case ViewUsage::kImage: return "Image";
-    case ViewUsage::kOther: return "Other";
-    case ViewUsage::kUnused: break;
-  }
-  return "none";
-}
-
-const char* what_of(ViewUsage usage) {
-  switch (usage) {
-    case ViewUsage::kVertexBuffer: return "vertices (target 34962, ARRAY_BUFFER)";
-    case ViewUsage::kIndexBuffer: return "indices (target 34963, ELEMENT_ARRAY_BUFFER)";
-    case ViewUsage::kIbm: return "inverse bind matrices";
-    case ViewUsage::kImage: return "an image";
-    case ViewUsage::kOther: return "sparse or animation data";
-    case ViewUsage::kUnused: break;
-  }
-  return "nothing";
+// "vertex data ('VertexAttribute')"
+template <typename Usage>
+std::string described(Usage usage) {
+  return std::string(text_of(usage).what) + " ('" + text_of(usage).name + "')";
 }
 
 ViewUsage view_usage_of(AccessorUsage usage) {
@@ -97,10 +78,9 @@ void DocumentCheck::use_view(std::size_t view, ViewUsage usage, const std::strin
   if (held == ViewUsage::kUnused) held = usage;
   if (held == usage) return;
   diag_.error(codes::BUFFER_VIEW_TARGET_OVERRIDE, pointer,
-              "buffer view " + std::to_string(view) + " holds " + what_of(held) + " ('" + name_of(held) +
-                  "', its target or first use), but is used here for " + what_of(usage) + " ('" +
-                  name_of(usage) + "'): a buffer view holds one kind of data; give this one a buffer view "
-                  "of its own");
+              "buffer view " + std::to_string(view) + " holds " + described(held) +
+                  " by its target or first use, but is used here for " + described(usage) +
+                  ": a buffer view holds one kind of data; give this one a buffer view of its own");
 }
 
 void DocumentCheck::use_accessor(std::size_t accessor, AccessorUsage usage, const std::string& pointer) {
@@ -109,9 +89,9 @@ void DocumentCheck::use_accessor(std::size_t accessor, AccessorUsage usage, cons
   if (held == AccessorUsage::kUnused) held = usage;
   if (held != usage) {
     diag_.error(codes::ACCESSOR_USAGE_OVERRIDE, pointer,
-                "accessor " + std::to_string(accessor) + " is used first for " + what_of(held) + " ('" +
-                    name_of(held) + "') and here for " + what_of(usage) + " ('" + name_of(usage) +
-                    "'): an accessor serves one purpose; give this use an accessor of its own");
+                "accessor " + std::to_string(accessor) + " is used first for " + described(held) +
+                    " and here for " + described(usage) +
+                    ": an accessor serves one purpose; give this use an accessor of its own");
   }
   use_view(accessors_[accessor].view, view_usage_of(usage), pointer);
 }

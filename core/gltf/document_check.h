@@ -2,8 +2,8 @@
 // they check: validate_document.cc (reading properties; asset, extensions, images, animations,
 // limits), validate_accessors.cc (buffers, buffer views, accessors), validate_meshes.cc (meshes)
 // validate_nodes.cc (nodes, the node graph, skins, scenes), validate_usage.cc (what each accessor
-// and buffer view is used for) and validate_materials.cc (materials,
-// textures, samplers, every object's extensions: what rdtf writes out unread).
+// and buffer view is used for) and validate_materials.cc (materials, textures, samplers, every
+// object's extensions: what rdtf writes out unread).
 //
 // The document is untrusted and may be fuzzed: every property is type-checked before it is read
 // (nlohmann::json throws on a wrong-type access), and offsets and lengths are unsigned 64-bit
@@ -34,7 +34,9 @@ struct BufferFacts {
 
 // What an accessor or a buffer view is used for, named as the Khronos validator names them
 // (validate_usage.cc).
-enum class AccessorUsage : std::uint8_t { kUnused, kVertexAttribute, kPrimitiveIndices, kIbm, kAnimationInput, kAnimationOutput };
+enum class AccessorUsage : std::uint8_t {
+  kUnused, kVertexAttribute, kPrimitiveIndices, kIbm, kAnimationInput, kAnimationOutput
+};
 enum class ViewUsage : std::uint8_t { kUnused, kVertexBuffer, kIndexBuffer, kIbm, kImage, kOther };
 
 struct ViewFacts {

@@ -117,15 +117,11 @@ void DocumentCheck::check_buffer_views() {
     // A negative target is, for the validator, one more value not in the list (a warning).
     const bool negative_target = view.contains("target") && view["target"].is_number_integer() &&
                                  view["target"].get<std::int64_t>() < 0;
-    if (negative_target) {
-      diag_.warning(codes::VALUE_NOT_IN_LIST, pointer + "/target",
-                    "target " + view["target"].dump() + " is neither 34962 (vertices) nor 34963 (indices); ignored");
-    }
     const auto target = negative_target ? std::nullopt : read_uint(view, "target", pointer);
     const bool known_target = target && (*target == kArrayBuffer || *target == kElementArrayBuffer);
-    if (target && !known_target) {
+    if (negative_target || (target && !known_target)) {
       diag_.warning(codes::VALUE_NOT_IN_LIST, pointer + "/target",
-                    "target " + std::to_string(*target) +
+                    "target " + view["target"].dump() +
                         " is neither 34962 (vertices) nor 34963 (indices); ignored");
     }
     ViewFacts& facts = views_[i];

@@ -1,7 +1,8 @@
 // What each accessor and buffer view is used for. glTF lets an accessor serve one purpose (vertex
 // data, indices, inverse bind matrices, animation keys or values) and a buffer view hold one kind
-// of data (vertices, indices, inverse bind matrices, an image, sparse or animation data): a GPU binds a buffer view as one
-// target, and the Khronos validator refuses a file whose references give one two
+// of data (vertices, indices, inverse bind matrices, an image, sparse or animation data): a GPU
+// binds a buffer view as one target, and the Khronos validator refuses a file whose references
+// give one two
 // (ACCESSOR_USAGE_OVERRIDE, BUFFER_VIEW_TARGET_OVERRIDE). rdtf copies these references into its
 // output as they are, so it refuses them too, or it would write a file the validator refuses.
 //
@@ -99,7 +100,7 @@ void DocumentCheck::use_accessor(std::size_t accessor, AccessorUsage usage, cons
 void DocumentCheck::check_usages() {
   accessor_usage_.assign(accessors_.size(), AccessorUsage::kUnused);
   const auto& accessors = entries_["accessors"];
-  for (std::size_t i = 0; i < accessors.size() && i < accessors_.size(); ++i) {
+  for (std::size_t i = 0; i < accessors.size(); ++i) {
     if (accessors[i] == nullptr || !accessors[i]->contains("sparse")) continue;
     // The validator links an accessor's sparse parts only when its componentType, count and type
     // could be read (it skips them otherwise; VALUE_NOT_IN_LIST of a componentType is its warning).

@@ -15,6 +15,7 @@
 #include "rdtf/convert.h"
 #include "rdtf/geometry.h"
 #include "rdtf/gltf.h"
+#include "rdtf/json_text.h"
 #include "rdtf/mass_properties.h"
 #include "rdtf/mesh_checks.h"
 #include "rdtf/write.h"
@@ -195,8 +196,28 @@ void print_summary(const rdtf::bench::SideBySide& runs) {
   }
 }
 
+// An object of n keys ("TEXCOORD_0": 0, ...), as a hostile primitive's attributes: rdtf's parser
+// against nlohmann's own ordered parse, which walks the keys read so far at each new one.
+std::string object_of_keys(std::int64_t n) {
+  std::string text = "{";
+  for (std::int64_t i = 0; i < n; ++i) text += (i == 0 ? "\"TEXCOORD_" : ",\"TEXCOORD_") + std::to_string(i) + "\":0";
+  return text + "}";
+}
+
+void BM_ParseJsonText(benchmark::State& state) {
+  const std::string text = object_of_keys(state.range(0));
+  for (auto _ : state) benchmark::DoNotOptimize(rdtf::parse_json_text(text));
+}
+
+void BM_NlohmannOrderedParse(benchmark::State& state) {
+  const std::string text = object_of_keys(state.range(0));
+  for (auto _ : state) benchmark::DoNotOptimize(rdtf::Json::parse(text));
+}
+
 }  // namespace
 
+BENCHMARK(BM_ParseJsonText)->Arg(1000)->Arg(10000)->Arg(40000)->Arg(160000)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_NlohmannOrderedParse)->Arg(1000)->Arg(10000)->Arg(40000)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_TinygltfLoadFloor)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_ReadFile)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_RdtfConvertNoWrite)->Unit(benchmark::kMillisecond);

@@ -12,6 +12,7 @@
 #include "decode.h"
 #include "rdtf/glb.h"
 #include "rdtf/gltf.h"
+#include "rdtf/json_text.h"
 #include "rdtf/validate.h"
 #include "rdtf/diagnostic_codes.h"
 
@@ -163,7 +164,7 @@ std::optional<Json> parse_json(std::string_view text, Diagnostics& diag,
     return std::nullopt;
   }
   try {
-    Json document = Json::parse(text.begin(), text.end());
+    Json document = parse_json_text(text);
     if (!document.is_object()) {
       diag.error(codes::TYPE_MISMATCH, "", "the glTF JSON must be an object");
       return std::nullopt;

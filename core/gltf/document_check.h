@@ -141,8 +141,8 @@ class DocumentCheck {
   std::map<std::string, std::size_t> check_attributes(const Json& attributes,
                                                       const std::string& pointer, bool target);
   void check_attribute_alignment(const std::string& name, std::size_t accessor, const std::string& pointer);
-  void check_attribute_format(const std::string& name, std::size_t accessor,
-                              const std::string& pointer);
+  void check_attribute_format(const std::string& name, std::size_t accessor, const std::string& pointer,
+                              bool target);  // validate_attribute_formats.cc
   void check_indices(std::size_t accessor, const std::string& pointer);
   void check_target(const Json& target, const std::string& pointer,
                     const std::map<std::string, std::size_t>& base);

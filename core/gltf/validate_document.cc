@@ -355,8 +355,24 @@ void DocumentCheck::check_images_and_animations() {
   const auto& images = entries_["images"];
   for (std::size_t i = 0; i < images.size(); ++i) {
     if (images[i] == nullptr) continue;
-    read_string(*images[i], "uri", json_pointer("/images", i));
-    read_ref(*images[i], "bufferView", json_pointer("/images", i), "bufferViews");
+    const Json& image = *images[i];
+    const std::string pointer = json_pointer("/images", i);
+    read_string(image, "uri", pointer);
+    read_ref(image, "bufferView", pointer, "bufferViews");
+    // The image's bytes are a file or a buffer view, never both or neither (the validator's
+    // ONE_OF_MISMATCH); bytes in a buffer carry no file name, so their mimeType says the format.
+    const bool file = image.contains("uri"), view = image.contains("bufferView");
+    if (file == view) {
+      diag_.error(codes::ONE_OF_MISMATCH, pointer,
+                  file ? "the image has both a uri and a bufferView; give it exactly one (its file, or its bytes in "
+                         "a buffer)"
+                       : "the image has neither a uri nor a bufferView; give it exactly one (its file, or its "
+                         "bytes in a buffer)");
+    }
+    if (view && !image.contains("mimeType")) {
+      diag_.error(codes::UNSATISFIED_DEPENDENCY, pointer + "/bufferView",
+                  "an image in a buffer view must give its mimeType ('image/png' or 'image/jpeg')");
+    }
   }
   const auto& animations = entries_["animations"];
   for (std::size_t a = 0; a < animations.size(); ++a) {

@@ -132,14 +132,13 @@ std::map<std::string, std::size_t> DocumentCheck::check_attributes(const Json& a
                   "'" + quote(name) + "' is not a glTF attribute name");
     }
     const std::size_t accessor = reference(value, here, "accessors");
-    if (accessor == kNone || !semantic) continue;
+    if (accessor == kNone) continue;
+    // Its format whatever its name, as the validator does (TEXCOORD_01 is checked as a TEXCOORD).
+    if (!accessors_[accessor].type.empty()) check_attribute_format(name, accessor, here, target);
+    if (!semantic) continue;
     if (semantic->second >= 0) sets[semantic->first].push_back(semantic->second);
-    if (!accessors_[accessor].valid) {
-      if (!accessors_[accessor].type.empty()) check_attribute_format(name, accessor, here);  // as for indices
-      continue;
-    }
+    if (!accessors_[accessor].valid) continue;
     resolved[name] = accessor;
-    check_attribute_format(name, accessor, here);
     check_attribute_alignment(name, accessor, here);
     if (count != 0 && accessors_[accessor].count != count) {
       diag_.error(codes::MESH_PRIMITIVE_UNEQUAL_ACCESSOR_COUNT, here,
@@ -193,44 +192,6 @@ void DocumentCheck::check_attribute_alignment(const std::string& name, std::size
                   ": glTF requires every vertex attribute element to start at a multiple of 4 bytes. Give the "
                   "buffer view a byteStride that is a multiple of 4 (8 for 16-bit VEC3), as gltfpack and Blender "
                   "write them");
-}
-
-// The formats of the attributes the converter reads: POSITION, JOINTS_n and WEIGHTS_n.
-void DocumentCheck::check_attribute_format(const std::string& name, std::size_t accessor,
-                                           const std::string& pointer) {
-  const AccessorFacts& facts = accessors_[accessor];
-  const std::uint64_t type = facts.component_type;
-  const bool small_unsigned = type == kUnsignedByte || type == kUnsignedShort;
-  bool ok = true;
-  std::string expected;
-  if (name == "POSITION") {
-    const bool quantized = quantization_ && type != kUnsignedInt && type != kFloat;
-    ok = facts.type == "VEC3" && ((type == kFloat && !facts.normalized) || quantized);
-    expected = quantization_ ? "VEC3 of FLOAT, or of BYTE or SHORT (KHR_mesh_quantization)"
-                             : "VEC3 of FLOAT";
-  } else if (name.rfind("JOINTS_", 0) == 0) {
-    ok = facts.type == "VEC4" && small_unsigned && !facts.normalized;
-    expected = "VEC4 of UNSIGNED_BYTE or UNSIGNED_SHORT";
-  } else if (name.rfind("WEIGHTS_", 0) == 0) {
-    ok = facts.type == "VEC4" &&
-         (type == kFloat ? !facts.normalized : small_unsigned && facts.normalized);
-    expected = "VEC4 of FLOAT, or of normalized UNSIGNED_BYTE or UNSIGNED_SHORT";
-  }
-  if (!ok) {
-    // Integer positions are valid glTF once the file declares the extension that allows them.
-    const bool needs_quantization = name == "POSITION" && !quantization_ && facts.type == "VEC3" &&
-                                    (type == kByte || type == kUnsignedByte || type == kShort || type == kUnsignedShort);
-    diag_.error(codes::MESH_PRIMITIVE_ATTRIBUTES_ACCESSOR_INVALID_FORMAT, pointer,
-                "the accessor is " + format_name(facts) + "; " + name + " must be " + expected +
-                    (needs_quantization ? " (integer positions need KHR_mesh_quantization in extensionsUsed "
-                                          "and extensionsRequired)"
-                                        : ""));
-  }
-  const Json& json = *entries_["accessors"][accessor];
-  if (name == "POSITION" && ok && (!json.contains("min") || !json.contains("max"))) {
-    diag_.error(codes::MESH_PRIMITIVE_POSITION_ACCESSOR_WITHOUT_BOUNDS, pointer,
-                "a POSITION accessor must declare min and max (its bounding box)");
-  }
 }
 
 void DocumentCheck::check_indices(std::size_t accessor, const std::string& pointer) {

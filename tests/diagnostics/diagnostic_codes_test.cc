@@ -46,7 +46,9 @@ const std::set<std::string>& not_codes() {
       // A material's alpha modes (BLEND is above).
       "OPAQUE", "MASK",
       // Animation samplers' interpolations.
-      "LINEAR", "STEP", "CUBICSPLINE"};
+      "LINEAR", "STEP", "CUBICSPLINE",
+      // Accessors' component types, as messages name them.
+      "BYTE", "UNSIGNED_BYTE", "SHORT", "UNSIGNED_SHORT", "UNSIGNED_INT", "FLOAT"};
   return names;
 }
 

@@ -125,6 +125,17 @@ TEST(ValidateDocument, WhatPassesThroughUnreadIsChecked) {
   EXPECT_DIAGNOSTIC(one(R"({"materials": [{"doubleSided": "yes"}]})"), "TYPE_MISMATCH", "/materials/0/doubleSided");
   EXPECT_DIAGNOSTIC(one(R"({"samplers": [{"wrapS": 7}]})"), "VALUE_NOT_IN_LIST", "/samplers/0/wrapS");
   EXPECT_DIAGNOSTIC(one(R"({"textures": [{"source": 0}]})"), "UNRESOLVED_REFERENCE", "/textures/0/source");
+  // An image's bytes are a file or a buffer view: exactly one, and in a view with its mimeType.
+  EXPECT_DIAGNOSTIC(one(R"({"images": [{"uri": "a.png", "bufferView": 0, "mimeType": "image/png"}]})"),
+                    "ONE_OF_MISMATCH", "/images/0");
+  EXPECT_DIAGNOSTIC(one(R"({"images": [{"name": "nothing"}]})"), "ONE_OF_MISMATCH", "/images/0");
+  EXPECT_DIAGNOSTIC(one(R"({"images": [{"bufferView": 0}]})"), "UNSATISFIED_DEPENDENCY", "/images/0/bufferView");
+  for (const char* image : {R"({"images": [{"uri": "a.png"}]})", R"({"images": [{"bufferView": 0, "mimeType": "image/png"}]})"}) {
+    for (const Diagnostic& d : one(image).all()) {
+      EXPECT_NE(d.code, "ONE_OF_MISMATCH") << image;
+      EXPECT_NE(d.code, "UNSATISFIED_DEPENDENCY") << image;
+    }
+  }
   // Every object's extensions, the node's named by its name.
   Json document = triangle_document();
   document["nodes"][0]["extensions"] = 5;
@@ -431,7 +442,8 @@ TEST(ValidateDocument, NodeTransformErrorsNameTheNodeTheValueAndWhy) {
   document = triangle_document();
   document["accessors"][0]["componentType"] = 5122;
   EXPECT_NE(message(document, "MESH_PRIMITIVE_ATTRIBUTES_ACCESSOR_INVALID_FORMAT")
-                .find("(integer positions need KHR_mesh_quantization in extensionsUsed and extensionsRequired)"),
+                .find("accessor 0 is VEC3 of SHORT; POSITION must be VEC3 of FLOAT (VEC3 of SHORT needs "
+                      "KHR_mesh_quantization in extensionsUsed and extensionsRequired)"),
             std::string::npos);
 }
 

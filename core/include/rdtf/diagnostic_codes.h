@@ -97,6 +97,7 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(MESH_PRIMITIVE_ACCESSOR_UNALIGNED, kSeverityError, "glTF") \
   X(MESH_PRIMITIVE_ACCESSOR_WITHOUT_BYTESTRIDE, kSeverityError, "glTF") \
   X(MESH_PRIMITIVE_ATTRIBUTES_ACCESSOR_INVALID_FORMAT, kSeverityError, "glTF") \
+  X(MESH_PRIMITIVE_ATTRIBUTES_ACCESSOR_UNSIGNED_INT, kSeverityError, "glTF") \
   X(MESH_PRIMITIVE_INDEXED_SEMANTIC_CONTINUITY, kSeverityError, "glTF") \
   X(MESH_PRIMITIVE_INDICES_ACCESSOR_INVALID_FORMAT, kSeverityError, "glTF") \
   X(MESH_PRIMITIVE_INDICES_ACCESSOR_WITH_BYTESTRIDE, kSeverityError, "glTF") \
@@ -115,6 +116,7 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(NODE_SKIN_WITH_NON_SKINNED_MESH, kSeverityError, "glTF") \
   X(NODE_WEIGHTS_INVALID, kSeverityError, "glTF") \
   X(NON_REQUIRED_EXTENSION, kSeverityError, "glTF") \
+  X(ONE_OF_MISMATCH, kSeverityError, "glTF") \
   X(PATTERN_MISMATCH, kSeverityError, "glTF") \
   X(ROTATION_NON_UNIT, kSeverityError, "glTF") \
   X(SCENE_NON_ROOT_NODE, kSeverityError, "glTF") \

@@ -358,10 +358,14 @@ void DocumentCheck::check_images_and_animations() {
     const Json& image = *images[i];
     const std::string pointer = json_pointer("/images", i);
     read_string(image, "uri", pointer);
+    read_string(image, "mimeType", pointer);
     read_ref(image, "bufferView", pointer, "bufferViews");
     // The image's bytes are a file or a buffer view, never both or neither (the validator's
     // ONE_OF_MISMATCH); bytes in a buffer carry no file name, so their mimeType says the format.
-    const bool file = image.contains("uri"), view = image.contains("bufferView");
+    // As the validator counts them: a uri that is a string, a bufferView that is an index (one
+    // past the end is still given, and refused as unresolved).
+    const bool file = image.contains("uri") && image["uri"].is_string();
+    const bool view = image.contains("bufferView") && as_uint(image["bufferView"]).has_value();
     if (file == view) {
       diag_.error(codes::ONE_OF_MISMATCH, pointer,
                   file ? "the image has both a uri and a bufferView; give it exactly one (its file, or its bytes in "
@@ -369,7 +373,7 @@ void DocumentCheck::check_images_and_animations() {
                        : "the image has neither a uri nor a bufferView; give it exactly one (its file, or its "
                          "bytes in a buffer)");
     }
-    if (view && !image.contains("mimeType")) {
+    if (view && !(image.contains("mimeType") && image["mimeType"].is_string())) {
       diag_.error(codes::UNSATISFIED_DEPENDENCY, pointer + "/bufferView",
                   "an image in a buffer view must give its mimeType ('image/png' or 'image/jpeg')");
     }

@@ -130,8 +130,13 @@ TEST(ValidateDocument, WhatPassesThroughUnreadIsChecked) {
                     "ONE_OF_MISMATCH", "/images/0");
   EXPECT_DIAGNOSTIC(one(R"({"images": [{"name": "nothing"}]})"), "ONE_OF_MISMATCH", "/images/0");
   EXPECT_DIAGNOSTIC(one(R"({"images": [{"bufferView": 0}]})"), "UNSATISFIED_DEPENDENCY", "/images/0/bufferView");
+  EXPECT_DIAGNOSTIC(one(R"({"images": [{"bufferView": 0, "mimeType": 5}]})"), "TYPE_MISMATCH", "/images/0/mimeType");
+  EXPECT_DIAGNOSTIC(one(R"({"images": [{"bufferView": 0, "mimeType": 5}]})"), "UNSATISFIED_DEPENDENCY",
+                    "/images/0/bufferView");
+  EXPECT_DIAGNOSTIC(one(R"({"images": [{"uri": 5}]})"), "ONE_OF_MISMATCH", "/images/0");  // No usable uri.
   for (const char* image : {R"({"images": [{"uri": "a.png"}]})", R"({"images": [{"bufferView": 0, "mimeType": "image/png"}]})"}) {
-    for (const Diagnostic& d : one(image).all()) {
+    const Diagnostics diag = one(image);
+    for (const Diagnostic& d : diag.all()) {
       EXPECT_NE(d.code, "ONE_OF_MISMATCH") << image;
       EXPECT_NE(d.code, "UNSATISFIED_DEPENDENCY") << image;
     }

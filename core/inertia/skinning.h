@@ -15,7 +15,9 @@ namespace rdtf {
 struct BoneGeometry {
   int joint_node = -1;                   // The bone's node.
   Eigen::Affine3d inverse_bind = Eigen::Affine3d::Identity();  // Mesh space -> bone space.
-  std::vector<TriangleMesh> pieces;      // The mesh's triangles bound to this bone.
+  // The mesh's triangles bound to this bone: of each piece that has some, those triangles and
+  // the vertices they use (in the piece's order).
+  std::vector<TriangleMesh> pieces;
 };
 
 // Splits a skinned mesh node's triangles among its skin's bones. Each connected part of the

@@ -29,12 +29,22 @@ class MeshOwnership {
         if (carrier_[child.get<std::size_t>()]) has_[i] = 1;
       }
     }
+    // Once per parent, not once per child: asked for each of a node's leaves, a walk of its
+    // children made a node of 40,000 empty children (camera frames) take seconds.
+    child_has_.assign(carrier_.size(), 0);
+    for (std::size_t i = 0; i < carrier_.size(); ++i) {
+      if (!nodes[i].contains("children")) continue;
+      for (const Json& child : nodes[i]["children"]) {
+        if (has_[child.get<std::size_t>()]) child_has_[i] = 1;
+      }
+    }
   }
   bool has_mesh(std::size_t node) const { return has_[node] != 0; }
   bool carrier(std::size_t node) const { return carrier_[node] != 0; }
+  bool a_child_has_mesh(std::size_t node) const { return child_has_[node] != 0; }
 
  private:
-  std::vector<char> carrier_, has_;
+  std::vector<char> carrier_, has_, child_has_;
 };
 
 const Json* node_extras(const Json& node) {
@@ -240,10 +250,7 @@ NodeType mesh_or_visual(const Json& nodes, const MeshOwnership& meshes, int pare
     return NodeType::kJoint;
   }
   if (children.empty()) {
-    bool sibling_has_mesh = false;
-    if (parent != nullptr) {
-      for (std::size_t sibling : children_of(*parent)) sibling_has_mesh |= has_mesh(sibling);
-    }
+    const bool sibling_has_mesh = parent != nullptr && meshes.a_child_has_mesh(static_cast<std::size_t>(parent_index));
     if (!sibling_has_mesh) return NodeType::kVisual;
   }
   return NodeType::kNone;

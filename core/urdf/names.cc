@@ -1,5 +1,6 @@
 #include "rdtf/urdf_names.h"
 
+#include <unordered_map>
 #include <unordered_set>
 
 #include "rdtf/diagnostic_codes.h"
@@ -23,12 +24,21 @@ std::vector<std::string> choose_names(const std::vector<std::pair<const std::str
     const std::string& name = *items[i].first;
     if (valid_urdf_name(name, what) == name && taken.insert(name).second) chosen[i] = name;
   }
+  // Per name, the suffix to try next: every one below it was taken when last asked, and taken
+  // names stay taken, so the first free one is the same as counting from 2 again (which made
+  // 40,000 links of one name cost 40,000^2 / 2 tries, on rdtfd's loop at each publication).
+  std::unordered_map<std::string, int> next_suffix;
   for (std::size_t i = 0; i < items.size(); ++i) {
     if (!chosen[i].empty()) continue;
     const std::string& name = *items[i].first;
     const std::string valid = valid_urdf_name(name, what);
+    const auto [next, first] = next_suffix.try_emplace(valid, 2);
     std::string candidate = valid;
-    for (int n = 2; taken.count(candidate) != 0; ++n) candidate = valid + "_" + std::to_string(n);
+    if (!first || taken.count(valid) != 0) {  // After a first ask, `valid` is always taken.
+      int n = next->second;
+      while (taken.count(candidate = valid + "_" + std::to_string(n)) != 0) ++n;
+      next->second = n + 1;
+    }
     taken.insert(candidate);
     chosen[i] = candidate;
     if (diag != nullptr) {

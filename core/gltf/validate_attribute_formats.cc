@@ -112,8 +112,8 @@ void DocumentCheck::check_attribute_format(const std::string& name, std::size_t 
     if (semantic == r.semantic && target == r.target) rule = &r;
   }
   if (rule == nullptr) {
-    // Application data (_NAME): any format but UNSIGNED_INT, which no graphics API takes as a
-    // vertex attribute.
+    // Application data (_NAME), or a name that is no glTF attribute (refused for its name
+    // already): any format but UNSIGNED_INT, which no graphics API takes as a vertex attribute.
     if (!target && facts.component_type == kUnsignedInt) {
       diag_.error(codes::MESH_PRIMITIVE_ATTRIBUTES_ACCESSOR_UNSIGNED_INT, pointer,
                   "attribute " + name + " reads accessor " + std::to_string(accessor) +

@@ -1,4 +1,10 @@
 #include "rdtf/completion.h"
+
+#include <cstdio>
+#include <optional>
+#include <string_view>
+#include <unordered_map>
+
 #include "rdtf/diagnostic_codes.h"
 
 namespace rdtf {
@@ -11,7 +17,8 @@ std::size_t append_node(Json& document, std::vector<NodeType>& types, Json node,
 }
 
 // Blender's mesh-on-the-parent: move the link's mesh (with its skin and morph weights, which
-// belong to it) onto a new child with an identity transform, so the scene renders the same.
+// belong to it) onto a new child with an identity transform, so the scene renders the same. Its
+// weight animations follow it afterwards (retarget_weight_animations).
 std::size_t split_off_mesh(Json& document, std::vector<NodeType>& types, std::size_t link) {
   Json mesh_node = {{"name", node_name(document, link) + "_mesh"}};
   Json& link_node = document["nodes"][link];
@@ -29,34 +36,63 @@ std::size_t split_off_mesh(Json& document, std::vector<NodeType>& types, std::si
     link_node["extensions"].erase(kInstancing);
     if (link_node["extensions"].empty()) link_node.erase("extensions");
   }
-  const std::size_t index = append_node(document, types, std::move(mesh_node), NodeType::kMesh);
-  // Morph-weight animations follow the mesh to its new node: channels of the node's "weights", and
-  // KHR_animation_pointer's at "/nodes/<link>/weights" (a weights animation of a node without a
-  // mesh is invalid glTF).
-  const std::string pointer_before = "/nodes/" + std::to_string(link) + "/weights";
-  if (document.contains("animations")) {
-    for (Json& animation : document["animations"]) {
-      if (!animation.contains("channels")) continue;
-      for (Json& channel : animation["channels"]) {
-        Json& target = channel["target"];
-        if (target.value("path", "") == "weights" && target.contains("node") &&
-            target["node"].get<std::size_t>() == link) {
-          target["node"] = index;
-        }
-        const auto extensions = target.find("extensions");
-        if (target.value("path", "") != "pointer" || extensions == target.end() || !extensions->is_object()) continue;
-        const auto extension = extensions->find("KHR_animation_pointer");
-        if (extension == extensions->end() || !extension->is_object()) continue;
-        const auto pointer = extension->find("pointer");
-        if (pointer == extension->end() || !pointer->is_string()) continue;
-        const std::string before = pointer->get<std::string>();
-        if (before == pointer_before || before.rfind(pointer_before + "/", 0) == 0) {
-          *pointer = "/nodes/" + std::to_string(index) + "/weights" + before.substr(pointer_before.size());
-        }
+  return append_node(document, types, std::move(mesh_node), NodeType::kMesh);
+}
+
+// Morph-weight animations follow each mesh split_off_mesh moved to its new node: channels of the
+// link's "weights", and KHR_animation_pointer's at "/nodes/<link>/weights" (a weights animation of
+// a node without a mesh is invalid glTF). One walk over the channels for all the moved meshes:
+// a walk per link cost links x channels (4.9 MB of them took 76 s).
+void retarget_weight_animations(Json& document, const std::unordered_map<std::size_t, std::size_t>& mesh_node_of) {
+  if (mesh_node_of.empty() || !document.contains("animations")) return;
+  const auto moved = [&](std::size_t link) {
+    const auto it = mesh_node_of.find(link);
+    return it == mesh_node_of.end() ? std::optional<std::size_t>() : it->second;
+  };
+  for (Json& animation : document["animations"]) {
+    if (!animation.contains("channels")) continue;
+    for (Json& channel : animation["channels"]) {
+      Json& target = channel["target"];
+      if (target.value("path", "") == "weights" && target.contains("node")) {
+        if (const auto index = moved(target["node"].get<std::size_t>())) target["node"] = *index;
+      }
+      const auto extensions = target.find("extensions");
+      if (target.value("path", "") != "pointer" || extensions == target.end() || !extensions->is_object()) continue;
+      const auto extension = extensions->find("KHR_animation_pointer");
+      if (extension == extensions->end() || !extension->is_object()) continue;
+      const auto pointer = extension->find("pointer");
+      if (pointer == extension->end() || !pointer->is_string()) continue;
+      // "/nodes/<digits>/weights" or below it.
+      const std::string before = pointer->get<std::string>();
+      constexpr std::string_view kNodes = "/nodes/";
+      if (before.rfind(kNodes, 0) != 0) continue;
+      const std::size_t digits_end = before.find_first_not_of("0123456789", kNodes.size());
+      if (digits_end == kNodes.size() || digits_end == std::string::npos || digits_end - kNodes.size() > 19) continue;
+      const std::string rest = before.substr(digits_end);
+      if (rest != "/weights" && rest.rfind("/weights/", 0) != 0) continue;
+      const std::string digits = before.substr(kNodes.size(), digits_end - kNodes.size());
+      if (digits.size() > 1 && digits[0] == '0') continue;  // Not a JSON pointer's array index.
+      if (const auto index = moved(std::stoull(digits))) {
+        *pointer = std::string(kNodes) + std::to_string(*index) + rest;
       }
     }
   }
-  return index;
+}
+
+// A name as a part of a generated name: a long one (a hostile file's megabyte of name) is cut to
+// its first 48 bytes, at a UTF-8 character boundary, and told apart by a digest of the whole.
+// Each child link's joint is named after its parent: without the cut, one long name times many
+// children made the output quadratic (a 2.6 MB glTF took 9-11 GB).
+std::string name_part(const std::string& name) {
+  constexpr std::size_t kMaxBytes = 64, kKeptBytes = 48;
+  if (name.size() <= kMaxBytes) return name;
+  std::size_t cut = kKeptBytes;
+  while (cut > 0 && (static_cast<unsigned char>(name[cut]) & 0xC0) == 0x80) --cut;  // A continuation byte.
+  std::uint64_t digest = 14695981039346656037ull;  // 64-bit FNV-1a.
+  for (const char c : name) digest = (digest ^ static_cast<unsigned char>(c)) * 1099511628211ull;
+  char hex[17];
+  std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(digest));
+  return name.substr(0, cut) + "~" + std::string(hex, 8);
 }
 
 }  // namespace
@@ -89,6 +125,7 @@ std::string value_text(const Json& value) {
 void complete_nodes(Json& document, std::vector<NodeType>& types, Diagnostics& diag, std::vector<int>* carried_by) {
   if (!document.contains("nodes")) return;
   const std::size_t original_count = document["nodes"].size();
+  std::unordered_map<std::size_t, std::size_t> mesh_node_of;  // Link -> the node its mesh moved to.
   for (std::size_t link = 0; link < original_count; ++link) {
     if (types[link] != NodeType::kLink) continue;
     const std::string name = node_name(document, link);
@@ -99,6 +136,7 @@ void complete_nodes(Json& document, std::vector<NodeType>& types, Diagnostics& d
       const bool has_children = document["nodes"][link].contains("children") && !document["nodes"][link]["children"].empty();
       const std::size_t mesh_node = split_off_mesh(document, types, link);
       mesh_children.push_back(mesh_node);
+      mesh_node_of.emplace(link, mesh_node);
       if (carried_by != nullptr) {
         carried_by->resize(document["nodes"].size(), -1);
         (*carried_by)[mesh_node] = static_cast<int>(link);
@@ -130,7 +168,7 @@ void complete_nodes(Json& document, std::vector<NodeType>& types, Diagnostics& d
     }
     // One joint node per child link (the paper groups them in one; URDF needs one each).
     for (std::size_t child : link_children) {
-      Json joint = {{"name", name + "_" + node_name(document, child) + "_joint"},
+      Json joint = {{"name", name_part(name) + "_" + name_part(node_name(document, child)) + "_joint"},
                     {"children", Json::array({child})}};
       other_children.push_back(append_node(document, types, std::move(joint), NodeType::kJoint));
     }
@@ -140,6 +178,7 @@ void complete_nodes(Json& document, std::vector<NodeType>& types, Diagnostics& d
     }
     document["nodes"][link]["children"] = other_children;
   }
+  retarget_weight_animations(document, mesh_node_of);
 }
 
 }  // namespace rdtf

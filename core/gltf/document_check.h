@@ -58,6 +58,9 @@ struct MeshFacts {
   std::size_t targets = 0;
   bool skinned = false;  // A primitive has JOINTS_0.
   std::uint64_t triangles = 0;
+  // For each morph target, the vertices its POSITION moves, over all primitives: what a node
+  // whose weight for it is not 0 makes the converter displace (check_triangle_limit).
+  std::vector<std::uint64_t> target_vertices;
 };
 
 struct NodeFacts {

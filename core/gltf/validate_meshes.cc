@@ -109,6 +109,14 @@ bool DocumentCheck::check_primitive(const Json& primitive, const std::string& po
   const std::uint64_t vertices = indices != kNone              ? accessors_[indices].count
                                  : position != accessors.end() ? accessors_[position->second].count
                                                                : 0;
+  if (position != accessors.end() && primitive.contains("targets") && primitive["targets"].is_array()) {
+    const Json& targets = primitive["targets"];
+    if (mesh.target_vertices.size() < targets.size()) mesh.target_vertices.resize(targets.size(), 0);
+    for (std::size_t t = 0; t < targets.size(); ++t) {
+      if (!targets[t].is_object() || !targets[t].contains("POSITION")) continue;
+      mesh.target_vertices[t] = saturating_add(mesh.target_vertices[t], accessors_[position->second].count);
+    }
+  }
   if (mode == 4) mesh.triangles = saturating_add(mesh.triangles, vertices / 3);
   if ((mode == 5 || mode == 6) && vertices >= 3) {
     mesh.triangles = saturating_add(mesh.triangles, vertices - 2);

@@ -308,6 +308,56 @@ TEST(ValidateDocument, LimitsOnBuffersAndTriangles) {
   EXPECT_DIAGNOSTIC(check_document(triangle_document(), limits), "LIMIT_EXCEEDED", "/nodes/0/mesh");
 }
 
+// Each vertex a weighed morph target moves counts as one triangle more: a mesh of many targets
+// sharing one accessor made the converter's work targets x vertices from a small file.
+TEST(ValidateDocument, MorphedVerticesCountTowardsTheTriangleLimit) {
+  Json document = triangle_document();
+  document["meshes"][0]["primitives"][0]["targets"] = Json::parse(R"([{"POSITION": 0}, {"POSITION": 0}, {"POSITION": 0}])");
+  document["meshes"][0]["weights"] = Json::parse("[1, 0, 0.5]");
+  const auto limit_error = [](const Diagnostics& diag) -> const Diagnostic* {
+    for (const Diagnostic& d : diag.all()) {
+      if (d.code == "LIMIT_EXCEEDED") return &d;
+    }
+    return nullptr;
+  };
+  LoadLimits limits;
+  limits.max_triangles = 7;  // 1 triangle, and 3 vertices moved by each of two weighed targets.
+  const Diagnostics within = check_document(document, limits);
+  EXPECT_EQ(within.error_count(), 0u) << listing(within);
+  limits.max_triangles = 6;
+  const Diagnostics over = check_document(document, limits);
+  const Diagnostic* error = limit_error(over);
+  ASSERT_NE(error, nullptr) << listing(over);
+  EXPECT_EQ(error->pointer, "/nodes/0/mesh");
+  EXPECT_NE(error->message.find("reach 7 triangles"), std::string::npos) << error->message;
+  EXPECT_NE(error->message.find("this node's 6"), std::string::npos) << error->message;
+  EXPECT_NE(error->message.find("over the limit of 6 (max_triangles)"), std::string::npos) << error->message;
+
+  // The node's own weights replace the mesh's: none weighed, only the triangle counts.
+  limits.max_triangles = 1;
+  document["nodes"][0]["weights"] = Json::parse("[0, 0, 0]");
+  const Diagnostics unweighed = check_document(document, limits);
+  EXPECT_EQ(limit_error(unweighed), nullptr) << listing(unweighed);
+  document["nodes"][0]["weights"] = Json::parse("[0, -2, 0]");
+  limits.max_triangles = 4;
+  const Diagnostics one = check_document(document, limits);
+  EXPECT_EQ(limit_error(one), nullptr) << listing(one);
+  limits.max_triangles = 3;
+  EXPECT_NE(limit_error(check_document(document, limits)), nullptr);
+
+  // A second node using the mesh counts again, with its own weights.
+  document["nodes"][0]["weights"] = Json::parse("[1, 1, 1]");
+  document["nodes"].push_back(Json::parse(R"({"mesh": 0, "name": "again"})"));  // The mesh's: 1, 0, 0.5.
+  document["scenes"][0]["nodes"].push_back(1);
+  limits.max_triangles = 1 + 9 + 1 + 6;
+  const Diagnostics two = check_document(document, limits);
+  EXPECT_EQ(limit_error(two), nullptr) << listing(two);
+  limits.max_triangles = 1 + 9 + 1 + 5;
+  const Diagnostics beyond = check_document(document, limits);
+  ASSERT_NE(limit_error(beyond), nullptr) << listing(beyond);
+  EXPECT_EQ(limit_error(beyond)->pointer, "/nodes/1/mesh");
+}
+
 TEST(ValidateDocument, NodeLoops) {
   Json document = triangle_document();
   document["nodes"] = Json::parse(R"([{"children": [1]}, {"children": [2]}, {"children": [1]}])");

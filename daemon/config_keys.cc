@@ -285,7 +285,8 @@ std::vector<ConfigKey> make_registry() {
              .doc = "input limit: most elements in an accessor (docs/format.md)"},
             RDTF_FIELD(convert.limits.max_accessor_count)),
       plain({.name = "max_triangles", .min = 1, .max = 4294967296.0, .reload = kReconvert,
-             .doc = "input limit: most triangles in a model (docs/format.md)"},
+             .doc = "input limit: most triangles in a model, a mesh counted per node using it and a vertex a "
+                    "weighed morph target moves as one (docs/format.md)"},
             RDTF_FIELD(convert.limits.max_triangles)),
       plain({.name = "max_read_bytes", .unit = "bytes", .min = 1, .max = kTiB, .reload = kReconvert,
              .doc = "bytes one conversion may read: the model plus every file it names, each counted as often as "

@@ -68,7 +68,11 @@ if command -v ccache >/dev/null 2>&1; then
   export CCACHE_BASEDIR=${CCACHE_BASEDIR:-$root}
 fi
 mkdir -p "$build"
+# Line tables only: what a sanitizer's or libFuzzer's stack trace needs (file and line), and a
+# shorter build than full debug information (docs/benchmarks.md, "Build time").
+line_tables="-O2 -gline-tables-only -DNDEBUG"
 if ! CC=clang CXX=clang++ cmake -S . -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+    -DCMAKE_C_FLAGS_RELWITHDEBINFO="$line_tables" -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="$line_tables" \
     -DRDTF_BUILD_FUZZ=ON -DRDTF_BUILD_TESTS=OFF -DRDTF_SANITIZE=ON -DRDTF_WERROR=ON \
     -DCMAKE_CXX_COMPILER_LAUNCHER="$launcher" >"$build/fuzz-configure.log" 2>&1; then
   cat "$build/fuzz-configure.log"

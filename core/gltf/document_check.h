@@ -18,6 +18,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <unordered_set>
 #include <vector>
 
 #include "rdtf/diagnostics.h"
@@ -117,6 +118,17 @@ class DocumentCheck {
   void check_textures();
   void check_material_texcoords();
   void check_extension_objects(const Json& value, const std::string& pointer, int depth);
+  // validate_extensions.cc: KHR_lights_punctual and KHR_materials_variants, also passed through
+  // unread, and where each extension the validator knows may be.
+  struct Bound {
+    double value;
+    bool inclusive;
+  };
+  std::optional<double> read_bounded(const Json& object, const char* key, const std::string& pointer,
+                                     double fallback, Bound low, Bound high);
+  void check_lights();
+  void check_variants();
+  void check_extension_place(const std::string& name, const std::string& object_pointer);
   void check_animation(const Json& animation, const std::string& pointer);
   void check_triangle_limit();
 
@@ -175,6 +187,7 @@ class DocumentCheck {
   Diagnostics& diag_;
   std::map<std::string, std::vector<const Json*>> entries_;  // Top-level arrays; null: no object.
   bool quantization_ = false;                                // KHR_mesh_quantization is used.
+  std::unordered_set<std::string> used_extensions_;          // The names extensionsUsed lists.
   std::vector<BufferFacts> buffers_;
   std::vector<ViewFacts> views_;
   std::vector<AccessorFacts> accessors_;

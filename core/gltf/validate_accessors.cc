@@ -235,7 +235,15 @@ bool DocumentCheck::check_accessor(const Json& accessor, const std::string& poin
                 "byteOffset " + std::to_string(*offset) + " of a " + *type +
                     " accessor is not a multiple of 4: matrices must start on 4-byte boundaries");
   }
-  if (!known_component || !known_type || !within_limit ||
+  // An offset into no view (glTF 2.0: byteOffset depends on bufferView) passed into the output,
+  // which the Khronos validator refuses (UNSATISFIED_DEPENDENCY).
+  const bool offset_without_view = accessor.contains("byteOffset") && !accessor.contains("bufferView");
+  if (offset_without_view) {
+    diag_.error(codes::UNSATISFIED_DEPENDENCY, pointer + "/byteOffset",
+                "byteOffset is given but bufferView is not: an accessor without a buffer view holds zeros "
+                "(or only its sparse values) and has no offset; remove byteOffset or give its bufferView");
+  }
+  if (!known_component || !known_type || !within_limit || offset_without_view ||
       (accessor.contains("bufferView") && facts.view == kNone) ||
       (accessor.contains("byteOffset") && !offset)) {
     return false;

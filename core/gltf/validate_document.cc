@@ -57,6 +57,8 @@ void DocumentCheck::run() {
   check_scenes();
   check_images_and_animations();
   check_usages();
+  check_lights();
+  check_variants();
   check_materials();
   check_textures();
   check_material_texcoords();
@@ -297,6 +299,7 @@ void DocumentCheck::check_extensions() {
     for (std::size_t k = 0; names != nullptr && k < names->size(); ++k) {
       const std::string pointer = json_pointer(json_pointer("", key), k);
       const Json& name = (*names)[k];
+      if (key == "extensionsUsed" && name.is_string()) used_extensions_.insert(name.get<std::string>());
       if (!name.is_string()) {
         diag_.error(codes::TYPE_MISMATCH, pointer,
                     "an extension name must be a string, found " + describe(name));

@@ -174,6 +174,17 @@ void DocumentCheck::check_extension_objects(const Json& value, const std::string
         diag_.error(codes::TYPE_MISMATCH, json_pointer(pointer, key),
                     "must be an object, found " + std::string(child.type_name()) +
                         (child.is_null() ? std::string() : " " + describe(child)));
+        continue;
+      }
+      // glTF 2.0: every extension used is listed in extensionsUsed. One that is not passed into
+      // the output, which the Khronos validator refuses (UNDECLARED_EXTENSION).
+      for (const auto& [name, unused] : child.items()) {
+        check_extension_place(name, pointer);
+        if (used_extensions_.count(name) != 0) continue;
+        diag_.error(codes::UNDECLARED_EXTENSION, json_pointer(json_pointer(pointer, key), name),
+                    "uses the extension '" + quote(name) +
+                        "', which extensionsUsed does not list (glTF 2.0 requires every extension used to be "
+                        "listed there): list it in extensionsUsed, or remove it");
       }
       continue;
     }

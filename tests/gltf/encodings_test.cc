@@ -250,6 +250,7 @@ TEST(GpuInstancing, InstancesFollowTheMeshOfALink) {
 
 TEST(GpuInstancing, UnusableAttributesAreErrors) {
   Model model = cube_model({0, 0, 0, 1, 0, 0}, Json::array({{{"offset", 0}, {"count", 2}, {"type", "VEC2"}}}));
+  model.document["extensionsUsed"] = {"EXT_mesh_gpu_instancing"};  // Without it, UNDECLARED_EXTENSION comes first.
   model.document["scenes"] = {{{"nodes", {0}}}};
   model.document["nodes"] = {{{"name", "base"}, {"mesh", 0},
                               {"extensions", {{"EXT_mesh_gpu_instancing", {{"attributes", {{"TRANSLATION", 2}}}}}}}}};

@@ -90,6 +90,8 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(IO_ERROR, kSeverityError | kSeverityWarning, "glTF") \
   X(JSON_BOM, kSeverityError, "glTF") \
   X(JSON_TOO_DEEP, kSeverityError, "glTF") \
+  X(KHR_LIGHTS_PUNCTUAL_LIGHT_SPOT_ANGLES, kSeverityError, "glTF") \
+  X(KHR_MATERIALS_VARIANTS_NON_UNIQUE_VARIANT, kSeverityError, "glTF") \
   X(LIMIT_EXCEEDED, kSeverityError, "glTF") \
   X(MESHOPT_INVALID, kSeverityError, "glTF") \
   X(MESH_INVALID_WEIGHTS_COUNT, kSeverityError, "glTF") \
@@ -127,6 +129,7 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(TYPE_MISMATCH, kSeverityError, "glTF") \
   X(UNDECLARED_EXTENSION, kSeverityError, "glTF") \
   X(UNDEFINED_PROPERTY, kSeverityError, "glTF") \
+  X(UNEXPECTED_EXTENSION_OBJECT, kSeverityError, "glTF") \
   X(UNKNOWN_ASSET_MAJOR_VERSION, kSeverityError, "glTF") \
   X(UNKNOWN_ASSET_MINOR_VERSION, kSeverityWarning, "glTF") \
   X(UNRESOLVED_REFERENCE, kSeverityError, "glTF") \

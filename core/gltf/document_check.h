@@ -126,6 +126,8 @@ class DocumentCheck {
   };
   std::optional<double> read_bounded(const Json& object, const char* key, const std::string& pointer,
                                      double fallback, Bound low, Bound high);
+  bool extension_is_object(const Json& extension, const std::string& pointer, const char* required);
+  const Json* read_objects(const Json& object, const char* key, const std::string& pointer);
   void check_lights();
   void check_variants();
   void check_extension_place(const std::string& name, const std::string& object_pointer);

@@ -6,8 +6,11 @@
 // as the validator does (2.0.0-dev.3.10: the extensions' schemas, the spot's cone angles in order,
 // each variant once per primitive), with its codes and pointers; what it only warns of (an unknown
 // light type, a range on a directional light) is left to it.
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
+#include <optional>
 #include <set>
 #include <string_view>
 #include <vector>
@@ -85,7 +88,34 @@ std::optional<std::vector<Place>> places_of(std::string_view name) {
   return std::nullopt;
 }
 
+// "none", or "3 (0..2)": what a reference may name.
+std::string count_and_range(std::size_t count) {
+  return count == 0 ? std::string("none") : std::to_string(count) + " (0.." + std::to_string(count - 1) + ")";
+}
+
 }  // namespace
+
+// An extension's object (the document's, a node's, a primitive's), which must be one and holds
+// `required`: as the validator, a value of another type is said twice, as a mismatch and as the
+// property it lacks.
+bool DocumentCheck::extension_is_object(const Json& extension, const std::string& pointer, const char* required) {
+  if (extension.is_object()) return true;
+  diag_.error(codes::TYPE_MISMATCH, pointer, "must be an object, found " + describe(extension));
+  diag_.error(codes::UNDEFINED_PROPERTY, pointer, std::string("property '") + required + "' must be defined");
+  return false;
+}
+
+// A required, non-empty array of objects (lights, variants, mappings): null when it is not one. As
+// the validator reads it, an array with an element of another type is no array of those objects.
+const Json* DocumentCheck::read_objects(const Json& object, const char* key, const std::string& pointer) {
+  const Json* array = read_array(object, key, pointer, true);
+  if (array == nullptr) return nullptr;
+  const auto other = std::find_if(array->begin(), array->end(), [](const Json& j) { return !j.is_object(); });
+  if (other == array->end()) return array;
+  diag_.error(codes::ARRAY_TYPE_MISMATCH, json_pointer(pointer, key),
+              "element " + std::to_string(other - array->begin()) + " is " + describe(*other) + ", not an object");
+  return nullptr;
+}
 
 // A number within bounds, each inclusive or not; returns it (or `fallback` when absent), or
 // nothing when it is not a number or out of range.
@@ -112,26 +142,18 @@ void DocumentCheck::check_lights() {
   const std::string root = json_pointer("/extensions", kLights);
   if (const Json* extension = extension_of(doc_, kLights)) {
     light_count = 0;
-    if (!extension->is_object()) {
-      diag_.error(codes::TYPE_MISMATCH, root, "must be an object, found " + describe(*extension));
-      diag_.error(codes::UNDEFINED_PROPERTY, root, "property 'lights' must be defined");
-    } else if (const Json* lights = read_array(*extension, "lights", root, true)) {
+    const Json* lights =
+        extension_is_object(*extension, root, "lights") ? read_objects(*extension, "lights", root) : nullptr;
+    if (lights != nullptr) {
+      light_count = lights->size();
       const std::string here = json_pointer(root, "lights");
-      bool all_objects = true;
-      for (std::size_t k = 0; k < lights->size() && all_objects; ++k) {
-        if ((*lights)[k].is_object()) continue;
-        diag_.error(codes::ARRAY_TYPE_MISMATCH, here,
-                    "element " + std::to_string(k) + " is " + describe((*lights)[k]) + ", not an object");
-        all_objects = false;
-      }
-      // As the validator: an array with an element of another type is no array of lights.
-      if (all_objects) light_count = lights->size();
-      for (std::size_t k = 0; all_objects && k < lights->size(); ++k) {
+      for (std::size_t k = 0; k < lights->size(); ++k) {
         const Json& light = (*lights)[k];
         const std::string at = json_pointer(here, k);
         read_factor(light, "color", at, 3);
         read_bounded(light, "intensity", at, 1.0, {0.0, true}, {kInfinity, true});
         read_bounded(light, "range", at, kInfinity, {0.0, false}, {kInfinity, true});
+        read_string(light, "name", at);
         const auto type = read_string(light, "type", at, true);
         if (type != "spot") continue;
         const Json* spot = read_object(light, "spot", at, true);
@@ -153,11 +175,7 @@ void DocumentCheck::check_lights() {
     const Json* extension = nodes[i] == nullptr ? nullptr : extension_of(*nodes[i], kLights);
     if (extension == nullptr) continue;
     const std::string at = json_pointer(json_pointer("/nodes", i) + "/extensions", kLights);
-    if (!extension->is_object()) {
-      diag_.error(codes::TYPE_MISMATCH, at, "must be an object, found " + describe(*extension));
-      diag_.error(codes::UNDEFINED_PROPERTY, at, "property 'light' must be defined");
-      continue;
-    }
+    if (!extension_is_object(*extension, at, "light")) continue;
     const Json* light = find(*extension, "light", at, true);
     if (light == nullptr) continue;
     const auto index = uint_value(*light, json_pointer(at, "light"));
@@ -170,9 +188,7 @@ void DocumentCheck::check_lights() {
     } else if (*index >= *light_count) {
       diag_.error(codes::UNRESOLVED_REFERENCE, json_pointer(at, "light"),
                   "there is no light " + std::to_string(*index) + ": the document has " +
-                      (*light_count == 0 ? std::string("none")
-                                         : std::to_string(*light_count) + " (0.." +
-                                               std::to_string(*light_count - 1) + ")"));
+                      count_and_range(*light_count));
     }
   }
 }
@@ -205,20 +221,12 @@ void DocumentCheck::check_variants() {
   const std::string root = json_pointer("/extensions", kVariants);
   if (const Json* extension = extension_of(doc_, kVariants)) {
     variant_count = 0;
-    if (!extension->is_object()) {
-      diag_.error(codes::TYPE_MISMATCH, root, "must be an object, found " + describe(*extension));
-      diag_.error(codes::UNDEFINED_PROPERTY, root, "property 'variants' must be defined");
-    } else if (const Json* variants = read_array(*extension, "variants", root, true)) {
+    const Json* variants =
+        extension_is_object(*extension, root, "variants") ? read_objects(*extension, "variants", root) : nullptr;
+    if (variants != nullptr) {
+      variant_count = variants->size();
       const std::string here = json_pointer(root, "variants");
-      bool all_objects = true;
-      for (std::size_t k = 0; k < variants->size() && all_objects; ++k) {
-        if ((*variants)[k].is_object()) continue;
-        diag_.error(codes::ARRAY_TYPE_MISMATCH, here,
-                    "element " + std::to_string(k) + " is " + describe((*variants)[k]) + ", not an object");
-        all_objects = false;
-      }
-      if (all_objects) variant_count = variants->size();
-      for (std::size_t k = 0; all_objects && k < variants->size(); ++k) {
+      for (std::size_t k = 0; k < variants->size(); ++k) {
         read_string((*variants)[k], "name", json_pointer(here, k), true);
       }
     }
@@ -234,21 +242,10 @@ void DocumentCheck::check_variants() {
       if (extension == nullptr) continue;
       const std::string at =
           json_pointer(json_pointer(json_pointer("/meshes", m) + "/primitives", p) + "/extensions", kVariants);
-      if (!extension->is_object()) {
-        diag_.error(codes::TYPE_MISMATCH, at, "must be an object, found " + describe(*extension));
-        diag_.error(codes::UNDEFINED_PROPERTY, at, "property 'mappings' must be defined");
-        continue;
-      }
-      const Json* mappings = read_array(*extension, "mappings", at, true);
+      const Json* mappings =
+          extension_is_object(*extension, at, "mappings") ? read_objects(*extension, "mappings", at) : nullptr;
       if (mappings == nullptr) continue;
       const std::string here = json_pointer(at, "mappings");
-      const auto not_object = std::find_if(mappings->begin(), mappings->end(), [](const Json& j) { return !j.is_object(); });
-      if (not_object != mappings->end()) {
-        diag_.error(codes::ARRAY_TYPE_MISMATCH, here,
-                    "element " + std::to_string(not_object - mappings->begin()) + " is " + describe(*not_object) +
-                        ", not an object");
-        continue;
-      }
       std::set<std::uint64_t> used;  // Each variant names one material of the primitive.
       for (std::size_t k = 0; k < mappings->size(); ++k) {
         const Json& mapping = (*mappings)[k];
@@ -278,9 +275,7 @@ void DocumentCheck::check_variants() {
           if (*index >= *variant_count) {
             diag_.error(codes::UNRESOLVED_REFERENCE, variant_at,
                         "there is no variant " + std::to_string(*index) + ": the document has " +
-                            (*variant_count == 0 ? std::string("none")
-                                                 : std::to_string(*variant_count) + " (0.." +
-                                                       std::to_string(*variant_count - 1) + ")"));
+                            count_and_range(*variant_count));
           }
         }
       }

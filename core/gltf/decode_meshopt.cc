@@ -256,6 +256,14 @@ bool decode_meshopt(GltfAsset& asset, bool& decoded, Diagnostics& diag) {
     }
   }
   if (ok && views > 0) {
+    // Once the name leaves extensionsUsed, no object may keep the extension (UNDECLARED_EXTENSION
+    // when the output is checked again): a buffer that is no fallback ({"fallback": false}) keeps
+    // its bytes, and the extension says nothing more of them.
+    if (document.contains("buffers") && document["buffers"].is_array()) {
+      for (Json& buffer : document["buffers"]) {
+        if (buffer.is_object()) drop_extension(buffer, kMeshoptExtension);
+      }
+    }
     drop_extension_name(document, kMeshoptExtension);
     diag.info(codes::COMPRESSION_DECODED, "/bufferViews",
               std::to_string(views) + " buffer view(s) decoded from EXT_meshopt_compression; the "

@@ -415,6 +415,24 @@ TEST(CompressedData, DracoTextureCoordinateOrientationsBeyondTheCornersAreRefuse
 // too; the Khronos validator refuses either. Real encoders' files with the lists removed or
 // mismatched are refused, naming the object (a required extension that is not used was kept by
 // the output and made it invalid).
+// gltfpack marks its fallback buffer; a buffer of real bytes may carry the extension too, with
+// "fallback": false. Once decoded, the extension leaves extensionsUsed and every buffer: the
+// output checked again has no object using an extension it does not list.
+TEST(CompressedData, AMeshoptBufferThatIsNoFallbackLosesTheExtensionWithTheName) {
+  const auto glb = fuzz::read_bytes(testing::data_dir() / "encoded" / "arm_meshopt.glb");
+  Diagnostics parse_diag;
+  const auto chunks = parse_glb(glb, parse_diag);
+  ASSERT_TRUE(chunks && chunks->bin);
+  Json document = Json::parse(chunks->json);
+  ASSERT_FALSE(document["buffers"][0].contains("extensions"));
+  document["buffers"][0]["extensions"] = {{"EXT_meshopt_compression", {{"fallback", false}}}};
+  Diagnostics diag;
+  const auto asset = load_gltf_from_memory(make_glb(document.dump(), *chunks->bin), "model.glb", "", LoadLimits{}, diag);
+  ASSERT_TRUE(asset) << (diag.all().empty() ? std::string() : format(diag.all().back()));
+  EXPECT_FALSE(asset->document["buffers"][0].contains("extensions")) << asset->document["buffers"].dump();
+  for (const Json& name : asset->document.value("extensionsUsed", Json::array())) EXPECT_NE(name, "EXT_meshopt_compression");
+}
+
 TEST(CompressedData, ExtensionsMissingFromExtensionsUsedAreRefused) {
   const auto refused = [](const std::string& name, Json document, std::span<const std::uint8_t> bin) {
     const std::string json = document.dump();

@@ -1,5 +1,6 @@
 #include "rdtf/completion.h"
 
+#include <cstdint>
 #include <cstdio>
 #include <optional>
 #include <string_view>

@@ -179,8 +179,11 @@ void DocumentCheck::check_extension_objects(const Json& value, const std::string
       // glTF 2.0: every extension used is listed in extensionsUsed. One that is not passed into
       // the output, which the Khronos validator refuses (UNDECLARED_EXTENSION).
       for (const auto& [name, unused] : child.items()) {
-        check_extension_place(name, pointer);
-        if (used_extensions_.count(name) != 0) continue;
+        // As the validator: where an undeclared extension is does not matter, only that it is undeclared.
+        if (used_extensions_.count(name) != 0) {
+          check_extension_place(name, pointer);
+          continue;
+        }
         diag_.error(codes::UNDECLARED_EXTENSION, json_pointer(json_pointer(pointer, key), name),
                     "uses the extension '" + quote(name) +
                         "', which extensionsUsed does not list (glTF 2.0 requires every extension used to be "

@@ -109,7 +109,8 @@ bool DocumentCheck::check_primitive(const Json& primitive, const std::string& po
   const std::uint64_t vertices = indices != kNone              ? accessors_[indices].count
                                  : position != accessors.end() ? accessors_[position->second].count
                                                                : 0;
-  if (position != accessors.end() && primitive.contains("targets") && primitive["targets"].is_array()) {
+  // Only triangles are morphed (read_primitive_triangles): points and lines cost nothing more.
+  if (mode >= 4 && position != accessors.end() && primitive.contains("targets") && primitive["targets"].is_array()) {
     const Json& targets = primitive["targets"];
     if (mesh.target_vertices.size() < targets.size()) mesh.target_vertices.resize(targets.size(), 0);
     for (std::size_t t = 0; t < targets.size(); ++t) {

@@ -1,4 +1,4 @@
-// What rdtf writes out again without reading it: KHR_lights_punctual (core/gltf/validate_lights.cc),
+// What rdtf writes out again without reading it: KHR_lights_punctual (core/gltf/validate_extensions.cc),
 // the extensions any object uses (each must be in extensionsUsed) and an accessor's byteOffset
 // (which needs its bufferView). Each broken one passed into an output the Khronos validator
 // refused. On small documents, rdtf reports its errors exactly where the validator reports its own
@@ -90,6 +90,7 @@ TEST(PassedThrough, BrokenLightsAreRefusedWhereTheValidatorRefusesThem) {
       {"range negative", Json::parse(R"([{"type": "point", "range": -1}])")},
       {"no type", Json::parse(R"([{"color": [1, 1, 1]}])")},
       {"type a number", Json::parse(R"([{"type": 3}])")},
+      {"name a number", Json::parse(R"([{"type": "point", "name": 3}])")},
       {"spot without its cone", Json::parse(R"([{"type": "spot"}])")},
       {"spot cone a number", Json::parse(R"([{"type": "spot", "spot": 3}])")},
       {"cones in the wrong order", Json::parse(R"([{"type": "spot", "spot": {"innerConeAngle": 1.0, "outerConeAngle": 0.5}}])")},
@@ -144,6 +145,12 @@ TEST(PassedThrough, ExtensionsMissingFromExtensionsUsedAndOffsetsIntoNoViewAreRe
   EXPECT_EQ(rdtf_errors(undeclared).count({"UNDECLARED_EXTENSION", "/materials/0/extensions/KHR_materials_unlit"}), 1u);
   undeclared["extensionsUsed"] = {"KHR_lights_punctual", "EXT_made_up", "KHR_materials_unlit"};
   EXPECT_EQ(rdtf_errors(undeclared), Places{}) << listing(rdtf_errors(undeclared));
+
+  // Undeclared and misplaced: the validator says only that it is undeclared, and so does rdtf.
+  Json misplaced = undeclared;
+  misplaced["scenes"][0]["extensions"] = Json::parse(R"({"KHR_texture_transform": {}})");
+  expect_same_errors(misplaced, "an undeclared extension in the wrong place");
+  EXPECT_EQ(rdtf_errors(misplaced).count({"UNDECLARED_EXTENSION", "/scenes/0/extensions/KHR_texture_transform"}), 1u);
 
   for (const int offset : {0, 4}) {
     Json accessor = Json::parse(R"({"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],

@@ -345,6 +345,14 @@ TEST(ValidateDocument, MorphedVerticesCountTowardsTheTriangleLimit) {
   limits.max_triangles = 3;
   EXPECT_NE(limit_error(check_document(document, limits)), nullptr);
 
+  // Points are not morphed: their targets cost nothing.
+  Json points = document;
+  points["meshes"][0]["primitives"][0]["mode"] = 0;
+  points["meshes"][0]["primitives"][0].erase("indices");
+  limits.max_triangles = 0;
+  const Diagnostics unmorphed = check_document(points, limits);
+  EXPECT_EQ(limit_error(unmorphed), nullptr) << listing(unmorphed);
+
   // A second node using the mesh counts again, with its own weights.
   document["nodes"][0]["weights"] = Json::parse("[1, 1, 1]");
   document["nodes"].push_back(Json::parse(R"({"mesh": 0, "name": "again"})"));  // The mesh's: 1, 0, 0.5.

@@ -96,6 +96,40 @@ std::string name_part(const std::string& name) {
   return name.substr(0, cut) + "~" + std::string(hex, 8);
 }
 
+// A part of a group with joint empties or frames parented to it (typing.cc, part_of_group) stays
+// a mesh of the group's link, under its visual node; what was parented to it hangs from the link
+// instead, each through a new joint node that places it as the part did (the part's transform,
+// copied), so every node keeps its place in the scene. Returns the new joint nodes.
+std::vector<std::size_t> hang_from_link(Json& document, std::vector<NodeType>& types, std::size_t link,
+                                        std::size_t mesh) {
+  std::vector<std::size_t> moved, kept;
+  for (const Json& child : document["nodes"][mesh].value("children", Json::array())) {
+    const auto c = child.get<std::size_t>();
+    (types[c] == NodeType::kJoint || types[c] == NodeType::kLink ? moved : kept).push_back(c);
+  }
+  std::vector<std::size_t> placers;
+  if (moved.empty()) return placers;
+  if (kept.empty()) {
+    document["nodes"][mesh].erase("children");
+  } else {
+    document["nodes"][mesh]["children"] = kept;
+  }
+  for (std::size_t child : moved) {
+    const std::string child_name = name_part(node_name(document, child));
+    // Named as completion names a joint node it adds above a link; above a joint node, after the
+    // part that placed it.
+    Json placer = {{"name", types[child] == NodeType::kLink
+                                ? name_part(node_name(document, link)) + "_" + child_name + "_joint"
+                                : name_part(node_name(document, mesh)) + "_" + child_name + "_frame"},
+                   {"children", Json::array({child})}};
+    for (const char* key : {"matrix", "translation", "rotation", "scale"}) {
+      if (document["nodes"][mesh].contains(key)) placer[key] = document["nodes"][mesh][key];
+    }
+    placers.push_back(append_node(document, types, std::move(placer), NodeType::kJoint));
+  }
+  return placers;
+}
+
 }  // namespace
 
 std::string node_name(const Json& document, std::size_t node) {
@@ -152,9 +186,12 @@ void complete_nodes(Json& document, std::vector<NodeType>& types, Diagnostics& d
     for (const Json& child_json : children) {
       const auto child = child_json.get<std::size_t>();
       switch (types[child]) {
-        case NodeType::kMesh:
+        case NodeType::kMesh: {
           mesh_children.push_back(child);
+          const auto placers = hang_from_link(document, types, link, child);
+          other_children.insert(other_children.end(), placers.begin(), placers.end());
           break;
+        }
         case NodeType::kLink:
           link_children.push_back(child);
           break;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <map>
+#include <string_view>
 
 #include "rdtf/completion.h"
 #include "rdtf/geometry.h"
@@ -215,9 +216,78 @@ void type_skin_joints(const Json& document, const std::vector<char>& in_scene,
   }
 }
 
+// Nodes whose placement an animation drives (a TRS channel, or KHR_animation_pointer at one).
+std::vector<char> placed_by_animation(const Json& document) {
+  const std::size_t count = document["nodes"].size();
+  std::vector<char> out(count, 0);
+  if (!document.contains("animations") || !document["animations"].is_array()) return out;
+  const auto mark = [&](std::size_t node) {
+    if (node < count) out[node] = 1;
+  };
+  for (const Json& animation : document["animations"]) {
+    if (!animation.is_object() || !animation.contains("channels") || !animation["channels"].is_array()) continue;
+    for (const Json& channel : animation["channels"]) {
+      if (!channel.is_object() || !channel.contains("target") || !channel["target"].is_object()) continue;
+      const Json& target = channel["target"];
+      const std::string path = target.value("path", std::string());
+      if (path != "pointer" && path != "weights" && target.contains("node") && target["node"].is_number_unsigned()) {
+        mark(target["node"].get<std::size_t>());
+        continue;
+      }
+      const Json* pointer = nullptr;
+      if (target.contains("extensions") && target["extensions"].is_object() &&
+          target["extensions"].contains("KHR_animation_pointer") &&
+          target["extensions"]["KHR_animation_pointer"].is_object()) {
+        const Json& extension = target["extensions"]["KHR_animation_pointer"];
+        if (extension.contains("pointer") && extension["pointer"].is_string()) pointer = &extension["pointer"];
+      }
+      if (pointer == nullptr) continue;
+      // "/nodes/<index>/translation", "/rotation", "/scale", "/matrix": any of them places the node.
+      const std::string text = pointer->get<std::string>();
+      constexpr std::string_view kNodes = "/nodes/";
+      if (text.rfind(kNodes, 0) != 0) continue;
+      std::size_t at = kNodes.size(), node = 0, digits = 0;
+      while (at < text.size() && text[at] >= '0' && text[at] <= '9' && digits < 10) {
+        node = node * 10 + static_cast<std::size_t>(text[at++] - '0');
+        ++digits;
+      }
+      if (digits == 0 || digits == 10 || at >= text.size() || text[at] != '/') continue;
+      const std::string_view property = std::string_view(text).substr(at + 1);
+      for (std::string_view placing : {"translation", "rotation", "scale", "matrix"}) {
+        if (property == placing) mark(node);
+      }
+    }
+  }
+  return out;
+}
+
+// A mesh in a group (its parent an empty that will be a link) with only joint empties and frames
+// parented to it: a part of the group, not a link of its own. Blender's modeller parents an
+// axle's empty or a camera's frame to the part it sits on, inside the group that makes one body
+// (docs/blender.md, "Frames"); typed a link, the part would leave the group's rdtf_density and
+// rdtf_mass behind. completion.cc hangs its children from the group's link.
+bool part_of_group(const Json& nodes, const MeshOwnership& meshes, int parent_index, NodeType parent_type,
+                   std::size_t index, const std::vector<std::size_t>& children, bool placed_by_animation) {
+  const Json& node = nodes[index];
+  if (parent_index < 0 || children.empty() || placed_by_animation || node.contains("skin") ||
+      has_extra(node, "rdtf_joint")) {
+    return false;
+  }
+  // A part with physics of its own (KHR_physics_rigid_bodies) is a body the author made one.
+  if (node.contains("extensions") && node["extensions"].is_object() &&
+      node["extensions"].contains("KHR_physics_rigid_bodies")) {
+    return false;
+  }
+  const auto parent = static_cast<std::size_t>(parent_index);
+  if (meshes.has_mesh(parent) || (parent_type != NodeType::kNone && parent_type != NodeType::kLink)) return false;
+  return std::all_of(children.begin(), children.end(), [&](std::size_t child) {
+    return !meshes.has_mesh(child) && has_extra(nodes[child], "rdtf_joint");
+  });
+}
+
 // Algorithm 2, amended: see docs/format.md, "Typing".
 NodeType mesh_or_visual(const Json& nodes, const MeshOwnership& meshes, int parent_index,
-                        NodeType parent_type, std::size_t index) {
+                        NodeType parent_type, std::size_t index, const std::vector<char>& animated) {
   const Json& node = nodes[index];
   const Json* parent = parent_index < 0 ? nullptr : &nodes[parent_index];
   const auto has_mesh = [&](std::size_t i) { return meshes.has_mesh(i); };
@@ -231,6 +301,9 @@ NodeType mesh_or_visual(const Json& nodes, const MeshOwnership& meshes, int pare
   if (has_mesh(index)) {
     // A skinned mesh moves with its bones, whose links carry its mass: never a link itself.
     if (node.contains("skin") && children.empty()) return NodeType::kMesh;
+    if (part_of_group(nodes, meshes, parent_index, parent_type, index, children, animated[index] != 0)) {
+      return NodeType::kMesh;
+    }
     // Blender puts an object's mesh on the node that parents other objects; an object parented
     // to a mesh object moves on its own; and an object parented to a joint empty is what that
     // joint moves (an elbow empty under the upper-arm mesh, the forearm under the elbow): all links.
@@ -357,6 +430,7 @@ std::vector<NodeType> type_nodes(const Json& document, std::size_t scene, Diagno
     if (!in_scene[i]) types[i] = NodeType::kNone;
   }
   const MeshOwnership meshes(document);
+  const std::vector<char> animated = placed_by_animation(document);
   const auto khr_frames = khr_attachment_nodes(nodes);
   for (const auto& [parent, node] : order) {
     if (fixed[node]) continue;
@@ -364,7 +438,7 @@ std::vector<NodeType> type_nodes(const Json& document, std::size_t scene, Diagno
       types[node] = NodeType::kVisual;
       continue;
     }
-    types[node] = mesh_or_visual(nodes, meshes, parent, parent < 0 ? NodeType::kNone : types[parent], node);
+    types[node] = mesh_or_visual(nodes, meshes, parent, parent < 0 ? NodeType::kNone : types[parent], node, animated);
   }
   for (const auto& [parent, node] : order) {
     if (fixed[node] || types[node] != NodeType::kNone) continue;

@@ -84,7 +84,7 @@ void check_mappable(const Robot& robot, const WeldGroups& welds, Diagnostics& di
     }
     // Welded to a link above it, it is part of that link's body, whose combined mass is checked
     // below; the top link's own must be a mass ODE accepts, except a point mass (zero inertia).
-    const bool point_mass = inertial.mass > 0 && inertial.inertia.isZero(0) && group.links.size() > 1;
+    const bool point_mass = is_point_mass(inertial, welds.extent) && group.links.size() > 1;
     if (static_cast<int>(l) == group.top && !point_mass && !mass_checks(inertial)) {
       diag.error(codes::ODE_MASS_CHECK_FAILED, where,
                  name + "dMassCheck refuses " + mass_text(inertial) +

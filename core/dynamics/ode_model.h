@@ -58,7 +58,18 @@ struct WeldGroup {
 struct WeldGroups {
   std::vector<int> group_of;  // robot.links order
   std::vector<WeldGroup> groups;
+  // The robot's extent at rest (m): the diagonal of the box holding every link origin and centre
+  // of mass. It scales what counts as an inertia of zero (is_point_mass).
+  double extent = 0;
 };
+
+// A link with mass whose inertia is zero to rounding: every entry within 4 eps m l^2, l the
+// robot's extent. Moving a point mass m across the robot adds m (d^2 1 - d d^T), d <= l, to the
+// inertia of any body or joint it joins, whose rounding (three products and two sums) is up to
+// 4 eps m l^2: a tensor below it is lost in that arithmetic, so it cannot tell the part from a
+// point. CAD exporters leave such residues where a part's tensor is zero (iCub's l_ankle_2: 0.27
+// kg with only ixz = 2^-66 kg m^2), and a tensor of one nonzero product is not positive definite.
+bool is_point_mass(const MassProperties& inertial, double extent);
 
 // Assumes check_structure passed. `rest`: X_SL of every link at the rest pose (fixed joints keep
 // the poses within a group at rest anyway). Links whose mass properties are not finite are left

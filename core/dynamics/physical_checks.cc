@@ -1,9 +1,11 @@
 // Physical checks of a robot before it is simulated (docs/dynamics.md, "Physical checks").
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include <Eigen/Eigenvalues>
 #include <numbers>
+#include <numeric>
 
 #include "ode_model.h"
 #include "rdtf/diagnostic_codes.h"
@@ -188,8 +190,8 @@ void check_combined_inertia(const Robot& robot, const WeldGroup& group, const Ph
                           });
 }
 
-void check_inertia(const Robot& robot, const Link& link, const WeldGroup& group, const PhysicalCheckOptions& options,
-                   Diagnostics& diag) {
+void check_inertia(const Robot& robot, const Link& link, const WeldGroup& group, double extent,
+                   const PhysicalCheckOptions& options, Diagnostics& diag) {
   const Eigen::Matrix3d& I = link.inertial.inertia;
   const std::string name = "link '" + link.name + "': ";
   if (!I.allFinite()) {
@@ -198,9 +200,15 @@ void check_inertia(const Robot& robot, const Link& link, const WeldGroup& group,
   }
   // A point mass (a sensor frame of a gram) is a sound part of a rigid body: welded to other links
   // or to the world it only adds m d^2 to the body's inertia. Alone on a joint it cannot turn.
-  if (I.isZero(0) && (group.links.size() > 1 || group.welded_to_world)) {
+  if (dynamics_internal::is_point_mass(link.inertial, extent) && (group.links.size() > 1 || group.welded_to_world)) {
     diag.info(codes::LINK_POINT_MASS, where(link),
-              name + "a point mass (zero inertia), welded (fixed joints) into the body of " +
+              name + "a point mass (" +
+                  (I.isZero(0) ? std::string("zero inertia")
+                               : "inertia zero to rounding: its largest entry " + number(I.cwiseAbs().maxCoeff()) +
+                                     " kg m^2 is below 4 eps m l^2 = " +
+                                     number(4 * std::numeric_limits<double>::epsilon() * link.inertial.mass * extent * extent) +
+                                     ", l = " + number(extent) + " m the robot's extent") +
+                  "), welded (fixed joints) into the body of " +
                   (group.welded_to_world ? std::string("the world") : body_text(robot, group)));
     return;
   }
@@ -291,8 +299,36 @@ void check_inertia_within_geometry(const Link& link, const std::optional<Eigen::
                    "times too large, a placeholder inertia far from the body's, and the link moves unlike the body");
 }
 
-void check_joint(const Robot& robot, const Joint& joint, const WeldGroups& welds, const PhysicalCheckOptions& options,
-                 Diagnostics& diag) {
+// The number of moving bodies in each weld group's island: groups joined by moving joints, as
+// the simulation's ODE bodies are (Simulation::Model's islands); 0 for a group that does not move.
+std::vector<int> island_bodies(const Robot& robot, const WeldGroups& welds) {
+  const std::size_t groups = welds.groups.size();
+  std::vector<std::size_t> root(groups);
+  std::iota(root.begin(), root.end(), std::size_t{0});
+  const auto find = [&root](std::size_t g) {
+    while (root[g] != g) g = root[g] = root[root[g]];
+    return g;
+  };
+  for (const Joint& joint : robot.joints) {
+    if (joint.kind == JointKind::kFixed) continue;
+    const auto a = static_cast<std::size_t>(welds.group_of[joint.parent_link]);
+    const auto b = static_cast<std::size_t>(welds.group_of[joint.child_link]);
+    if (!dynamics_internal::moves(welds.groups[a]) || !dynamics_internal::moves(welds.groups[b])) continue;
+    root[find(b)] = find(a);
+  }
+  std::vector<int> count(groups, 0);
+  for (std::size_t g = 0; g < groups; ++g) {
+    if (dynamics_internal::moves(welds.groups[g])) ++count[find(g)];
+  }
+  std::vector<int> out(groups, 0);
+  for (std::size_t g = 0; g < groups; ++g) {
+    if (dynamics_internal::moves(welds.groups[g])) out[g] = count[find(g)];
+  }
+  return out;
+}
+
+void check_joint(const Robot& robot, const Joint& joint, const WeldGroups& welds, const std::vector<int>& islands,
+                 const PhysicalCheckOptions& options, Diagnostics& diag) {
   const std::string name = "joint '" + joint.name + "' (" + to_string(joint.kind) + "): ";
   if (!joint.X_PJ.matrix().allFinite()) {
     diag.error(codes::JOINT_POSE_NOT_FINITE, where(joint), name + "origin is not finite");
@@ -346,6 +382,10 @@ void check_joint(const Robot& robot, const Joint& joint, const WeldGroups& welds
   const WeldGroup& parent = welds.groups[welds.group_of[joint.parent_link]];
   const WeldGroup& child = welds.groups[welds.group_of[joint.child_link]];
   if (parent.welded_to_world || child.welded_to_world) return;
+  // dWorldStep holds joints between bodies of any ratio (it solves the island exactly): judged
+  // only where QuickStep steps the joint.
+  const int island = islands[static_cast<std::size_t>(welds.group_of[joint.child_link])];
+  if (island < options.mass_ratio_island_bodies) return;
   const double mp = parent.merged.mass, mc = child.merged.mass;
   if (std::isfinite(mp) && std::isfinite(mc) && mp > 0 && mc > 0) {
     const double ratio = std::max(mp, mc) / std::min(mp, mc);
@@ -353,9 +393,10 @@ void check_joint(const Robot& robot, const Joint& joint, const WeldGroups& welds
       diag.error(codes::JOINT_MASS_RATIO, where(joint),
                  name + "joins " + body_text(robot, parent) + " (" + number(mp) + " kg) and " +
                      body_text(robot, child) + " (" + number(mc) + " kg): mass ratio " + number(ratio) +
-                     " is above the bound " + number(options.max_mass_ratio) +
-                     " (max_mass_ratio): QuickStep, the stepper of islands of 27 bodies or more, does not "
-                     "hold joints between bodies this unequal; raise the bound for a model dWorldStep steps");
+                     " is above the bound " + number(options.max_mass_ratio) + " (max_mass_ratio): QuickStep, " +
+                     "whose run is the verdict for its island of " + std::to_string(island) +
+                     " moving bodies, does not hold joints between bodies this unequal; make the masses "
+                     "closer, raise the bound, or step the model with dWorldStep (exact, slower for large islands)");
     }
   }
 }
@@ -377,14 +418,15 @@ void check_physics(const Robot& robot, const PhysicalCheckOptions& options, cons
     }
     check_mass(robot, l, welds, options, diag);
     if (std::isfinite(link.inertial.mass) && link.inertial.mass > 0) {
-      check_inertia(robot, link, welds.groups[welds.group_of[l]], options, diag);
+      check_inertia(robot, link, welds.groups[welds.group_of[l]], welds.extent, options, diag);
     }
     const std::optional<Eigen::AlignedBox3d> none;
     check_center_of_mass(link, bounds && l < bounds->size() ? (*bounds)[l] : none, options, diag);
     check_inertia_within_geometry(link, bounds && l < bounds->size() ? (*bounds)[l] : none, options, diag);
   }
   for (const WeldGroup& group : welds.groups) check_combined_inertia(robot, group, options, diag);
-  for (const Joint& joint : robot.joints) check_joint(robot, joint, welds, options, diag);
+  const std::vector<int> islands = island_bodies(robot, welds);
+  for (const Joint& joint : robot.joints) check_joint(robot, joint, welds, islands, options, diag);
 }
 
 }  // namespace rdtf

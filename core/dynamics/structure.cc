@@ -2,6 +2,7 @@
 // massless links go.
 #include <cmath>
 #include <cstdio>
+#include <limits>
 
 #include "ode_model.h"
 
@@ -24,6 +25,12 @@ bool one_dof(JointKind kind) {
 
 bool is_massless(const Link& link) {
   return link.inertial.mass == 0 && link.inertial.inertia.isZero(0);
+}
+
+bool is_point_mass(const MassProperties& inertial, double extent) {
+  if (!(inertial.mass > 0) || !std::isfinite(inertial.mass) || !inertial.inertia.allFinite()) return false;
+  const double rounding = 4 * std::numeric_limits<double>::epsilon() * inertial.mass * extent * extent;
+  return inertial.inertia.cwiseAbs().maxCoeff() <= rounding;
 }
 
 bool check_structure(const Robot& robot, const char* code, Diagnostics& diag) {
@@ -122,6 +129,13 @@ WeldGroups weld_groups(const Robot& robot, const std::vector<int>& order,
     out.group_of[l] = static_cast<int>(out.groups.size());
     out.groups.push_back(std::move(group));
   }
+  Eigen::AlignedBox3d box;
+  for (std::size_t l = 0; l < robot.links.size(); ++l) {
+    if (!rest[l].matrix().allFinite()) continue;
+    box.extend(rest[l].translation());
+    if (robot.links[l].inertial.center_of_mass.allFinite()) box.extend(rest[l] * robot.links[l].inertial.center_of_mass);
+  }
+  out.extent = box.isEmpty() ? 0 : box.diagonal().norm();
   for (WeldGroup& group : out.groups) {
     const Eigen::Isometry3d X_TS = rest[group.top].inverse();
     // Two passes: the centre of mass, then every inertia about it (parallel-axis theorem), so that

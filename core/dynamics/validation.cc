@@ -1,8 +1,10 @@
 // The validation run (the gate, docs/dynamics.md): physical checks, then a passive scenario in
 // ODE watched for NaN, energy created, joints coming apart, limits overrun and bodies flying off.
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <ctime>
+#include <limits>
 #include <map>
 
 #include "ode_model.h"
@@ -312,6 +314,23 @@ ValidationReport validate_dynamics(const Robot& robot, const ValidationOptions& 
   checks.floating_root = options.simulation.floating_root;
   checks.bound_mass = options.simulation.bound_mass;
   checks.bound_inertia = options.simulation.bound_inertia;
+  // The mass ratio is QuickStep's problem (dWorldStep holds any): judged where QuickStep gives the
+  // verdict. The automatic stepper judges an island of up to exact_rerun_max_bodies again with
+  // dWorldStep when QuickStep's run fails, so only beyond that is QuickStep's run the verdict.
+  switch (options.simulation.stepper) {
+    case Stepper::kAuto:
+      checks.mass_ratio_island_bodies =
+          options.exact_rerun_max_bodies > 0
+              ? std::max(options.simulation.quickstep_min_bodies, options.exact_rerun_max_bodies + 1)
+              : options.simulation.quickstep_min_bodies;
+      break;
+    case Stepper::kQuickStep:
+      checks.mass_ratio_island_bodies = 0;
+      break;
+    case Stepper::kWorldStep:
+      checks.mass_ratio_island_bodies = std::numeric_limits<int>::max();
+      break;
+  }
   check_physics(robot, checks, bounds, report.diagnostics);
   if (!(options.duration >= 0) || !std::isfinite(options.duration) || !std::isfinite(options.start_offset_angular) ||
       !(options.cpu_budget >= 0) || !(options.simulation.bound_mass >= 0) ||

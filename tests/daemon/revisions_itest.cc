@@ -244,7 +244,12 @@ TEST(Revisions, NumbersOfRejectedContentsAreNotHandedOutAgainAfterARestart) {
   const auto bad = gate_failing_model("bad_base", 0.05);
   const auto fixed = chain(1.5);
   write_model(s.watch, id, good);
-  const auto gated = DaemonOptions().with("validate", true).with("validation_seconds", 0.5).with("floating_root", true);
+  // The bad model's mass ratio is judged under QuickStep (docs/dynamics.md, JOINT_MASS_RATIO).
+  const auto gated = DaemonOptions()
+                         .with("validate", true)
+                         .with("validation_seconds", 0.5)
+                         .with("floating_root", true)
+                         .with("stepper", "quick_step");
   auto& daemon = s.start(gated);
   ASSERT_TRUE(s.wait_revision(id, 1, content_hash(good), 20s)) << daemon.log();
   write_in_place(s.watch / id, bad.gltf);

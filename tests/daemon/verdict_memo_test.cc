@@ -27,6 +27,7 @@ struct Arm {
   testing::TempDir root;
   testing::TempDir out;
   Json document = Json::parse(testing::read_file(testing::data_dir() / "blender" / "arm3.gltf"));
+  Stepper stepper = Stepper::kAuto;
 
   Arm() {
     testing::write_file(root / "arm3.bin", testing::read_file(testing::data_dir() / "blender" / "arm3.bin"));
@@ -50,6 +51,7 @@ struct Arm {
     job.output_dir = out.path();
     job.validation = ValidationOptions{};
     job.validation->duration = 0.5;
+    job.validation->simulation.stepper = stepper;
     job.cache_key = "settings A";
     return job;
   }
@@ -129,6 +131,7 @@ TEST(DaemonVerdictMemo, AnIdenticalRobotReusesTheVerdictAndAnyChangeRunsTheCheck
 
 TEST(DaemonVerdictMemo, AFailedVerdictIsNeverReplacedByThePassOfAnotherRobot) {
   Arm arm;
+  arm.stepper = Stepper::kQuickStep;  // whose run judges the mass ratio below
   const ConversionOutcome good = arm.convert(arm.job());
   ASSERT_TRUE(good.verdict && good.verdict->verdict.passed);
 
@@ -264,6 +267,7 @@ class DaemonVerdicts : public DaemonLoop {
     start([](DaemonConfig& config) {
       config.validate = true;
       config.validation_seconds = 0.5;
+      config.stepper = Stepper::kQuickStep;  // whose run judges the mass ratio the failing robot has
     });
   }
   // Saves arm3.gltf and lets it settle: its conversion waits in the runner.

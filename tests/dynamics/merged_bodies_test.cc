@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 
 #include "dynamics/dynamics_models.h"
 
@@ -339,6 +340,115 @@ TEST(MergedBodies, MasslessMovingLinkAndTheBoundMass) {
   const ValidationReport strict = validate_dynamics(b.robot(), bounded);
   EXPECT_FALSE(strict.passed);
   EXPECT_TRUE(strict.simulated);
+}
+
+// iCub's ankle: a 0.2675 kg link whose published tensor is zero but for ixz = 1.35525e-20 (2^-66,
+// its exporter's rounding), moved by a pitch joint, with the foot welded below it. The tensor is
+// within 4 eps m l^2 of zero (l the robot's extent, here 0.451 m: 4.8e-17), so the link is a point
+// mass and the welded body (with the foot's real tensor) is what ODE moves. A product of inertia
+// a hundred times that threshold is a tensor, not rounding: not positive definite, refused.
+Robot icub_ankle(double ixz) {
+  RobotBuilder b;
+  const int shin = b.root("l_shin", box_inertial(1.0, {0.06, 0.4, 0.06}, {0, -0.2, 0}));
+  MassProperties ankle;
+  ankle.mass = 0.2675;
+  ankle.inertia(0, 2) = ankle.inertia(2, 0) = ixz;
+  const int ankle_link = b.child(shin, "l_ankle_pitch", JointKind::kRevolute, translation(0, -0.4, 0),
+                                 Eigen::Vector3d::UnitX(), "l_ankle_2", ankle);
+  b.joint(0).limits = JointLimits{-0.7, 0.5, 0, 0};
+  b.child(ankle_link, "l_foot_fixed", JointKind::kFixed, translation(0.03, -0.05, 0), Eigen::Vector3d::UnitX(),
+          "l_foot", box_inertial(0.6, {0.08, 0.03, 0.2}));
+  return b.robot();
+}
+
+TEST(MergedBodies, TensorZeroToRoundingIsAPointMass) {
+  const Robot robot = icub_ankle(std::ldexp(1.0, -66));
+  // The extent: the diagonal of the box of link origins and centres of mass at rest, from the
+  // shin's origin at 0 to the foot's at (0.03, -0.45, 0).
+  Eigen::AlignedBox3d box;
+  for (const Link& link : robot.links) {
+    box.extend(link.X_SL.translation());
+    box.extend(link.X_SL * link.inertial.center_of_mass);
+  }
+  const double extent = box.diagonal().norm();
+  const double rounding = 4 * std::numeric_limits<double>::epsilon() * 0.2675 * extent * extent;
+  EXPECT_NEAR(extent, std::hypot(0.03, 0.45), 1e-15);
+  EXPECT_GT(rounding, std::ldexp(1.0, -66)) << "the residue must be within rounding for this test to mean anything";
+  ValidationOptions options;
+  options.simulation.floating_root = true;
+  const ValidationReport report = validate_dynamics(robot, options);
+  EXPECT_TRUE(report.passed) << all_text(report.diagnostics);
+  EXPECT_FALSE(report.diagnostics.contains("LINK_INERTIA_NOT_POSITIVE_DEFINITE")) << all_text(report.diagnostics);
+  EXPECT_FALSE(report.diagnostics.contains("ODE_MASS_CHECK_FAILED")) << all_text(report.diagnostics);
+  const auto point = with_code(report.diagnostics, "LINK_POINT_MASS");
+  ASSERT_EQ(point.size(), 1u) << all_text(report.diagnostics);
+  EXPECT_NE(point[0].message.find("link 'l_ankle_2'"), std::string::npos) << point[0].message;
+  EXPECT_NE(point[0].message.find("zero to rounding"), std::string::npos) << point[0].message;
+
+  // The same with a product of inertia 100 times the rounding bound: a tensor, and not a sound one.
+  const ValidationReport refused = validate_dynamics(icub_ankle(100 * rounding), options);
+  EXPECT_FALSE(refused.passed);
+  const auto not_pd = with_code(refused.diagnostics, "LINK_INERTIA_NOT_POSITIVE_DEFINITE");
+  ASSERT_EQ(not_pd.size(), 1u) << all_text(refused.diagnostics);
+  EXPECT_EQ(not_pd[0].severity, Severity::kError);
+  EXPECT_FALSE(refused.diagnostics.contains("LINK_POINT_MASS")) << all_text(refused.diagnostics);
+}
+
+// A pan-tilt head as ROS descriptions build one: a 10 g dummy link between the pan and the tilt
+// joints, a 1 kg head. The ratio across the tilt (1e2) and the pan (the world holds the base) is
+// fine; with a 1e-5 kg dummy (Gazebo's habit) it is 1e5. dWorldStep, the automatic stepper's for
+// an island of 2 bodies, holds the joints (the run passes); QuickStep's run is refused, and the
+// message names the island.
+Robot pan_tilt(double dummy_mass) {
+  RobotBuilder b;
+  const int base = b.root("base", box_inertial(3.0, {0.2, 0.1, 0.2}));
+  const int dummy = b.child(base, "pan", JointKind::kRevolute, translation(0, 0.1, 0), Eigen::Vector3d::UnitY(),
+                            "pan_link", box_inertial(dummy_mass, {0.01, 0.01, 0.01}));
+  b.joint(0).limits = JointLimits{-2.5, 2.5, 0, 0};
+  b.child(dummy, "tilt", JointKind::kRevolute, translation(0, 0.02, 0), Eigen::Vector3d::UnitX(), "head",
+          box_inertial(1.0, {0.1, 0.1, 0.15}, {0, 0.05, 0.03}));
+  b.joint(1).limits = JointLimits{-1.0, 1.0, 0, 0};
+  return b.robot();
+}
+
+TEST(MergedBodies, MassRatioIsJudgedWhereQuickStepGivesTheVerdict) {
+  const Robot robot = pan_tilt(1e-5);
+  const ValidationReport exact = validate_dynamics(robot, ValidationOptions{});
+  std::printf("pan-tilt, 1e-5 kg dummy, auto: %s\n", validation_summary_line(exact).c_str());
+  EXPECT_TRUE(exact.passed) << all_text(exact.diagnostics);
+  EXPECT_EQ(exact.stepper, "dWorldStep");
+  EXPECT_FALSE(exact.diagnostics.contains("JOINT_MASS_RATIO")) << all_text(exact.diagnostics);
+
+  ValidationOptions quick;
+  quick.simulation.stepper = Stepper::kQuickStep;
+  const ValidationReport refused = validate_dynamics(robot, quick);
+  EXPECT_FALSE(refused.passed);
+  const auto ratio = with_code(refused.diagnostics, "JOINT_MASS_RATIO");
+  ASSERT_EQ(ratio.size(), 1u) << all_text(refused.diagnostics);
+  EXPECT_NE(ratio[0].message.find("joint 'tilt'"), std::string::npos) << ratio[0].message;
+  EXPECT_NE(ratio[0].message.find("mass ratio 100000"), std::string::npos) << ratio[0].message;
+  EXPECT_NE(ratio[0].message.find("its island of 2 moving bodies"), std::string::npos) << ratio[0].message;
+
+  // The island counts the bodies joined by moving joints: with the bound at 3 bodies, this island
+  // of 2 is not judged; a third body hung below the head by a hinge makes it 3, and it is.
+  PhysicalCheckOptions options;
+  options.mass_ratio_island_bodies = 3;
+  Diagnostics two;
+  check_physics(robot, options, nullptr, two);
+  EXPECT_FALSE(two.contains("JOINT_MASS_RATIO")) << all_text(two);
+  RobotBuilder b;
+  const int base = b.root("base", box_inertial(3.0, {0.2, 0.1, 0.2}));
+  const int dummy = b.child(base, "pan", JointKind::kRevolute, translation(0, 0.1, 0), Eigen::Vector3d::UnitY(),
+                            "pan_link", box_inertial(1e-5, {0.01, 0.01, 0.01}));
+  const int head = b.child(dummy, "tilt", JointKind::kRevolute, translation(0, 0.02, 0), Eigen::Vector3d::UnitX(),
+                           "head", box_inertial(1.0, {0.1, 0.1, 0.15}, {0, 0.05, 0.03}));
+  b.child(head, "visor_hinge", JointKind::kRevolute, translation(0, 0.1, 0.08), Eigen::Vector3d::UnitX(), "visor",
+          box_inertial(0.2, {0.1, 0.05, 0.01}));
+  Diagnostics three;
+  check_physics(b.robot(), options, nullptr, three);
+  const auto judged = with_code(three, "JOINT_MASS_RATIO");
+  ASSERT_EQ(judged.size(), 1u) << all_text(three);
+  EXPECT_NE(judged[0].message.find("its island of 3 moving bodies"), std::string::npos) << judged[0].message;
 }
 
 }  // namespace

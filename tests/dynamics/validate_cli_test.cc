@@ -97,12 +97,13 @@ TEST(ValidateCli, GeneratedGoodModelPasses) {
   EXPECT_NE(run.out.find(": PASS:"), std::string::npos) << run.out;
 }
 
-// base at rdtf_mass 1e7 kg, arm 1 kg (0.1 m cube at 1000 kg/m^3), floating: the joint is named
-// with both bodies. Held by the world (the default) the base is no body, and no ratio is judged.
+// base at rdtf_mass 1e7 kg, arm 1 kg (0.1 m cube at 1000 kg/m^3), floating, stepped by QuickStep:
+// the joint is named with both bodies. Held by the world (the default) the base is no body, and no
+// ratio is judged; nor with the automatic stepper, whose dWorldStep holds the joint (2 bodies).
 TEST(ValidateCli, MassRatioFailsWithExitTwoAndTheDiagnostic) {
   testing::TempDir folder;
   const auto path = write_two_boxes(folder, {{"rdtf_mass", 1e7}}, kHinge);
-  const auto run = validate("--floating " + quoted(path));
+  const auto run = validate("--stepper quick_step --floating " + quoted(path));
   EXPECT_EQ(run.exit_code, 2) << run.out << run.err;
   EXPECT_NE(run.err.find("error JOINT_MASS_RATIO: joint 'base_arm_joint' (revolute): joins link 'base' (1e+07 kg) "
                          "and link 'arm' (1 kg): mass ratio 1e+07"),
@@ -110,8 +111,11 @@ TEST(ValidateCli, MassRatioFailsWithExitTwoAndTheDiagnostic) {
       << run.err;
   EXPECT_NE(run.out.find(": FAIL:"), std::string::npos) << run.out;
   // The bound is an option.
-  EXPECT_EQ(validate("--floating " + quoted(path) + " --max-mass-ratio 1e8").exit_code, 0);
+  EXPECT_EQ(validate("--stepper quick_step --floating " + quoted(path) + " --max-mass-ratio 1e8").exit_code, 0);
   EXPECT_EQ(validate(quoted(path)).exit_code, 0);
+  const auto exact = validate("--floating " + quoted(path));
+  EXPECT_EQ(exact.exit_code, 0) << exact.out << exact.err;
+  EXPECT_EQ(exact.err.find("JOINT_MASS_RATIO"), std::string::npos) << exact.err;
 }
 
 // A massless arm on a hinge fails naming the options that simulate it; with them it passes, and
@@ -195,7 +199,8 @@ TEST(ValidateCli, JsonReportHasTheDocumentedFields) {
 
 TEST(ValidateCli, JsonReportOfABrokenModelCarriesTheDiagnostic) {
   testing::TempDir folder;
-  const auto run = validate("--json --floating " + quoted(write_two_boxes(folder, {{"rdtf_mass", 1e7}}, kHinge)));
+  const auto run = validate("--json --stepper quick_step --floating " +
+                            quoted(write_two_boxes(folder, {{"rdtf_mass", 1e7}}, kHinge)));
   EXPECT_EQ(run.exit_code, 2) << run.out << run.err;
   const json report = json::parse(run.out);
   expect_report_fields(report);

@@ -35,8 +35,14 @@ inline constexpr double kStandardGravity = 9.80665;  // m/s^2
 // Physical checks: pure functions of the robot (and optionally its geometry's bounds).
 
 struct PhysicalCheckOptions {
-  // A joint whose two links' masses differ by more than this factor is an error.
+  // A joint whose two links' masses differ by more than this factor is an error, when QuickStep
+  // steps it: in an island (bodies joined by moving joints) of at least mass_ratio_island_bodies
+  // moving bodies. dWorldStep solves an island's constraints exactly and holds such joints.
+  // validate_dynamics sets it from the stepper it runs (SimulationOptions): for kAuto, islands
+  // beyond exact_rerun_max_bodies (up to it, a failed QuickStep run is judged again with
+  // dWorldStep); 0 for kQuickStep (every joint judged); none for kWorldStep.
   double max_mass_ratio = 1e3;
+  int mass_ratio_island_bodies = 0;
   // |I - I^T| may reach this much of the largest |I_ij|.
   double symmetry_tolerance = 1e-9;
   // Principal moments A, B, C must satisfy A + B >= C - triangle_tolerance * (A + B + C).

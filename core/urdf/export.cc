@@ -33,7 +33,9 @@ constexpr double kUnsetEffort = 1.0e6;    // N m or N
 constexpr double kUnsetVelocity = 1.0e3;  // rad/s or m/s
 
 // The joint type in URDF, or nothing (and an error) when URDF cannot say it.
-std::optional<int> urdf_joint_type(const Joint& joint, const std::string& name, Diagnostics& diag) {
+// `below_world`: the joint's parent is a root link named "world", which MuJoCo's URDF reader
+// takes as its world body, so the child is a top-level body.
+std::optional<int> urdf_joint_type(const Joint& joint, const std::string& name, bool below_world, Diagnostics& diag) {
   const std::string pointer = node_pointer(joint.node);
   switch (joint.kind) {
     case JointKind::kFixed:
@@ -44,10 +46,19 @@ std::optional<int> urdf_joint_type(const Joint& joint, const std::string& name, 
       // Valid URDF, which check_urdf and urdfdom accept, but every URDF joint hangs below a link:
       // MuJoCo makes it a free joint of a nested body and refuses the file, and ROS's
       // robot_state_publisher publishes no transform for it.
+      // Below a root named "world" MuJoCo takes the child as a top-level body and loads the file.
+      if (below_world) {
+        diag.warning(codes::URDF_FLOATING_JOINT, pointer,
+                     "floating joint '" + name + "' is written as URDF says it; below the root link 'world' "
+                     "MuJoCo makes it a free joint, but robot_state_publisher ignores it (publish its pose "
+                     "yourself, or use a fixed joint)");
+        return urdf::Joint::FLOATING;
+      }
       diag.warning(codes::URDF_FLOATING_JOINT, pointer,
                    "floating joint '" + name + "' is written as URDF says it, but MuJoCo refuses the file "
-                   "(a free joint must belong to a top-level body) and robot_state_publisher ignores it; "
-                   "for those tools make the child a separate model or use a fixed joint");
+                   "(a free joint must belong to a top-level body: name its parent, a root, 'world' for "
+                   "MuJoCo to take it as its world) and robot_state_publisher ignores it; for those tools "
+                   "make the child a separate model or use a fixed joint");
       return urdf::Joint::FLOATING;
     case JointKind::kPlanar:
       return urdf::Joint::PLANAR;
@@ -381,7 +392,9 @@ std::optional<UrdfExport> export_urdf(const Conversion& conversion, const UrdfOp
   for (std::size_t j = 0; j < robot.joints.size(); ++j) {
     const Joint& joint = robot.joints[j];
     const std::string& name = result.joint_names[j];
-    const auto type = urdf_joint_type(joint, name, diag);
+    const Link& parent = robot.links[joint.parent_link];
+    const bool below_world = parent.parent_joint < 0 && result.link_names[joint.parent_link] == "world";
+    const auto type = urdf_joint_type(joint, name, below_world, diag);
     if (!type) {
       ok = false;
       continue;

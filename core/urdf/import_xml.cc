@@ -241,7 +241,24 @@ void check_origin(Checker& c, const TiXmlElement* parent, const std::string& poi
 
 // <inertial>: what urdfdom needs (a <mass value>, an <inertia> with all six terms) and import
 // uses; urdfdom 3.0 would otherwise keep the link with a zero mass and tensor.
-void check_inertial(Checker& c, const TiXmlElement* inertial, const std::string& pointer) {
+// The largest |term| of any link's <inertia> (the first <inertial> of each, as urdfdom reads):
+// the robot's scale of inertia, against which a frame's all-noise tensor is judged.
+double largest_inertia_term(const TiXmlElement* robot_element) {
+  double largest = 0;
+  for (const TiXmlElement* e = robot_element->FirstChildElement("link"); e; e = e->NextSiblingElement("link")) {
+    const TiXmlElement* inertial = e->FirstChildElement("inertial");
+    const TiXmlElement* inertia = inertial != nullptr ? inertial->FirstChildElement("inertia") : nullptr;
+    if (inertia == nullptr) continue;
+    for (const char* term : {"ixx", "ixy", "ixz", "iyy", "iyz", "izz"}) {
+      const char* text = inertia->Attribute(term);
+      double value = 0;
+      if (text != nullptr && parse_number(text, value) == NumberError::kNone) largest = std::max(largest, std::abs(value));
+    }
+  }
+  return largest;
+}
+
+void check_inertial(Checker& c, const TiXmlElement* inertial, const std::string& pointer, double robot_largest) {
   check_origin(c, inertial, pointer, kInvalidInertial);
   if (const TiXmlElement* mass = inertial->FirstChildElement("mass")) {
     c.numbers(mass, pointer + "/mass", "value", {1, Range::kNonNegative, "a mass"}, true, kInvalidInertial);
@@ -250,17 +267,18 @@ void check_inertial(Checker& c, const TiXmlElement* inertial, const std::string&
   }
   if (const TiXmlElement* inertia = inertial->FirstChildElement("inertia")) {
     std::map<std::string, double> moments;
+    double largest = robot_largest;
     for (const char* term : {"ixx", "ixy", "ixz", "iyy", "iyz", "izz"}) {
       const auto value = c.numbers(inertia, pointer + "/inertia", term, {1, Range::kAny, "an inertia term"}, true,
                                    kInvalidInertial);
+      if (value) largest = std::max(largest, std::abs(value->front()));
       if (value && term[1] == term[2]) moments[term] = value->front();
     }
     // A moment (ixx, iyy, izz) of no body is negative; a product of inertia may be (s100err D7: a
     // negative ixx imported without a word, and only the dynamics check refused it later). A
-    // rounding's worth below 0 (1e-9 of the largest moment: an exporter's -1e-30 for a thin rod's
-    // axis) is not refused.
-    double largest = 0;
-    for (const auto& [term, value] : moments) largest = std::max(largest, std::abs(value));
+    // rounding's worth below 0 is not refused: 1e-9 of the largest term of the link, or of the
+    // robot for a tensor that is all noise (an exporter's -1e-30 for a thin rod's axis; a sensor
+    // frame's ixx="-1e-30" beside moments of 1e-30, written where it computed zero).
     for (const auto& [term, value] : moments) {
       if (value >= -1e-9 * largest) continue;
       c.error(kInvalidInertial, pointer + "/inertia/@" + term, inertia->Row(),
@@ -586,6 +604,7 @@ std::optional<XmlRobot> scan_urdf_xml(const std::string& text, Diagnostics& diag
   robot.row = robot_element->Row();
   bool ok = true;
   Checker checker(diag);
+  const double robot_largest_inertia = largest_inertia_term(robot_element);
   std::set<std::string> link_names, joint_names;
   for (const TiXmlElement* m = robot_element->FirstChildElement("material"); m; m = m->NextSiblingElement("material")) {
     const char* name = m->Attribute("name");
@@ -619,7 +638,7 @@ std::optional<XmlRobot> scan_urdf_xml(const std::string& text, Diagnostics& diag
     }
     // urdfdom reads the first <inertial> only.
     if (const TiXmlElement* inertial = e->FirstChildElement("inertial")) {
-      check_inertial(checker, inertial, pointer + "/inertial");
+      check_inertial(checker, inertial, pointer + "/inertial", robot_largest_inertia);
     }
     robot.links.push_back(std::move(link));
   }

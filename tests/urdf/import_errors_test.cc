@@ -332,6 +332,41 @@ TEST(UrdfImportErrors, AMomentARoundingBelowZeroIsAccepted) {
   for (const Diagnostic& d : diag.all()) EXPECT_NE(d.code, "URDF_INVALID_INERTIAL") << d.message;
 }
 
+// A sensor frame whose exporter wrote zero as noise (Unitree's z1: ixx="-1e-30" beside moments of
+// 1e-30) is judged against the robot's inertias, not its own noise: accepted. A moment below 0 by
+// more than a rounding of the robot's largest term is still refused.
+TEST(UrdfImportErrors, ANoiseTensorOfAFrameIsJudgedAgainstTheRobot) {
+  const auto urdf_with_frame = [](const std::string& frame_ixx) {
+    return "<robot name=\"r\">\n"
+           "<link name=\"base\"><inertial><mass value=\"2\"/>"
+           "<inertia ixx=\"0.02\" ixy=\"0\" ixz=\"0\" iyy=\"0.03\" iyz=\"0\" izz=\"0.04\"/></inertial></link>\n"
+           "<link name=\"camera_frame\"><inertial><mass value=\"1e-6\"/>"
+           "<inertia ixx=\"" + frame_ixx + "\" ixy=\"0\" ixz=\"0\" iyy=\"1e-30\" iyz=\"0\" izz=\"1e-30\"/>"
+           "</inertial></link>\n"
+           "<joint name=\"camera_joint\" type=\"fixed\"><parent link=\"base\"/><child link=\"camera_frame\"/></joint>\n"
+           "</robot>\n";
+  };
+  TempDir dir;
+  const fs::path urdf = dir / "robot.urdf";
+  testing::write_file(urdf, urdf_with_frame("-1e-30"));
+  Diagnostics noise;
+  EXPECT_TRUE(import_urdf(urdf, UrdfImportOptions{}, noise).has_value());
+  for (const Diagnostic& d : noise.all()) EXPECT_NE(d.code, "URDF_INVALID_INERTIAL") << d.message;
+
+  // 1e-9 of the robot's largest term (0.04) is 4e-11: -1e-10 is beyond it.
+  testing::write_file(urdf, urdf_with_frame("-1e-10"));
+  Diagnostics negative;
+  import_urdf(urdf, UrdfImportOptions{}, negative);
+  bool refused = false;
+  for (const Diagnostic& d : negative.all()) {
+    if (d.code != "URDF_INVALID_INERTIAL") continue;
+    refused = true;
+    EXPECT_EQ(d.pointer, "/robot/link[@name='camera_frame']/inertial/inertia/@ixx");
+    EXPECT_NE(d.message.find("'-1e-10' is negative"), std::string::npos) << d.message;
+  }
+  EXPECT_TRUE(refused) << "a moment of -1e-10 beside a largest term of 0.04 is no rounding";
+}
+
 TEST(UrdfImportErrors, MissingMeshOfALinkWithAnInertialIsAWarning) {
   expect_unusable_mesh_is_a_warning("URDF_MESH_NOT_FOUND", [](const fs::path&) {});
 }

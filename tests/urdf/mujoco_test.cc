@@ -203,6 +203,32 @@ TEST(UrdfMujoco, FloatingJointIsWrittenWithAWarningThatMujocoRefusesIt) {
   EXPECT_NE(error.find("free joint can only be used on top level"), std::string::npos) << error;
 }
 
+// Below a massless root named "world" (URDF's usual world link) MuJoCo takes the floating joint's
+// child as a top-level body with a free joint and loads the file: the warning says only what
+// robot_state_publisher does.
+TEST(UrdfMujoco, FloatingJointBelowARootNamedWorldLoads) {
+  GltfBuilder b;
+  const int mesh = b.box_mesh(Eigen::Vector3f(0.2f, 0.2f, 0.2f));
+  const int world = b.node("world", -1, Json{{"extras", {{"rdtf_type", "link"}}}});
+  const int joint = b.node("free", world, Json{{"extras", {{"rdtf_joint", "floating"}}}});
+  b.link_with_mesh("drone", joint, mesh);
+  Diagnostics diag;
+  const Conversion conversion = b.convert(diag);
+  TempDir dir;
+  Diagnostics export_diag;
+  ASSERT_TRUE(write_urdf(conversion, dir.path(), UrdfOptions{}, export_diag));
+  std::vector<Diagnostic> warnings;
+  for (const Diagnostic& d : export_diag.all()) {
+    if (d.code == "URDF_FLOATING_JOINT") warnings.push_back(d);
+  }
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_NE(warnings[0].message.find("robot_state_publisher ignores it"), std::string::npos) << warnings[0].message;
+  EXPECT_EQ(warnings[0].message.find("MuJoCo refuses"), std::string::npos) << warnings[0].message;
+  expect_check_urdf_passes(dir / "robot.urdf");
+  std::string error;
+  EXPECT_TRUE(load_in_mujoco(dir / "robot.urdf", error)) << error;
+}
+
 TEST(UrdfMujoco, ImportedTutorialRobot) {
   Diagnostics diag;
   auto conversion = import_urdf(testing::data_dir() / "urdf/urdf_tutorial/07-physics.urdf", UrdfImportOptions{}, diag);

@@ -101,7 +101,7 @@ std::string name_part(const std::string& name) {
 // instead, each through a new joint node that places it as the part did (the part's transform,
 // copied), so every node keeps its place in the scene. Returns the new joint nodes.
 std::vector<std::size_t> hang_from_link(Json& document, std::vector<NodeType>& types, std::size_t link,
-                                        std::size_t mesh) {
+                                        std::size_t mesh, Diagnostics& diag) {
   std::vector<std::size_t> moved, kept;
   for (const Json& child : document["nodes"][mesh].value("children", Json::array())) {
     const auto c = child.get<std::size_t>();
@@ -114,6 +114,13 @@ std::vector<std::size_t> hang_from_link(Json& document, std::vector<NodeType>& t
   } else {
     document["nodes"][mesh]["children"] = kept;
   }
+  std::string names;
+  for (std::size_t child : moved) names += std::string(names.empty() ? "" : ", ") + "'" + node_name(document, child) + "'";
+  diag.info(codes::MESH_HOLDS_FRAMES, json_pointer("/nodes", mesh),
+            "mesh node '" + node_name(document, mesh) + "' is a part of group '" + node_name(document, link) +
+                "' (its rdtf_density or rdtf_mass covers it), so it stays in link '" + node_name(document, link) +
+                "'; what is parented to it (" + names + ") hangs from that link where it was (give the part "
+                "rdtf_joint to make it a link of its own)");
   for (std::size_t child : moved) {
     const std::string child_name = name_part(node_name(document, child));
     // Named as completion names a joint node it adds above a link; above a joint node, after the
@@ -188,7 +195,7 @@ void complete_nodes(Json& document, std::vector<NodeType>& types, Diagnostics& d
       switch (types[child]) {
         case NodeType::kMesh: {
           mesh_children.push_back(child);
-          const auto placers = hang_from_link(document, types, link, child);
+          const auto placers = hang_from_link(document, types, link, child, diag);
           other_children.insert(other_children.end(), placers.begin(), placers.end());
           break;
         }

@@ -261,16 +261,24 @@ std::vector<char> placed_by_animation(const Json& document) {
   return out;
 }
 
-// A mesh in a group (its parent an empty that will be a link) with only joint empties and frames
-// parented to it: a part of the group, not a link of its own. Blender's modeller parents an
-// axle's empty or a camera's frame to the part it sits on, inside the group that makes one body
-// (docs/blender.md, "Frames"); typed a link, the part would leave the group's rdtf_density and
-// rdtf_mass behind. completion.cc hangs its children from the group's link.
+// A mesh in a group (its parent an empty, to be a link, that gives its parts rdtf_density or
+// rdtf_mass) with only joint empties and frames parented to it: a part of the group, not a link of
+// its own. Blender's modeller parents an axle's empty or a camera's frame to the part it sits on,
+// inside the group that makes one body (docs/blender.md, "Frames"); typed a link, the part would
+// leave the group's density and mass behind. An empty without them only holds the robot (a root
+// "my_robot" over "base_link"): its parts keep their links, and their names. completion.cc hangs
+// the part's children from the group's link.
 bool part_of_group(const Json& nodes, const MeshOwnership& meshes, int parent_index, NodeType parent_type,
                    std::size_t index, const std::vector<std::size_t>& children, bool placed_by_animation) {
   const Json& node = nodes[index];
-  if (parent_index < 0 || children.empty() || placed_by_animation || node.contains("skin") ||
-      has_extra(node, "rdtf_joint")) {
+  if (parent_index < 0 || children.empty() || placed_by_animation || node.contains("skin")) return false;
+  // Joint keys say the author meant the part to move (JOINT_TYPE_MISSING when rdtf_joint is not
+  // among them): a link.
+  for (const char* key : kJointExtrasKeys) {
+    if (has_extra(node, key)) return false;
+  }
+  if (!has_extra(nodes[static_cast<std::size_t>(parent_index)], "rdtf_density") &&
+      !has_extra(nodes[static_cast<std::size_t>(parent_index)], "rdtf_mass")) {
     return false;
   }
   // A part with physics of its own (KHR_physics_rigid_bodies) is a body the author made one.

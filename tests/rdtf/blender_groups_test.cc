@@ -6,9 +6,12 @@
 // so 1e-6 is the bound (as in blender_modelled_test.cc).
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "rdtf/convert.h"
 #include "rdtf/write.h"
 #include "support/test_support.h"
+#include "urdf/urdf_test_support.h"
 
 namespace rdtf {
 namespace {
@@ -116,6 +119,72 @@ TEST(BlenderGroups, OutputIsValidAndConvertsToTheSameRobot) {
     EXPECT_NEAR(b.inertial.mass, a.inertial.mass, 1e-12 * std::max(1.0, a.inertial.mass)) << a.name;
     EXPECT_TRUE(b.inertial.inertia.isApprox(a.inertial.inertia, 1e-9)) << a.name;
   }
+}
+
+// my_robot (an empty) -> base_link (a box) -> shoulder (a joint empty) -> arm: the common layout of
+// a robot under one root empty. Without rdtf_density or rdtf_mass the empty only holds the robot:
+// base_link stays a link (URDF and TF keep its name) and the shoulder hangs from it. With
+// rdtf_density on the empty, base_link is a part of its group: the shoulder hangs from my_robot,
+// at the same place, and MESH_HOLDS_FRAMES says so.
+Robot robot_under_root_empty(const Json& root_extras, Diagnostics& diag, const Json& part_extras = Json::object()) {
+  urdf_test::GltfBuilder b;
+  const int box = b.box_mesh(Eigen::Vector3f(0.2f, 0.1f, 0.2f));
+  const int root = b.node("my_robot", -1, root_extras.empty() ? Json::object() : Json{{"extras", root_extras}});
+  Json part = {{"mesh", box}, {"translation", {0, 0.05, 0}}};
+  if (!part_extras.empty()) part["extras"] = part_extras;
+  const int base = b.node("base_link", root, part);
+  const int shoulder = b.node("shoulder", base, Json{{"translation", {0, 0.05, 0}},
+                                                     {"extras", {{"rdtf_joint", "revolute"}, {"rdtf_axis", "y"},
+                                                                 {"rdtf_lower", -1}, {"rdtf_upper", 1}}}});
+  b.node("arm", shoulder, Json{{"mesh", box}, {"translation", {0, 0.1, 0}}});
+  return b.convert(diag).robot;
+}
+
+std::vector<std::string> link_names(const Robot& robot) {
+  std::vector<std::string> names;
+  for (const Link& link : robot.links) names.push_back(link.name);
+  return names;
+}
+
+TEST(BlenderGroups, AnEmptyWithoutDensityOrMassOnlyHoldsTheRobot) {
+  Diagnostics plain;
+  const Robot held = robot_under_root_empty(Json::object(), plain);
+  EXPECT_EQ(link_names(held), (std::vector<std::string>{"my_robot", "base_link", "arm"}));
+  EXPECT_FALSE(plain.contains("MESH_HOLDS_FRAMES"));
+  ASSERT_EQ(held.joints.size(), 2u);
+  for (const Joint& joint : held.joints) {
+    if (joint.name == "shoulder") {
+      EXPECT_EQ(held.links[joint.parent_link].name, "base_link");
+    }
+  }
+
+  Diagnostics grouped;
+  const Robot group = robot_under_root_empty(Json{{"rdtf_density", 2000.0}}, grouped);
+  EXPECT_EQ(link_names(group), (std::vector<std::string>{"my_robot", "arm"}));
+  ASSERT_EQ(group.joints.size(), 1u);
+  EXPECT_EQ(group.links[group.joints[0].parent_link].name, "my_robot");
+  // The pivot where the modeller put it: base_link at 0.05, the shoulder 0.05 above it.
+  const Eigen::Isometry3d X_SJ = group.links[group.joints[0].parent_link].X_SL * group.joints[0].X_PJ;
+  EXPECT_LE((X_SJ.translation() - Eigen::Vector3d(0, 0.1, 0)).norm(), 1e-12);
+  // The group's density is the part's: 0.2 x 0.1 x 0.2 m at 2000 kg/m^3 (float32 corners).
+  const double volume = double(0.2f) * double(0.1f) * double(0.2f);
+  EXPECT_NEAR(group.links[0].inertial.mass, 2000 * volume, 1e-6 * 2000 * volume);
+  const auto info = std::find_if(grouped.all().begin(), grouped.all().end(),
+                                 [](const Diagnostic& d) { return d.code == "MESH_HOLDS_FRAMES"; });
+  ASSERT_NE(info, grouped.all().end());
+  EXPECT_EQ(info->severity, Severity::kInfo);
+  EXPECT_NE(info->message.find("mesh node 'base_link' is a part of group 'my_robot'"), std::string::npos) << info->message;
+  EXPECT_NE(info->message.find("('shoulder')"), std::string::npos) << info->message;
+}
+
+// A part with joint keys but no rdtf_joint was meant to move: it stays a link, and the missing
+// type is said (JOINT_TYPE_MISSING), as anywhere else.
+TEST(BlenderGroups, APartWithJointKeysStaysALink) {
+  Diagnostics diag;
+  const Robot robot = robot_under_root_empty(Json{{"rdtf_density", 2000.0}}, diag, Json{{"rdtf_axis", "x"}});
+  EXPECT_EQ(link_names(robot), (std::vector<std::string>{"my_robot", "base_link", "arm"}));
+  EXPECT_TRUE(diag.contains("JOINT_TYPE_MISSING"));
+  EXPECT_FALSE(diag.contains("MESH_HOLDS_FRAMES"));
 }
 
 }  // namespace

@@ -161,6 +161,7 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(LINK_MESH_SPLIT, kSeverityInfo, "model") \
   X(LINK_NO_VOLUME, kSeverityWarning, "model") \
   X(LINK_PARTS_OVERLAP, kSeverityWarning, "model") \
+  X(MESH_HOLDS_FRAMES, kSeverityInfo, "model") \
   X(MESH_INCONSISTENT_WINDING, kSeverityWarning, "model") \
   X(MESH_ENCLOSES_NO_VOLUME, kSeverityWarning, "model") \
   X(MESH_INSIDE_OUT, kSeverityWarning, "model") \

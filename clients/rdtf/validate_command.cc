@@ -81,7 +81,7 @@ void add_validate_command(CLI::App& app, int& exit_code) {
       ->capture_default_str();
   command->add_option("--stepper", args->validation.simulation.stepper,
                       "auto (dWorldStep while the largest island has fewer than 27 bodies, QuickStep from "
-                      "27, and dWorldStep again up to 40 bodies if QuickStep's run fails), world_step or "
+                      "27, and dWorldStep again up to 100 bodies if QuickStep's run fails), world_step or "
                       "quick_step (rdtfd's stepper)")
       ->transform(CLI::CheckedTransformer(std::map<std::string, Stepper>{{"auto", Stepper::kAuto},
                                                                           {"world_step", Stepper::kWorldStep},

@@ -63,9 +63,8 @@ bool mass_checks(const MassProperties& in) {
 }
 
 // Errors for what ODE cannot take: the model is refused when there is one. Links welded to the
-// world never move: their mass is not used. A moving group is one ODE body: its top link (the one
-// its joint moves) must have a mass ODE accepts, unless a point mass, and so must the combined
-// mass; the links welded below the top only add to it.
+// world never move: their mass is not used. A moving group is one ODE body with the combined mass
+// of its links, which ODE must accept; with one link adding mass, that link's own.
 void check_mappable(const Robot& robot, const WeldGroups& welds, Diagnostics& diag) {
   for (std::size_t l = 0; l < robot.links.size(); ++l) {
     const Link& link = robot.links[l];
@@ -82,10 +81,9 @@ void check_mappable(const Robot& robot, const WeldGroups& welds, Diagnostics& di
       diag.error(codes::ODE_MASS_CHECK_FAILED, where, name + "mass, inertia or centre of mass is not finite");
       continue;
     }
-    // Welded to a link above it, it is part of that link's body, whose combined mass is checked
-    // below; the top link's own must be a mass ODE accepts, except a point mass (zero inertia).
-    const bool point_mass = is_point_mass(inertial, welds.extent) && group.links.size() > 1;
-    if (static_cast<int>(l) == group.top && !point_mass && !mass_checks(inertial)) {
+    // A link is part of its group's body, one ODE body with the combined mass, checked below. The
+    // top link's own is what ODE gets when no other link of the group adds mass or inertia.
+    if (static_cast<int>(l) == group.top && adding_links(robot, group) < 2 && !mass_checks(inertial)) {
       diag.error(codes::ODE_MASS_CHECK_FAILED, where,
                  name + "dMassCheck refuses " + mass_text(inertial) +
                      " (mass must be positive, inertia positive definite)");
@@ -103,7 +101,7 @@ void check_mappable(const Robot& robot, const WeldGroups& welds, Diagnostics& di
                        "rdtf validate --bound-mass KG --bound-inertia KGM2, rdtfd bound_mass_kg and "
                        "bound_inertia_kgm2)");
       }
-    } else if (group.links.size() > 1 && !mass_checks(group.merged)) {
+    } else if (adding_links(robot, group) >= 2 && !mass_checks(group.merged)) {
       diag.error(codes::ODE_MASS_CHECK_FAILED, node_pointer(top.node),
                  "link '" + top.name + "' and the " + std::to_string(group.links.size() - 1) +
                      " links fixed to it: dMassCheck refuses their combined " + mass_text(group.merged));

@@ -71,6 +71,15 @@ struct WeldGroups {
 // kg with only ixz = 2^-66 kg m^2), and a tensor of one nonzero product is not positive definite.
 bool is_point_mass(const MassProperties& inertial, double extent);
 
+// How many links of the group add mass or inertia to its body. With two or more, the body's
+// combined tensor is its own, not any one link's: that is what is checked and simulated.
+long adding_links(const Robot& robot, const WeldGroup& group);
+
+// The moving bodies (weld groups that move) in the largest island: bodies joined by the joints
+// ODE makes (not fixed ones, inside a body; not floating or planar ones, which it does not
+// constrain), as Simulation::Model counts them once built. It chooses the stepper.
+int largest_island(const Robot& robot, const WeldGroups& welds);
+
 // Assumes check_structure passed. `rest`: X_SL of every link at the rest pose (fixed joints keep
 // the poses within a group at rest anyway). Links whose mass properties are not finite are left
 // out of the sums (they are errors of their own). A moving group without mass gets `bound_mass`

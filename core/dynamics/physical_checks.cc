@@ -5,7 +5,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <numbers>
-#include <numeric>
+#include <string_view>
 
 #include "ode_model.h"
 #include "rdtf/diagnostic_codes.h"
@@ -178,11 +178,7 @@ void check_combined_inertia(const Robot& robot, const WeldGroup& group, const Ph
     return;
   }
   // With one link of mass or inertia the combined body is that link's, checked on its own.
-  const auto adds = std::count_if(group.links.begin(), group.links.end(), [&](int l) {
-    const MassProperties& m = robot.links[l].inertial;
-    return m.mass != 0 || !m.inertia.isZero(0);
-  });
-  if (adds < 2) return;
+  if (dynamics_internal::adding_links(robot, group) < 2) return;
   const Link& top = robot.links[group.top];
   principal_moments_check(group.merged.inertia, body_text(robot, group) + " (welded by fixed joints): combined ",
                           options, [&](const char* code, const std::string& message) {
@@ -198,9 +194,16 @@ void check_inertia(const Robot& robot, const Link& link, const WeldGroup& group,
     diag.error(codes::LINK_INERTIA_NOT_FINITE, where(link), name + "inertia is not finite");
     return;
   }
-  // A point mass (a sensor frame of a gram) is a sound part of a rigid body: welded to other links
-  // or to the world it only adds m d^2 to the body's inertia. Alone on a joint it cannot turn.
-  if (dynamics_internal::is_point_mass(link.inertial, extent) && (group.links.size() > 1 || group.welded_to_world)) {
+  // Welded (fixed joints) to other links that add mass or inertia, or to the world, a link is no
+  // body of its own: the simulation moves the body of the links welded together, whose combined
+  // tensor is checked (check_combined_inertia), as MuJoCo's fusestatic (its default for URDF) and
+  // Gazebo do, or nothing. That holds for the link a joint moves too (finger_edu's thin rod with
+  // its fingertip welded on: MuJoCo loads it).
+  const bool in_body = group.welded_to_world || dynamics_internal::adding_links(robot, group) >= 2;
+  // A point mass (a sensor frame of a gram) is a sound part of a rigid body: it only adds m d^2
+  // to the body's inertia. Alone on a joint it cannot turn.
+  const bool point_mass = dynamics_internal::is_point_mass(link.inertial, extent);
+  if (point_mass && in_body) {
     diag.info(codes::LINK_POINT_MASS, where(link),
               name + "a point mass (" +
                   (I.isZero(0) ? std::string("zero inertia")
@@ -212,14 +215,23 @@ void check_inertia(const Robot& robot, const Link& link, const WeldGroup& group,
                   (group.welded_to_world ? std::string("the world") : body_text(robot, group)));
     return;
   }
-  // Welded (fixed joints) to a link above it or to the world, a link is no body of its own: the
-  // simulation moves the body of the link it is welded to (check_combined_inertia), as MuJoCo's
-  // fusestatic and Gazebo do, or nothing. A tensor no real part has (a published 1 mg antenna's, a
-  // sensor frame's rounding noise) is then a warning; a tool that keeps every link a body (Drake)
-  // refuses it. The link a joint moves is the body's own, and MuJoCo checks it alone: an error.
-  const bool welded = group.welded_to_world || (group.links.size() > 1 && link.node != robot.links[group.top].node);
+  // In a body, a tensor no real part has (a published 1 mg antenna's, a sensor frame's rounding
+  // noise, an ideal rod's) is a warning; a tool that keeps every link a body (Drake) refuses it.
+  // Alone, the link is the body: an error.
+  if (point_mass) {
+    diag.error(codes::LINK_INERTIA_NOT_POSITIVE_DEFINITE, where(link),
+               name + "inertia is zero" + (I.isZero(0) ? std::string() : " to rounding (every entry within 4 eps m l^2)") +
+                   ": a point mass of " + number(link.inertial.mass) +
+                   " kg, and nothing welded to it adds inertia, so its joint turns a body without rotational "
+                   "inertia; give it the inertia of its part");
+    return;
+  }
+  // But the triangle inequality of the link a joint moves is its own: MuJoCo checks every moving
+  // body's authored tensor for it before fusing welded links in (it refuses allegro_right_hand's
+  // fingers, whose tips are welded on), and accepts a singular one it then fuses (finger_edu).
+  const bool top = !group.welded_to_world && link.node == robot.links[group.top].node;
   const auto report = [&](const char* code, const std::string& message) {
-    if (!welded) {
+    if (!in_body || (top && std::string_view(code) == codes::LINK_INERTIA_TRIANGLE_INEQUALITY)) {
       diag.error(code, where(link), message);
       return;
     }
@@ -299,35 +311,7 @@ void check_inertia_within_geometry(const Link& link, const std::optional<Eigen::
                    "times too large, a placeholder inertia far from the body's, and the link moves unlike the body");
 }
 
-// The number of moving bodies in each weld group's island: groups joined by moving joints, as
-// the simulation's ODE bodies are (Simulation::Model's islands); 0 for a group that does not move.
-std::vector<int> island_bodies(const Robot& robot, const WeldGroups& welds) {
-  const std::size_t groups = welds.groups.size();
-  std::vector<std::size_t> root(groups);
-  std::iota(root.begin(), root.end(), std::size_t{0});
-  const auto find = [&root](std::size_t g) {
-    while (root[g] != g) g = root[g] = root[root[g]];
-    return g;
-  };
-  for (const Joint& joint : robot.joints) {
-    if (joint.kind == JointKind::kFixed) continue;
-    const auto a = static_cast<std::size_t>(welds.group_of[joint.parent_link]);
-    const auto b = static_cast<std::size_t>(welds.group_of[joint.child_link]);
-    if (!dynamics_internal::moves(welds.groups[a]) || !dynamics_internal::moves(welds.groups[b])) continue;
-    root[find(b)] = find(a);
-  }
-  std::vector<int> count(groups, 0);
-  for (std::size_t g = 0; g < groups; ++g) {
-    if (dynamics_internal::moves(welds.groups[g])) ++count[find(g)];
-  }
-  std::vector<int> out(groups, 0);
-  for (std::size_t g = 0; g < groups; ++g) {
-    if (dynamics_internal::moves(welds.groups[g])) out[g] = count[find(g)];
-  }
-  return out;
-}
-
-void check_joint(const Robot& robot, const Joint& joint, const WeldGroups& welds, const std::vector<int>& islands,
+void check_joint(const Robot& robot, const Joint& joint, const WeldGroups& welds, int largest_island,
                  const PhysicalCheckOptions& options, Diagnostics& diag) {
   const std::string name = "joint '" + joint.name + "' (" + to_string(joint.kind) + "): ";
   if (!joint.X_PJ.matrix().allFinite()) {
@@ -382,10 +366,10 @@ void check_joint(const Robot& robot, const Joint& joint, const WeldGroups& welds
   const WeldGroup& parent = welds.groups[welds.group_of[joint.parent_link]];
   const WeldGroup& child = welds.groups[welds.group_of[joint.child_link]];
   if (parent.welded_to_world || child.welded_to_world) return;
-  // dWorldStep holds joints between bodies of any ratio (it solves the island exactly): judged
-  // only where QuickStep steps the joint.
-  const int island = islands[static_cast<std::size_t>(welds.group_of[joint.child_link])];
-  if (island < options.mass_ratio_island_bodies) return;
+  // dWorldStep holds joints between bodies of any ratio (it solves each island exactly): judged
+  // only where QuickStep's run is the verdict. The stepper is one for the whole world, chosen by
+  // its largest island, so every joint is judged when that island is.
+  if (largest_island < options.mass_ratio_island_bodies) return;
   const double mp = parent.merged.mass, mc = child.merged.mass;
   if (std::isfinite(mp) && std::isfinite(mc) && mp > 0 && mc > 0) {
     const double ratio = std::max(mp, mc) / std::min(mp, mc);
@@ -394,8 +378,8 @@ void check_joint(const Robot& robot, const Joint& joint, const WeldGroups& welds
                  name + "joins " + body_text(robot, parent) + " (" + number(mp) + " kg) and " +
                      body_text(robot, child) + " (" + number(mc) + " kg): mass ratio " + number(ratio) +
                      " is above the bound " + number(options.max_mass_ratio) + " (max_mass_ratio): QuickStep, " +
-                     "whose run is the verdict for its island of " + std::to_string(island) +
-                     " moving bodies, does not hold joints between bodies this unequal; make the masses "
+                     "whose run is the verdict for this model (its largest island has " + std::to_string(largest_island) +
+                     " moving bodies), does not hold joints between bodies this unequal; make the masses "
                      "closer, raise the bound, or step the model with dWorldStep (exact, slower for large islands)");
     }
   }
@@ -425,8 +409,8 @@ void check_physics(const Robot& robot, const PhysicalCheckOptions& options, cons
     check_inertia_within_geometry(link, bounds && l < bounds->size() ? (*bounds)[l] : none, options, diag);
   }
   for (const WeldGroup& group : welds.groups) check_combined_inertia(robot, group, options, diag);
-  const std::vector<int> islands = island_bodies(robot, welds);
-  for (const Joint& joint : robot.joints) check_joint(robot, joint, welds, islands, options, diag);
+  const int largest_island = dynamics_internal::largest_island(robot, welds);
+  for (const Joint& joint : robot.joints) check_joint(robot, joint, welds, largest_island, options, diag);
 }
 
 }  // namespace rdtf

@@ -1,5 +1,6 @@
 // The robot's tree as the dynamics code needs it: order, roots, kinematics, reach, and where the
 // massless links go.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -31,6 +32,38 @@ bool is_point_mass(const MassProperties& inertial, double extent) {
   if (!(inertial.mass > 0) || !std::isfinite(inertial.mass) || !inertial.inertia.allFinite()) return false;
   const double rounding = 4 * std::numeric_limits<double>::epsilon() * inertial.mass * extent * extent;
   return inertial.inertia.cwiseAbs().maxCoeff() <= rounding;
+}
+
+long adding_links(const Robot& robot, const WeldGroup& group) {
+  return std::count_if(group.links.begin(), group.links.end(), [&](int l) {
+    const MassProperties& m = robot.links[static_cast<std::size_t>(l)].inertial;
+    return m.mass != 0 || !m.inertia.isZero(0);
+  });
+}
+
+int largest_island(const Robot& robot, const WeldGroups& welds) {
+  const std::size_t groups = welds.groups.size();
+  std::vector<std::size_t> root(groups);
+  for (std::size_t g = 0; g < groups; ++g) root[g] = g;
+  const auto find = [&root](std::size_t g) {
+    while (root[g] != g) g = root[g] = root[root[g]];
+    return g;
+  };
+  for (const Joint& joint : robot.joints) {
+    if (joint.kind == JointKind::kFixed || joint.kind == JointKind::kFloating || joint.kind == JointKind::kPlanar) {
+      continue;
+    }
+    const auto a = static_cast<std::size_t>(welds.group_of[joint.parent_link]);
+    const auto b = static_cast<std::size_t>(welds.group_of[joint.child_link]);
+    if (!moves(welds.groups[a]) || !moves(welds.groups[b])) continue;
+    root[find(b)] = find(a);
+  }
+  std::vector<int> count(groups, 0);
+  int largest = 0;
+  for (std::size_t g = 0; g < groups; ++g) {
+    if (moves(welds.groups[g])) largest = std::max(largest, ++count[find(g)]);
+  }
+  return largest;
 }
 
 bool check_structure(const Robot& robot, const char* code, Diagnostics& diag) {

@@ -179,15 +179,34 @@ TEST(MergedBodies, AWeldedPartThatBreaksTheCombinedBodyIsAnError) {
   EXPECT_FALSE(report.passed);
 }
 
-// The link a joint moves is checked alone, welded children or not (MuJoCo does the same): a
-// bad tensor there is an error though the combined body would pass.
-TEST(MergedBodies, TheMovingLinkOfABodyIsCheckedAlone) {
+// The link a joint moves is part of its body like the links welded to it: with the sensor welded
+// on, what moves is the combined body (as MuJoCo's fusestatic, its URDF default, makes it), so a
+// singular tensor on the arm (an ideal rod's) is a warning when the combined body is sound.
+// Without the sensor's mass and inertia the arm is the body: an error. A tensor that breaks the
+// triangle inequality is the arm's own error either way (MuJoCo checks it before fusing).
+TEST(MergedBodies, TheMovingLinkOfABodyIsPartOfItsBody) {
   Robot robot = chain_with_sensor();
-  robot.links[1].inertial.inertia = Eigen::Vector3d(1e-6, 1e-6, 1e-5).asDiagonal();
-  robot.links[2].inertial.inertia = Eigen::Vector3d(1e-3, 1e-3, 1e-3).asDiagonal();
+  robot.links[1].inertial.inertia = Eigen::Vector3d(1e-2, 0, 1e-2).asDiagonal();  // a rod along y
   Diagnostics diag;
   check_physics(robot, {}, nullptr, diag);
-  dynamics_test::expect_one_error(diag, "LINK_INERTIA_TRIANGLE_INEQUALITY", robot.links[1].node, "arm");
+  EXPECT_FALSE(diag.has_errors()) << all_text(diag);
+  const auto found = with_code(diag, "LINK_INERTIA_NOT_POSITIVE_DEFINITE");
+  ASSERT_EQ(found.size(), 1u) << all_text(diag);
+  EXPECT_EQ(found[0].severity, Severity::kWarning);
+  EXPECT_EQ(found[0].pointer, "/nodes/" + std::to_string(robot.links[1].node));
+  EXPECT_NE(found[0].message.find("link 'arm'"), std::string::npos) << found[0].message;
+
+  Robot alone_robot = robot;
+  alone_robot.links[2].inertial = MassProperties{};  // the sensor adds nothing: the arm is the body
+  Diagnostics alone;
+  check_physics(alone_robot, {}, nullptr, alone);
+  dynamics_test::expect_one_error(alone, "LINK_INERTIA_NOT_POSITIVE_DEFINITE", robot.links[1].node, "arm");
+
+  robot.links[1].inertial.inertia = Eigen::Vector3d(1e-6, 1e-6, 1e-5).asDiagonal();
+  robot.links[2].inertial.inertia = Eigen::Vector3d(1e-3, 1e-3, 1e-3).asDiagonal();
+  Diagnostics triangle;
+  check_physics(robot, {}, nullptr, triangle);
+  dynamics_test::expect_one_error(triangle, "LINK_INERTIA_TRIANGLE_INEQUALITY", robot.links[1].node, "arm");
 }
 
 // A quadruped-like trunk: 12 kg, with a 1 g IMU, camera optical frames of 1e-5 kg and zero inertia
@@ -345,9 +364,11 @@ TEST(MergedBodies, MasslessMovingLinkAndTheBoundMass) {
 // iCub's ankle: a 0.2675 kg link whose published tensor is zero but for ixz = 1.35525e-20 (2^-66,
 // its exporter's rounding), moved by a pitch joint, with the foot welded below it. The tensor is
 // within 4 eps m l^2 of zero (l the robot's extent, here 0.451 m: 4.8e-17), so the link is a point
-// mass and the welded body (with the foot's real tensor) is what ODE moves. A product of inertia
-// a hundred times that threshold is a tensor, not rounding: not positive definite, refused.
-Robot icub_ankle(double ixz) {
+// mass in the welded body (with the foot's real tensor) that ODE moves. A product of inertia a
+// hundred times that threshold is a tensor, not rounding: not positive definite, a warning since
+// the body that moves is the combined one. Without the foot, the point mass is the body its joint
+// turns: an error.
+Robot icub_ankle(double ixz, bool with_foot = true) {
   RobotBuilder b;
   const int shin = b.root("l_shin", box_inertial(1.0, {0.06, 0.4, 0.06}, {0, -0.2, 0}));
   MassProperties ankle;
@@ -356,8 +377,10 @@ Robot icub_ankle(double ixz) {
   const int ankle_link = b.child(shin, "l_ankle_pitch", JointKind::kRevolute, translation(0, -0.4, 0),
                                  Eigen::Vector3d::UnitX(), "l_ankle_2", ankle);
   b.joint(0).limits = JointLimits{-0.7, 0.5, 0, 0};
-  b.child(ankle_link, "l_foot_fixed", JointKind::kFixed, translation(0.03, -0.05, 0), Eigen::Vector3d::UnitX(),
-          "l_foot", box_inertial(0.6, {0.08, 0.03, 0.2}));
+  if (with_foot) {
+    b.child(ankle_link, "l_foot_fixed", JointKind::kFixed, translation(0.03, -0.05, 0), Eigen::Vector3d::UnitX(),
+            "l_foot", box_inertial(0.6, {0.08, 0.03, 0.2}));
+  }
   return b.robot();
 }
 
@@ -385,20 +408,57 @@ TEST(MergedBodies, TensorZeroToRoundingIsAPointMass) {
   EXPECT_NE(point[0].message.find("link 'l_ankle_2'"), std::string::npos) << point[0].message;
   EXPECT_NE(point[0].message.find("zero to rounding"), std::string::npos) << point[0].message;
 
-  // The same with a product of inertia 100 times the rounding bound: a tensor, and not a sound one.
-  const ValidationReport refused = validate_dynamics(icub_ankle(100 * rounding), options);
-  EXPECT_FALSE(refused.passed);
-  const auto not_pd = with_code(refused.diagnostics, "LINK_INERTIA_NOT_POSITIVE_DEFINITE");
-  ASSERT_EQ(not_pd.size(), 1u) << all_text(refused.diagnostics);
-  EXPECT_EQ(not_pd[0].severity, Severity::kError);
-  EXPECT_FALSE(refused.diagnostics.contains("LINK_POINT_MASS")) << all_text(refused.diagnostics);
+  // A product of inertia 100 times the rounding bound: a tensor, not a sound one; the welded body
+  // (ankle and foot) is, and it is what moves: a warning.
+  const ValidationReport tensor = validate_dynamics(icub_ankle(100 * rounding), options);
+  EXPECT_TRUE(tensor.passed) << all_text(tensor.diagnostics);
+  const auto not_pd = with_code(tensor.diagnostics, "LINK_INERTIA_NOT_POSITIVE_DEFINITE");
+  ASSERT_EQ(not_pd.size(), 1u) << all_text(tensor.diagnostics);
+  EXPECT_EQ(not_pd[0].severity, Severity::kWarning);
+  EXPECT_FALSE(tensor.diagnostics.contains("LINK_POINT_MASS")) << all_text(tensor.diagnostics);
+
+  // Without the foot the point mass is the body its joint turns: refused, by both checks.
+  const ValidationReport alone = validate_dynamics(icub_ankle(std::ldexp(1.0, -66), false), options);
+  EXPECT_FALSE(alone.passed);
+  const auto zero = with_code(alone.diagnostics, "LINK_INERTIA_NOT_POSITIVE_DEFINITE");
+  ASSERT_EQ(zero.size(), 1u) << all_text(alone.diagnostics);
+  EXPECT_EQ(zero[0].severity, Severity::kError);
+  EXPECT_NE(zero[0].message.find("inertia is zero to rounding"), std::string::npos) << zero[0].message;
+  EXPECT_TRUE(alone.diagnostics.contains("ODE_MASS_CHECK_FAILED")) << all_text(alone.diagnostics);
+}
+
+// The link a joint moves, with an ideal rod's singular tensor (moments 0, 1.2e-4, 1.2e-4, as
+// finger_edu publishes its lower link) and a fingertip welded below: the body that moves is the
+// combined one, positive definite, as MuJoCo's fusestatic (its URDF default) makes it. A warning,
+// as for the same rod welded below the body's top link; the run passes.
+TEST(MergedBodies, SingularTopLinkOfAWeldedBodyIsAWarning) {
+  RobotBuilder b;
+  const int upper = b.root("upper", box_inertial(0.2, {0.03, 0.16, 0.03}, {0, -0.08, 0}));
+  MassProperties rod;
+  rod.mass = 0.0307;
+  rod.center_of_mass = {0, -0.08, 0};
+  rod.inertia = Eigen::Vector3d(1.2e-4, 0, 1.2e-4).asDiagonal();  // no moment about its own axis (y)
+  const int lower = b.child(upper, "knee", JointKind::kRevolute, translation(0, -0.16, 0), Eigen::Vector3d::UnitX(),
+                            "lower", rod);
+  b.joint(0).limits = JointLimits{-2.0, 2.0, 0, 0};
+  b.child(lower, "tip_fixed", JointKind::kFixed, translation(0, -0.16, 0), Eigen::Vector3d::UnitX(), "tip",
+          box_inertial(0.01, {0.02, 0.02, 0.02}));
+  const ValidationReport report = validate_dynamics(b.robot(), ValidationOptions{});
+  EXPECT_TRUE(report.passed) << all_text(report.diagnostics);
+  const auto rod_warning = with_code(report.diagnostics, "LINK_INERTIA_NOT_POSITIVE_DEFINITE");
+  ASSERT_EQ(rod_warning.size(), 1u) << all_text(report.diagnostics);
+  EXPECT_EQ(rod_warning[0].severity, Severity::kWarning);
+  EXPECT_NE(rod_warning[0].message.find("link 'lower'"), std::string::npos) << rod_warning[0].message;
+  EXPECT_NE(rod_warning[0].message.find("whose combined inertia is what moves"), std::string::npos)
+      << rod_warning[0].message;
+  EXPECT_FALSE(report.diagnostics.contains("ODE_MASS_CHECK_FAILED")) << all_text(report.diagnostics);
 }
 
 // A pan-tilt head as ROS descriptions build one: a 10 g dummy link between the pan and the tilt
 // joints, a 1 kg head. The ratio across the tilt (1e2) and the pan (the world holds the base) is
 // fine; with a 1e-5 kg dummy (Gazebo's habit) it is 1e5. dWorldStep, the automatic stepper's for
 // an island of 2 bodies, holds the joints (the run passes); QuickStep's run is refused, and the
-// message names the island.
+// message names the model's largest island, which chooses the stepper.
 Robot pan_tilt(double dummy_mass) {
   RobotBuilder b;
   const int base = b.root("base", box_inertial(3.0, {0.2, 0.1, 0.2}));
@@ -427,10 +487,10 @@ TEST(MergedBodies, MassRatioIsJudgedWhereQuickStepGivesTheVerdict) {
   ASSERT_EQ(ratio.size(), 1u) << all_text(refused.diagnostics);
   EXPECT_NE(ratio[0].message.find("joint 'tilt'"), std::string::npos) << ratio[0].message;
   EXPECT_NE(ratio[0].message.find("mass ratio 100000"), std::string::npos) << ratio[0].message;
-  EXPECT_NE(ratio[0].message.find("its island of 2 moving bodies"), std::string::npos) << ratio[0].message;
+  EXPECT_NE(ratio[0].message.find("its largest island has 2 moving bodies"), std::string::npos) << ratio[0].message;
 
-  // The island counts the bodies joined by moving joints: with the bound at 3 bodies, this island
-  // of 2 is not judged; a third body hung below the head by a hinge makes it 3, and it is.
+  // The largest island counts the bodies joined by moving joints: with the bound at 3 bodies, this
+  // island of 2 is not judged; a third body hung below the head by a hinge makes it 3, and it is.
   PhysicalCheckOptions options;
   options.mass_ratio_island_bodies = 3;
   Diagnostics two;
@@ -448,7 +508,7 @@ TEST(MergedBodies, MassRatioIsJudgedWhereQuickStepGivesTheVerdict) {
   check_physics(b.robot(), options, nullptr, three);
   const auto judged = with_code(three, "JOINT_MASS_RATIO");
   ASSERT_EQ(judged.size(), 1u) << all_text(three);
-  EXPECT_NE(judged[0].message.find("its island of 3 moving bodies"), std::string::npos) << judged[0].message;
+  EXPECT_NE(judged[0].message.find("its largest island has 3 moving bodies"), std::string::npos) << judged[0].message;
 }
 
 }  // namespace

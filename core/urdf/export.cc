@@ -33,9 +33,10 @@ constexpr double kUnsetEffort = 1.0e6;    // N m or N
 constexpr double kUnsetVelocity = 1.0e3;  // rad/s or m/s
 
 // The joint type in URDF, or nothing (and an error) when URDF cannot say it.
-// `below_world`: the joint's parent is a root link named "world", which MuJoCo's URDF reader
-// takes as its world body, so the child is a top-level body.
-std::optional<int> urdf_joint_type(const Joint& joint, const std::string& name, bool below_world, Diagnostics& diag) {
+// `parent_is_root`: the joint's parent link is a root; `below_world`: a root named "world", which
+// MuJoCo's URDF reader takes as its world body, so the child is a top-level body.
+std::optional<int> urdf_joint_type(const Joint& joint, const std::string& name, bool parent_is_root, bool below_world,
+                                   Diagnostics& diag) {
   const std::string pointer = node_pointer(joint.node);
   switch (joint.kind) {
     case JointKind::kFixed:
@@ -55,10 +56,13 @@ std::optional<int> urdf_joint_type(const Joint& joint, const std::string& name, 
         return urdf::Joint::FLOATING;
       }
       diag.warning(codes::URDF_FLOATING_JOINT, pointer,
-                   "floating joint '" + name + "' is written as URDF says it, but MuJoCo refuses the file "
-                   "(a free joint must belong to a top-level body: name its parent, a root, 'world' for "
-                   "MuJoCo to take it as its world) and robot_state_publisher ignores it; for those tools "
-                   "make the child a separate model or use a fixed joint");
+                   "floating joint '" + name + "' is written as URDF says it, but MuJoCo refuses the file " +
+                       (parent_is_root ? "(a free joint must belong to a top-level body: name the root link "
+                                         "'world' for MuJoCo to take it as its world)"
+                                       : "(a free joint must belong to a top-level body, and its parent is not "
+                                         "the root)") +
+                       " and robot_state_publisher ignores it; for those tools make the child a separate model "
+                       "or use a fixed joint");
       return urdf::Joint::FLOATING;
     case JointKind::kPlanar:
       return urdf::Joint::PLANAR;
@@ -393,8 +397,9 @@ std::optional<UrdfExport> export_urdf(const Conversion& conversion, const UrdfOp
     const Joint& joint = robot.joints[j];
     const std::string& name = result.joint_names[j];
     const Link& parent = robot.links[joint.parent_link];
-    const bool below_world = parent.parent_joint < 0 && result.link_names[joint.parent_link] == "world";
-    const auto type = urdf_joint_type(joint, name, below_world, diag);
+    const bool parent_is_root = parent.parent_joint < 0;
+    const bool below_world = parent_is_root && result.link_names[joint.parent_link] == "world";
+    const auto type = urdf_joint_type(joint, name, parent_is_root, below_world, diag);
     if (!type) {
       ok = false;
       continue;

@@ -9,6 +9,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <map>
 #include <set>
 #include <string_view>
@@ -267,7 +268,7 @@ void check_inertial(Checker& c, const TiXmlElement* inertial, const std::string&
   }
   if (const TiXmlElement* inertia = inertial->FirstChildElement("inertia")) {
     std::map<std::string, double> moments;
-    double largest = robot_largest;
+    double largest = 0;
     for (const char* term : {"ixx", "ixy", "ixz", "iyy", "iyz", "izz"}) {
       const auto value = c.numbers(inertia, pointer + "/inertia", term, {1, Range::kAny, "an inertia term"}, true,
                                    kInvalidInertial);
@@ -276,11 +277,14 @@ void check_inertial(Checker& c, const TiXmlElement* inertial, const std::string&
     }
     // A moment (ixx, iyy, izz) of no body is negative; a product of inertia may be (s100err D7: a
     // negative ixx imported without a word, and only the dynamics check refused it later). A
-    // rounding's worth below 0 is not refused: 1e-9 of the largest term of the link, or of the
-    // robot for a tensor that is all noise (an exporter's -1e-30 for a thin rod's axis; a sensor
-    // frame's ixx="-1e-30" beside moments of 1e-30, written where it computed zero).
+    // rounding's worth below 0 is not refused: 1e-9 of the link's largest term (an exporter's
+    // -1e-30 for a thin rod's axis), or a few roundings (16 eps) of the robot's largest for a
+    // tensor that is all noise (a sensor frame's ixx="-1e-30" beside moments of 1e-30, written
+    // where the exporter computed zero from the robot's values). A sign error on a small part
+    // (-1e-8 beside a base's 16) is still refused.
+    const double noise = std::max(1e-9 * largest, 16 * std::numeric_limits<double>::epsilon() * robot_largest);
     for (const auto& [term, value] : moments) {
-      if (value >= -1e-9 * largest) continue;
+      if (value >= -noise) continue;
       c.error(kInvalidInertial, pointer + "/inertia/@" + term, inertia->Row(),
               "<inertia " + term + "=\"" + inertia->Attribute(term.c_str()) + "\">: '" + inertia->Attribute(term.c_str()) +
                   "' is negative: a moment of inertia is 0 or more (no body has a negative one)");

@@ -353,7 +353,8 @@ TEST(UrdfImportErrors, ANoiseTensorOfAFrameIsJudgedAgainstTheRobot) {
   EXPECT_TRUE(import_urdf(urdf, UrdfImportOptions{}, noise).has_value());
   for (const Diagnostic& d : noise.all()) EXPECT_NE(d.code, "URDF_INVALID_INERTIAL") << d.message;
 
-  // 1e-9 of the robot's largest term (0.04) is 4e-11: -1e-10 is beyond it.
+  // 16 eps of the robot's largest term (0.04) is 1.4e-16, 1e-9 of the link's own 1e-10 less:
+  // -1e-10 is a sign error, not noise.
   testing::write_file(urdf, urdf_with_frame("-1e-10"));
   Diagnostics negative;
   import_urdf(urdf, UrdfImportOptions{}, negative);
@@ -365,6 +366,19 @@ TEST(UrdfImportErrors, ANoiseTensorOfAFrameIsJudgedAgainstTheRobot) {
     EXPECT_NE(d.message.find("'-1e-10' is negative"), std::string::npos) << d.message;
   }
   EXPECT_TRUE(refused) << "a moment of -1e-10 beside a largest term of 0.04 is no rounding";
+  // Nor is -1e-8 on a sensor beside a 100 kg base's 16 kg m^2 (a heavy link licenses no sign error).
+  const std::string heavy = "<robot name=\"r\">\n"
+                            "<link name=\"base\"><inertial><mass value=\"100\"/>"
+                            "<inertia ixx=\"16\" ixy=\"0\" ixz=\"0\" iyy=\"16\" iyz=\"0\" izz=\"16\"/></inertial></link>\n"
+                            "<link name=\"sensor\"><inertial><mass value=\"0.01\"/>"
+                            "<inertia ixx=\"-1e-8\" ixy=\"0\" ixz=\"0\" iyy=\"1e-8\" iyz=\"0\" izz=\"1e-8\"/>"
+                            "</inertial></link>\n"
+                            "<joint name=\"sensor_joint\" type=\"fixed\"><parent link=\"base\"/><child link=\"sensor\"/></joint>\n"
+                            "</robot>\n";
+  testing::write_file(urdf, heavy);
+  Diagnostics sign_error;
+  EXPECT_FALSE(import_urdf(urdf, UrdfImportOptions{}, sign_error).has_value());
+  EXPECT_TRUE(sign_error.contains("URDF_INVALID_INERTIAL"));
 }
 
 TEST(UrdfImportErrors, MissingMeshOfALinkWithAnInertialIsAWarning) {

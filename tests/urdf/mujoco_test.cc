@@ -175,28 +175,39 @@ TEST(UrdfMujoco, RotatedBoxFullTensor) {
   expect_mujoco_agrees(conversion);
 }
 
-// A URDF imported (the ROS tutorial robot: fixed, continuous, prismatic and revolute joints,
-// authored inertials) and exported again loads in MuJoCo with its inertials.
-// A floating joint is valid URDF (check_urdf passes) that MuJoCo refuses, as the warning says.
-TEST(UrdfMujoco, FloatingJointIsWrittenWithAWarningThatMujocoRefusesIt) {
+// A floating joint 'free' below a root link `root` (a box, or an empty typed link) carrying a box
+// 'drone', written as URDF into `dir`: the URDF_FLOATING_JOINT warnings of the export.
+std::vector<Diagnostic> floating_joint_below(const std::string& root, bool root_has_mesh, const TempDir& dir,
+                                             int* joint_node = nullptr) {
   GltfBuilder b;
   const int mesh = b.box_mesh(Eigen::Vector3f(0.2f, 0.2f, 0.2f));
-  const int base = b.node("base", -1, Json{{"mesh", mesh}});
+  const int base = b.node(root, -1, root_has_mesh ? Json{{"mesh", mesh}} : Json{{"extras", {{"rdtf_type", "link"}}}});
   const int joint = b.node("free", base, Json{{"extras", {{"rdtf_joint", "floating"}}}});
+  if (joint_node != nullptr) *joint_node = joint;
   b.link_with_mesh("drone", joint, mesh);
   Diagnostics diag;
   const Conversion conversion = b.convert(diag);
-  TempDir dir;
   Diagnostics export_diag;
-  ASSERT_TRUE(write_urdf(conversion, dir.path(), UrdfOptions{}, export_diag));
+  EXPECT_TRUE(write_urdf(conversion, dir.path(), UrdfOptions{}, export_diag));
   std::vector<Diagnostic> warnings;
   for (const Diagnostic& d : export_diag.all()) {
     if (d.code == "URDF_FLOATING_JOINT") warnings.push_back(d);
   }
+  return warnings;
+}
+
+// A URDF imported (the ROS tutorial robot: fixed, continuous, prismatic and revolute joints,
+// authored inertials) and exported again loads in MuJoCo with its inertials.
+// A floating joint is valid URDF (check_urdf passes) that MuJoCo refuses, as the warning says.
+TEST(UrdfMujoco, FloatingJointIsWrittenWithAWarningThatMujocoRefusesIt) {
+  TempDir dir;
+  int joint = -1;
+  const auto warnings = floating_joint_below("base", true, dir, &joint);
   ASSERT_EQ(warnings.size(), 1u);
   EXPECT_EQ(warnings[0].severity, Severity::kWarning);
   EXPECT_EQ(warnings[0].pointer, "/nodes/" + std::to_string(joint));
   EXPECT_NE(warnings[0].message.find("floating joint 'free'"), std::string::npos) << warnings[0].message;
+  EXPECT_NE(warnings[0].message.find("name the root link 'world'"), std::string::npos) << warnings[0].message;
   expect_check_urdf_passes(dir / "robot.urdf");
   std::string error;
   EXPECT_FALSE(load_in_mujoco(dir / "robot.urdf", error));
@@ -207,20 +218,8 @@ TEST(UrdfMujoco, FloatingJointIsWrittenWithAWarningThatMujocoRefusesIt) {
 // child as a top-level body with a free joint and loads the file: the warning says only what
 // robot_state_publisher does.
 TEST(UrdfMujoco, FloatingJointBelowARootNamedWorldLoads) {
-  GltfBuilder b;
-  const int mesh = b.box_mesh(Eigen::Vector3f(0.2f, 0.2f, 0.2f));
-  const int world = b.node("world", -1, Json{{"extras", {{"rdtf_type", "link"}}}});
-  const int joint = b.node("free", world, Json{{"extras", {{"rdtf_joint", "floating"}}}});
-  b.link_with_mesh("drone", joint, mesh);
-  Diagnostics diag;
-  const Conversion conversion = b.convert(diag);
   TempDir dir;
-  Diagnostics export_diag;
-  ASSERT_TRUE(write_urdf(conversion, dir.path(), UrdfOptions{}, export_diag));
-  std::vector<Diagnostic> warnings;
-  for (const Diagnostic& d : export_diag.all()) {
-    if (d.code == "URDF_FLOATING_JOINT") warnings.push_back(d);
-  }
+  const auto warnings = floating_joint_below("world", false, dir);
   ASSERT_EQ(warnings.size(), 1u);
   EXPECT_NE(warnings[0].message.find("robot_state_publisher ignores it"), std::string::npos) << warnings[0].message;
   EXPECT_EQ(warnings[0].message.find("MuJoCo refuses"), std::string::npos) << warnings[0].message;

@@ -36,8 +36,9 @@ inline constexpr double kStandardGravity = 9.80665;  // m/s^2
 
 struct PhysicalCheckOptions {
   // A joint whose two links' masses differ by more than this factor is an error, when QuickStep
-  // steps it: in an island (bodies joined by moving joints) of at least mass_ratio_island_bodies
-  // moving bodies. dWorldStep solves an island's constraints exactly and holds such joints.
+  // steps it: when the model's largest island (bodies joined by joints), which chooses the stepper
+  // for the whole world, has at least mass_ratio_island_bodies moving bodies. dWorldStep solves
+  // each island's constraints exactly and holds such joints.
   // validate_dynamics sets it from the stepper it runs (SimulationOptions): for kAuto, islands
   // beyond exact_rerun_max_bodies (up to it, a failed QuickStep run is judged again with
   // dWorldStep); 0 for kQuickStep (every joint judged); none for kWorldStep.

@@ -156,6 +156,10 @@ bool channel_moves(const GltfAsset& asset, const Json& animation, const Json& ch
   return known->second;
 }
 
+}  // namespace
+
+namespace internal {
+
 // The node and property a channel's target animates: target.node and target.path, or
 // KHR_animation_pointer's "pointer" path with a JSON pointer such as "/nodes/3/rotation".
 std::optional<std::pair<std::size_t, std::string>> animated_property(const Json& target) {
@@ -184,7 +188,7 @@ std::optional<std::pair<std::size_t, std::string>> animated_property(const Json&
   return std::pair{static_cast<std::size_t>(std::stoul(index)), pointer.substr(slash + 1)};
 }
 
-}  // namespace
+}  // namespace internal
 
 void check_animations(const GltfAsset& asset, Diagnostics& diag) {
   const Json& document = asset.document;
@@ -213,7 +217,7 @@ void check_animations(const GltfAsset& asset, Diagnostics& diag) {
     for (std::size_t c = 0; c < channels.size(); ++c) {
       const Json* target = channels[c].is_object() && channels[c].contains("target") ? &channels[c]["target"] : nullptr;
       if (!target || !target->is_object()) continue;
-      const auto animated = animated_property(*target);
+      const auto animated = internal::animated_property(*target);
       if (!animated) continue;
       const std::size_t node = animated->first;  // not a structured binding: clang 14 cannot capture one
       const std::string path = animated->second;

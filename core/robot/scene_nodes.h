@@ -1,6 +1,11 @@
-// Which nodes place the robot: shared by the checks of core/robot (checks.cc, animations.cc).
+// Which nodes place the robot: shared by the checks of core/robot (checks.cc, animations.cc) and
+// by typing (core/typing/typing.cc: a part an animation places is no part of a group).
 #pragma once
 
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "rdtf/gltf.h"
@@ -13,5 +18,9 @@ namespace rdtf::internal {
 // every node of that scene.
 std::vector<char> nodes_placing_the_robot(const Json& document, const std::vector<int>& parents,
                                           std::vector<char>* scene_nodes = nullptr);
+
+// The node and property a channel's target animates: target.node and target.path, or
+// KHR_animation_pointer's "pointer" path with a JSON pointer such as "/nodes/3/rotation".
+std::optional<std::pair<std::size_t, std::string>> animated_property(const Json& target);
 
 }  // namespace rdtf::internal

@@ -3,13 +3,13 @@
 #include <algorithm>
 #include <cstdint>
 #include <map>
-#include <string_view>
 
 #include "rdtf/completion.h"
 #include "rdtf/geometry.h"
 #include "rdtf/mesh_carriers.h"
 #include "rdtf/robot.h"
 #include "rdtf/diagnostic_codes.h"
+#include "../robot/scene_nodes.h"
 
 namespace rdtf {
 namespace {
@@ -221,41 +221,14 @@ std::vector<char> placed_by_animation(const Json& document) {
   const std::size_t count = document["nodes"].size();
   std::vector<char> out(count, 0);
   if (!document.contains("animations") || !document["animations"].is_array()) return out;
-  const auto mark = [&](std::size_t node) {
-    if (node < count) out[node] = 1;
-  };
   for (const Json& animation : document["animations"]) {
     if (!animation.is_object() || !animation.contains("channels") || !animation["channels"].is_array()) continue;
     for (const Json& channel : animation["channels"]) {
       if (!channel.is_object() || !channel.contains("target") || !channel["target"].is_object()) continue;
-      const Json& target = channel["target"];
-      const std::string path = target.value("path", std::string());
-      if (path != "pointer" && path != "weights" && target.contains("node") && target["node"].is_number_unsigned()) {
-        mark(target["node"].get<std::size_t>());
-        continue;
-      }
-      const Json* pointer = nullptr;
-      if (target.contains("extensions") && target["extensions"].is_object() &&
-          target["extensions"].contains("KHR_animation_pointer") &&
-          target["extensions"]["KHR_animation_pointer"].is_object()) {
-        const Json& extension = target["extensions"]["KHR_animation_pointer"];
-        if (extension.contains("pointer") && extension["pointer"].is_string()) pointer = &extension["pointer"];
-      }
-      if (pointer == nullptr) continue;
-      // "/nodes/<index>/translation", "/rotation", "/scale", "/matrix": any of them places the node.
-      const std::string text = pointer->get<std::string>();
-      constexpr std::string_view kNodes = "/nodes/";
-      if (text.rfind(kNodes, 0) != 0) continue;
-      std::size_t at = kNodes.size(), node = 0, digits = 0;
-      while (at < text.size() && text[at] >= '0' && text[at] <= '9' && digits < 10) {
-        node = node * 10 + static_cast<std::size_t>(text[at++] - '0');
-        ++digits;
-      }
-      if (digits == 0 || digits == 10 || at >= text.size() || text[at] != '/') continue;
-      const std::string_view property = std::string_view(text).substr(at + 1);
-      for (std::string_view placing : {"translation", "rotation", "scale", "matrix"}) {
-        if (property == placing) mark(node);
-      }
+      const auto animated = internal::animated_property(channel["target"]);
+      if (!animated || animated->first >= count) continue;
+      const std::string& path = animated->second;
+      if (path == "translation" || path == "rotation" || path == "scale" || path == "matrix") out[animated->first] = 1;
     }
   }
   return out;

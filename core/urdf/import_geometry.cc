@@ -143,6 +143,12 @@ std::optional<std::filesystem::path> resolve_mesh_path(const std::string& filena
                                                        std::string& why) {
   namespace fs = std::filesystem;
   std::vector<fs::path> candidates;
+  // "$(find my_pkg)/meshes/base.stl" is xacro's, left unexpanded; no file is named so.
+  if (filename.find("$(") != std::string::npos || filename.find("${") != std::string::npos) {
+    why = "mesh file '" + filename +
+          "' holds a xacro expression: expand the file with xacro first (xacro robot.urdf.xacro > robot.urdf)";
+    return std::nullopt;
+  }
   const std::string package = "package://";
   if (filename.rfind(package, 0) == 0) {
     const std::string rest = filename.substr(package.size());

@@ -62,6 +62,18 @@ std::string shown(std::string_view text) {
   return out;
 }
 
+// The first xacro substitution in `text` ("$(find pkg)", "${pi/2}"), up to its closing bracket
+// (or the end when unclosed); empty when there is none.
+std::string_view xacro_expression(std::string_view text) {
+  for (std::size_t i = 0; i + 1 < text.size(); ++i) {
+    if (text[i] != '$' || (text[i + 1] != '(' && text[i + 1] != '{')) continue;
+    const char close = text[i + 1] == '(' ? ')' : '}';
+    const std::size_t end = text.find(close, i + 2);
+    return text.substr(i, end == std::string_view::npos ? std::string_view::npos : end + 1 - i);
+  }
+  return {};
+}
+
 // Whether a decimal number that is beyond double's range is tiny (an underflow) rather than huge:
 // its order of magnitude (digits before the point, or minus the zeros after it, plus the exponent)
 // is not above 0.
@@ -154,6 +166,14 @@ class Checker {
     }
     const std::string at = pointer + "/@" + name;
     const std::string said = element + " " + name + "=\"" + shown(value) + "\">: ";
+    // `$(arg x)` or `${pi/2}` left in a value: the file was saved before xacro expanded it (or
+    // by a tool that copied a .urdf.xacro's text), which counting numbers would not say.
+    if (const std::string_view expression = xacro_expression(value); !expression.empty()) {
+      error(code, at, e->Row(),
+            said + "'" + shown(expression) +
+                "' is a xacro expression, not a number: expand the file with xacro first (xacro robot.urdf.xacro > robot.urdf)");
+      return std::nullopt;
+    }
     std::vector<std::string_view> pieces;
     std::string_view text(value);
     if (rule.count == 1) {

@@ -81,6 +81,17 @@ const BadUrdf kBadUrdfs[] = {
      "<robot name=\"r\" xmlns:xacro=\"http://www.ros.org/wiki/xacro\">\n<link name=\"a\"/>\n"
      "<xacro:macro name=\"m\"><link name=\"b\"/></xacro:macro>\n<xacro:m/>\n</robot>\n",
      "URDF_INVALID", "", "line 3: <xacro:macro>: this is a xacro file, not a URDF"},
+    // A xacro file's text saved as .urdf with no xacro element left, only its substitutions:
+    // counting the pieces of "$(optenv X 0) 0 0" said "3 numbers expected, 5 found".
+    {"xacro_argument_in_a_number", joint_urdf("<origin xyz=\"$(optenv X 0) 0 0\"/>\n" + kLimit),
+     "URDF_INVALID_NUMBER", "/robot/joint[@name='j']/origin/@xyz",
+     "line 5: <origin xyz=\"$(optenv X 0) 0 0\">: '$(optenv X 0)' is a xacro expression, not a number: expand the file "
+     "with xacro first"},
+    {"xacro_property_in_a_number", joint_urdf("<origin rpy=\"0 0 ${pi/2}\"/>\n" + kLimit), "URDF_INVALID_NUMBER",
+     "/robot/joint[@name='j']/origin/@rpy", "'${pi/2}' is a xacro expression, not a number"},
+    {"xacro_find_in_a_mesh", link_urdf(visual("<mesh filename=\"$(find my_pkg)/meshes/base.stl\"/>")),
+     "URDF_MESH_NOT_FOUND", "/robot/link[@name='a']/visual[1]",
+     "line 3: mesh file '$(find my_pkg)/meshes/base.stl' holds a xacro expression: expand the file with xacro first"},
     {"missing mesh",
      "<robot name=\"r\">\n<link name=\"a\">\n<visual><geometry><mesh filename=\"meshes/gone.stl\"/></geometry></visual>\n"
      "</link>\n</robot>\n",

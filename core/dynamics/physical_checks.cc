@@ -226,12 +226,13 @@ void check_inertia(const Robot& robot, const Link& link, const WeldGroup& group,
                    "inertia; give it the inertia of its part");
     return;
   }
-  // But the triangle inequality of the link a joint moves is its own: MuJoCo checks every moving
-  // body's authored tensor for it before fusing welded links in (it refuses allegro_right_hand's
-  // fingers, whose tips are welded on), and accepts a singular one it then fuses (finger_edu).
-  const bool top = !group.welded_to_world && link.node == robot.links[group.top].node;
+  // But a broken triangle inequality in a body that moves is an error, on the link a joint moves
+  // and on a link welded to it alike: MuJoCo checks every link's authored tensor for it before
+  // fusing welded links in (it refuses allegro_right_hand's fingers, whose tips are welded on, and
+  // a tool welded to a sound arm), though it accepts a singular one it then fuses (finger_edu).
+  // Welded to the world, the part never moves: still a warning (TIAGo's antenna).
   const auto report = [&](const char* code, const std::string& message) {
-    if (!in_body || (top && std::string_view(code) == codes::LINK_INERTIA_TRIANGLE_INEQUALITY)) {
+    if (!in_body || (!group.welded_to_world && std::string_view(code) == codes::LINK_INERTIA_TRIANGLE_INEQUALITY)) {
       diag.error(code, where(link), message);
       return;
     }
@@ -240,7 +241,9 @@ void check_inertia(const Robot& robot, const Link& link, const WeldGroup& group,
                      (group.welded_to_world ? std::string("the world, and never moves")
                                             : "the body of " + body_text(robot, group) +
                                                   ", whose combined inertia is what moves") +
-                     " (a simulator that keeps each link a body refuses it)");
+                     (std::string_view(code) == codes::LINK_INERTIA_TRIANGLE_INEQUALITY
+                          ? " (MuJoCo refuses it: it checks every link before it fuses welded ones)"
+                          : " (a simulator that keeps each link a body refuses it)"));
   };
   if (!principal_moments_check(I, name, options, report)) return;
   if (link.inertial_source == InertialSource::kComputed) {

@@ -116,15 +116,18 @@ TEST(MergedBodies, SensorOnAFixedJointMovesAsMergedByHand) {
   EXPECT_EQ(robot.links[1].inertial.mass, arm_inertial().mass);
 }
 
-// The per-link checks still run on a link welded into another's body, as warnings: the body
-// that moves is the combined one, and that must be a real body.
+// The per-link checks still run on a link welded into another's body: a singular tensor is a
+// warning (the body that moves is the combined one, and that must be a real body; MuJoCo loads
+// finger_edu's such link); a broken triangle inequality is an error, as MuJoCo refuses it before
+// it fuses the link into the body (measured: a 0.5 kg tool of principal moments 0.01, 0.01,
+// 0.05 welded to a sound arm, "inertia must satisfy A + B >= C", object 'tool').
 TEST(MergedBodies, PerLinkChecksSeeEveryWeldedLink) {
   Robot robot = chain_with_sensor();
-  robot.links[2].inertial.inertia = Eigen::Vector3d(1e-6, 1e-6, 1e-5).asDiagonal();
+  robot.links[2].inertial.inertia = Eigen::Vector3d(0, 1e-5, 1e-5).asDiagonal();  // an ideal rod's
   Diagnostics diag;
   check_physics(robot, {}, nullptr, diag);
   EXPECT_FALSE(diag.has_errors()) << dynamics_test::all_text(diag);
-  const std::vector<Diagnostic> found = dynamics_test::with_code(diag, "LINK_INERTIA_TRIANGLE_INEQUALITY");
+  const std::vector<Diagnostic> found = dynamics_test::with_code(diag, "LINK_INERTIA_NOT_POSITIVE_DEFINITE");
   ASSERT_EQ(found.size(), 1u) << dynamics_test::all_text(diag);
   EXPECT_EQ(found[0].severity, Severity::kWarning);
   EXPECT_EQ(found[0].pointer, "/nodes/" + std::to_string(robot.links[2].node));
@@ -134,6 +137,12 @@ TEST(MergedBodies, PerLinkChecksSeeEveryWeldedLink) {
   // The same model validates and steps: ODE moves the arm's combined body.
   const ValidationReport report = validate_dynamics(robot, ValidationOptions{});
   EXPECT_TRUE(report.passed) << dynamics_test::all_text(report.diagnostics);
+
+  robot.links[2].inertial.inertia = Eigen::Vector3d(1e-6, 1e-6, 1e-5).asDiagonal();  // A + B < C
+  Diagnostics triangle;
+  check_physics(robot, {}, nullptr, triangle);
+  dynamics_test::expect_one_error(triangle, "LINK_INERTIA_TRIANGLE_INEQUALITY", robot.links[2].node, "sensor");
+  EXPECT_FALSE(validate_dynamics(robot, ValidationOptions{}).passed);
 }
 
 // A published antenna of 1 mg whose tensor no body has, welded to a root the world holds: it
@@ -156,6 +165,17 @@ TEST(MergedBodies, AnImpossiblePartWeldedToTheWorldIsAWarning) {
   EXPECT_EQ(found[0].severity, Severity::kWarning);
   EXPECT_NE(found[0].message.find("'antenna'"), std::string::npos) << found[0].message;
   EXPECT_NE(found[0].message.find("into the world, and never moves"), std::string::npos) << found[0].message;
+
+  // A broken triangle inequality there is a warning too, saying that MuJoCo refuses it.
+  Robot triangle = robot;
+  triangle.links[1].inertial.inertia = Eigen::Vector3d(1e-9, 1e-9, 1e-8).asDiagonal();
+  const ValidationReport triangle_report = validate_dynamics(triangle, ValidationOptions{});
+  EXPECT_TRUE(triangle_report.passed) << dynamics_test::all_text(triangle_report.diagnostics);
+  const std::vector<Diagnostic> broken =
+      dynamics_test::with_code(triangle_report.diagnostics, "LINK_INERTIA_TRIANGLE_INEQUALITY");
+  ASSERT_EQ(broken.size(), 1u) << dynamics_test::all_text(triangle_report.diagnostics);
+  EXPECT_EQ(broken[0].severity, Severity::kWarning);
+  EXPECT_NE(broken[0].message.find("MuJoCo refuses it"), std::string::npos) << broken[0].message;
 }
 
 // A welded part whose tensor breaks the combined body: that body, named by its top link, is the

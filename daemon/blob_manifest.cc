@@ -7,6 +7,7 @@
 
 #include "../core/gltf/confined_files.h"
 #include "conversion.h"
+#include "message_parts.h"
 #include "messages.h"
 #include "rdtf/urdf.h"
 
@@ -116,32 +117,17 @@ std::vector<rdtf::manifest_t> make_manifests(const std::string& model_id, std::i
   part.num_parts = 0;
   part.total_files = static_cast<std::int32_t>(files.size());
   part.num_files = 0;
-  const std::size_t fields = static_cast<std::size_t>(part.getEncodedSize());
-  std::vector<rdtf::manifest_t> parts;
-  std::size_t size = fields;
+  std::vector<rdtf::file_t> rows;
+  rows.reserve(files.size());
   for (const OutputFile& file : files) {
-    rdtf::file_t row;
+    rdtf::file_t& row = rows.emplace_back();
     row.path = file.path;
     row.sha256 = file.sha256;
     row.size = file.size;
     row.role = file.role;
-    const std::size_t row_size = static_cast<std::size_t>(row._getEncodedSizeNoHash());
-    if (!part.files.empty() && size + row_size > max_message_bytes) {
-      part.num_files = static_cast<std::int32_t>(part.files.size());
-      parts.push_back(part);
-      part.files.clear();
-      size = fields;
-    }
-    part.files.push_back(std::move(row));
-    size += row_size;
   }
-  part.num_files = static_cast<std::int32_t>(part.files.size());
-  parts.push_back(std::move(part));
-  for (std::size_t i = 0; i < parts.size(); ++i) {
-    parts[i].part = static_cast<std::int32_t>(i);
-    parts[i].num_parts = static_cast<std::int32_t>(parts.size());
-  }
-  return parts;
+  return split_into_parts(part, std::move(rows), &rdtf::manifest_t::files, &rdtf::manifest_t::num_files,
+                          max_message_bytes);
 }
 
 }  // namespace rdtf::daemon

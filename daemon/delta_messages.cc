@@ -1,6 +1,7 @@
 #include "delta_messages.h"
 
 #include "diagnostic_message.h"
+#include "message_parts.h"
 
 namespace rdtf::daemon {
 
@@ -17,37 +18,19 @@ std::vector<rdtf::delta_t> make_deltas(const DeltaHeader& header, const std::vec
   empty.num_parts = 1;
   empty.total_changes = static_cast<std::int32_t>(changes.size());
   empty.num_changes = 0;
-  const std::size_t fields = static_cast<std::size_t>(empty.getEncodedSize());
-  std::vector<rdtf::delta_t> parts;
-  rdtf::delta_t part = empty;
-  std::size_t size = fields;
+  std::vector<rdtf::delta_change_t> rows;
+  rows.reserve(changes.size());
   for (const ElementChange& change : changes) {
-    rdtf::delta_change_t row;
+    rdtf::delta_change_t& row = rows.emplace_back();
     row.element = to_string(change.element);
     row.change = to_string(change.kind);
     row.name = lcm_text(change.name);  // As LINK_STATE and JOINT_STATE carry it.
     row.urdf_name = change.urdf_name;
     row.aspects = aspect_names(change.aspects);
     row.num_aspects = static_cast<std::int32_t>(row.aspects.size());
-    const std::size_t row_size = static_cast<std::size_t>(row._getEncodedSizeNoHash());
-    // A part holds at least one change, so that even a change larger than the limit (a name of
-    // kilobytes) makes progress; the publisher sends what the limit would not.
-    if (!part.changes.empty() && size + row_size > max_message_bytes) {
-      part.num_changes = static_cast<std::int32_t>(part.changes.size());
-      parts.push_back(std::move(part));
-      part = empty;
-      size = fields;
-    }
-    part.changes.push_back(std::move(row));
-    size += row_size;
   }
-  part.num_changes = static_cast<std::int32_t>(part.changes.size());
-  parts.push_back(std::move(part));
-  for (std::size_t i = 0; i < parts.size(); ++i) {
-    parts[i].part = static_cast<std::int32_t>(i);
-    parts[i].num_parts = static_cast<std::int32_t>(parts.size());
-  }
-  return parts;
+  return split_into_parts(empty, std::move(rows), &rdtf::delta_t::changes, &rdtf::delta_t::num_changes,
+                          max_message_bytes);
 }
 
 }  // namespace rdtf::daemon

@@ -1,7 +1,8 @@
-// make_deltas: a delta too long for one datagram goes in parts, each within the limit, together
-// every change once and in order.
+// make_deltas and make_manifests: a delta or a manifest too long for one datagram goes in parts,
+// each within the limit, together every row once and in order.
 #include <gtest/gtest.h>
 
+#include "blob_manifest.h"
 #include "delta_messages.h"
 #include "messages.h"
 #include "registry.h"
@@ -46,6 +47,43 @@ TEST(DeltaMessages, ManyChangesGoInPartsEachWithinTheLimit) {
     }
   }
   EXPECT_EQ(next, 500u);
+}
+
+TEST(ManifestMessages, ManyFilesGoInPartsEachWithinTheLimit) {
+  std::vector<OutputFile> files;
+  for (int i = 0; i < 300; ++i) {
+    files.push_back({"urdf/meshes/part_" + std::to_string(i) + ".stl", std::string(64, 'a' + i % 6), 1000 + i,
+                     "urdf_mesh"});
+  }
+  constexpr std::size_t kLimit = 3000;
+  const auto parts = make_manifests("arm.gltf", 7, "ccc", files, kLimit);
+  ASSERT_GT(parts.size(), 1u);
+  std::size_t next = 0;
+  for (std::size_t p = 0; p < parts.size(); ++p) {
+    const auto& part = parts[p];
+    EXPECT_LE(static_cast<std::size_t>(part.getEncodedSize()), kLimit);
+    EXPECT_EQ(part.part, static_cast<std::int32_t>(p));
+    EXPECT_EQ(part.num_parts, static_cast<std::int32_t>(parts.size()));
+    EXPECT_EQ(part.total_files, 300);
+    EXPECT_EQ(part.num_files, static_cast<std::int32_t>(part.files.size()));
+    EXPECT_EQ(part.model_id, "arm.gltf");
+    EXPECT_EQ(part.revision, 7);
+    EXPECT_EQ(part.content_hash, "ccc");
+    for (const auto& row : part.files) {
+      ASSERT_LT(next, files.size());
+      EXPECT_EQ(row.path, files[next].path);
+      EXPECT_EQ(row.sha256, files[next].sha256);
+      EXPECT_EQ(row.size, files[next].size);
+      EXPECT_EQ(row.role, "urdf_mesh");
+      ++next;
+    }
+  }
+  EXPECT_EQ(next, files.size());
+  // No file: one part that says so.
+  const auto none = make_manifests("arm.gltf", 7, "ccc", {}, kLimit);
+  ASSERT_EQ(none.size(), 1u);
+  EXPECT_EQ(none[0].num_files, 0);
+  EXPECT_EQ(none[0].num_parts, 1);
 }
 
 // A report cut to one datagram keeps the most severe diagnostics, in their own order: it kept the

@@ -7,22 +7,10 @@
 namespace rdtf::internal {
 namespace {
 
-// Columns and rows of an accessor type ("VEC3": 1 x 3, "MAT4": 4 x 4); {0, 0} when unknown.
-std::pair<std::uint64_t, std::uint64_t> type_shape(const std::string& type) {
-  if (type == "SCALAR") return {1, 1};
-  if (type == "VEC2") return {1, 2};
-  if (type == "VEC3") return {1, 3};
-  if (type == "VEC4") return {1, 4};
-  if (type == "MAT2") return {2, 2};
-  if (type == "MAT3") return {3, 3};
-  if (type == "MAT4") return {4, 4};
-  return {0, 0};
-}
-
 // glTF 2.0 section 3.6.2.4: matrix columns start on 4-byte boundaries, so MAT2 and MAT3 of 1-
 // and 2-byte components are padded.
 std::uint64_t element_size(const std::string& type, std::uint64_t component_type) {
-  const auto [columns, rows] = type_shape(type);
+  const auto [columns, rows] = accessor_type_shape(type);
   const std::uint64_t column_bytes = rows * component_size(component_type);
   return columns * (columns > 1 ? (column_bytes + 3) / 4 * 4 : column_bytes);
 }
@@ -206,7 +194,7 @@ bool DocumentCheck::check_accessor(const Json& accessor, const std::string& poin
                     "5123 (UNSIGNED_SHORT), 5125 (UNSIGNED_INT), 5126 (FLOAT)");
   }
   const auto type = read_string(accessor, "type", pointer, true);
-  const bool known_type = type && type_shape(*type).first != 0;
+  const bool known_type = type && accessor_type_shape(*type).first != 0;
   if (type && !known_type) {
     diag_.error(
         codes::VALUE_NOT_IN_LIST, pointer + "/type",
@@ -251,7 +239,7 @@ bool DocumentCheck::check_accessor(const Json& accessor, const std::string& poin
   facts.type = *type;
   facts.component_type = *component_type;
   facts.count = *count;
-  const auto [columns, rows] = type_shape(*type);
+  const auto [columns, rows] = accessor_type_shape(*type);
   bool ok = true;
   for (const char* key : {"min", "max"}) {
     if (!accessor.contains(key)) continue;

@@ -40,18 +40,11 @@ std::string counted(std::uint64_t n, const char* one, const char* many) {
   return std::to_string(n) + " " + (n == 1 ? one : many);
 }
 
-// Columns and rows of an accessor type; {0, 0} when unknown.
+// Columns and rows of an accessor's type; {0, 0} when unknown or missing.
 std::pair<int, int> type_shape(const Json& accessor) {
   if (!accessor.contains("type") || !accessor["type"].is_string()) return {0, 0};
-  const std::string type = accessor["type"].get<std::string>();
-  if (type == "SCALAR") return {1, 1};
-  if (type == "VEC2") return {1, 2};
-  if (type == "VEC3") return {1, 3};
-  if (type == "VEC4") return {1, 4};
-  if (type == "MAT2") return {2, 2};
-  if (type == "MAT3") return {3, 3};
-  if (type == "MAT4") return {4, 4};
-  return {0, 0};
+  const auto [columns, rows] = accessor_type_shape(accessor["type"].get<std::string>());
+  return {static_cast<int>(columns), static_cast<int>(rows)};
 }
 
 // Calls f(T{}), T being the C++ type of glTF component type `type` (float when unknown).

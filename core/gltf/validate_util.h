@@ -8,6 +8,7 @@
 #include <limits>
 #include <optional>
 #include <string>
+#include <utility>
 
 #include "rdtf/completion.h"
 #include "rdtf/gltf.h"
@@ -31,6 +32,18 @@ inline constexpr std::uint64_t kByte = 5120, kUnsignedByte = 5121, kShort = 5122
                                kUnsignedShort = 5123, kUnsignedInt = 5125, kFloat = 5126;
 // bufferView.target: vertex attributes, indices.
 inline constexpr std::uint64_t kArrayBuffer = 34962, kElementArrayBuffer = 34963;
+
+// Columns and rows of an accessor type ("VEC3": 1 x 3, "MAT4": 4 x 4); {0, 0} when unknown.
+inline std::pair<std::uint64_t, std::uint64_t> accessor_type_shape(const std::string& type) {
+  if (type == "SCALAR") return {1, 1};
+  if (type == "VEC2") return {1, 2};
+  if (type == "VEC3") return {1, 3};
+  if (type == "VEC4") return {1, 4};
+  if (type == "MAT2") return {2, 2};
+  if (type == "MAT3") return {3, 3};
+  if (type == "MAT4") return {4, 4};
+  return {0, 0};
+}
 
 // Bytes of one component; 0 for a value that is no glTF componentType.
 inline std::uint64_t component_size(std::uint64_t component_type) {

@@ -316,10 +316,10 @@ std::optional<std::string> joint_properties_differ(const Joint& extras, const Jo
 }
 
 // A joint node with joint properties is one degree of freedom: whatever hangs from it moves as
-// one part. The link among its children (the first with geometry, else the first) is that part,
-// and what else hangs from the joint node hangs from that link: a part parented to a bone beside
-// the next bone, an elbow empty parented to the shoulder empty beside the upper arm, two jaws under
-// one grip empty. A joint node without properties (the paper's, which groups a link's child links
+// one part. The link among its children (the first with geometry that does not fix itself, else
+// the first with geometry, else the first) is that part, and what else hangs from the joint node
+// hangs from that link: a part parented to a bone beside the next bone, an elbow empty parented
+// to the shoulder empty beside the upper arm, two jaws under one grip empty. A joint node without properties (the paper's, which groups a link's child links
 // in one node, or rdtf's inserted ones) moves nothing: each link below it keeps its own joint to
 // the link above. The link node each joint node carries, -1 for none.
 std::vector<int> carried_links(const Json& document, const std::vector<NodeType>& types,
@@ -346,15 +346,27 @@ std::vector<int> carried_links(const Json& document, const std::vector<NodeType>
     const Json* entry = entries[node];
     const bool has_entry_joint = entry != nullptr && entry->contains("joint") && (*entry)["joint"].is_object();
     if (!has_entry_joint && !has_joint_keys(node_extras(document, node))) continue;
+    // A link that fixes itself (rdtf_joint 'fixed' on its own node: rdtf's output writes that on
+    // the second jaw) hangs from the part rather than being it: chosen last, so that the choice
+    // does not hang on the children's order, which Blender's importer sorts by name (a tyre and
+    // its hubcap under a wheel's empty came back with the hubcap carrying the tyre).
+    const auto fixes_itself = [&](std::size_t link) {
+      const Json* extras = node_extras(document, link);
+      return extras != nullptr && extras->contains("rdtf_joint") && (*extras)["rdtf_joint"] == "fixed";
+    };
+    int first = -1, first_with_geometry = -1, chosen = -1;
     for (const Json& child : document["nodes"][node].value("children", Json::array())) {
       const auto c = child.get<std::size_t>();
       if (types[c] != NodeType::kLink) continue;
-      if (carried[node] < 0) carried[node] = static_cast<int>(c);
-      if (has_geometry(c)) {
-        carried[node] = static_cast<int>(c);
+      if (first < 0) first = static_cast<int>(c);
+      if (!has_geometry(c)) continue;
+      if (first_with_geometry < 0) first_with_geometry = static_cast<int>(c);
+      if (!fixes_itself(c)) {
+        chosen = static_cast<int>(c);
         break;
       }
     }
+    carried[node] = chosen >= 0 ? chosen : first_with_geometry >= 0 ? first_with_geometry : first;
   }
   return carried;
 }

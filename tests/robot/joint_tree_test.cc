@@ -3,6 +3,8 @@
 // that link. The layouts are Blender's: parts parented to bones (Ctrl+P > Bone), whose bones
 // chain bone to bone; an elbow empty parented to the shoulder empty; two jaws under one grip
 // empty. The meshes are tests/data/khr/arm_extras.gltf's 0.4 x 0.2 x 0.2 m box.
+#include <algorithm>
+
 #include <gtest/gtest.h>
 
 #include "rdtf/convert.h"
@@ -129,6 +131,22 @@ TEST(JointTree, TwoPartsUnderOneJointEmptyMoveTogether) {
   EXPECT_EQ(info[0].pointer, "/nodes/1");
   EXPECT_NE(info[0].message.find("'jaw_b' hangs from 'jaw_a'"), std::string::npos) << info[0].message;
   expect_same_tree_again(c);
+
+  // Blender's importer sorts children by name: a round trip can put the second jaw first (a
+  // hubcap before its tyre). The output marks it fixed on its own node, so the tree holds, and
+  // that key is read, not reported as ignored.
+  json resorted = c.document;
+  resorted.erase("extras");
+  bool reversed = false;
+  for (json& node : resorted["nodes"]) {
+    if (node.value("name", "") != "grip") continue;
+    std::reverse(node["children"].begin(), node["children"].end());
+    reversed = true;
+  }
+  ASSERT_TRUE(reversed);
+  const Converted again = convert_doc(resorted);
+  EXPECT_EQ(tree(again.robot), tree(c.robot));
+  EXPECT_TRUE(with_code(again.diag, codes::RDTF_NODE_EXTRAS_IGNORED).empty());
 }
 
 // Two joint empties with properties and no part between them are two degrees of freedom one

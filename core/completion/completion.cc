@@ -164,6 +164,16 @@ std::string value_text(const Json& value) {
   return text;
 }
 
+std::string text_value_advice(const Json& value, std::string_view key) {
+  if (!value.is_string() || !key.starts_with("rdtf_")) return {};
+  const std::string text = value.get<std::string>();
+  const bool numeric = !text.empty() && text.find_first_not_of("0123456789+-.eE[], ") == std::string::npos &&
+                       text.find_first_of("0123456789") != std::string::npos;
+  if (!numeric) return {};
+  return "; it is text: in Blender, make the custom property a number (Edit Property > Type: Float, or Float "
+         "Array for an axis), not a String";
+}
+
 void complete_nodes(Json& document, std::vector<NodeType>& types, Diagnostics& diag, std::vector<int>* carried_by) {
   if (!document.contains("nodes")) return;
   const std::size_t original_count = document["nodes"].size();

@@ -137,35 +137,46 @@ double polar_lower_bound(const Link& link) {
 }
 
 // Symmetry, positive definiteness and the triangle inequality of I; each failure goes to
-// `report(code, message)`. False when the moments could not be judged further.
+// `report(code, message, breaks_triangle)`, the last true when the principal moments break
+// A + B >= C (a negative moment beyond rounding does too), as MuJoCo judges every link. False
+// when the moments could not be judged further.
 template <typename Report>
 bool principal_moments_check(const Eigen::Matrix3d& I, const std::string& name, const PhysicalCheckOptions& options,
                              const Report& report) {
   const double largest = I.cwiseAbs().maxCoeff();
   const double asymmetry = (I - I.transpose()).cwiseAbs().maxCoeff();
   if (asymmetry > options.symmetry_tolerance * largest) {
-    report(codes::LINK_INERTIA_NOT_SYMMETRIC, name + "inertia is not symmetric: |I - I^T| reaches " +
-                                                  number(asymmetry) + " kg m^2 (largest entry " + number(largest) + ")");
+    report(codes::LINK_INERTIA_NOT_SYMMETRIC,
+           name + "inertia is not symmetric: |I - I^T| reaches " + number(asymmetry) + " kg m^2 (largest entry " +
+               number(largest) + ")",
+           false);
     return false;
   }
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(0.5 * (I + I.transpose()), Eigen::EigenvaluesOnly);
   const Eigen::Vector3d moments = solver.eigenvalues();  // ascending
   const double a = moments[0], b = moments[1], c = moments[2];
   const std::string principal = "principal moments " + vector_text(moments) + " kg m^2";
+  const bool breaks_triangle = a + b < c - options.triangle_tolerance * (std::abs(a) + b + c);
   if (!(a > 0)) {
-    report(codes::LINK_INERTIA_NOT_POSITIVE_DEFINITE, name + "inertia is not positive definite: " + principal);
+    report(codes::LINK_INERTIA_NOT_POSITIVE_DEFINITE,
+           name + "inertia is not positive definite: " + principal +
+               (breaks_triangle ? ", A + B = " + number(a + b) + " < C = " + number(c) : std::string()),
+           breaks_triangle);
     return false;
   }
   if (!(a > options.positive_definite_tolerance * c)) {
     report(codes::LINK_INERTIA_NOT_POSITIVE_DEFINITE,
            name + "inertia is singular to within rounding: " + principal + ", the smallest " + number(a / c) +
                " of the largest, at most positive_definite_tolerance " + number(options.positive_definite_tolerance) +
-               " (an ideal rod's; no real part is that thin)");
+               " (an ideal rod's; no real part is that thin)",
+           false);
     return false;
   }
-  if (a + b < c - options.triangle_tolerance * (a + b + c)) {
-    report(codes::LINK_INERTIA_TRIANGLE_INEQUALITY, name + "inertia breaks the triangle inequality A + B >= C of a real body: " +
-                                                        principal + ", A + B = " + number(a + b) + " < C = " + number(c));
+  if (breaks_triangle) {
+    report(codes::LINK_INERTIA_TRIANGLE_INEQUALITY,
+           name + "inertia breaks the triangle inequality A + B >= C of a real body: " + principal +
+               ", A + B = " + number(a + b) + " < C = " + number(c),
+           true);
   }
   return true;
 }
@@ -181,7 +192,7 @@ void check_combined_inertia(const Robot& robot, const WeldGroup& group, const Ph
   if (dynamics_internal::adding_links(robot, group) < 2) return;
   const Link& top = robot.links[group.top];
   principal_moments_check(group.merged.inertia, body_text(robot, group) + " (welded by fixed joints): combined ",
-                          options, [&](const char* code, const std::string& message) {
+                          options, [&](const char* code, const std::string& message, bool) {
                             diag.error(code, where(top), message);
                           });
 }
@@ -226,12 +237,15 @@ void check_inertia(const Robot& robot, const Link& link, const WeldGroup& group,
                    "inertia; give it the inertia of its part");
     return;
   }
-  // But a broken triangle inequality in a body that moves is an error, on the link a joint moves
-  // and on a link welded to it alike: MuJoCo checks every link's authored tensor for it before
-  // fusing welded links in (it refuses allegro_right_hand's fingers, whose tips are welded on, and
-  // a tool welded to a sound arm), though it accepts a singular one it then fuses (finger_edu).
-  // Welded to the world, the part never moves: still a warning (TIAGo's antenna).
-  const auto report = [&](const char* code, const std::string& message) {
+  // But a broken triangle inequality of positive moments in a body that moves is an error, on the
+  // link a joint moves and on a link welded to it alike: MuJoCo checks every link's authored
+  // tensor for it before fusing welded links in (it refuses allegro_right_hand's fingers, whose
+  // tips are welded on, and a tool welded to a sound arm), though it accepts a singular one it then
+  // fuses (finger_edu). A tensor with a negative moment breaks it too, and MuJoCo refuses it
+  // beyond a threshold of its own (a product of inertia of 1e-9 kg m^2 alone, not 4.8e-15): it
+  // stays a warning, as rounding noise in a zero tensor is no error, saying that MuJoCo may refuse
+  // it. Welded to the world, the part never moves: a warning (TIAGo's antenna).
+  const auto report = [&](const char* code, const std::string& message, bool breaks_triangle) {
     if (!in_body || (!group.welded_to_world && std::string_view(code) == codes::LINK_INERTIA_TRIANGLE_INEQUALITY)) {
       diag.error(code, where(link), message);
       return;
@@ -243,7 +257,9 @@ void check_inertia(const Robot& robot, const Link& link, const WeldGroup& group,
                                                   ", whose combined inertia is what moves") +
                      (std::string_view(code) == codes::LINK_INERTIA_TRIANGLE_INEQUALITY
                           ? " (MuJoCo refuses it: it checks every link before it fuses welded ones)"
-                          : " (a simulator that keeps each link a body refuses it)"));
+                      : breaks_triangle ? " (its moments break A + B >= C: MuJoCo, which checks every link before it "
+                                          "fuses welded ones, refuses that beyond rounding)"
+                                        : " (a simulator that keeps each link a body refuses it)"));
   };
   if (!principal_moments_check(I, name, options, report)) return;
   if (link.inertial_source == InertialSource::kComputed) {

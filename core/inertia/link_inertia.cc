@@ -132,7 +132,7 @@ std::optional<double> positive_extra(const Json& document, std::size_t node, con
   if (!value.is_number() || !std::isfinite(value.get<double>()) || value.get<double>() <= 0) {
     diag.error(codes::RDTF_INVALID_VALUE, json_pointer("/nodes", node) + "/extras/" + key,
                node_label(document, node) + ": " + key + " is " + value_text(value) +
-                   ", not a positive number");
+                   ", not a positive number" + text_value_advice(value, key));
     return std::nullopt;
   }
   return value.get<double>();

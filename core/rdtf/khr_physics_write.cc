@@ -235,7 +235,8 @@ void write_khr_physics(Json& document, std::vector<NodeType>& types, const Robot
                    "written for it: link '" + mirrored.name + "' is mirrored (a negative scale on its node or above), "
                    "and no attachment node of translation and rotation has a proper joint frame there. extras.RDTF "
                    "and the URDF have the joint; a tool reading only KHR physics sees its two bodies unjoined. "
-                   "Apply the scale (Blender: Ctrl+A > Scale) to keep it");
+                   "Apply the scale (Blender: Ctrl+A > Scale; for a mesh several objects share, a linked duplicate, first "
+                   "Object > Relations > Make Single User > Object & Data) to keep it");
       continue;
     }
     if (!extension.contains("physicsJoints") || !extension["physicsJoints"].is_array()) {

@@ -325,7 +325,8 @@ void check_shear(const Json& document, Diagnostics& diag) {
                      ", so its axes are not at right angles (cosine " + short_number(shear) +
                      ") and the meshes, pivots and axes below it are skewed too. A modeller rarely means this: "
                      "Blender writes a child of an object with unapplied non-uniform scale so. Apply that "
-                     "object's scale (Ctrl+A > Scale) and export again");
+                     "object's scale (Ctrl+A > Scale; Blender refuses it on a mesh several objects share until "
+                     "Object > Relations > Make Single User > Object & Data) and export again");
   }
 }
 
@@ -484,7 +485,8 @@ void check_missing_properties(const Json& document, const std::vector<NodeType>&
                                      (packer ? std::string()
                                              : std::string(" (were the joint empties left out of the export, by "
                                                            "Include > Limit to > Selected Objects with only the "
-                                                           "meshes selected?)"))
+                                                           "meshes selected, or by Limit to > Visible Objects with "
+                                                           "the empties hidden?)"))
                                : std::string()) +
                    (packer ? std::string(". The file was packed by '") + *packer + "', which " + packer_advice(*packer) +
                                  " (if the file it packed had no joint properties either: a Blender export needs "

@@ -1,6 +1,7 @@
 #include "rdtf/robot.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <tuple>
 
@@ -32,7 +33,8 @@ std::optional<double> read_number(const JointSource& source, const std::string& 
   const Json& value = (*source.values)[key];
   if (!value.is_number() || !std::isfinite(value.get<double>())) {
     diag.error(codes::RDTF_INVALID_VALUE, json_pointer(source.pointer, key),
-               source.label + ": " + key + " is " + value_text(value) + ", not a finite number");
+               source.label + ": " + key + " is " + value_text(value) + ", not a finite number" +
+                   text_value_advice(value, key));
     return std::nullopt;
   }
   return value.get<double>();
@@ -195,7 +197,8 @@ void read_axis(const JointSource& source, const Eigen::Affine3d& X_SF, const Eig
   if (!axis) {
     diag.error(codes::RDTF_INVALID_VALUE, pointer,
                source.label + ": " + axis_key + " is " + value_text(value) +
-                   ", not three finite numbers or one of \"x\", \"y\", \"z\", \"-x\", \"-y\", \"-z\"");
+                   ", not three finite numbers or one of \"x\", \"y\", \"z\", \"-x\", \"-y\", \"-z\"" +
+                   text_value_advice(value, axis_key));
     return;
   }
   if (axis->cwiseAbs().maxCoeff() == 0.0) {
@@ -221,6 +224,17 @@ void read_axis(const JointSource& source, const Eigen::Affine3d& X_SF, const Eig
   joint.axis = axis->normalized();
 }
 
+// "; did you mean 'revolute'?" for a joint type written in other case or with spaces ("Revolute").
+std::string lower_case_advice(const Json& value) {
+  if (!value.is_string()) return {};
+  std::string lower;
+  for (const char c : value.get<std::string>()) {
+    if (!std::isspace(static_cast<unsigned char>(c))) lower += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  }
+  if (!joint_kind_from_string(lower)) return {};
+  return "; did you mean '" + lower + "'? (types are lower case)";
+}
+
 void read_joint_properties(const JointSource& source, const Eigen::Affine3d& X_SF,
                            const Eigen::Isometry3d& X_SC, Joint& joint, Diagnostics& diag) {
   const std::string kind_key = key_for(source, "type", "rdtf_joint");
@@ -230,7 +244,8 @@ void read_joint_properties(const JointSource& source, const Eigen::Affine3d& X_S
     if (!kind) {
       diag.error(codes::RDTF_INVALID_JOINT_TYPE, json_pointer(source.pointer, kind_key),
                  source.label + ": joint type " + value_text(value) +
-                     " is not one of fixed, revolute, continuous, prismatic, floating, planar, ball");
+                     " is not one of fixed, revolute, continuous, prismatic, floating, planar, ball" +
+                     lower_case_advice(value));
     } else {
       joint.kind = *kind;
     }

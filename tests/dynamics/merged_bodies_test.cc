@@ -118,8 +118,8 @@ TEST(MergedBodies, SensorOnAFixedJointMovesAsMergedByHand) {
 
 // The per-link checks still run on a link welded into another's body: a singular tensor is a
 // warning (the body that moves is the combined one, and that must be a real body; MuJoCo loads
-// finger_edu's such link); a broken triangle inequality is an error, as MuJoCo refuses it before
-// it fuses the link into the body (measured: a 0.5 kg tool of principal moments 0.01, 0.01,
+// finger_edu's such link); a broken triangle inequality of positive moments is an error, as MuJoCo
+// refuses it before it fuses the link into the body (measured: a 0.5 kg tool of principal moments 0.01, 0.01,
 // 0.05 welded to a sound arm, "inertia must satisfy A + B >= C", object 'tool').
 TEST(MergedBodies, PerLinkChecksSeeEveryWeldedLink) {
   Robot robot = chain_with_sensor();
@@ -143,6 +143,18 @@ TEST(MergedBodies, PerLinkChecksSeeEveryWeldedLink) {
   check_physics(robot, {}, nullptr, triangle);
   dynamics_test::expect_one_error(triangle, "LINK_INERTIA_TRIANGLE_INEQUALITY", robot.links[2].node, "sensor");
   EXPECT_FALSE(validate_dynamics(robot, ValidationOptions{}).passed);
+
+  // A negative moment breaks it too (moments -1e-6, 4e-6, 5e-6): a warning like the rod's (rounding
+  // noise in a zero tensor is no error), saying that MuJoCo refuses such a tensor.
+  robot.links[2].inertial.inertia << 2e-6, 3e-6, 0, 3e-6, 2e-6, 0, 0, 0, 4e-6;
+  Diagnostics indefinite;
+  check_physics(robot, {}, nullptr, indefinite);
+  EXPECT_FALSE(indefinite.has_errors()) << dynamics_test::all_text(indefinite);
+  const std::vector<Diagnostic> negative = dynamics_test::with_code(indefinite, "LINK_INERTIA_NOT_POSITIVE_DEFINITE");
+  ASSERT_EQ(negative.size(), 1u) << dynamics_test::all_text(indefinite);
+  EXPECT_EQ(negative[0].severity, Severity::kWarning);
+  EXPECT_NE(negative[0].message.find("A + B = 3e-06 < C = 5e-06"), std::string::npos) << negative[0].message;
+  EXPECT_NE(negative[0].message.find("MuJoCo"), std::string::npos) << negative[0].message;
 }
 
 // A published antenna of 1 mg whose tensor no body has, welded to a root the world holds: it

@@ -201,7 +201,16 @@ TEST(BlenderModelled, JointDiagnosticsNameTheNodeAndShowTheValue) {
        "node 1 'elbow joint': joint type 'hinge' is not one of fixed, revolute, continuous, "
        "prismatic, floating, planar, ball"},
       {{{"rdtf_joint", "revolute"}, {"rdtf_damping", "0.4"}}, "RDTF_INVALID_VALUE",
-       "/nodes/1/extras/rdtf_damping", "node 1 'elbow joint': rdtf_damping is '0.4', not a finite number"},
+       "/nodes/1/extras/rdtf_damping",
+       "node 1 'elbow joint': rdtf_damping is '0.4', not a finite number; it is text: in Blender, make the custom "
+       "property a number (Edit Property > Type: Float, or Float Array for an axis), not a String"},
+      {{{"rdtf_joint", "revolute"}, {"rdtf_axis", "[0, 0, 1]"}}, "RDTF_INVALID_VALUE", "/nodes/1/extras/rdtf_axis",
+       "node 1 'elbow joint': rdtf_axis is '[0, 0, 1]', not three finite numbers or one of \"x\", \"y\", \"z\", "
+       "\"-x\", \"-y\", \"-z\"; it is text: in Blender, make the custom property a number (Edit Property > Type: "
+       "Float, or Float Array for an axis), not a String"},
+      {{{"rdtf_joint", "Revolute "}}, "RDTF_INVALID_JOINT_TYPE", "/nodes/1/extras/rdtf_joint",
+       "node 1 'elbow joint': joint type 'Revolute ' is not one of fixed, revolute, continuous, prismatic, floating, "
+       "planar, ball; did you mean 'revolute'? (types are lower case)"},
       {{{"rdtf_joint", "revolute"}, {"rdtf_lower", 1.5}, {"rdtf_upper", -1.25}},
        "JOINT_LIMITS_INVERTED", "/nodes/1/extras",
        "node 1 'elbow joint': lower limit 1.5 is above upper limit -1.25"},

@@ -1,6 +1,8 @@
 // Node completion: the RDTF paper's Algorithm 4, with the amendments docs/format.md lists.
 #pragma once
 
+#include <string>
+#include <string_view>
 #include <vector>
 
 #include "rdtf/diagnostics.h"
@@ -28,5 +30,9 @@ std::string node_label(const Json& document, std::size_t node);
 
 // An offending value as a diagnostic shows it: compact JSON, ASCII only, at most 80 characters.
 std::string value_text(const Json& value);
+
+// For a number or an axis typed as text in a Blender custom property ("2700", "[0, 0, 1]"), the
+// advice to change the property's type; "" for any other value or key (an extras.RDTF entry's).
+std::string text_value_advice(const Json& value, std::string_view key);
 
 }  // namespace rdtf

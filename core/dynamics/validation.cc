@@ -339,6 +339,12 @@ ValidationReport validate_dynamics(const Robot& robot, const ValidationOptions& 
     report.diagnostics.error(codes::SIM_INVALID_OPTIONS, "",
                              "the duration, CPU budget, bound mass and bound inertia must not be negative, "
                              "and all but the budget finite; the start offset finite");
+  } else if (const double dt = options.simulation.time_step;
+             options.duration > 0 && (!(dt > 0) || !std::isfinite(dt) || std::llround(options.duration / dt) < 1)) {
+    // A step longer than the run (--time-step 10 of a 3 s run) took no step and passed.
+    report.diagnostics.error(codes::SIM_INVALID_OPTIONS, "",
+                             "a time step of " + number(dt) + " s over a run of " + number(options.duration) +
+                                 " s takes no step: give a positive time step shorter than the run");
   } else if (limits.cancelled()) {
     report.cancelled = true;
     report.diagnostics.error(codes::SIM_CANCELLED, "", "the validation was cancelled before the run: the model is not judged");

@@ -236,6 +236,18 @@ TEST(ValidateCli, OptionsChangeTheRun) {
   EXPECT_NE((bad.out + bad.err).find("rk4"), std::string::npos) << bad.out << bad.err;
 }
 
+// A time step longer than the run takes no step: it passed, "0 s simulated in 0 steps".
+TEST(ValidateCli, ATimeStepLongerThanTheRunIsRefused) {
+  const auto run = validate("--time-step 10 " + quoted(testing::data_dir() / "blender" / "arm3.gltf"));
+  EXPECT_EQ(run.exit_code, 2) << run.out << run.err;
+  EXPECT_NE(run.err.find("SIM_INVALID_OPTIONS"), std::string::npos) << run.out << run.err;
+  EXPECT_NE(run.err.find("a time step of 10 s over a run of 3 s takes no step"), std::string::npos) << run.err;
+  EXPECT_EQ(run.out.find("PASS"), std::string::npos) << run.out;
+  // --seconds 0 asks for the physical checks alone: no step, and no complaint about it.
+  const auto checks_only = validate("--seconds 0 " + quoted(testing::data_dir() / "blender" / "arm3.gltf"));
+  EXPECT_EQ(checks_only.exit_code, 0) << checks_only.out << checks_only.err;
+}
+
 // --start-offset bends every revolute joint without a named start (arm3: shoulder and elbow, whose
 // limits allow +0.3 rad) and the report says where the run started.
 TEST(ValidateCli, StartOffsetBendsTheRevoluteJoints) {

@@ -5,6 +5,7 @@
 #include <cctype>
 #include <cmath>
 #include <map>
+#include <string_view>
 
 #include <urdf_parser/urdf_parser.h>
 
@@ -402,6 +403,17 @@ void report_urdfdom_failure(const XmlRobot& xml, const ConsoleMessages& messages
   diag.error_at_line(codes::URDF_PARSE_FAILED, pointer, row, "urdfdom cannot read it: " + said);
 }
 
+// What a file given as a URDF is instead, when its first bytes say so: a GLB, or JSON (a .gltf),
+// which the XML parser reported as "line 0: Error document empty" or a byte that is not UTF-8.
+std::optional<std::string> other_kind_of_file(std::string_view text) {
+  if (text.starts_with("glTF")) return "a GLB (binary glTF) file";
+  const std::size_t first = text.find_first_not_of(" \t\r\n");
+  if (first != std::string_view::npos && (text[first] == '{' || text[first] == '[')) {
+    return text.find("\"asset\"") != std::string_view::npos ? "a glTF file (JSON)" : "JSON";
+  }
+  return std::nullopt;
+}
+
 }  // namespace
 
 std::optional<Conversion> import_urdf(const fs::path& urdf, const UrdfImportOptions& options,
@@ -409,6 +421,12 @@ std::optional<Conversion> import_urdf(const fs::path& urdf, const UrdfImportOpti
   diag.set_file(urdf.string());
   const auto file_text = read_text(urdf, options.convert.limits.max_file_bytes, diag);
   if (!file_text) return std::nullopt;
+  if (const auto kind = other_kind_of_file(*file_text)) {
+    diag.error(codes::URDF_NOT_A_ROBOT, "",
+               "this is " + *kind + ", not a URDF (an XML <robot> element)" +
+                   (kind->starts_with("JSON") ? std::string() : ": rdtf convert reads it"));
+    return std::nullopt;
+  }
   const auto text = urdf_text_as_utf8(*file_text, diag);
   if (!text) return std::nullopt;
   const auto xml = scan_urdf_xml(*text, diag);

@@ -83,6 +83,12 @@ const BadUrdf kBadUrdfs[] = {
      "URDF_INVALID", "", "line 3: <xacro:macro>: this is a xacro file, not a URDF"},
     // A xacro file's text saved as .urdf with no xacro element left, only its substitutions:
     // counting the pieces of "$(optenv X 0) 0 0" said "3 numbers expected, 5 found".
+    // A model given to import instead of convert: "line 0: column 0: malformed XML: Error
+    // document empty", and for a GLB "byte 0xF0 is not UTF-8".
+    {"gltf_given_as_urdf", "{\"asset\": {\"version\": \"2.0\"}, \"nodes\": []}\n", "URDF_NOT_A_ROBOT", "",
+     "this is a glTF file (JSON), not a URDF (an XML <robot> element): rdtf convert reads it"},
+    {"glb_given_as_urdf", std::string("glTF\x02\x00\x00\x00\x14\x00\x00\x00\xf0\x00\x00\x00", 16),
+     "URDF_NOT_A_ROBOT", "", "this is a GLB (binary glTF) file, not a URDF"},
     {"xacro_argument_in_a_number", joint_urdf("<origin xyz=\"$(optenv X 0) 0 0\"/>\n" + kLimit),
      "URDF_INVALID_NUMBER", "/robot/joint[@name='j']/origin/@xyz",
      "line 5: <origin xyz=\"$(optenv X 0) 0 0\">: '$(optenv X 0)' is a xacro expression, not a number: expand the file "

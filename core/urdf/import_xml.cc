@@ -9,6 +9,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstring>
+#include <initializer_list>
 #include <limits>
 #include <map>
 #include <set>
@@ -568,6 +569,18 @@ int line_past_depth(const std::string& text, int limit) {
 
 constexpr int kMaxXmlDepth = 256;
 
+// The first child of `e` named one of `names` that repeats an earlier sibling of its name, or
+// nullptr: URDF allows one of each (urdfdom reads the first, MuJoCo refuses the file).
+const TiXmlElement* repeated_child(const TiXmlElement* e, std::initializer_list<const char*> names) {
+  for (const char* name : names) {
+    if (const TiXmlElement* first = e->FirstChildElement(name)) {
+      if (const TiXmlElement* second = first->NextSiblingElement(name)) return second;
+    }
+  }
+  return nullptr;
+}
+
+
 // The first element in document order named "xacro:..." (depth-bounded by kMaxXmlDepth).
 const TiXmlElement* first_xacro_element(const TiXmlElement* element) {
   for (; element != nullptr; element = element->NextSiblingElement()) {
@@ -628,6 +641,49 @@ std::optional<XmlRobot> scan_urdf_xml(const std::string& text, Diagnostics& diag
   robot.row = robot_element->Row();
   bool ok = true;
   Checker checker(diag);
+  // A second <inertial>, <origin>, <limit>... where URDF has one: urdfdom silently reads the
+  // first (a 50 kg inertial after a 1 kg one was dropped), MuJoCo refuses the file.
+  const auto no_repeats = [&](const TiXmlElement* e, const std::string& pointer,
+                              std::initializer_list<const char*> names) {
+    const TiXmlElement* second = repeated_child(e, names);
+    if (second == nullptr) return true;
+    const std::string name = second->Value();
+    diag.error_at_line(codes::URDF_INVALID, pointer + "/" + name + "[2]", second->Row(),
+                       "<" + std::string(e->Value()) + "> has a second <" + name + "> (the first is on line " +
+                           std::to_string(e->FirstChildElement(name.c_str())->Row()) +
+                           "): URDF allows one; urdfdom would read the first alone and MuJoCo refuses the file");
+    return false;
+  };
+  for (const TiXmlNode* after = robot_element->NextSibling(); after != nullptr; after = after->NextSibling()) {
+    if (after->ToComment() != nullptr || after->ToDeclaration() != nullptr) continue;
+    diag.error_at_line(codes::URDF_MALFORMED_XML, "", after->Row(),
+                       after->ToElement() != nullptr
+                           ? "a second root element <" + std::string(after->Value()) +
+                                 "> after </robot>: a URDF is one <robot> element (urdfdom would read the first "
+                                 "alone)"
+                           : std::string("text after </robot>: a URDF is one <robot> element"));
+    return std::nullopt;
+  }
+  // Text after the root element, which TinyXML drops without a word (xmllint and MuJoCo refuse it).
+  if (const std::size_t end = text.rfind("</robot>"); end != std::string::npos) {
+    std::size_t at = end + 8;
+    while (at < text.size()) {
+      if (std::isspace(static_cast<unsigned char>(text[at]))) {
+        ++at;
+      } else if (text.compare(at, 4, "<!--") == 0 && text.find("-->", at + 4) != std::string::npos) {
+        at = text.find("-->", at + 4) + 3;
+      } else {
+        break;
+      }
+    }
+    if (at < text.size()) {
+      const int line = 1 + static_cast<int>(std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(at), '\n'));
+      diag.error_at_line(codes::URDF_MALFORMED_XML, "", line,
+                         "text after </robot> ('" + shown(std::string_view(text).substr(at, 20)) +
+                             "'): a URDF is one <robot> element");
+      return std::nullopt;
+    }
+  }
   const double robot_largest_inertia = largest_inertia_term(robot_element);
   std::set<std::string> link_names, joint_names;
   for (const TiXmlElement* m = robot_element->FirstChildElement("material"); m; m = m->NextSiblingElement("material")) {
@@ -660,7 +716,16 @@ std::optional<XmlRobot> scan_urdf_xml(const std::string& text, Diagnostics& diag
       link.collision_rows.push_back(c->Row());
       check_geometry(checker, c, pointer + "/collision[" + std::to_string(link.collision_rows.size()) + "]");
     }
-    // urdfdom reads the first <inertial> only.
+    bool repeats = !no_repeats(e, pointer, {"inertial"});
+    for (const TiXmlElement* v = e->FirstChildElement(); v; v = v->NextSiblingElement()) {
+      const std::string name = v->Value();
+      if (name == "visual" || name == "collision") repeats = !no_repeats(v, pointer + "/" + name, {"origin", "geometry"}) || repeats;
+      if (name == "inertial") repeats = !no_repeats(v, pointer + "/inertial", {"origin", "mass", "inertia"}) || repeats;
+    }
+    if (repeats) {
+      ok = false;
+      continue;
+    }
     if (const TiXmlElement* inertial = e->FirstChildElement("inertial")) {
       check_inertial(checker, inertial, pointer + "/inertial", robot_largest_inertia);
     }
@@ -683,6 +748,12 @@ std::optional<XmlRobot> scan_urdf_xml(const std::string& text, Diagnostics& diag
     }
     if (!joint_names.insert(joint.name).second) {
       diag.error_at_line(codes::URDF_DUPLICATE_NAME, pointer, e->Row(), "a second joint is named '" + joint.name + "'");
+      ok = false;
+      continue;
+    }
+    if (!no_repeats(e, pointer,
+                    {"parent", "child", "origin", "axis", "limit", "dynamics", "mimic", "calibration",
+                     "safety_controller"})) {
       ok = false;
       continue;
     }

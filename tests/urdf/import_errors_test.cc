@@ -89,6 +89,18 @@ const BadUrdf kBadUrdfs[] = {
      "this is a glTF file (JSON), not a URDF (an XML <robot> element): rdtf convert reads it"},
     {"glb_given_as_urdf", std::string("glTF\x02\x00\x00\x00\x14\x00\x00\x00\xf0\x00\x00\x00", 16),
      "URDF_NOT_A_ROBOT", "", "this is a GLB (binary glTF) file, not a URDF"},
+    // One of each where URDF has one: urdfdom reads the first and drops the rest without a word.
+    {"two_inertials", link_urdf(inertial("1") + "\n" + inertial("50")), "URDF_INVALID",
+     "/robot/link[@name='a']/inertial[2]",
+     "line 4: <link> has a second <inertial> (the first is on line 3): URDF allows one"},
+    {"two_parents", joint_urdf("<parent link=\"b\"/>\n" + kLimit), "URDF_INVALID", "/robot/joint[@name='j']/parent[2]",
+     "line 5: <joint> has a second <parent> (the first is on line 4)"},
+    {"two_masses", link_urdf("<inertial><mass value=\"1\"/>\n<mass value=\"2\"/>" + kInertia + "</inertial>"),
+     "URDF_INVALID", "/robot/link[@name='a']/inertial/mass[2]", "line 4: <inertial> has a second <mass>"},
+    {"second_robot", "<robot name=\"r\"><link name=\"a\"/></robot>\n<robot name=\"s\"><link name=\"b\"/></robot>\n",
+     "URDF_MALFORMED_XML", "", "line 2: a second root element <robot> after </robot>"},
+    {"text_after_the_robot", "<robot name=\"r\"><link name=\"a\"/></robot>\n<!-- fine -->\ntrailing <junk>\n",
+     "URDF_MALFORMED_XML", "", "line 3: text after </robot> ('trailing <junk>"},
     {"xacro_argument_in_a_number", joint_urdf("<origin xyz=\"$(optenv X 0) 0 0\"/>\n" + kLimit),
      "URDF_INVALID_NUMBER", "/robot/joint[@name='j']/origin/@xyz",
      "line 5: <origin xyz=\"$(optenv X 0) 0 0\">: '$(optenv X 0)' is a xacro expression, not a number: expand the file "

@@ -634,8 +634,15 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
           : link_solids[l].empty() ? "no closed mesh"
                                    : "its closed meshes enclose none: faces doubled back to back, or shells wound "
                                      "inward that cancel the others";
+      // An rdtf_mass there is no mass: it scales the densities of the volume the meshes enclose.
+      const bool mass_given = node.contains("extras") && node["extras"].is_object() &&
+                              node["extras"].contains("rdtf_mass");
       diag.warning(codes::LINK_NO_VOLUME, json_pointer("/nodes", link.node),
-                   "link '" + link.name + "' has no volume (" + why + "): its mass is zero");
+                   "link '" + link.name + "' has no volume (" + why + "): its mass is zero" +
+                       (mass_given ? ", and its rdtf_mass " + value_text(node["extras"]["rdtf_mass"]) +
+                                         " is not applied: a mass fills the volume its meshes enclose, and there "
+                                         "is none (close the mesh, or give the link an inertial in extras.RDTF)"
+                                   : std::string()));
     }
   }
   if (solids_out == nullptr) report_part_overlaps(document, robot, own_solids, diag);

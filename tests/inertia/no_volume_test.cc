@@ -124,6 +124,22 @@ TEST(NoVolume, ADoubleSidedMeshWeighsExactlyNothingWhereItsSumsRound) {
   EXPECT_GT(single->robot.links[0].inertial.volume, 0.5);
 }
 
+// An rdtf_mass on a link that encloses nothing cannot be given: it was dropped, and the message
+// said only "its mass is zero".
+TEST(NoVolume, AnRdtfMassWithNothingToFillIsNamed) {
+  Json document = cube(true);
+  document["nodes"][0]["extras"] = {{"rdtf_mass", 0.5}};
+  Diagnostics diag;
+  ASSERT_TRUE(convert(document, diag).has_value());
+  bool named = false;
+  for (const Diagnostic& d : diag.all()) {
+    if (d.code != codes::LINK_NO_VOLUME) continue;
+    named = true;
+    EXPECT_NE(d.message.find("its mass is zero, and its rdtf_mass 0.5 is not applied"), std::string::npos) << d.message;
+  }
+  EXPECT_TRUE(named);
+}
+
 TEST(NoVolume, TheSingleSidedCubeIsSilent) {
   for (const Diagnostic& d : convert_cube(false)) {
     EXPECT_NE(d.code, codes::MESH_ENCLOSES_NO_VOLUME) << d.message;

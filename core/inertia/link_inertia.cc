@@ -209,6 +209,14 @@ std::optional<MassProperties> authored_inertial(const Json& inertial, const std:
                label + ": mass " + value_text(inertial["mass"]) + " kg is negative: a mass is 0 or more");
     return std::nullopt;
   }
+  // rdtf writes "link" (the link's frame, docs/format.md) and reads no other: a tensor said to be
+  // in another frame ("world") would be read in the wrong one.
+  if (inertial.contains("frame") && inertial["frame"] != "link") {
+    diag.error(codes::RDTF_INVALID_VALUE, where + "/frame",
+               label + ": frame " + value_text(inertial["frame"]) +
+                   " is not \"link\", the only frame an inertial is given in (the link's)");
+    return std::nullopt;
+  }
   if (inertial.contains("gravityCenter")) {
     const Json& c = inertial["gravityCenter"];
     if (!c.is_array() || c.size() != 3 || !number(c[0]) || !number(c[1]) || !number(c[2])) {

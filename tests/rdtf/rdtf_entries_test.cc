@@ -55,6 +55,18 @@ TEST(RdtfEntries, AJointOrInertialThatIsNoObjectIsRefused) {
   }
 }
 
+// An authored inertial in a frame other than the link's would be read in the wrong one.
+TEST(RdtfEntries, AnInertialInAnotherFrameIsRefused) {
+  json doc = arm();
+  doc["extras"]["RDTF"] = {{"nodes",
+                            {{{"node", 3},
+                              {"type", "inertial"},
+                              {"inertial", {{"mass", 1.0}, {"inertia", {0.01, 0, 0, 0.01, 0, 0.01}}, {"frame", "world"}}}}}}};
+  const Diagnostic d = refused(doc, codes::RDTF_INVALID_VALUE);
+  EXPECT_EQ(d.pointer, "/extras/RDTF/nodes/0/inertial/frame");
+  EXPECT_NE(d.message.find("frame 'world' is not \"link\""), std::string::npos) << d.message;
+}
+
 // Listed twice, a node's type and properties would be whichever entry a reader takes.
 TEST(RdtfEntries, ANodeListedTwiceIsRefused) {
   json doc = arm();

@@ -56,7 +56,7 @@ struct XmlRobot {
   std::vector<XmlJoint> joints;
   std::size_t root = 0;                      // Index into links.
   int row = 0;                               // Line of <robot>.
-  std::map<std::string, int> material_rows;  // Line of the last top-level <material> of each name.
+  std::map<std::string, int> material_rows;  // Line of the first top-level <material> of each name.
 };
 
 std::optional<XmlRobot> scan_urdf_xml(const std::string& text, Diagnostics& diag);

@@ -689,7 +689,13 @@ std::optional<XmlRobot> scan_urdf_xml(const std::string& text, Diagnostics& diag
   for (const TiXmlElement* m = robot_element->FirstChildElement("material"); m; m = m->NextSiblingElement("material")) {
     const char* name = m->Attribute("name");
     const std::string pointer = name != nullptr ? "/robot/material[@name='" + std::string(name) + "']" : "/robot/material";
-    if (name != nullptr) robot.material_rows[name] = m->Row();
+    if (name != nullptr && !robot.material_rows.emplace(name, m->Row()).second) {
+      // urdfdom refuses it too, but at the line of the last one.
+      diag.error_at_line(codes::URDF_DUPLICATE_NAME, pointer, m->Row(),
+                         "a second material is named '" + std::string(name) + "' (the first is on line " +
+                             std::to_string(robot.material_rows[name]) + ")");
+      ok = false;
+    }
     if (const TiXmlElement* color = m->FirstChildElement("color")) {
       checker.numbers(color, pointer + "/color", "rgba", {4, Range::kUnit, "a colour component"}, false);
     }

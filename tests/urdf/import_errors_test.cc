@@ -101,6 +101,10 @@ const BadUrdf kBadUrdfs[] = {
      "URDF_MALFORMED_XML", "", "line 2: a second root element <robot> after </robot>"},
     {"text_after_the_robot", "<robot name=\"r\"><link name=\"a\"/></robot>\n<!-- fine -->\ntrailing <junk>\n",
      "URDF_MALFORMED_XML", "", "line 3: text after </robot> ('trailing <junk>"},
+    // urdfdom refuses it too, but named the line of the last one.
+    {"material_named_twice",
+     "<robot name=\"r\">\n<material name=\"m\"/>\n<material name=\"m\"/>\n<link name=\"a\"/>\n</robot>\n",
+     "URDF_DUPLICATE_NAME", "/robot/material[@name='m']", "line 3: a second material is named 'm' (the first is on line 2)"},
     {"xacro_argument_in_a_number", joint_urdf("<origin xyz=\"$(optenv X 0) 0 0\"/>\n" + kLimit),
      "URDF_INVALID_NUMBER", "/robot/joint[@name='j']/origin/@xyz",
      "line 5: <origin xyz=\"$(optenv X 0) 0 0\">: '$(optenv X 0)' is a xacro expression, not a number: expand the file "
@@ -248,10 +252,6 @@ const BadUrdf kBadUrdfs[] = {
     {"mimic multiplier not a number", joint_urdf(kLimit + "<mimic joint=\"j\" multiplier=\"x\"/>"),
      "URDF_INVALID_NUMBER", "/robot/joint[@name='j']/mimic/@multiplier", "'x' is not a number"},
     // What urdfdom alone refuses: its message, at the element it names, with the line.
-    {"material named twice",
-     "<robot name=\"r\">\n<material name=\"m\"><color rgba=\"1 0 0 1\"/></material>\n"
-     "<material name=\"m\"><color rgba=\"1 0 0 1\"/></material>\n<link name=\"a\"/>\n</robot>\n",
-     "URDF_PARSE_FAILED", "/robot/material[@name='m']", "line 3: urdfdom cannot read it: material 'm' is not unique"},
     {"robot without a name", "<robot>\n<link name=\"a\"/>\n</robot>\n", "URDF_PARSE_FAILED", "/robot",
      "line 1: urdfdom cannot read it: No name given for the robot"},
     // Names become glTF names, which JSON needs in UTF-8 (found by fuzzing: a crash, then an

@@ -245,6 +245,7 @@ struct Simulation::Model {
   // step() does nothing more. `interrupted`: ODE was left mid-step by an exception, so its
   // threading object still holds jobs and is not freed (freeing it asserts).
   bool failed = false;
+  int failed_link = -1;  // The body's top link when a state beyond stepping stopped it; -1 otherwise
   bool interrupted = false;
 
   Model() = default;

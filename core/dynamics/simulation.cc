@@ -301,6 +301,7 @@ void Simulation::step(double dt) {
   for (std::size_t b = 0; b < m.bodies.size(); ++b) {
     if (!m.frames[b].steppable) {
       m.failed = true;
+      m.failed_link = m.bodies[b].link;
       m.messages.push_back("the state of link '" + m.robot.links[m.bodies[b].link].name + "' at t = " +
                            std::to_string(m.time) +
                            " s is not finite or beyond 1e100: the simulation stopped");
@@ -490,6 +491,7 @@ SimulationHealth Simulation::health(const HealthTolerances& tolerances) const {
   const Model& m = *model_;
   SimulationHealth h;
   h.finite = !m.failed;
+  h.not_finite_link = m.failed_link;
   h.dissipated_energy = m.dissipated;
   h.actuator_work = m.actuator_work;
   // Poses and angular velocities as of the last step (Model::frames), which is when the state
@@ -497,7 +499,10 @@ SimulationHealth Simulation::health(const HealthTolerances& tolerances) const {
   for (std::size_t b = 0; b < m.bodies.size(); ++b) {
     const BodyModel& body = m.bodies[b];
     const BodyFrame& f = m.frames[b];
-    if (!f.finite) h.finite = false;
+    if (!f.finite) {
+      h.finite = false;
+      if (h.not_finite_link < 0) h.not_finite_link = body.link;
+    }
     const Eigen::Vector3d& v = f.v;
     const Eigen::Vector3d Iw = f.R * (body.inertia * (f.R.transpose() * f.w));
     h.kinetic_energy += 0.5 * body.mass * v.squaredNorm() + 0.5 * f.w.dot(Iw);

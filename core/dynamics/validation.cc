@@ -147,10 +147,11 @@ void run_scenario(Simulation& sim, const Simulation::Model& model, const Validat
     const double t = sim.time();
     const SimulationHealth h = sim.health(tolerances);
     if (!h.finite) {
-      diag.error(codes::SIM_NOT_FINITE, "",
-                 "the state became NaN, infinite or too large to step (beyond 1e100) at t = " +
-                     number(t) + " s (step " + std::to_string(sim.steps()) +
-                     "): the model is unstable in ODE");
+      const Link* link = h.not_finite_link >= 0 ? &robot.links[static_cast<std::size_t>(h.not_finite_link)] : nullptr;
+      diag.error(codes::SIM_NOT_FINITE, link != nullptr ? node_pointer(link->node) : "",
+                 (link != nullptr ? "link '" + link->name + "': its" : std::string("the")) +
+                     " state became NaN, infinite or too large to step (beyond 1e100) at t = " + number(t) +
+                     " s (step " + std::to_string(sim.steps()) + "): the model is unstable in ODE");
       break;
     }
     largest_kinetic = std::max({largest_kinetic, h.kinetic_energy, h.spring_energy});

@@ -176,6 +176,12 @@ TEST(DynamicsGate, NonFiniteStateFails) {
   EXPECT_FALSE(report.passed);
   EXPECT_TRUE(report.diagnostics.contains("SIM_NOT_FINITE")) << all_text(report.diagnostics);
   EXPECT_LT(report.steps, 3000u);
+  // It names the body that blew up (it named none).
+  for (const Diagnostic& d : report.diagnostics.all()) {
+    if (d.code != "SIM_NOT_FINITE") continue;
+    EXPECT_EQ(d.pointer, "/nodes/" + std::to_string(b.robot().links[1].node)) << format(d);
+    EXPECT_EQ(d.message.rfind("link 'carriage': its state became NaN, infinite or too large", 0), 0u) << d.message;
+  }
 }
 
 // Hinge limits beyond (-pi, pi) are enforced (they used to be only watched, and this pendulum,

@@ -173,6 +173,8 @@ struct HealthTolerances {
 // The state's physics, for watching a run (validation, or a live model).
 struct SimulationHealth {
   bool finite = true;                   // Every body's position, orientation and velocities.
+  int not_finite_link = -1;             // robot.links index of the first body that is not; -1: none
+                                        // (or ODE stopped the run without saying which)
   double kinetic_energy = 0;            // J
   double potential_energy = 0;          // J: gravity (relative to the scene origin) and springs
   double spring_energy = 0;             // J: sum 1/2 k q^2 of the joint springs (in potential_energy)

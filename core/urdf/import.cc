@@ -265,6 +265,26 @@ class Builder {
                     (mass_authored ? std::string(", nor any other <visual>")
                                    : std::string(", and the link's mass comes from its geometry")) +
                     ": its <collision> geometry is its mesh");
+    } else if (!link.collision_array.empty() && !any_readable(link.visual_array) &&
+               !any_readable(link.collision_array)) {
+      // Nothing to show, and the collision geometry that would have stood in cannot either: say
+      // why, or a missing collision mesh goes unmentioned (z1's gripper, a quadrotor's base).
+      for (std::size_t i = 0; i < link.collision_array.size(); ++i) {
+        const urdf::GeometrySharedPtr& g = link.collision_array[i]->geometry;
+        if (!g || g->type != urdf::Geometry::MESH) continue;
+        const std::string& filename = static_cast<const urdf::Mesh&>(*g).filename;
+        std::string why = "is not STL, the one mesh format import reads";
+        const std::string base = urdf.parent_path().empty() ? std::string(".") : urdf.parent_path().string();
+        std::string extension = fs::path(filename).extension().string();
+        for (char& ch : extension) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+        if (extension == ".stl" && !resolve_mesh_path(filename, base, why)) why = "cannot be read: " + why;
+        diag.warning_at_line(codes::URDF_GEOMETRY_SKIPPED,
+                             link_pointer(link.name) + "/collision[" + std::to_string(i + 1) + "]",
+                             i < xml.collision_rows.size() ? xml.collision_rows[i] : xml.row,
+                             "link '" + link.name + "' has no <visual> import can read, and its <collision> mesh '" +
+                                 filename + "', which would stand in, " + why + ": the link has no geometry");
+        break;
+      }
     }
     std::vector<std::size_t> mesh_nodes;
     const std::size_t count = use_collision ? link.collision_array.size() : link.visual_array.size();

@@ -518,6 +518,31 @@ TEST(UrdfImportErrors, UnreadableVisualsGiveWayToTheCollisionGeometry) {
   EXPECT_NEAR(robot.links[1].inertial.mass, 6.0, 6.0 * 2e-7);
 }
 
+// A COLLADA visual and a collision STL that is not there: the link shows nothing, and the missing
+// collision mesh, which would have stood in, went unmentioned (z1's gripper).
+TEST(UrdfImportErrors, AMissingCollisionMeshThatWouldStandInIsNamed) {
+  TempDir dir;
+  const fs::path urdf = dir / "robot.urdf";
+  testing::write_file(urdf, "<robot name=\"r\">\n<link name=\"a\">" + inertial("2.5") +
+                                visual("<mesh filename=\"meshes/a.dae\"/>") +
+                                "\n<collision><geometry><mesh filename=\"meshes/a_collision.STL\"/></geometry></collision>"
+                                "</link>\n</robot>\n");
+  Diagnostics diag;
+  ASSERT_TRUE(import_urdf(urdf, UrdfImportOptions{}, diag));
+  const Diagnostic* found = nullptr;
+  for (const Diagnostic& d : diag.all()) {
+    if (d.code == "URDF_GEOMETRY_SKIPPED") found = &d;
+  }
+  ASSERT_NE(found, nullptr);
+  EXPECT_EQ(found->severity, Severity::kWarning);
+  EXPECT_EQ(found->pointer, "/robot/link[@name='a']/collision[1]");
+  EXPECT_EQ(found->line, 3);
+  EXPECT_NE(found->message.find("its <collision> mesh 'meshes/a_collision.STL', which would stand in, cannot be read: "
+                                "mesh file 'meshes/a_collision.STL' not found"),
+            std::string::npos)
+      << found->message;
+}
+
 // Why the URDF cannot be read, in the user's terms: missing, a folder, unreadable (it used to say
 // "not a regular file" for all of them).
 void expect_read_failure(const fs::path& urdf, const std::string& why) {

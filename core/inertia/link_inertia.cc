@@ -571,8 +571,12 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
       const Json& node = document["nodes"][link.inertial_node];
       std::optional<MassProperties> authored;
       if (entry != nullptr && entry->contains("inertial")) {
+        const std::size_t errors_before = diag.error_count();
         authored = authored_inertial((*entry)["inertial"], entry_pointer + "/inertial", label, diag);
-        link.ignored_inertial_extras = warn_if_extras_differ(node, authored, label, link.inertial_node, diag);
+        // An entry refused above is not "computed from the geometry": nothing to compare with.
+        if (diag.error_count() == errors_before) {
+          link.ignored_inertial_extras = warn_if_extras_differ(node, authored, label, link.inertial_node, diag);
+        }
       } else if (node.contains("extras") && node["extras"].is_object() &&
                  node["extras"].contains("rdtf_inertial")) {
         authored = authored_inertial(node["extras"]["rdtf_inertial"],

@@ -67,6 +67,25 @@ TEST(RdtfEntries, AnInertialInAnotherFrameIsRefused) {
   EXPECT_NE(d.message.find("frame 'world' is not \"link\""), std::string::npos) << d.message;
 }
 
+// A refused entry is refused, not also compared with the node's rdtf_inertial as if it said
+// "computed from the geometry".
+TEST(RdtfEntries, ARefusedInertialIsNotComparedWithTheNodeExtras) {
+  json doc = arm();
+  doc["nodes"][3]["extras"]["rdtf_inertial"] = {{"mass", 1.0}, {"inertia", {0.01, 0, 0, 0.01, 0, 0.01}}};
+  doc["extras"]["RDTF"] = {
+      {"nodes", {{{"node", 3}, {"type", "inertial"}, {"inertial", {{"mass", -1.0}, {"inertia", {0.01, 0, 0, 0.01, 0, 0.01}}}}}}}};
+  testing::TempDir dir;
+  testing::write_file(dir / "arm.gltf", doc.dump());
+  Diagnostics diag;
+  EXPECT_FALSE(convert_file(dir / "arm.gltf", {}, diag).has_value());
+  bool refused = false;
+  for (const Diagnostic& d : diag.all()) {
+    EXPECT_NE(d.code, codes::RDTF_NODE_EXTRAS_IGNORED) << format(d);
+    refused = refused || (d.code == codes::RDTF_INVALID_VALUE && d.message.find("kg is negative: a mass is 0 or more") != std::string::npos);
+  }
+  EXPECT_TRUE(refused);
+}
+
 // Listed twice, a node's type and properties would be whichever entry a reader takes.
 TEST(RdtfEntries, ANodeListedTwiceIsRefused) {
   json doc = arm();

@@ -12,6 +12,16 @@
 namespace rdtf::daemon {
 namespace {
 
+// Every part within `limit` bytes, numbered 0..n-1 of n.
+template <typename Part>
+void expect_numbered_parts_within(const std::vector<Part>& parts, std::size_t limit) {
+  for (std::size_t p = 0; p < parts.size(); ++p) {
+    EXPECT_LE(static_cast<std::size_t>(parts[p].getEncodedSize()), limit) << "part " << p;
+    EXPECT_EQ(parts[p].part, static_cast<std::int32_t>(p));
+    EXPECT_EQ(parts[p].num_parts, static_cast<std::int32_t>(parts.size()));
+  }
+}
+
 TEST(DeltaMessages, ManyChangesGoInPartsEachWithinTheLimit) {
   std::vector<ElementChange> changes;
   for (int i = 0; i < 500; ++i) {
@@ -23,12 +33,9 @@ TEST(DeltaMessages, ManyChangesGoInPartsEachWithinTheLimit) {
   constexpr std::size_t kLimit = 2000;
   const auto parts = make_deltas(header, changes, 42, kLimit);
   ASSERT_GT(parts.size(), 1u);
+  expect_numbered_parts_within(parts, kLimit);
   std::size_t next = 0;
-  for (std::size_t p = 0; p < parts.size(); ++p) {
-    const auto& part = parts[p];
-    EXPECT_LE(static_cast<std::size_t>(part.getEncodedSize()), kLimit);
-    EXPECT_EQ(part.part, static_cast<std::int32_t>(p));
-    EXPECT_EQ(part.num_parts, static_cast<std::int32_t>(parts.size()));
+  for (const auto& part : parts) {
     EXPECT_EQ(part.total_changes, 500);
     EXPECT_EQ(part.num_changes, static_cast<std::int32_t>(part.changes.size()));
     EXPECT_EQ(part.previous_revision, 3);
@@ -58,12 +65,9 @@ TEST(ManifestMessages, ManyFilesGoInPartsEachWithinTheLimit) {
   constexpr std::size_t kLimit = 3000;
   const auto parts = make_manifests("arm.gltf", 7, "ccc", files, kLimit);
   ASSERT_GT(parts.size(), 1u);
+  expect_numbered_parts_within(parts, kLimit);
   std::size_t next = 0;
-  for (std::size_t p = 0; p < parts.size(); ++p) {
-    const auto& part = parts[p];
-    EXPECT_LE(static_cast<std::size_t>(part.getEncodedSize()), kLimit);
-    EXPECT_EQ(part.part, static_cast<std::int32_t>(p));
-    EXPECT_EQ(part.num_parts, static_cast<std::int32_t>(parts.size()));
+  for (const auto& part : parts) {
     EXPECT_EQ(part.total_files, 300);
     EXPECT_EQ(part.num_files, static_cast<std::int32_t>(part.files.size()));
     EXPECT_EQ(part.model_id, "arm.gltf");

@@ -664,22 +664,34 @@ std::optional<XmlRobot> scan_urdf_xml(const std::string& text, Diagnostics& diag
                            : std::string("text after </robot>: a URDF is one <robot> element"));
     return std::nullopt;
   }
-  // Text after the root element, which TinyXML drops without a word (xmllint and MuJoCo refuse it).
-  if (const std::size_t end = text.rfind("</robot>"); end != std::string::npos) {
-    std::size_t at = end + 8;
-    while (at < text.size()) {
-      if (std::isspace(static_cast<unsigned char>(text[at]))) {
-        ++at;
-      } else if (text.compare(at, 4, "<!--") == 0 && text.find("-->", at + 4) != std::string::npos) {
-        at = text.find("-->", at + 4) + 3;
-      } else {
-        break;
-      }
+  // Text after the root element, which TinyXML drops without a word (xmllint and MuJoCo refuse
+  // it). Read backward from the end, past white space, comments and processing instructions (a
+  // "</robot>" inside a comment is no end tag): what is left must end with a tag.
+  {
+    std::size_t end = text.size();
+    for (;;) {
+      while (end > 0 && std::isspace(static_cast<unsigned char>(text[end - 1]))) --end;
+      const std::string_view head = std::string_view(text).substr(0, end);
+      std::size_t open = std::string_view::npos;
+      if (head.ends_with("-->")) open = head.rfind("<!--");
+      else if (head.ends_with("?>")) open = head.rfind("<?");
+      if (open == std::string_view::npos) break;
+      end = open;
     }
-    if (at < text.size()) {
+    // The last tag must close the root ("</robot>", or "<robot .../>"): a second element after it
+    // is refused above, so any other is text that looks like a tag ("trailing <junk>").
+    const std::size_t last_open = end > 0 ? text.rfind('<', end - 1) : std::string::npos;
+    const bool closes = end > 0 && text[end - 1] == '>' && last_open != std::string::npos &&
+                        (text.compare(last_open, 2, "</") == 0 || text.compare(end - 2, 2, "/>") == 0);
+    if (end > 0 && !closes) {
+      std::size_t at = text[end - 1] == '>' && last_open != std::string::npos && last_open > 0
+                           ? text.rfind('>', last_open - 1)
+                           : text.rfind('>', end - 1);
+      at = at == std::string::npos ? 0 : at + 1;
+      while (at < end && std::isspace(static_cast<unsigned char>(text[at]))) ++at;
       const int line = 1 + static_cast<int>(std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(at), '\n'));
       diag.error_at_line(codes::URDF_MALFORMED_XML, "", line,
-                         "text after </robot> ('" + shown(std::string_view(text).substr(at, 20)) +
+                         "text after </robot> ('" + shown(std::string_view(text).substr(at, std::min<std::size_t>(20, end - at))) +
                              "'): a URDF is one <robot> element");
       return std::nullopt;
     }

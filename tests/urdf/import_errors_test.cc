@@ -105,6 +105,8 @@ const BadUrdf kBadUrdfs[] = {
     {"material_named_twice",
      "<robot name=\"r\">\n<material name=\"m\"/>\n<material name=\"m\"/>\n<link name=\"a\"/>\n</robot>\n",
      "URDF_DUPLICATE_NAME", "/robot/material[@name='m']", "line 3: a second material is named 'm' (the first is on line 2)"},
+    {"text_after_the_robot_without_a_tag", "<robot name=\"r\"><link name=\"a\"/></robot>\njunk\n",
+     "URDF_MALFORMED_XML", "", "line 2: text after </robot> ('junk')"},
     {"xacro_argument_in_a_number", joint_urdf("<origin xyz=\"$(optenv X 0) 0 0\"/>\n" + kLimit),
      "URDF_INVALID_NUMBER", "/robot/joint[@name='j']/origin/@xyz",
      "line 5: <origin xyz=\"$(optenv X 0) 0 0\">: '$(optenv X 0)' is a xacro expression, not a number: expand the file "
@@ -516,6 +518,20 @@ TEST(UrdfImportErrors, UnreadableVisualsGiveWayToTheCollisionGeometry) {
   // The box at the default 1000 kg/m^3: 6 kg, to the float32 rounding of its three edges (each
   // within 2^-24 relative, so the volume within 3 * 2^-24 < 2e-7).
   EXPECT_NEAR(robot.links[1].inertial.mass, 6.0, 6.0 * 2e-7);
+}
+
+// What may follow the root: white space, comments (one holding "</robot>" too), processing
+// instructions; and an end tag written "</robot  >". Each imports.
+TEST(UrdfImportErrors, CommentsAndInstructionsAfterTheRobotAreFine) {
+  for (const std::string& text : {std::string("<robot name=\"r\"><link name=\"a\"/></robot>\n<!-- ended with </robot> -->\n"),
+                                 std::string("<robot name=\"r\"><!-- </robot> --><link name=\"a\"/></robot  >\n"),
+                                 std::string("<robot name=\"r\"><link name=\"a\"/></robot>\n<?xml-stylesheet href=\"x\"?>\n")}) {
+    TempDir dir;
+    testing::write_file(dir / "robot.urdf", text);
+    Diagnostics diag;
+    EXPECT_TRUE(import_urdf(dir / "robot.urdf", UrdfImportOptions{}, diag))
+        << text << (diag.all().empty() ? std::string() : format(diag.all().front()));
+  }
 }
 
 // A COLLADA visual and a collision STL that is not there: the link shows nothing, and the missing

@@ -331,8 +331,8 @@ std::optional<std::string> joint_properties_differ(const Joint& extras, const Jo
 }
 
 // A joint node with joint properties is one degree of freedom: whatever hangs from it moves as
-// one part. The link among its children (the first with geometry that does not fix itself, else
-// the first with geometry, else the first) is that part, and what else hangs from the joint node
+// one part. The link among its children (the first with geometry and no joint of its own, else
+// one that fixes itself, else one with its own moving joint; else the first) is that part, and what else hangs from the joint node
 // hangs from that link: a part parented to a bone beside the next bone, an elbow empty parented
 // to the shoulder empty beside the upper arm, two jaws under one grip empty. A joint node without properties (the paper's, which groups a link's child links
 // in one node, or rdtf's inserted ones) moves nothing: each link below it keeps its own joint to
@@ -361,27 +361,32 @@ std::vector<int> carried_links(const Json& document, const std::vector<NodeType>
     const Json* entry = entries[node];
     const bool has_entry_joint = entry != nullptr && entry->contains("joint") && (*entry)["joint"].is_object();
     if (!has_entry_joint && !has_joint_keys(node_extras(document, node))) continue;
-    // A link that fixes itself (rdtf_joint 'fixed' on its own node: rdtf's output writes that on
-    // the second jaw) hangs from the part rather than being it: chosen last, so that the choice
-    // does not hang on the children's order, which Blender's importer sorts by name (a tyre and
-    // its hubcap under a wheel's empty came back with the hubcap carrying the tyre).
-    const auto fixes_itself = [&](std::size_t link) {
+    // Among the links with geometry, one without a joint type of its own is the part; then one
+    // that fixes itself (rdtf_joint 'fixed': rdtf's output writes that on the second jaw); last
+    // one with a moving joint of its own, which then keeps it. So the choice does not hang on the
+    // children's order, which Blender's importer sorts by name (a tyre and its hubcap under a
+    // wheel's empty came back with the hubcap carrying the tyre).
+    // (A joint told only by an extras.RDTF entry has its keys written on its frame node, which is
+    // the part when the joint node has no transform of its own.)
+    const Json entry_type =
+        !has_joint_keys(node_extras(document, node)) && has_entry_joint ? (*entry)["joint"].value("type", Json()) : Json();
+    const auto rank = [&](std::size_t link) {
       const Json* extras = node_extras(document, link);
-      return extras != nullptr && extras->contains("rdtf_joint") && (*extras)["rdtf_joint"] == "fixed";
+      if (extras == nullptr || !extras->contains("rdtf_joint") || (*extras)["rdtf_joint"] == entry_type) return 0;
+      return (*extras)["rdtf_joint"] == "fixed" ? 1 : 2;
     };
-    int first = -1, first_with_geometry = -1, chosen = -1;
+    int first = -1, chosen = -1, chosen_rank = 3;
     for (const Json& child : document["nodes"][node].value("children", Json::array())) {
       const auto c = child.get<std::size_t>();
       if (types[c] != NodeType::kLink) continue;
       if (first < 0) first = static_cast<int>(c);
       if (!has_geometry(c)) continue;
-      if (first_with_geometry < 0) first_with_geometry = static_cast<int>(c);
-      if (!fixes_itself(c)) {
+      if (const int r = rank(c); r < chosen_rank) {
         chosen = static_cast<int>(c);
-        break;
+        chosen_rank = r;
       }
     }
-    carried[node] = chosen >= 0 ? chosen : first_with_geometry >= 0 ? first_with_geometry : first;
+    carried[node] = chosen >= 0 ? chosen : first;
   }
   return carried;
 }

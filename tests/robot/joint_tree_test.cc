@@ -149,6 +149,26 @@ TEST(JointTree, TwoPartsUnderOneJointEmptyMoveTogether) {
   EXPECT_TRUE(with_code(again.diag, codes::RDTF_NODE_EXTRAS_IGNORED).empty());
 }
 
+// Under a wrist, a palm that fixes itself and a finger with a moving joint of its own: the palm
+// is the part, the finger keeps its joint (a rule that only put 'fixed' last carried the finger
+// and dropped its degree of freedom).
+TEST(JointTree, ALinkWithAMovingJointOfItsOwnIsNotThePart) {
+  const json nodes = {
+      {{"name", "base"}, {"mesh", 0}, {"children", {1}}},
+      {{"name", "wrist"}, {"translation", {0, 0.3, 0}}, {"children", {2, 3}}, {"extras", revolute("z")}},
+      {{"name", "palm"}, {"mesh", 0}, {"extras", {{"rdtf_joint", "fixed"}}}},
+      {{"name", "finger"}, {"mesh", 0}, {"translation", {0.1, 0, 0}}, {"extras", revolute("x")}}};
+  const Converted c = convert_doc(with_nodes(nodes, {0}));
+  const std::vector<std::string> lines = tree(c.robot);
+  ASSERT_EQ(lines.size(), 2u);
+  EXPECT_EQ(lines[0], "palm <- base by wrist (revolute)");
+  EXPECT_EQ(lines[1].rfind("finger <- palm by ", 0), 0u) << lines[1];
+  EXPECT_NE(lines[1].find("(revolute)"), std::string::npos) << lines[1];
+  for (const Diagnostic& d : with_code(c.diag, codes::RDTF_NODE_EXTRAS_IGNORED)) {
+    EXPECT_EQ(d.message.find("'finger'"), std::string::npos) << d.message;  // its joint is read
+  }
+}
+
 // Two joint empties with properties and no part between them are two degrees of freedom one
 // joint cannot have: a warning names the one whose properties are not used.
 TEST(JointTree, StackedJointEmptiesWarnThatADegreeOfFreedomIsLost) {

@@ -15,6 +15,9 @@ namespace rdtf {
 namespace {
 
 using dynamics_internal::node_pointer;
+
+// More steps than any validation could take: a run of 60 s (rdtfd's largest) at 1e-4 s is 6e5.
+constexpr double kMaxValidationSteps = 1e9;
 using dynamics_internal::number;
 
 // The first time a check failed, its worst value (by `rank`: the value, or the value relative
@@ -341,11 +344,16 @@ ValidationReport validate_dynamics(const Robot& robot, const ValidationOptions& 
                              "the duration, CPU budget, bound mass and bound inertia must not be negative, "
                              "and all but the budget finite; the start offset finite");
   } else if (const double dt = options.simulation.time_step;
-             options.duration > 0 && (!(dt > 0) || !std::isfinite(dt) || std::llround(options.duration / dt) < 1)) {
-    // A step longer than the run (--time-step 10 of a 3 s run) took no step and passed.
-    report.diagnostics.error(codes::SIM_INVALID_OPTIONS, "",
-                             "a time step of " + number(dt) + " s over a run of " + number(options.duration) +
-                                 " s takes no step: give a positive time step shorter than the run");
+             options.duration > 0 && (!(dt > 0) || !std::isfinite(dt) || dt > options.duration ||
+                                      options.duration / dt > kMaxValidationSteps)) {
+    // A step longer than the run (--time-step 10 of a 3 s run) took no step and passed; one of
+    // 1e-300 s would count more steps than any run could take (and overflow the count).
+    report.diagnostics.error(
+        codes::SIM_INVALID_OPTIONS, "",
+        "a time step of " + number(dt) + " s over a run of " + number(options.duration) + " s: " +
+            (dt > 0 && options.duration / dt > kMaxValidationSteps
+                 ? "more than " + number(kMaxValidationSteps) + " steps; give a longer time step"
+                 : std::string("give a positive time step no longer than the run")));
   } else if (limits.cancelled()) {
     report.cancelled = true;
     report.diagnostics.error(codes::SIM_CANCELLED, "", "the validation was cancelled before the run: the model is not judged");

@@ -653,7 +653,10 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
                    "link '" + link.name + "' has no volume (" + why + "): its mass is zero" +
                        (mass_given ? ", and its rdtf_mass " + value_text(node["extras"]["rdtf_mass"]) +
                                          " is not applied: a mass fills the volume its meshes enclose, and there "
-                                         "is none (close the mesh, or give the link an inertial in extras.RDTF)"
+                                         "is none (" +
+                                         (link.meshes.empty() ? std::string("give the link a closed mesh")
+                                                              : std::string("close the mesh")) +
+                                         ", or give the link an inertial in extras.RDTF)"
                                    : std::string()));
     }
   }

@@ -232,7 +232,7 @@ std::string lower_case_advice(const Json& value) {
     if (!std::isspace(static_cast<unsigned char>(c))) lower += static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   }
   if (!joint_kind_from_string(lower)) return {};
-  return "; did you mean '" + lower + "'? (types are lower case)";
+  return "; did you mean '" + lower + "'? (types are lower case, without spaces)";
 }
 
 void read_joint_properties(const JointSource& source, const Eigen::Affine3d& X_SF,

@@ -277,8 +277,9 @@ class Builder {
         const std::string base = urdf.parent_path().empty() ? std::string(".") : urdf.parent_path().string();
         std::string extension = fs::path(filename).extension().string();
         for (char& ch : extension) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
-        if (extension == ".stl" && !resolve_mesh_path(filename, base, why)) why = "cannot be read: " + why;
-        diag.warning_at_line(codes::URDF_GEOMETRY_SKIPPED,
+        const bool missing = extension == ".stl" && !resolve_mesh_path(filename, base, why);
+        if (missing) why = "cannot be read: " + why;
+        diag.warning_at_line(missing ? codes::URDF_MESH_NOT_FOUND : codes::URDF_GEOMETRY_SKIPPED,
                              link_pointer(link.name) + "/collision[" + std::to_string(i + 1) + "]",
                              i < xml.collision_rows.size() ? xml.collision_rows[i] : xml.row,
                              "link '" + link.name + "' has no <visual> import can read, and its <collision> mesh '" +

@@ -735,9 +735,13 @@ std::optional<XmlRobot> scan_urdf_xml(const std::string& text, Diagnostics& diag
       check_geometry(checker, c, pointer + "/collision[" + std::to_string(link.collision_rows.size()) + "]");
     }
     bool repeats = !no_repeats(e, pointer, {"inertial"});
+    int visuals = 0, collisions = 0;  // Counted as the pointers count them: /visual[1], ...
     for (const TiXmlElement* v = e->FirstChildElement(); v; v = v->NextSiblingElement()) {
       const std::string name = v->Value();
-      if (name == "visual" || name == "collision") repeats = !no_repeats(v, pointer + "/" + name, {"origin", "geometry"}) || repeats;
+      if (name == "visual" || name == "collision") {
+        const int n = name == "visual" ? ++visuals : ++collisions;
+        repeats = !no_repeats(v, pointer + "/" + name + "[" + std::to_string(n) + "]", {"origin", "geometry"}) || repeats;
+      }
       if (name == "inertial") repeats = !no_repeats(v, pointer + "/inertial", {"origin", "mass", "inertia"}) || repeats;
     }
     if (repeats) {

@@ -210,7 +210,7 @@ TEST(BlenderModelled, JointDiagnosticsNameTheNodeAndShowTheValue) {
        "Float, or Float Array for an axis), not a String"},
       {{{"rdtf_joint", "Revolute "}}, "RDTF_INVALID_JOINT_TYPE", "/nodes/1/extras/rdtf_joint",
        "node 1 'elbow joint': joint type 'Revolute ' is not one of fixed, revolute, continuous, prismatic, floating, "
-       "planar, ball; did you mean 'revolute'? (types are lower case)"},
+       "planar, ball; did you mean 'revolute'? (types are lower case, without spaces)"},
       {{{"rdtf_joint", "revolute"}, {"rdtf_lower", 1.5}, {"rdtf_upper", -1.25}},
        "JOINT_LIMITS_INVERTED", "/nodes/1/extras",
        "node 1 'elbow joint': lower limit 1.5 is above upper limit -1.25"},

@@ -547,7 +547,7 @@ TEST(UrdfImportErrors, AMissingCollisionMeshThatWouldStandInIsNamed) {
   ASSERT_TRUE(import_urdf(urdf, UrdfImportOptions{}, diag));
   const Diagnostic* found = nullptr;
   for (const Diagnostic& d : diag.all()) {
-    if (d.code == "URDF_GEOMETRY_SKIPPED") found = &d;
+    if (d.code == "URDF_MESH_NOT_FOUND") found = &d;
   }
   ASSERT_NE(found, nullptr);
   EXPECT_EQ(found->severity, Severity::kWarning);

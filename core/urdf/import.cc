@@ -157,15 +157,13 @@ class Builder {
         break;
     }
     const auto& mesh = static_cast<const urdf::Mesh&>(g);
-    std::string extension = fs::path(mesh.filename).extension().string();
-    for (char& ch : extension) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
-    if (extension != ".stl") {
+    if (!is_stl(mesh.filename)) {
       diag.warning_at_line(codes::URDF_MESH_FORMAT_UNSUPPORTED, pointer, row,
                    "mesh '" + mesh.filename + "' is not STL (the one mesh format import reads); skipped");
       return std::nullopt;
     }
     std::string why;
-    const auto path = resolve_mesh_path(mesh.filename, urdf.parent_path().empty() ? fs::path(".") : urdf.parent_path(), why);
+    const auto path = resolve_mesh_path(mesh.filename, urdf_folder(), why);
     // A published robot often comes without its mesh package, or with a mesh no tool can read.
     // Where the link's mass is its <inertial>, such a mesh costs only its look: a warning, and
     // the rest is imported. Where the mass would be computed from the mesh, it cannot be: an error.
@@ -210,12 +208,19 @@ class Builder {
     if (!g || degenerate_shape(*g)) return false;
     if (g->type != urdf::Geometry::MESH) return true;
     const auto& mesh = static_cast<const urdf::Mesh&>(*g);
-    std::string extension = fs::path(mesh.filename).extension().string();
-    for (char& ch : extension) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
     std::string why;
-    return extension == ".stl" &&
-           resolve_mesh_path(mesh.filename, urdf.parent_path().empty() ? fs::path(".") : urdf.parent_path(), why);
+    return is_stl(mesh.filename) && resolve_mesh_path(mesh.filename, urdf_folder(), why);
   }
+
+  // Whether a mesh file name ends in .stl, in any case.
+  static bool is_stl(const std::string& filename) {
+    std::string extension = fs::path(filename).extension().string();
+    for (char& ch : extension) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+    return extension == ".stl";
+  }
+
+  // Where relative mesh file names start: the URDF's folder.
+  fs::path urdf_folder() const { return urdf.parent_path().empty() ? fs::path(".") : urdf.parent_path(); }
 
   // The link's visual node with a mesh node per geometry, or nothing when it has none.
   // `mass_from`: why the link's mass is not its geometry's (an <inertial>, or massless on a fixed
@@ -274,10 +279,7 @@ class Builder {
         if (!g || g->type != urdf::Geometry::MESH) continue;
         const std::string& filename = static_cast<const urdf::Mesh&>(*g).filename;
         std::string why = "is not STL, the one mesh format import reads";
-        const std::string base = urdf.parent_path().empty() ? std::string(".") : urdf.parent_path().string();
-        std::string extension = fs::path(filename).extension().string();
-        for (char& ch : extension) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
-        const bool missing = extension == ".stl" && !resolve_mesh_path(filename, base, why);
+        const bool missing = is_stl(filename) && !resolve_mesh_path(filename, urdf_folder(), why);
         if (missing) why = "cannot be read: " + why;
         diag.warning_at_line(missing ? codes::URDF_MESH_NOT_FOUND : codes::URDF_GEOMETRY_SKIPPED,
                              link_pointer(link.name) + "/collision[" + std::to_string(i + 1) + "]",

@@ -89,6 +89,15 @@ const BadUrdf kBadUrdfs[] = {
      "this is a glTF file (JSON), not a URDF (an XML <robot> element): rdtf convert reads it"},
     {"glb_given_as_urdf", std::string("glTF\x02\x00\x00\x00\x14\x00\x00\x00\xf0\x00\x00\x00", 16),
      "URDF_NOT_A_ROBOT", "", "this is a GLB (binary glTF) file, not a URDF"},
+    // A mesh or a text that is no XML at all: TinyXML said "line 0: Error document empty".
+    {"ascii_stl_given_as_urdf", "solid cube\nfacet normal 0 0 1\n", "URDF_NOT_A_ROBOT", "",
+     "this is an STL mesh (ASCII), not a URDF (an XML <robot> element): a URDF names its meshes in <mesh filename="},
+    {"binary_stl_given_as_urdf", std::string(80, 'x') + std::string("\x01\x00\x00\x00", 4) + std::string(50, '\0'),
+     "URDF_NOT_A_ROBOT", "", "this is a binary STL mesh, not a URDF"},
+    {"not_xml", "\xEF\xBB\xBF\n  robot: r\n", "URDF_NOT_A_ROBOT", "",
+     "this is not XML: it starts with 'robot: r' where a URDF (an XML <robot> element) starts with '<'"},
+    {"not_xml_binary", std::string("\x01\xDD \x00", 4), "URDF_NOT_A_ROBOT", "",
+     "this is not XML: it starts with the bytes 0x01 0xDD 0x20 0x00 where"},
     // One of each where URDF has one: urdfdom reads the first and drops the rest without a word.
     {"two_inertials", link_urdf(inertial("1") + "\n" + inertial("50")), "URDF_INVALID",
      "/robot/link[@name='a']/inertial[2]",
@@ -627,6 +636,27 @@ TEST(UrdfImportErrorsCli, UnreadableFileSaysPermissionDenied) {
   ASSERT_EQ(::waitpid(child, &status, 0), child);
   ASSERT_TRUE(WIFEXITED(status));
   EXPECT_EQ(WEXITSTATUS(status), 0) << "the check as user nobody failed (3: could not become nobody)";
+}
+
+// What a file is instead is told from its first bytes, before it is read whole: a GLB over the size
+// limit is named as a GLB (not FILE_TOO_LARGE after reading it), and 300 MB of a mesh are not read.
+TEST(UrdfImportErrors, AFileThatIsNoUrdfIsToldFromItsFirstBytes) {
+  TempDir dir;
+  testing::write_file(dir / "robot.urdf", std::string("glTF\x02\x00\x00\x00", 8) + std::string(4096, '\0'));
+  UrdfImportOptions options;
+  options.convert.limits.max_file_bytes = 1024;
+  Diagnostics diag;
+  EXPECT_FALSE(import_urdf(dir / "robot.urdf", options, diag));
+  ASSERT_EQ(diag.all().size(), 1u);
+  EXPECT_EQ(diag.all()[0].code, "URDF_NOT_A_ROBOT");
+  EXPECT_EQ(diag.all()[0].message,
+            "this is a GLB (binary glTF) file, not a URDF (an XML <robot> element): rdtf convert reads it");
+  // A URDF over the limit is still refused for its size.
+  testing::write_file(dir / "big.urdf", "<robot name=\"r\">" + std::string(2048, ' ') + "</robot>\n");
+  Diagnostics big;
+  EXPECT_FALSE(import_urdf(dir / "big.urdf", options, big));
+  ASSERT_EQ(big.all().size(), 1u);
+  EXPECT_EQ(big.all()[0].code, "FILE_TOO_LARGE");
 }
 
 // Every bad number is reported, not only the first, each at its own attribute and line.

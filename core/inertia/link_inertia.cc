@@ -628,12 +628,17 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
     }
     for (std::size_t l : no_volume) {
       const Link& link = robot.links[l];
-      if (link.meshes.empty() && (body_has_mass[l] || is_root[l])) continue;
+      const Json& node = document["nodes"][static_cast<std::size_t>(link.node)];
+      // An rdtf_mass there is no mass: it scales the densities of the volume the meshes enclose.
+      const bool mass_given = node.contains("extras") && node["extras"].is_object() &&
+                              node["extras"].contains("rdtf_mass");
+      // A meshless frame on a body with mass is what URDF keeps for a sensor, unless it was given
+      // a mass (a payload's empty typed fixed): that mass would be dropped without a word.
+      if (link.meshes.empty() && (body_has_mass[l] || is_root[l]) && !mass_given) continue;
       // A link without meshes whose node extras give it a density had meshes once: rdtf's output
       // of a part parented to a bone, exported again by Blender 3.4, which writes no children of
       // such an object (in the output a link's meshes are children of its node; docs/blender.md,
       // section 8). A meshless link alone proves nothing (a URDF's frame link, a typed empty).
-      const Json& node = document["nodes"][static_cast<std::size_t>(link.node)];
       const bool lost = node.contains("extras") && node["extras"].is_object() &&
                         node["extras"].contains("rdtf_density");
       const std::string why =
@@ -646,9 +651,6 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
           : link_solids[l].empty() ? "no closed mesh"
                                    : "its closed meshes enclose none: faces doubled back to back, or shells wound "
                                      "inward that cancel the others";
-      // An rdtf_mass there is no mass: it scales the densities of the volume the meshes enclose.
-      const bool mass_given = node.contains("extras") && node["extras"].is_object() &&
-                              node["extras"].contains("rdtf_mass");
       diag.warning(codes::LINK_NO_VOLUME, json_pointer("/nodes", link.node),
                    "link '" + link.name + "' has no volume (" + why + "): its mass is zero" +
                        (mass_given ? ", and its rdtf_mass " + value_text(node["extras"]["rdtf_mass"]) +

@@ -752,6 +752,31 @@ Robot build_robot(const Json& document, const std::vector<NodeType>& types, std:
                        (below.empty() ? std::string(" (its mesh node, or its link)") : " '" + below + "' (the link below it)"));
     }
   }
+  // Nor on a node without a mesh that is no link (an empty standing for a payload, a battery): it
+  // has no shape to give the mass a volume and an inertia, and the mass was dropped without a word.
+  for (std::size_t node = 0; node < types.size(); ++node) {
+    if ((types[node] != NodeType::kVisual && types[node] != NodeType::kNone) || !seen[node] ||
+        document["nodes"][node].contains("mesh")) {
+      continue;
+    }
+    const Json* extras = node_extras(document, node);
+    if (extras == nullptr) continue;
+    std::string rides_on;
+    for (int up = parents[node]; up >= 0 && rides_on.empty(); up = parents[up]) {
+      for (const Link& link : robot.links) {
+        if (link.node == up) rides_on = link.name;
+      }
+    }
+    for (const char* key : {"rdtf_density", "rdtf_mass"}) {
+      if (!extras->contains(key)) continue;
+      diag.warning(codes::RDTF_NODE_EXTRAS_IGNORED, json_pointer("/nodes", node) + "/extras/" + key,
+                   node_label(document, node) + ": " + key + " " + value_text((*extras)[key]) +
+                       " is not read on a node without a mesh (it has no shape to give the mass a volume and an "
+                       "inertia): count it in the rdtf_mass of the part it rides on" +
+                       (rides_on.empty() ? std::string() : " ('" + rides_on + "')") +
+                       ", or give the node a mesh of the payload's shape");
+    }
+  }
   if (robot.links.empty()) {
     diag.warning(codes::NO_LINKS, json_pointer("/scenes", scene),
                  "the scene has no link: nothing in it carries a mesh or children");

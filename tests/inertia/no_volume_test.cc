@@ -347,5 +347,27 @@ TEST(NoVolume, AJointEmptyThatMovesNothingIsNamed) {
                        "Ctrl+P > Object)"});
 }
 
+// An empty standing for a payload, given a mass: it has no shape to give the mass a volume and an
+// inertia. The mass was dropped without a word, whether the empty was a plain node (typed visual)
+// or a frame fixed where it sits.
+TEST(NoVolume, AMassOnAnEmptyIsNamed) {
+  std::vector<std::string> ignored;
+  const auto plain = convert_cube_with({{{"name", "payload"}, {"translation", {0.5, 1, 0.5}}, {"extras", {{"rdtf_mass", 2.0}}}}});
+  for (const Diagnostic& d : plain) {
+    if (d.code == codes::RDTF_NODE_EXTRAS_IGNORED) ignored.push_back(d.pointer + ": " + d.message);
+  }
+  EXPECT_EQ(ignored, std::vector<std::string>{
+                         "/nodes/1/extras/rdtf_mass: node 1 'payload': rdtf_mass 2.0 is not read on a node without a "
+                         "mesh (it has no shape to give the mass a volume and an inertia): count it in the rdtf_mass of "
+                         "the part it rides on ('shell'), or give the node a mesh of the payload's shape"});
+  EXPECT_EQ(no_volume_messages(convert_cube_with({{{"name", "payload"},
+                                                   {"translation", {0.5, 1, 0.5}},
+                                                   {"extras", {{"rdtf_joint", "fixed"}, {"rdtf_mass", 2.0}}}}})),
+            std::vector<std::string>{
+                "/nodes/1: link 'payload' has no volume (no mesh): its mass is zero, and its rdtf_mass 2.0 is not "
+                "applied: a mass fills the volume its meshes enclose, and there is none (give the link a closed mesh, "
+                "or give the link an inertial in extras.RDTF)"});
+}
+
 }  // namespace
 }  // namespace rdtf

@@ -137,9 +137,9 @@ double polar_lower_bound(const Link& link) {
 }
 
 // Symmetry, positive definiteness and the triangle inequality of I; each failure goes to
-// `report(code, message, breaks_triangle)`, the last true when the principal moments break
-// A + B >= C (a negative moment beyond rounding does too), as MuJoCo judges every link. False
-// when the moments could not be judged further.
+// `report(code, message, triangle_breach)`, the last C - (A + B) when the principal moments break
+// A + B >= C beyond triangle_tolerance (a negative moment does too), as MuJoCo judges every link,
+// else 0. False when the moments could not be judged further.
 template <typename Report>
 bool principal_moments_check(const Eigen::Matrix3d& I, const std::string& name, const PhysicalCheckOptions& options,
                              const Report& report) {
@@ -149,7 +149,7 @@ bool principal_moments_check(const Eigen::Matrix3d& I, const std::string& name, 
     report(codes::LINK_INERTIA_NOT_SYMMETRIC,
            name + "inertia is not symmetric: |I - I^T| reaches " + number(asymmetry) + " kg m^2 (largest entry " +
                number(largest) + ")",
-           false);
+           0.0);
     return false;
   }
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(0.5 * (I + I.transpose()), Eigen::EigenvaluesOnly);
@@ -157,11 +157,12 @@ bool principal_moments_check(const Eigen::Matrix3d& I, const std::string& name, 
   const double a = moments[0], b = moments[1], c = moments[2];
   const std::string principal = "principal moments " + vector_text(moments) + " kg m^2";
   const bool breaks_triangle = a + b < c - options.triangle_tolerance * (std::abs(a) + b + c);
+  const double breach = breaks_triangle ? c - (a + b) : 0.0;
   if (!(a > 0)) {
     report(codes::LINK_INERTIA_NOT_POSITIVE_DEFINITE,
            name + "inertia is not positive definite: " + principal +
                (breaks_triangle ? ", A + B = " + number(a + b) + " < C = " + number(c) : std::string()),
-           breaks_triangle);
+           breach);
     return false;
   }
   if (!(a > options.positive_definite_tolerance * c)) {
@@ -169,14 +170,14 @@ bool principal_moments_check(const Eigen::Matrix3d& I, const std::string& name, 
            name + "inertia is singular to within rounding: " + principal + ", the smallest " + number(a / c) +
                " of the largest, at most positive_definite_tolerance " + number(options.positive_definite_tolerance) +
                " (an ideal rod's; no real part is that thin)",
-           false);
+           0.0);
     return false;
   }
   if (breaks_triangle) {
     report(codes::LINK_INERTIA_TRIANGLE_INEQUALITY,
            name + "inertia breaks the triangle inequality A + B >= C of a real body: " + principal +
                ", A + B = " + number(a + b) + " < C = " + number(c),
-           true);
+           breach);
   }
   return true;
 }
@@ -192,7 +193,7 @@ void check_combined_inertia(const Robot& robot, const WeldGroup& group, const Ph
   if (dynamics_internal::adding_links(robot, group) < 2) return;
   const Link& top = robot.links[group.top];
   principal_moments_check(group.merged.inertia, body_text(robot, group) + " (welded by fixed joints): combined ",
-                          options, [&](const char* code, const std::string& message, bool) {
+                          options, [&](const char* code, const std::string& message, double) {
                             diag.error(code, where(top), message);
                           });
 }
@@ -237,29 +238,42 @@ void check_inertia(const Robot& robot, const Link& link, const WeldGroup& group,
                    "inertia; give it the inertia of its part");
     return;
   }
-  // But a broken triangle inequality of positive moments in a body that moves is an error, on the
-  // link a joint moves and on a link welded to it alike: MuJoCo checks every link's authored
-  // tensor for it before fusing welded links in (it refuses allegro_right_hand's fingers, whose
-  // tips are welded on, and a tool welded to a sound arm), though it accepts a singular one it then
-  // fuses (finger_edu). A tensor with a negative moment breaks it too, and MuJoCo refuses it
-  // beyond a threshold of its own (a product of inertia of 1e-9 kg m^2 alone, not 4.8e-15): it
-  // stays a warning, as rounding noise in a zero tensor is no error, saying that MuJoCo may refuse
-  // it. Welded to the world, the part never moves: a warning (TIAGo's antenna).
-  const auto report = [&](const char* code, const std::string& message, bool breaks_triangle) {
-    if (!in_body || (!group.welded_to_world && std::string_view(code) == codes::LINK_INERTIA_TRIANGLE_INEQUALITY)) {
+  // But a broken triangle inequality in a body that moves is an error, on the link a joint moves
+  // and on a link welded to it alike, whether or not a moment is also negative: MuJoCo checks every
+  // link's authored tensor for it before fusing welded links in (it refuses allegro_right_hand's
+  // fingers, whose tips are welded on, a tool welded to a sound arm, and ur5_robotiq_85's 1 kg
+  // finger pads of six entries 1e-10, moments 0, 0, 3e-10), though it accepts a singular one it
+  // then fuses (finger_edu). Unless the breach is below the triangle tolerance of the body it
+  // joins (triangle_tolerance x the trace of the body's combined tensor): then it cannot show in
+  // what moves, as rounding noise in a zero tensor cannot (MuJoCo loads a lone product of inertia
+  // of 8e-13 kg m^2, refuses 1e-12). Welded to the world, the part never moves: a warning (TIAGo's
+  // antenna).
+  const double body_tolerance = options.triangle_tolerance * std::abs(group.merged.inertia.trace());
+  const auto report = [&](const char* code, const std::string& message, double triangle_breach) {
+    if (!in_body) {
       diag.error(code, where(link), message);
       return;
     }
+    const std::string welded =
+        "; it is welded (fixed joints) into " +
+        (group.welded_to_world ? std::string("the world, and never moves")
+                               : "the body of " + body_text(robot, group) + ", whose combined inertia is what moves");
+    if (!group.welded_to_world && triangle_breach > body_tolerance) {
+      diag.error(code, where(link),
+                 message + welded + ", but its breach of A + B >= C, " + number(triangle_breach) +
+                     " kg m^2, is beyond the body's triangle tolerance (" + number(body_tolerance) +
+                     "), and MuJoCo refuses such a link before it fuses it; give the part its real inertia");
+      return;
+    }
     diag.warning(code, where(link),
-                 message + "; it is welded (fixed joints) into " +
-                     (group.welded_to_world ? std::string("the world, and never moves")
-                                            : "the body of " + body_text(robot, group) +
-                                                  ", whose combined inertia is what moves") +
-                     (std::string_view(code) == codes::LINK_INERTIA_TRIANGLE_INEQUALITY
-                          ? " (MuJoCo refuses it: it checks every link before it fuses welded ones)"
-                      : breaks_triangle ? " (its moments break A + B >= C: MuJoCo, which checks every link before it "
-                                          "fuses welded ones, refuses that beyond rounding)"
-                                        : " (a simulator that keeps each link a body refuses it)"));
+                 message + welded +
+                     (triangle_breach > 0 && group.welded_to_world
+                          ? " (its moments break A + B >= C, and MuJoCo refuses it: it checks every link before it "
+                            "fuses welded ones)"
+                      : triangle_breach > 0 ? " (its breach of A + B >= C, " + number(triangle_breach) +
+                                                  " kg m^2, is below the body's triangle tolerance, " +
+                                                  number(body_tolerance) + ")"
+                                            : " (a simulator that keeps each link a body refuses it)"));
   };
   if (!principal_moments_check(I, name, options, report)) return;
   if (link.inertial_source == InertialSource::kComputed) {

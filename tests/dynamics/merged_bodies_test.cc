@@ -144,17 +144,30 @@ TEST(MergedBodies, PerLinkChecksSeeEveryWeldedLink) {
   dynamics_test::expect_one_error(triangle, "LINK_INERTIA_TRIANGLE_INEQUALITY", robot.links[2].node, "sensor");
   EXPECT_FALSE(validate_dynamics(robot, ValidationOptions{}).passed);
 
-  // A negative moment breaks it too (moments -1e-6, 4e-6, 5e-6): a warning like the rod's (rounding
-  // noise in a zero tensor is no error), saying that MuJoCo refuses such a tensor.
+  // A negative moment breaks it too (moments -1e-6, 4e-6, 5e-6): an error as well, as MuJoCo
+  // refuses it (ur5_robotiq_85's 1 kg finger pads of six entries 1e-10 passed with a warning).
   robot.links[2].inertial.inertia << 2e-6, 3e-6, 0, 3e-6, 2e-6, 0, 0, 0, 4e-6;
   Diagnostics indefinite;
   check_physics(robot, {}, nullptr, indefinite);
-  EXPECT_FALSE(indefinite.has_errors()) << dynamics_test::all_text(indefinite);
+  dynamics_test::expect_one_error(indefinite, "LINK_INERTIA_NOT_POSITIVE_DEFINITE", robot.links[2].node, "sensor");
   const std::vector<Diagnostic> negative = dynamics_test::with_code(indefinite, "LINK_INERTIA_NOT_POSITIVE_DEFINITE");
-  ASSERT_EQ(negative.size(), 1u) << dynamics_test::all_text(indefinite);
-  EXPECT_EQ(negative[0].severity, Severity::kWarning);
   EXPECT_NE(negative[0].message.find("A + B = 3e-06 < C = 5e-06"), std::string::npos) << negative[0].message;
-  EXPECT_NE(negative[0].message.find("MuJoCo"), std::string::npos) << negative[0].message;
+  EXPECT_NE(negative[0].message.find("beyond the body's triangle tolerance"), std::string::npos) << negative[0].message;
+  EXPECT_NE(negative[0].message.find("MuJoCo refuses"), std::string::npos) << negative[0].message;
+  EXPECT_FALSE(validate_dynamics(robot, ValidationOptions{}).passed);
+
+  // Noise in a zero tensor (a lone product of inertia of 1e-10 kg m^2, moments -1e-10, 0, 1e-10)
+  // breaks it by 2e-10, below the triangle tolerance of the body it joins (1e-6 of its trace, about
+  // 3e-8): it cannot show in what moves, and stays a warning.
+  robot.links[2].inertial.inertia.setZero();
+  robot.links[2].inertial.inertia(0, 2) = robot.links[2].inertial.inertia(2, 0) = 1e-10;
+  Diagnostics noise;
+  check_physics(robot, {}, nullptr, noise);
+  EXPECT_FALSE(noise.has_errors()) << dynamics_test::all_text(noise);
+  const std::vector<Diagnostic> quiet = dynamics_test::with_code(noise, "LINK_INERTIA_NOT_POSITIVE_DEFINITE");
+  ASSERT_EQ(quiet.size(), 1u) << dynamics_test::all_text(noise);
+  EXPECT_EQ(quiet[0].severity, Severity::kWarning);
+  EXPECT_NE(quiet[0].message.find("is below the body's triangle tolerance"), std::string::npos) << quiet[0].message;
 }
 
 // A published antenna of 1 mg whose tensor no body has, welded to a root the world holds: it
@@ -199,8 +212,9 @@ TEST(MergedBodies, AWeldedPartThatBreaksTheCombinedBodyIsAnError) {
   check_physics(robot, {}, nullptr, diag);
   const std::vector<Diagnostic> found = dynamics_test::with_code(diag, "LINK_INERTIA_NOT_POSITIVE_DEFINITE");
   ASSERT_EQ(found.size(), 2u) << dynamics_test::all_text(diag);
-  // The part's own, a warning at the sensor; the combined body's, an error at the arm.
-  EXPECT_EQ(found[0].severity, Severity::kWarning);
+  // The part's own at the sensor (its moments -1, 1, 1 break A + B >= C: MuJoCo refuses it); the
+  // combined body's at the arm.
+  EXPECT_EQ(found[0].severity, Severity::kError);
   EXPECT_EQ(found[0].pointer, "/nodes/" + std::to_string(robot.links[2].node));
   EXPECT_EQ(found[1].severity, Severity::kError);
   EXPECT_EQ(found[1].pointer, "/nodes/" + std::to_string(robot.links[1].node));

@@ -5,6 +5,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "json_bytes.h"
 #include "rdtf/diagnostics_json.h"
 #include "result_cache.h"
 #include "revision_store.h"
@@ -38,6 +39,12 @@ int integer(const Json& value) {
 std::string text(const Json& value) {
   if (!value.is_string()) throw Refused{"a text is not a string"};
   return value.get<std::string>();
+}
+
+std::string file_name(const Json& value) {
+  auto bytes = bytes_from_json(value);
+  if (!bytes) throw Refused{"a file name is neither text nor {\"hex\": ...}"};
+  return std::move(*bytes);
 }
 
 bool flag(const Json& value) {
@@ -253,15 +260,16 @@ ValidationSummary validation_from(const Json& j) {
 
 std::string cache_entry_text(const CachedResult& r) {
   Json files = Json::array();
-  for (const OutputFile& f : r.files) files.push_back({f.path, f.sha256, f.size, f.role});
-  const Json body = {{"key", r.key}, {"source", r.source}, {"content_hash", r.content_hash},
-                     {"written", r.written}, {"output_name", r.output_name}, {"rdtf_sha256", r.rdtf_sha256},
+  for (const OutputFile& f : r.files) files.push_back({bytes_to_json(f.path), f.sha256, f.size, f.role});
+  // The names of files byte for byte (json_bytes.h): a model named in bytes that are not UTF-8
+  // finds its entry again after a restart.
+  const Json body = {{"key", r.key}, {"source", bytes_to_json(r.source)}, {"content_hash", r.content_hash},
+                     {"written", r.written}, {"output_name", bytes_to_json(r.output_name)}, {"rdtf_sha256", r.rdtf_sha256},
                      {"has_urdf", r.has_urdf}, {"urdf_sha256", r.urdf_sha256}, {"files", files},
                      {"validation", r.validation ? validation_json(*r.validation) : Json(nullptr)},
                      {"diagnostics", diagnostics_json(r.diagnostics)}, {"robot", robot_json(r.robot)},
                      {"facts", facts_to_json(r.facts)}};
-  // Text that is not UTF-8 (a path) is replaced: the entry's source then differs from the model's,
-  // and the entry is simply never used.
+  // Other text that is not UTF-8 is replaced.
   const std::string text = body.dump(-1, ' ', false, Json::error_handler_t::replace);
   return std::string(kFormat) + " " + sha256_hex(text) + "\n" + text;
 }
@@ -283,16 +291,16 @@ std::optional<CachedResult> cache_entry_from_text(std::string_view all, std::str
     const Json j = Json::parse(body.begin(), body.end());
     CachedResult r;
     r.key = text(at(j, "key"));
-    r.source = text(at(j, "source"));
+    r.source = file_name(at(j, "source"));
     r.content_hash = text(at(j, "content_hash"));
     r.written = flag(at(j, "written"));
-    r.output_name = text(at(j, "output_name"));
+    r.output_name = file_name(at(j, "output_name"));
     r.rdtf_sha256 = text(at(j, "rdtf_sha256"));
     r.has_urdf = flag(at(j, "has_urdf"));
     r.urdf_sha256 = text(at(j, "urdf_sha256"));
     for (const Json& f : at(j, "files")) {
       if (!f.is_array() || f.size() != 4 || !f[2].is_number_integer()) throw Refused{"a file needs 4 values"};
-      r.files.push_back({text(f[0]), text(f[1]), f[2].get<std::int64_t>(), text(f[3])});
+      r.files.push_back({file_name(f[0]), text(f[1]), f[2].get<std::int64_t>(), text(f[3])});
     }
     if (!at(j, "validation").is_null()) r.validation = validation_from(j["validation"]);
     r.diagnostics = diagnostics_from(at(j, "diagnostics"), r.source);

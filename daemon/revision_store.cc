@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "../core/gltf/confined_files.h"
+#include "json_bytes.h"
 #include "rdtf/atomic_file.h"
 #include "rdtf/shortage.h"
 
@@ -158,7 +159,7 @@ std::string result_digest(const ConvertedModel& m) {
 std::string state_to_json(const ModelState& state) {
   Json j = {{"format", kFormat},
             {"model_id", state.model_id},
-            {"source", state.source},
+            {"source", bytes_to_json(state.source)},
             {"numbered", state.numbered},
             {"reserved", std::max(state.reserved, state.numbered)}};
   if (state.live) {
@@ -171,8 +172,9 @@ std::string state_to_json(const ModelState& state) {
   } else {
     j["live"] = nullptr;
   }
-  // Text with invalid UTF-8 (a glTF name is checked, a path need not be) is written replaced, not
-  // refused: the state is ours to read back, and a replaced name only makes a delta say more.
+  // The source path is written byte for byte (json_bytes.h). Other text with invalid UTF-8 (a
+  // glTF name is checked) is written replaced, not refused: a replaced name only makes a delta say
+  // more.
   return j.dump(1, ' ', false, Json::error_handler_t::replace) + "\n";
 }
 
@@ -183,7 +185,10 @@ std::optional<ModelState> state_from_json(std::string_view text_in, std::string&
     if (text(j, "format", "/") != kFormat) throw Refused{"/format is not '" + std::string(kFormat) + "'"};
     ModelState state;
     state.model_id = text(j, "model_id", "/");
-    state.source = text(j, "source", "/");
+    if (!j.contains("source")) throw Refused{"/: no 'source'"};
+    const auto source = bytes_from_json(j["source"]);
+    if (!source) throw Refused{"/: 'source' is neither text nor {\"hex\": ...}"};
+    state.source = *source;
     state.numbered = revision_number(j, "numbered", 0, "/");
     state.reserved = j.contains("reserved") ? revision_number(j, "reserved", 0, "/") : state.numbered;
     if (state.reserved < state.numbered) {

@@ -22,15 +22,15 @@ struct Converted {
 };
 
 // arm3 through the whole pipeline (the gate, the URDF) with a cache in the temporary folder.
-std::unique_ptr<Converted> convert_arm3() {
+std::unique_ptr<Converted> convert_arm3(const std::string& name = "arm3.glb") {
   auto c = std::make_unique<Converted>();
   fs::create_directories(c->tmp / "watch");
   const fs::path root = fs::canonical(c->tmp / "watch");
-  rdtf::testing::write_file(root / "arm3.glb",
+  rdtf::testing::write_file(root / name,
                             rdtf::testing::read_file(rdtf::testing::data_dir() / "blender" / "arm3.glb"));
   c->job.model_id = "arm3.glb";
   c->job.root = root;
-  c->job.source = root / "arm3.glb";
+  c->job.source = root / name;
   c->job.output_dir = c->tmp / "out" / "arm3.glb";
   c->job.validation = ValidationOptions{};
   c->job.urdf = UrdfOptions{};
@@ -137,6 +137,20 @@ TEST(ResultCache, AConversionIsStoredAndTheNextOneIsTheCachedResultBitForBit) {
   EXPECT_EQ(formatted(cached.validation->diagnostics), formatted(first.validation->diagnostics));
   EXPECT_EQ(cached.validation->live_stepper, first.validation->live_stepper);
   EXPECT_EQ(formatted(again.diagnostics), formatted(c->outcome.diagnostics));
+}
+
+// A model whose file name is not UTF-8 (Linux allows any bytes) finds its entry again: its name
+// was written with U+FFFD in place of the byte, and every restart checked the model anew.
+TEST(ResultCache, AFileNameThatIsNotUtf8FindsItsEntry) {
+  auto c = convert_arm3("arm\xff.glb");
+  ASSERT_EQ(c->outcome.kind, ConversionOutcome::Kind::kConverted) << ::testing::PrintToString(formatted(c->outcome.diagnostics));
+  ASSERT_FALSE(c->outcome.from_cache);
+  EXPECT_EQ(c->job.cache->entries(), 1u);
+  const ConversionOutcome again = run_conversion(c->job);
+  ASSERT_EQ(again.kind, ConversionOutcome::Kind::kConverted);
+  EXPECT_TRUE(again.from_cache) << again.cache_note;
+  EXPECT_EQ(again.converted->output_path, c->outcome.converted->output_path);
+  EXPECT_EQ(again.converted->files, c->outcome.converted->files);
 }
 
 // The stepper of the run that is the verdict (dWorldStep where QuickStep failed the model) comes

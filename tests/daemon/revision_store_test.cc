@@ -67,6 +67,27 @@ TEST(RevisionStore, StateComesBackExactly) {
   EXPECT_TRUE(back->live->facts.joints[0].has_range);
 }
 
+// A source path that is not UTF-8 comes back byte for byte (it came back with U+FFFD, never matched
+// the file again, and every restart numbered the model anew with a DELTA of everything "added");
+// the file stays valid JSON, a UTF-8 path stays readable text.
+TEST(RevisionStore, ASourceThatIsNotUtf8ComesBackByteForByte) {
+  ModelState state = sample();
+  state.source = "/models/a\xff\xfe.gltf";
+  const std::string text = state_to_json(state);
+  const nlohmann::json j = nlohmann::json::parse(text);
+  EXPECT_EQ(j["source"], nlohmann::json({{"hex", "2f6d6f64656c732f61fffe2e676c7466"}}));
+  std::string why;
+  const auto back = state_from_json(text, why);
+  ASSERT_TRUE(back) << why;
+  EXPECT_EQ(back->source, state.source);
+  EXPECT_EQ(nlohmann::json::parse(state_to_json(sample()))["source"], "/models/sub/arm.gltf");
+  // A hex that is not whole bytes is refused with its reason.
+  std::string bad = text;
+  bad.replace(bad.find("fffe"), 4, "fff");
+  EXPECT_FALSE(state_from_json(bad, why));
+  EXPECT_NE(why.find("'source'"), std::string::npos) << why;
+}
+
 // Whether a joint's limits have a range is kept (it was lost, and after a restart every DELTA
 // then said the limits of every joint with a range had changed); a file written before the flag
 // existed reads as "a range wherever there were limits", which was true then.

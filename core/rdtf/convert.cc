@@ -95,6 +95,7 @@ std::optional<Conversion> convert(GltfAsset asset, const ConvertOptions& options
   if (diag.has_errors()) return std::nullopt;
   check_missing_properties(asset.document, types, diag);
   check_extras_keys(asset.document, diag);
+  check_quantized_joint_origins(asset.document, types, diag);
   add_missing_strides(asset.document, diag);
   std::vector<int> carried_by;
   complete_nodes(asset.document, types, diag, &carried_by);

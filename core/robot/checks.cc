@@ -79,13 +79,19 @@ std::string packer_advice(const std::string& packer) {
   if (packer.rfind("glTF-Transform", 0) == 0) {
     return "keeps node extras (custom properties: joints, masses, densities), but whose flatten, join and instance "
            "steps (which optimize runs by default) move parts to the scene's root, merge them or drop their "
-           "empties: run gltf-transform optimize --flatten false --join false --instance false, or pack rdtf's own "
-           "output (rdtf convert first)";
+           "empties, and whose quantize (run by meshopt and by optimize's default compression) moves a leaf part's "
+           "origin: run gltf-transform optimize --flatten false --join false --instance false --compress false, or "
+           "pack rdtf's own output (rdtf convert first)";
   }
   if (packer.rfind("gltfpack", 0) == 0) {
     return "drops node extras (custom properties: joints, masses, densities) unless -ke, and merges or renames nodes "
            "(parts, joint empties) unless -kn: pack with gltfpack -kn -ke, or pack rdtf's own output (rdtf convert "
            "first)";
+  }
+  if (packer.rfind("Open Asset Import Library", 0) == 0) {
+    return "drops every node extra (custom properties: joints, masses, densities; measured with assimp 5.2): "
+           "export the glTF from the tool that made the model, with its custom properties, and give it to rdtf as "
+           "it is";
   }
   return "may have dropped node extras (custom properties: joints, masses, densities) or merged nodes: pack rdtf's "
          "own output instead (rdtf convert first)";
@@ -495,6 +501,80 @@ void check_missing_properties(const Json& document, const std::vector<NodeType>&
                                          "(export_extras=True): it is off by default; on an armature set the "
                                          "properties on the Bone (Bone tab, edit or object mode), not on the pose "
                                          "bone, whose properties are never exported")));
+}
+
+namespace {
+
+// Whether every primitive of `mesh` has positions quantized as glTF-Transform's quantize leaves a
+// leaf node's (KHR_mesh_quantization): normalized signed integers whose box is centred on the
+// node's origin and spans the whole range on its longest axis (the node's translation and scale
+// hold the dequantization).
+bool positions_centred_by_a_quantizer(const Json& document, const Json& mesh_index) {
+  if (!mesh_index.is_number_unsigned() || !document.contains("meshes") ||
+      mesh_index.get<std::size_t>() >= document["meshes"].size()) {
+    return false;
+  }
+  const Json& primitives = document["meshes"][mesh_index.get<std::size_t>()].value("primitives", Json::array());
+  if (!primitives.is_array() || primitives.empty()) return false;
+  for (const Json& primitive : primitives) {
+    const Json* attributes = primitive.contains("attributes") ? &primitive["attributes"] : nullptr;
+    if (attributes == nullptr || !attributes->contains("POSITION") || !(*attributes)["POSITION"].is_number_unsigned()) {
+      return false;
+    }
+    const std::size_t index = (*attributes)["POSITION"].get<std::size_t>();
+    if (!document.contains("accessors") || index >= document["accessors"].size()) return false;
+    const Json& accessor = document["accessors"][index];
+    const int type = accessor.value("componentType", 0);
+    const double full = type == 5120 ? 127.0 : type == 5122 ? 32767.0 : 0.0;  // BYTE, SHORT
+    if (full == 0 || !accessor.value("normalized", false) || !accessor.contains("min") || !accessor.contains("max") ||
+        !accessor["min"].is_array() || !accessor["max"].is_array() || accessor["min"].size() != 3 ||
+        accessor["max"].size() != 3) {
+      return false;
+    }
+    double reach = 0;
+    for (std::size_t k = 0; k < 3; ++k) {
+      if (!accessor["min"][k].is_number() || !accessor["max"][k].is_number()) return false;
+      const double lo = accessor["min"][k].get<double>(), hi = accessor["max"][k].get<double>();
+      if (lo != -hi) return false;
+      reach = std::max(reach, hi);
+    }
+    if (reach != full) return false;
+  }
+  return true;
+}
+
+
+}  // namespace
+
+// glTF-Transform's quantize (run by its meshopt and by optimize's default compression) folds a
+// leaf mesh node's dequantization into that node's translation and scale: the node's origin moves
+// to its mesh's centre. Where that node's own frame is a joint's (the part carries its joint
+// keys, or is a fixed frame), the joint moves with it, and nothing in the file says where it was
+// (a forearm's elbow moved 0.2 m, without a word, in a sweep of packers).
+void check_quantized_joint_origins(const Json& document, const std::vector<NodeType>& types, Diagnostics& diag) {
+  if (!document.contains("nodes") || !document["nodes"].is_array()) return;
+  const std::vector<int> parents = node_parents(document);
+  for (std::size_t n = 0; n < document["nodes"].size() && n < types.size(); ++n) {
+    const Json& node = document["nodes"][n];
+    if (types[n] != NodeType::kLink || parents[n] < 0 || !node.is_object() || !node.contains("mesh") ||
+        !node.contains("scale") || (node.contains("children") && !node["children"].empty())) {
+      continue;
+    }
+    if (!positions_centred_by_a_quantizer(document, node["mesh"])) continue;
+    const Json* extras = node.contains("extras") && node["extras"].is_object() ? &node["extras"] : nullptr;
+    const std::string joint = extras != nullptr && extras->contains("rdtf_joint")
+                                  ? "carries its own joint (rdtf_joint " + value_text((*extras)["rdtf_joint"]) +
+                                        "), which turns about the node's origin"
+                                  : std::string("is a link whose frame, and the origin of its joint, is the node's origin");
+    diag.warning(codes::JOINT_ORIGIN_QUANTIZED, json_pointer("/nodes", n),
+                 node_label(document, n) + " " + joint +
+                     ", but its mesh is quantized (KHR_mesh_quantization) and centred on that origin, with the "
+                     "dequantization in the node's translation and scale: what glTF-Transform's quantize (also run "
+                     "by its meshopt and optimize) does to a leaf part, moving its origin to its mesh's centre, and "
+                     "the joint with it. If the joint was elsewhere when modelled, quantize rdtf's output instead "
+                     "(rdtf convert first: its parts' meshes hang from their link nodes), or set the joint on an "
+                     "empty above the part");
+  }
 }
 
 void check_units(const Json& document, const Robot& robot, Diagnostics& diag) {

@@ -420,7 +420,10 @@ std::optional<std::string> resaved_by(const Json& document) {
 
 std::optional<std::string> repacked_by(const Json& document) {
   const std::string generator = generator_of(document);
-  for (const char* packer : {"gltfpack", "glTF-Transform", "draco_transcoder"}) {
+  // Tools that rewrite a model (Draco's transcoder and decoder, Assimp's converter), not modellers:
+  // what they drop is theirs to keep, not a Blender export setting.
+  for (const char* packer : {"gltfpack", "glTF-Transform", "draco_transcoder", "draco_decoder",
+                             "Open Asset Import Library"}) {
     if (generator.rfind(packer, 0) == 0) return generator.substr(0, 80);
   }
   return std::nullopt;

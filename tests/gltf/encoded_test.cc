@@ -239,6 +239,42 @@ TEST(EncodedFallback, DracoFallbackOverASharedAccessorIsRefusedSayingWhy) {
   }
 }
 
+// glTF-Transform's quantize folds a leaf part's dequantization into the part's own node: the
+// forearm, which carries its joint itself (rdtf_joint on its mesh node), came back with its elbow
+// 0.2 m up, at its mesh's centre, without a word. The file cannot say where the elbow was: it is
+// named. rdtf's output, whose meshes hang from their link nodes, keeps the elbow through the same
+// quantize, and the source is silent.
+TEST(EncodedQuantized, ALeafPartsJointMovedByAQuantizerIsNamed) {
+  const auto quantized_origin_warnings = [](const std::string& file, Eigen::Vector3d* elbow) {
+    Diagnostics diag;
+    const auto conversion = convert_file(encoded(file), ConvertOptions{}, diag);
+    EXPECT_TRUE(conversion.has_value()) << file;
+    std::vector<std::string> found;
+    for (const Diagnostic& d : diag.all()) {
+      if (d.code == "JOINT_ORIGIN_QUANTIZED") found.push_back(d.pointer + ": " + d.message);
+    }
+    if (conversion) {
+      for (const Joint& joint : conversion->robot.joints) {
+        if (joint.name == "upper_forearm_joint") *elbow = joint.X_PJ.translation();
+      }
+    }
+    return found;
+  };
+  Eigen::Vector3d source_elbow = Eigen::Vector3d::Zero(), moved = source_elbow, kept = source_elbow;
+  EXPECT_EQ(quantized_origin_warnings("leaf_joint_source.gltf", &source_elbow), std::vector<std::string>{});
+  EXPECT_EQ(source_elbow, Eigen::Vector3d(0.15, 0.5, 0));
+  const auto warnings = quantized_origin_warnings("leaf_joint_gltf_transform_quantize.glb", &moved);
+  ASSERT_EQ(warnings.size(), 1u);
+  EXPECT_EQ(warnings[0].rfind("/nodes/2: node 2 'forearm' carries its own joint (rdtf_joint 'revolute'), which turns "
+                              "about the node's origin, but its mesh is quantized (KHR_mesh_quantization)",
+                              0),
+            0u)
+      << warnings[0];
+  EXPECT_NEAR(moved.y(), 0.7, 1e-6);  // What the file says: the mesh's centre.
+  EXPECT_EQ(quantized_origin_warnings("leaf_joint_rdtf_gltf_transform_quantize.glb", &kept), std::vector<std::string>{});
+  EXPECT_EQ(kept, source_elbow);
+}
+
 // gltfpack moves a skinned mesh with its skin into an unnamed carrier under the named node, as it
 // does plain meshes: the named node stays the mesh node of the bones' links. (It became a massless
 // link on a fixed joint of its own, and NO_RDTF_PROPERTIES took it for a joint empty.) Each bone's

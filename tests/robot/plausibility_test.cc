@@ -231,6 +231,13 @@ TEST(Plausibility, AxesBehindAPackersGeneratorAreNamedAsAssumed) {
   const auto transformed = convert_and_find(doc, codes::NO_RDTF_PROPERTIES);
   expect_one(transformed, "/nodes", {"keeps node extras", "--flatten false --join false"});
   EXPECT_EQ(transformed[0].message.find("gltfpack"), std::string::npos) << transformed[0].message;
+  // Nor is it Blender's export setting when Assimp or Draco's decoder wrote the file: they dropped
+  // the extras themselves (the advice was "In Blender, tick Include > Custom Properties").
+  doc["asset"]["generator"] = "Open Asset Import Library (assimp v5.2.0)";
+  expect_one(convert_and_find(doc, codes::NO_RDTF_PROPERTIES), "/nodes",
+             {"'Open Asset Import Library (assimp v5.2.0)', which drops every node extra"});
+  doc["asset"]["generator"] = "draco_decoder";
+  expect_one(convert_and_find(doc, codes::NO_RDTF_PROPERTIES), "/nodes", {"'draco_decoder', which may have dropped"});
 }
 
 // The arm with its elbow as a joint empty, as Blender models it: base > elbow (empty) > arm.

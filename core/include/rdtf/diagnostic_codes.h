@@ -151,6 +151,7 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(JOINT_LIMITS_IMPLAUSIBLE, kSeverityWarning, "model") \
   X(JOINT_LIMITS_INVERTED, kSeverityError, "model") \
   X(JOINT_MOVES_NOTHING, kSeverityWarning, "model") \
+  X(JOINT_ORIGIN_QUANTIZED, kSeverityWarning, "model") \
   X(JOINT_MOVES_SEVERAL_LINKS, kSeverityInfo, "model") \
   X(JOINT_TYPE_MISSING, kSeverityWarning, "model") \
   X(KHR_JOINT_FRAMES_DISAGREE, kSeverityError, "model") \

@@ -153,6 +153,10 @@ void check_missing_properties(const Json& document, const std::vector<NodeType>&
 // Custom properties that look like rdtf's but are not ("rdft_axis", "rdtf_axes_", "Rdtf_mass"): a
 // typo leaves a property out without a word otherwise.
 void check_extras_keys(const Json& document, Diagnostics& diag);
+// A leaf part typed a link (its node's origin is its joint's) whose mesh a quantizer centred on
+// that origin (glTF-Transform's quantize moves a leaf's origin to its mesh's centre):
+// JOINT_ORIGIN_QUANTIZED. On the typed document as read, before completion moves meshes.
+void check_quantized_joint_origins(const Json& document, const std::vector<NodeType>& types, Diagnostics& diag);
 // Extent or masses implausible for metres (a model drawn in millimetres); a link's density beyond
 // any solid (g/cm^3 or grams typed); limits typed in node extras in degrees or millimetres; more
 // than one root link (an object the modeller did not mean to export).

@@ -69,3 +69,13 @@ draco_encoder -i cube_texcoords.obj -o cube_texcoords.drc >/dev/null
 # A skinned mesh (Blender's skinned_arm, three bones): gltfpack moves the mesh and its skin into an
 # unnamed carrier under the named node, which must stay the mesh node (no link of its own).
 "$bin/gltfpack" -i "$root/tests/data/blender/skinned_arm.gltf" -o skinned_gltfpack.glb -kn -ke -cc
+
+# glTF-Transform's quantize (npm @gltf-transform/cli 4.5.1; not pinned in tools/encoders: its
+# package pulls sharp, whose native binary does not come from npm) folds a leaf part's
+# dequantization into the part's node, moving its origin and a joint the part carries itself
+# (JOINT_ORIGIN_QUANTIZED); rdtf's own output keeps its joints. Made by hand, when it is at hand:
+if command -v gltf-transform >/dev/null; then
+  gltf-transform quantize leaf_joint_source.gltf leaf_joint_gltf_transform_quantize.glb
+  "$root/build/clients/rdtf/rdtf" convert leaf_joint_source.gltf -o /tmp/leaf_joint_rdtf.gltf
+  gltf-transform quantize /tmp/leaf_joint_rdtf.gltf leaf_joint_rdtf_gltf_transform_quantize.glb
+fi

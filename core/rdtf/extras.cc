@@ -189,6 +189,8 @@ Json vector_to_json(const Eigen::Vector3d& v) { return Json::array({v.x(), v.y()
 
 bool write_rdtf_extras(Json& document, const std::vector<NodeType>& types, const Robot& robot,
                        Diagnostics& diag) {
+  // "extras": null says there are none (the validator accepts it): extras.RDTF takes its place.
+  if (document.contains("extras") && document["extras"].is_null()) document.erase("extras");
   if (document.contains("extras") && !document["extras"].is_object()) {
     diag.error(codes::EXTRAS_NOT_OBJECT, "/extras",
                "the document's extras is not an object, so extras.RDTF cannot be added to it");

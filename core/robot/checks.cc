@@ -11,6 +11,7 @@
 
 #include <Eigen/SVD>
 
+#include "rdtf/utf8.h"
 #include "rdtf/completion.h"
 #include "rdtf/geometry.h"
 #include "rdtf/robot.h"
@@ -402,7 +403,25 @@ void check_extras_keys(const Json& document, Diagnostics& diag) {
   if (!document.contains("nodes") || !document["nodes"].is_array()) return;
   for (std::size_t i = 0; i < document["nodes"].size(); ++i) {
     const Json& node = document["nodes"][i];
-    if (!node.is_object() || !node.contains("extras") || !node["extras"].is_object()) continue;
+    if (!node.is_object() || !node.contains("extras")) continue;
+    if (!node["extras"].is_object()) {
+      // glTF allows extras of any type, and custom properties are an object's keys: rdtf's written
+      // as text or in an array were dropped without a word (a revolute elbow became fixed).
+      const Json& extras = node["extras"];
+      std::string text = extras.dump(-1, ' ', false, Json::error_handler_t::replace);
+      std::string lower = text;
+      for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+      if (extras.is_null() || (lower.find("rdtf") == std::string::npos && lower.find("rdft") == std::string::npos)) {
+        continue;
+      }
+      if (text.size() > 60) text = text.substr(0, 57) + "...";
+      diag.warning(codes::RDTF_UNKNOWN_KEY, json_pointer("/nodes", i) + "/extras",
+                   node_label(document, i) + ": extras is " +
+                       (extras.is_string() ? "text" : extras.is_array() ? "an array" : "a " + std::string(extras.type_name())) +
+                       " (" + escape_for_terminal(text) + "), not an object, so the rdtf properties in it are not "
+                       "read: custom properties are an object's keys, {\"rdtf_joint\": \"revolute\"}");
+      continue;
+    }
     for (const auto& [key, value] : node["extras"].items()) {
       if (std::find(std::begin(kExtrasKeys), std::end(kExtrasKeys), key) != std::end(kExtrasKeys)) continue;
       std::string lower = key;

@@ -240,6 +240,21 @@ TEST(Plausibility, AxesBehindAPackersGeneratorAreNamedAsAssumed) {
   expect_one(convert_and_find(doc, codes::NO_RDTF_PROPERTIES), "/nodes", {"'draco_decoder', which may have dropped"});
 }
 
+// Node extras that are not an object (glTF allows any type) with rdtf's properties written in them
+// as text: the joint was lost without a word. Extras of someone else's, without "rdtf", are left
+// alone; and a document whose extras is null converts (it was refused: EXTRAS_NOT_OBJECT).
+TEST(Plausibility, RdtfPropertiesInExtrasThatAreNoObjectAreNamed) {
+  json doc = arm();
+  doc["nodes"][1]["extras"] = "rdtf_joint=revolute";
+  expect_one(convert_and_find(doc, codes::RDTF_UNKNOWN_KEY), "/nodes/1/extras",
+             {"extras is text (\"rdtf_joint=revolute\"), not an object, so the rdtf properties in it are not read"});
+  doc["nodes"][1]["extras"] = json::array({1, 2, 3});
+  EXPECT_TRUE(convert_and_find(doc, codes::RDTF_UNKNOWN_KEY).empty());
+  doc = arm();
+  doc["extras"] = nullptr;
+  EXPECT_TRUE(convert_and_find(doc, codes::EXTRAS_NOT_OBJECT).empty());
+}
+
 // The arm with its elbow as a joint empty, as Blender models it: base > elbow (empty) > arm.
 json arm_with_elbow_empty() {
   json doc = arm();

@@ -229,14 +229,22 @@ void write_khr_physics(Json& document, std::vector<NodeType>& types, const Robot
       // Under a mirror (a negative scale) a node of translation and rotation has a mirrored frame,
       // which no KHR joint frame may be. The joint is in extras.RDTF and the URDF; a tool reading
       // KHR physics alone sees its two bodies unjoined, so say so.
+      // A scale of 0 (on an axis) leaves no frame at all: that, not a mirror, is then the reason.
       const Link& mirrored = X_PA ? child : parent;
+      const double det = world[static_cast<std::size_t>(mirrored.node)].linear().determinant();
+      const std::string why = det < 0    ? "is mirrored (a negative scale on its node or above)"
+                              : det == 0 ? "is scaled to nothing on an axis (a scale of 0 on its node or above)"
+                                         : "has a scale on its node or above under which its joint frame cannot be "
+                                           "placed to within rounding";
       diag.warning(codes::KHR_JOINT_NOT_WRITTEN, "/nodes/" + std::to_string(joint.node),
                    "joint '" + joint.name + "' (" + to_string(joint.kind) + "): no KHR_physics_rigid_bodies joint is "
-                   "written for it: link '" + mirrored.name + "' is mirrored (a negative scale on its node or above), "
-                   "and no attachment node of translation and rotation has a proper joint frame there. extras.RDTF "
-                   "and the URDF have the joint; a tool reading only KHR physics sees its two bodies unjoined. "
-                   "Apply the scale (Blender: Ctrl+A > Scale; for a mesh several objects share, a linked duplicate, first "
-                   "Object > Relations > Make Single User > Object & Data) to keep it");
+                   "written for it: link '" + mirrored.name + "' " + why +
+                   ", and no attachment node of translation and rotation has a proper joint frame there. extras.RDTF "
+                   "and the URDF have the joint; a tool reading only KHR physics sees its two bodies unjoined. " +
+                       (det == 0 ? std::string("Give the node a scale other than 0 to keep it")
+                                 : std::string("Apply the scale (Blender: Ctrl+A > Scale; for a mesh several objects "
+                                               "share, a linked duplicate, first Object > Relations > Make Single "
+                                               "User > Object & Data) to keep it")));
       continue;
     }
     if (!extension.contains("physicsJoints") || !extension["physicsJoints"].is_array()) {

@@ -273,6 +273,28 @@ TEST(KhrPhysicsWrite, AJointUnderAMirrorIsNamedWhenItGetsNoKhrJoint) {
   EXPECT_NE(missing[0].message.find("is mirrored"), std::string::npos) << missing[0].message;
   const json& physics_joints = conversion->asset.document["extensions"][kKhrPhysics]["physicsJoints"];
   EXPECT_EQ(physics_joints.size(), robot.joints.size() - 1);
+
+  // A scale of 0 leaves no frame either, and is named as such, not as a mirror (whose advice,
+  // apply the scale, would flatten the part).
+  json document = json::parse(testing::read_file(testing::data_dir() / "blender" / "transforms.gltf"));
+  const int wheel = conversion->robot.links[static_cast<std::size_t>(joint->child_link)].node;
+  ASSERT_LT(static_cast<std::size_t>(wheel), document["nodes"].size());
+  document["nodes"][static_cast<std::size_t>(wheel)]["scale"] = {1, 0, 1};
+  testing::TempDir dir;
+  testing::write_file(dir / "transforms.gltf", document.dump());
+  std::filesystem::copy_file(testing::data_dir() / "blender" / "transforms.bin", dir / "transforms.bin");
+  Diagnostics flat_diag;
+  ASSERT_TRUE(convert_file(dir / "transforms.gltf", ConvertOptions{}, flat_diag)) << all_text(flat_diag);
+  bool named = false;
+  for (const Diagnostic& d : flat_diag.all()) {
+    if (d.code != codes::KHR_JOINT_NOT_WRITTEN || d.pointer != missing[0].pointer) continue;
+    named = true;
+    EXPECT_NE(d.message.find("is scaled to nothing on an axis (a scale of 0 on its node or above)"), std::string::npos)
+        << d.message;
+    EXPECT_EQ(d.message.find("is mirrored"), std::string::npos) << d.message;
+    EXPECT_NE(d.message.find("Give the node a scale other than 0"), std::string::npos) << d.message;
+  }
+  EXPECT_TRUE(named) << all_text(flat_diag);
 }
 
 // A mirrored link's motion (transforms.gltf's wheel_r_mirrored: scale -2, -3.3, -10 on a turned

@@ -93,6 +93,7 @@ std::optional<Conversion> convert(GltfAsset asset, const ConvertOptions& options
   if (!scene) return std::nullopt;
   auto types = type_nodes(asset.document, *scene, diag);
   if (diag.has_errors()) return std::nullopt;
+  check_other_scenes(asset.document, *scene, types, diag);
   check_missing_properties(asset.document, types, diag);
   check_extras_keys(asset.document, diag);
   check_quantized_joint_origins(asset.document, types, diag);

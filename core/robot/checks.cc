@@ -596,6 +596,52 @@ void check_quantized_joint_origins(const Json& document, const std::vector<NodeT
   }
 }
 
+void check_other_scenes(const Json& document, std::size_t scene, const std::vector<NodeType>& types,
+                        Diagnostics& diag) {
+  if (!document.contains("scenes") || !document["scenes"].is_array() || document["scenes"].size() < 2 ||
+      !document.contains("nodes") || !document["nodes"].is_array()) {
+    return;
+  }
+  const Json& nodes = document["nodes"];
+  const auto has_rdtf_keys = [&](std::size_t n) {
+    if (!nodes[n].is_object() || !nodes[n].contains("extras") || !nodes[n]["extras"].is_object()) return false;
+    for (const auto& item : nodes[n]["extras"].items()) {
+      if (item.key().rfind("rdtf_", 0) == 0) return true;
+    }
+    return false;
+  };
+  const std::vector<int> parents = node_parents(document);
+  for (std::size_t other = 0; other < document["scenes"].size(); ++other) {
+    if (other == scene || !document["scenes"][other].is_object()) continue;
+    std::vector<std::size_t> found;
+    for (std::size_t n = 0; n < nodes.size() && n < types.size(); ++n) {
+      if (types[n] != NodeType::kNone || !has_rdtf_keys(n)) continue;
+      int root = static_cast<int>(n);
+      while (parents[static_cast<std::size_t>(root)] >= 0) root = parents[static_cast<std::size_t>(root)];
+      const Json& roots = document["scenes"][other].value("nodes", Json::array());
+      if (std::find(roots.begin(), roots.end(), Json(root)) != roots.end()) found.push_back(n);
+    }
+    if (found.empty()) continue;
+    std::string names;
+    for (std::size_t k = 0; k < found.size() && k < 3; ++k) names += (k ? ", " : "") + node_label(document, found[k]);
+    if (found.size() > 3) names += ", ...";
+    const Json& converted = document["scenes"][scene];
+    const std::string converted_name = converted.is_object() && converted.contains("name") && converted["name"].is_string()
+                                           ? " " + value_text(converted["name"])
+                                           : "";
+    const Json& that = document["scenes"][other];
+    const std::string other_name =
+        that.contains("name") && that["name"].is_string() ? " " + value_text(that["name"]) : "";
+    diag.warning(codes::SCENE_NOT_CONVERTED, json_pointer("/scenes", other),
+                 "scene " + std::to_string(other) + other_name + " holds " + std::to_string(found.size()) +
+                     " node(s) with rdtf properties (" + names + "), but rdtf converts one scene, scene " +
+                     std::to_string(scene) + converted_name +
+                     (document.contains("scene") ? " (the document's 'scene')" : " (the first: the document names none)") +
+                     ": set the document's 'scene' to " + std::to_string(other) +
+                     " to convert that one (in Blender, export with that scene active, or one scene only)");
+  }
+}
+
 void check_units(const Json& document, const Robot& robot, Diagnostics& diag) {
   if (!document.contains("nodes")) return;
   if (robot.root_links.size() > 1) {

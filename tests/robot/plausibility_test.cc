@@ -255,6 +255,23 @@ TEST(Plausibility, RdtfPropertiesInExtrasThatAreNoObjectAreNamed) {
   EXPECT_TRUE(convert_and_find(doc, codes::EXTRAS_NOT_OBJECT).empty());
 }
 
+// A robot in a scene other than the one converted (gltf-transform merge keeps each file's scene;
+// a decoy in scene 0) was left out without a word.
+TEST(Plausibility, ARobotInASceneNotConvertedIsNamed) {
+  json doc = arm();
+  const json robot_scene = doc["scenes"][doc.value("scene", 0)];
+  doc["nodes"].push_back({{"name", "decoy"}, {"mesh", 0}});
+  doc["scenes"] = json::array({{{"name", "props"}, {"nodes", {doc["nodes"].size() - 1}}}, robot_scene});
+  doc.erase("scene");
+  const auto found = convert_and_find(doc, codes::SCENE_NOT_CONVERTED);
+  expect_one(found, "/scenes/1",
+             {"scene 1 holds 4 node(s) with rdtf properties (node 0 'base'",
+              "but rdtf converts one scene, scene 0 'props' (the first: the document names none): set the document's "
+              "'scene' to 1"});
+  doc["scene"] = 1;
+  EXPECT_TRUE(convert_and_find(doc, codes::SCENE_NOT_CONVERTED).empty());
+}
+
 // The arm with its elbow as a joint empty, as Blender models it: base > elbow (empty) > arm.
 json arm_with_elbow_empty() {
   json doc = arm();

@@ -175,6 +175,7 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(NO_LINKS, kSeverityWarning, "model") \
   X(NO_RDTF_PROPERTIES, kSeverityWarning, "model") \
   X(NO_SCENE, kSeverityError, "model") \
+  X(SCENE_NOT_CONVERTED, kSeverityWarning, "model") \
   X(NODE_ANIMATED, kSeverityWarning, "model") \
   X(NODE_SHEARED, kSeverityWarning, "model") \
   X(PRIMITIVE_SKIPPED, kSeverityInfo, "model") \

@@ -153,6 +153,11 @@ void check_missing_properties(const Json& document, const std::vector<NodeType>&
 // Custom properties that look like rdtf's but are not ("rdft_axis", "rdtf_axes_", "Rdtf_mass"): a
 // typo leaves a property out without a word otherwise.
 void check_extras_keys(const Json& document, Diagnostics& diag);
+// Nodes with rdtf properties in a scene other than the one converted (`scene`, else the first):
+// SCENE_NOT_CONVERTED names them and the scene (a robot in scene 1 of a file whose scene 0 is a
+// decoy was left out without a word).
+void check_other_scenes(const Json& document, std::size_t scene, const std::vector<NodeType>& types,
+                        Diagnostics& diag);
 // A leaf part typed a link (its node's origin is its joint's) whose mesh a quantizer centred on
 // that origin (glTF-Transform's quantize moves a leaf's origin to its mesh's centre):
 // JOINT_ORIGIN_QUANTIZED. On the typed document as read, before completion moves meshes.

@@ -341,14 +341,29 @@ std::vector<int> carried_links(const Json& document, const std::vector<NodeType>
                                const std::vector<const Json*>& entries) {
   std::vector<int> carried(types.size(), -1);
   if (!document.contains("nodes")) return carried;
-  // Whether a link node has geometry: a mesh of its own or below it before the next link or joint
-  // (a marker empty beside the part under a joint empty is a link too, and carries nothing).
+  // Whether a mesh has a surface: a primitive of triangles (a strip or fan too). A three.js
+  // AxesHelper or a wire gizmo under the joint empty is a mesh of lines, which weighs nothing.
+  const auto has_surface = [&](const Json& mesh_index) {
+    if (!mesh_index.is_number_unsigned() || !document.contains("meshes") ||
+        mesh_index.get<std::size_t>() >= document["meshes"].size()) {
+      return true;  // Not this function's to judge: validation names a bad index.
+    }
+    const Json& primitives = document["meshes"][mesh_index.get<std::size_t>()].value("primitives", Json::array());
+    if (!primitives.is_array()) return true;
+    return std::any_of(primitives.begin(), primitives.end(), [](const Json& primitive) {
+      const Json mode = primitive.is_object() ? primitive.value("mode", Json(4)) : Json(4);
+      return !mode.is_number_integer() || mode.get<int>() >= 4;
+    });
+  };
+  // Whether a link node has geometry: a mesh with a surface of its own or below it before the
+  // next link or joint (a marker empty beside the part under a joint empty is a link too, and
+  // carries nothing).
   const auto has_geometry = [&](std::size_t link) {
     std::vector<std::size_t> stack{link};
     while (!stack.empty()) {
       const std::size_t at = stack.back();
       stack.pop_back();
-      if (document["nodes"][at].contains("mesh")) return true;
+      if (document["nodes"][at].contains("mesh") && has_surface(document["nodes"][at]["mesh"])) return true;
       for (const Json& child : document["nodes"][at].value("children", Json::array())) {
         const auto c = child.get<std::size_t>();
         if (types[c] != NodeType::kLink && types[c] != NodeType::kJoint) stack.push_back(c);

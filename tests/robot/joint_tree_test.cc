@@ -169,6 +169,25 @@ TEST(JointTree, ALinkWithAMovingJointOfItsOwnIsNotThePart) {
   }
 }
 
+// A mesh of lines (three.js's AxesHelper added to the joint empty before the part) weighs nothing
+// and is no part: it took the elbow's joint, the forearm hanging from it by a fixed one.
+TEST(JointTree, AMeshOfLinesIsNotThePart) {
+  const json nodes = {
+      {{"name", "base"}, {"mesh", 0}, {"children", {1}}},
+      {{"name", "elbow"}, {"translation", {0, 0.3, 0}}, {"children", {2, 3}}, {"extras", revolute("z")}},
+      {{"name", "elbow_axes"}, {"mesh", 1}},
+      {{"name", "forearm"}, {"mesh", 0}}};
+  json doc = with_nodes(nodes, {0});
+  json lines = doc["meshes"][0];
+  for (json& primitive : lines["primitives"]) primitive["mode"] = 1;  // LINES
+  doc["meshes"] = {doc["meshes"][0], lines};
+  const Converted c = convert_doc(doc);
+  const std::vector<std::string> tree_lines = tree(c.robot);
+  ASSERT_EQ(tree_lines.size(), 2u);
+  EXPECT_EQ(tree_lines[0], "forearm <- base by elbow (revolute)");
+  EXPECT_EQ(tree_lines[1].rfind("elbow_axes <- forearm by ", 0), 0u) << tree_lines[1];
+}
+
 // Two joint empties with properties and no part between them are two degrees of freedom one
 // joint cannot have: a warning names the one whose properties are not used.
 TEST(JointTree, StackedJointEmptiesWarnThatADegreeOfFreedomIsLost) {

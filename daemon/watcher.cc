@@ -10,6 +10,8 @@
 #include <cstring>
 #include <algorithm>
 #include <fstream>
+#include <string>
+#include <string_view>
 
 #include "rdtf/atomic_file.h"
 
@@ -87,6 +89,24 @@ void InotifyWatcher::clear() {
   roots_.clear();
 }
 
+namespace {
+
+// One more reason in `error` (one log line), unless it says that already; beyond about 2 KB the
+// rest are left out, with a word: a tree of folders that all fail (a chain deeper than PATH_MAX)
+// made one line of 231 KB repeating the same reason.
+void add_reason(std::string& error, const std::string& why) {
+  static constexpr std::string_view kMore = "; and more folders alike";
+  if (error.find(why) != std::string::npos || error.ends_with(kMore)) return;
+  if (error.size() + why.size() > 2048 && !error.empty()) {
+    error += kMore;
+    return;
+  }
+  if (!error.empty()) error += "; ";
+  error += why;
+}
+
+}  // namespace
+
 void InotifyWatcher::add_folder(const std::filesystem::path& folder,
                                 std::vector<std::filesystem::path>& files, std::string& error) {
   // Watch first, then list: a file created in between shows up in both, never in neither.
@@ -97,8 +117,7 @@ void InotifyWatcher::add_folder(const std::filesystem::path& folder,
     // tell); only a watched folder itself is looked for again.
     if (missing && std::find(roots_.begin(), roots_.end(), folder) == roots_.end()) return;
     const std::string why = missing ? "cannot watch " + folder.string() + ": it is missing" : watch_error(folder);
-    if (!error.empty()) error += "; ";
-    error += why;
+    add_reason(error, why);
     // Still list it: its models are converted now, and seen again when a retry can watch it.
     unwatched_.push_back({folder, missing, why});
   } else {
@@ -123,8 +142,7 @@ void InotifyWatcher::add_folder(const std::filesystem::path& folder,
   // (docs/notes/ubsan-descriptors.md).
   if (ec && wd >= 0 && ec.value() != ENOENT && ec.value() != ENOTDIR) {
     const std::string why = "cannot list " + folder.string() + ": " + std::strerror(ec.value());
-    if (!error.empty()) error += "; ";
-    error += why;
+    add_reason(error, why);
     unwatched_.push_back({folder, false, why});
   }
 }

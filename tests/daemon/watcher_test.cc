@@ -3,6 +3,7 @@
 // fake watcher in daemon_loop_test.cc; together they cover a save from the kernel to the bus.
 #include "watcher.h"
 
+#include <dirent.h>
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -94,6 +95,61 @@ TEST_F(Watcher, AFolderThatCannotBeListedIsUnwatchedNotSkipped) {
   EXPECT_EQ(watch(), (Events{"a.gltf", "sub/deep/b.glb"}));
   EXPECT_TRUE(watcher_.unwatched().empty());
   EXPECT_EQ(watcher_.watch_count(), 3u);
+}
+
+// Removes what `dir` (an open folder) holds, by descriptors: paths below it may be longer than
+// PATH_MAX, which std::filesystem::remove_all cannot reach.
+void remove_below(int dir) {
+  const int listing = ::dup(dir);
+  ASSERT_GE(listing, 0);
+  DIR* entries = ::fdopendir(listing);
+  ASSERT_NE(entries, nullptr);
+  std::vector<std::string> names;
+  while (const dirent* entry = ::readdir(entries)) {
+    const std::string name = entry->d_name;
+    if (name != "." && name != "..") names.push_back(name);
+  }
+  ::closedir(entries);
+  for (const std::string& name : names) {
+    const int sub = ::openat(dir, name.c_str(), O_RDONLY | O_DIRECTORY | O_NOFOLLOW | O_CLOEXEC);
+    if (sub >= 0) {
+      remove_below(sub);
+      ::close(sub);
+      ASSERT_EQ(::unlinkat(dir, name.c_str(), AT_REMOVEDIR), 0) << name;
+    } else {
+      ASSERT_EQ(::unlinkat(dir, name.c_str(), 0), 0) << name;
+    }
+  }
+}
+
+// Folders whose paths are longer than PATH_MAX cannot be watched, each for the same reason with
+// its own path of 4 KB: the reasons are one log line of a readable length (it reached 231 KB).
+TEST_F(Watcher, FoldersThatAllFailAreOneLineOfReadableLength) {
+  const std::string name(40, 'd'), leaf(250, 'f');
+  int dir = ::open(root_.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  ASSERT_GE(dir, 0);
+  const int top = ::dup(dir);
+  // A folder whose path is 3850 to 3890 bytes long, short of PATH_MAX (4096), then 30 folders in
+  // it whose paths are beyond it (251 bytes more).
+  for (std::size_t length = root_.string().size(); length + name.size() + 1 <= 3890; length += name.size() + 1) {
+    ASSERT_EQ(::mkdirat(dir, name.c_str(), 0755), 0);
+    const int next = ::openat(dir, name.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    ASSERT_GE(next, 0);
+    ::close(dir);
+    dir = next;
+  }
+  for (int k = 0; k < 30; ++k) {
+    ASSERT_EQ(::mkdirat(dir, (leaf.substr(2) + (k < 10 ? "0" : "") + std::to_string(k)).c_str(), 0755), 0);
+  }
+  ::close(dir);
+  std::string error;
+  watcher_.watch_tree(root_, error);
+  EXPECT_EQ(watcher_.unwatched().size(), 30u);
+  EXPECT_NE(error.find("File name too long"), std::string::npos) << error.substr(0, 300);
+  EXPECT_LT(error.size(), 2 * 4096u) << "reasons past 2 KB are left out, with a word";
+  EXPECT_TRUE(error.ends_with("; and more folders alike")) << error.substr(error.size() - std::min<std::size_t>(error.size(), 100));
+  remove_below(top);
+  ::close(top);
 }
 
 TEST_F(Watcher, AnInPlaceSaveIsModifiedWhileOpenThenWrittenWhenClosed) {

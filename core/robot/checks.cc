@@ -490,7 +490,16 @@ void check_missing_properties(const Json& document, const std::vector<NodeType>&
   // Parts parented to parts and nothing else, from Blender: the joint empties were probably left
   // out (Limit to > Selected Objects with only the meshes selected).
   // Blender's exports, and packed files (which may be Blender's without their properties).
-  const bool parts_only = empties.empty() && !bones && links > 1 && (written_by_blender(document) || packer);
+  // A packed file that still has rdtf properties (densities, masses) kept its extras: the packer
+  // dropped nothing, and the robot is as its source had it (glTF-Transform's copy of an all-fixed
+  // robot was warned about, its source not).
+  bool any_rdtf_key = false;
+  for (const Json& node : document["nodes"]) {
+    if (!node.is_object() || !node.contains("extras") || !node["extras"].is_object()) continue;
+    for (const auto& item : node["extras"].items()) any_rdtf_key = any_rdtf_key || item.key().rfind("rdtf_", 0) == 0;
+  }
+  const bool parts_only =
+      empties.empty() && !bones && links > 1 && (written_by_blender(document) || (packer && !any_rdtf_key));
   if (empties.empty() && !bones && !parts_only) return;
   std::string names;
   for (std::size_t k = 0; k < empties.size() && k < 4; ++k) {

@@ -231,6 +231,11 @@ TEST(Plausibility, AxesBehindAPackersGeneratorAreNamedAsAssumed) {
   const auto transformed = convert_and_find(doc, codes::NO_RDTF_PROPERTIES);
   expect_one(transformed, "/nodes", {"keeps node extras", "--flatten false --join false"});
   EXPECT_EQ(transformed[0].message.find("gltfpack"), std::string::npos) << transformed[0].message;
+  // With a density still on a part, the packer kept the extras: the robot has no joints as its
+  // source had none, and is not warned about where the source was not.
+  doc["nodes"][0]["extras"] = {{"rdtf_density", 2700}};
+  EXPECT_TRUE(convert_and_find(doc, codes::NO_RDTF_PROPERTIES).empty());
+  doc["nodes"][0].erase("extras");
   // Nor is it Blender's export setting when Assimp or Draco's decoder wrote the file: they dropped
   // the extras themselves (the advice was "In Blender, tick Include > Custom Properties").
   doc["asset"]["generator"] = "Open Asset Import Library (assimp v5.2.0)";

@@ -243,12 +243,13 @@ void check_inertia(const Robot& robot, const Link& link, const WeldGroup& group,
   // link's authored tensor for it before fusing welded links in (it refuses allegro_right_hand's
   // fingers, whose tips are welded on, a tool welded to a sound arm, and ur5_robotiq_85's 1 kg
   // finger pads of six entries 1e-10, moments 0, 0, 3e-10), though it accepts a singular one it
-  // then fuses (finger_edu). Unless the breach is below the triangle tolerance of the body it
-  // joins (triangle_tolerance x the trace of the body's combined tensor): then it cannot show in
-  // what moves, as rounding noise in a zero tensor cannot (MuJoCo loads a lone product of inertia
-  // of 8e-13 kg m^2, refuses 1e-12). Welded to the world, the part never moves: a warning (TIAGo's
-  // antenna).
-  const double body_tolerance = options.triangle_tolerance * std::abs(group.merged.inertia.trace());
+  // then fuses (finger_edu). The breach is judged on the link's own moments (triangle_tolerance x
+  // (|A| + B + C)), never against the body around it, whose size says nothing of the part's
+  // tensor, and must pass kTriangleNoise: a breach below 1e-12 kg m^2, the moment of a milligram a
+  // millimetre from its axis, changes no robot (an exporter's residue a hundred times the
+  // point-mass bound, iCub's ixz of 4.8e-15; MuJoCo too loads a lone product of 8e-13 and refuses
+  // 1e-12). Welded to the world, the part never moves: a warning (TIAGo's antenna).
+  constexpr double kTriangleNoise = 1e-12;  // kg m^2
   const auto report = [&](const char* code, const std::string& message, double triangle_breach) {
     if (!in_body) {
       diag.error(code, where(link), message);
@@ -258,21 +259,19 @@ void check_inertia(const Robot& robot, const Link& link, const WeldGroup& group,
         "; it is welded (fixed joints) into " +
         (group.welded_to_world ? std::string("the world, and never moves")
                                : "the body of " + body_text(robot, group) + ", whose combined inertia is what moves");
-    if (!group.welded_to_world && triangle_breach > body_tolerance) {
+    if (!group.welded_to_world && triangle_breach > kTriangleNoise) {
       diag.error(code, where(link),
-                 message + welded + ", but its breach of A + B >= C, " + number(triangle_breach) +
-                     " kg m^2, is beyond the body's triangle tolerance (" + number(body_tolerance) +
-                     "), and MuJoCo refuses such a link before it fuses it; give the part its real inertia");
+                 message + welded + ", but MuJoCo refuses a link whose moments break A + B >= C before it fuses it "
+                 "into its body; give the part its real inertia");
       return;
     }
     diag.warning(code, where(link),
                  message + welded +
-                     (triangle_breach > 0 && group.welded_to_world
+                     (triangle_breach > kTriangleNoise
                           ? " (its moments break A + B >= C, and MuJoCo refuses it: it checks every link before it "
                             "fuses welded ones)"
-                      : triangle_breach > 0 ? " (its breach of A + B >= C, " + number(triangle_breach) +
-                                                  " kg m^2, is below the body's triangle tolerance, " +
-                                                  number(body_tolerance) + ")"
+                      : triangle_breach > 0 ? " (its moments break A + B >= C by " + number(triangle_breach) +
+                                                  " kg m^2, below 1e-12, a residue that changes no robot)"
                                             : " (a simulator that keeps each link a body refuses it)"));
   };
   if (!principal_moments_check(I, name, options, report)) return;

@@ -194,6 +194,16 @@ Robot robot_from(const Json& j) {
   return robot;
 }
 
+// diagnostics_json's form with each file named byte for byte (json_bytes.h), so that a result
+// read back names the model file it named (a name that is not UTF-8 came back with U+FFFD).
+Json diagnostics_with_files(const Diagnostics& diagnostics) {
+  Json out = diagnostics_json(diagnostics);
+  for (std::size_t i = 0; i < out.size() && i < diagnostics.all().size(); ++i) {
+    out[i]["file"] = bytes_to_json(diagnostics.all()[i].file);
+  }
+  return out;
+}
+
 // Only the fields a diagnostic carries through the daemon (diagnostics_json.h's form).
 Diagnostics diagnostics_from(const Json& j, const std::string& file) {
   if (!j.is_array()) throw Refused{"diagnostics are not an array"};
@@ -208,7 +218,7 @@ Diagnostics diagnostics_from(const Json& j, const std::string& file) {
     } else if (severity != "info") {
       throw Refused{"unknown severity"};
     }
-    out.set_file(text(at(d, "file")));
+    out.set_file(file_name(at(d, "file")));
     const std::string code = text(at(d, "code")), pointer = text(at(d, "pointer")), message = text(at(d, "message"));
     const int line = d.contains("line") ? integer(d["line"]) : 0;
     const std::string line_prefix = "line " + std::to_string(line) + ": ";
@@ -267,7 +277,7 @@ std::string cache_entry_text(const CachedResult& r) {
                      {"written", r.written}, {"output_name", bytes_to_json(r.output_name)}, {"rdtf_sha256", r.rdtf_sha256},
                      {"has_urdf", r.has_urdf}, {"urdf_sha256", r.urdf_sha256}, {"files", files},
                      {"validation", r.validation ? validation_json(*r.validation) : Json(nullptr)},
-                     {"diagnostics", diagnostics_json(r.diagnostics)}, {"robot", robot_json(r.robot)},
+                     {"diagnostics", diagnostics_with_files(r.diagnostics)}, {"robot", robot_json(r.robot)},
                      {"facts", facts_to_json(r.facts)}};
   // Other text that is not UTF-8 is replaced.
   const std::string text = body.dump(-1, ' ', false, Json::error_handler_t::replace);

@@ -93,9 +93,11 @@ namespace {
 
 // One more reason in `error` (one log line), unless it says that already; beyond about 2 KB the
 // rest are left out, with a word: a tree of folders that all fail (a chain deeper than PATH_MAX)
-// made one line of 231 KB repeating the same reason.
-void add_reason(std::string& error, const std::string& why) {
+// made one line of 231 KB repeating the same reason. The line stays within about 3 KB.
+void add_reason(std::string& error, std::string why) {
   static constexpr std::string_view kMore = "; and more folders alike";
+  // A path of kilobytes (PATH_MAX is 4096) keeps its head and its tail.
+  if (why.size() > 1024) why = why.substr(0, 480) + "..." + why.substr(why.size() - 480);
   if (error.find(why) != std::string::npos || error.ends_with(kMore)) return;
   if (error.size() + why.size() > 2048 && !error.empty()) {
     error += kMore;

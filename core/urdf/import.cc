@@ -473,6 +473,16 @@ std::string quoted_start(std::string_view text) {
   return hex;
 }
 
+// Which UTF-16 the file is in, when its first bytes say so (a byte order mark, or '<' beside a
+// zero byte): XML, in an encoding URDF names (glTF names) cannot keep. TinyXML said "line 0: Error
+// document empty" of a big-endian one.
+std::optional<std::string> utf16_order(const FileHead& head) {
+  const std::string_view text = head.bytes;
+  if (text.starts_with("\xFF\xFE") || text.starts_with(std::string_view("<\0", 2))) return "little-endian";
+  if (text.starts_with("\xFE\xFF") || text.starts_with(std::string_view("\0<", 2))) return "big-endian";
+  return std::nullopt;
+}
+
 // What a file given as a URDF is instead, when its first bytes say so: a GLB, JSON (a .gltf), an
 // STL mesh, or no XML at all. TinyXML reported each as "line 0: Error document empty" or a byte that
 // is not UTF-8, and only after reading the whole file (2.3 s and 400 MB for a 200 MB mesh).
@@ -489,6 +499,7 @@ std::optional<std::string> other_kind_of_file(const FileHead& head) {
       return "a binary STL mesh, " + kNotUrdf + kNamesMeshes;
     }
   }
+  if (utf16_order(head)) return std::nullopt;  // XML in another encoding: said by its caller.
   std::size_t first = text.starts_with("\xEF\xBB\xBF") ? 3 : 0;
   first = text.find_first_not_of(" \t\r\n", first);
   if (first == std::string_view::npos) return std::nullopt;  // Empty or blank: said after reading it.
@@ -512,7 +523,14 @@ std::optional<Conversion> import_urdf(const fs::path& urdf, const UrdfImportOpti
                                       Diagnostics& diag) {
   diag.set_file(urdf.string());
   // Told from the first bytes, before a large file is read whole.
-  if (const auto kind = other_kind_of_file(head_of(urdf, 4096))) {
+  const FileHead head = head_of(urdf, 4096);
+  if (const auto order = utf16_order(head)) {
+    diag.error(codes::URDF_NOT_UTF8, "",
+               "the file is XML in UTF-16 (" + *order +
+                   "), which is not UTF-8 (URDF names become glTF names, which must be UTF-8): save it as UTF-8");
+    return std::nullopt;
+  }
+  if (const auto kind = other_kind_of_file(head)) {
     diag.error(codes::URDF_NOT_A_ROBOT, "", "this is " + *kind);
     return std::nullopt;
   }

@@ -151,6 +151,9 @@ TEST(ResultCache, AFileNameThatIsNotUtf8FindsItsEntry) {
   EXPECT_TRUE(again.from_cache) << again.cache_note;
   EXPECT_EQ(again.converted->output_path, c->outcome.converted->output_path);
   EXPECT_EQ(again.converted->files, c->outcome.converted->files);
+  // The diagnostics name the file as it is (they named it with U+FFFD after a restart).
+  ASSERT_FALSE(again.diagnostics.all().empty());
+  EXPECT_EQ(formatted(again.diagnostics), formatted(c->outcome.diagnostics));
 }
 
 // The stepper of the run that is the verdict (dWorldStep where QuickStep failed the model) comes

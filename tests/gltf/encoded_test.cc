@@ -273,6 +273,12 @@ TEST(EncodedQuantized, ALeafPartsJointMovedByAQuantizerIsNamed) {
   EXPECT_NEAR(moved.y(), 0.7, 1e-6);  // What the file says: the mesh's centre.
   EXPECT_EQ(quantized_origin_warnings("leaf_joint_rdtf_gltf_transform_quantize.glb", &kept), std::vector<std::string>{});
   EXPECT_EQ(kept, source_elbow);
+  // The quantized file with the forearm's joint keys moved to a new empty 'elbow' at the elbow
+  // (what the warning's advice asks for): the joint turns about the empty, which the quantizer
+  // left alone. It was warned about.
+  Eigen::Vector3d on_empty = Eigen::Vector3d::Zero();
+  EXPECT_EQ(quantized_origin_warnings("leaf_joint_on_empty_gltf_transform_quantize.glb", &on_empty),
+            std::vector<std::string>{});
 }
 
 // gltfpack moves a skinned mesh with its skin into an unnamed carrier under the named node, as it

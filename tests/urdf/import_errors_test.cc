@@ -98,6 +98,10 @@ const BadUrdf kBadUrdfs[] = {
      "this is not XML: it starts with 'robot: r' where a URDF (an XML <robot> element) starts with '<'"},
     {"not_xml_binary", std::string("\x01\xDD \x00", 4), "URDF_NOT_A_ROBOT", "",
      "this is not XML: it starts with the bytes 0x01 0xDD 0x20 0x00 where"},
+    // XML in UTF-16 is XML: the UTF-8 check names it, not "not XML".
+    {"utf16_little_endian", std::string("\xFF\xFE<\0r\0", 6), "URDF_NOT_UTF8", "",
+     "the file is XML in UTF-16 (little-endian), which is not UTF-8"},
+    {"utf16_big_endian_without_a_mark", std::string("\0<\0r", 4), "URDF_NOT_UTF8", "", "XML in UTF-16 (big-endian)"},
     // One of each where URDF has one: urdfdom reads the first and drops the rest without a word.
     {"two_inertials", link_urdf(inertial("1") + "\n" + inertial("50")), "URDF_INVALID",
      "/robot/link[@name='a']/inertial[2]",

@@ -151,8 +151,8 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(JOINT_LIMITS_IMPLAUSIBLE, kSeverityWarning, "model") \
   X(JOINT_LIMITS_INVERTED, kSeverityError, "model") \
   X(JOINT_MOVES_NOTHING, kSeverityWarning, "model") \
-  X(JOINT_ORIGIN_QUANTIZED, kSeverityWarning, "model") \
   X(JOINT_MOVES_SEVERAL_LINKS, kSeverityInfo, "model") \
+  X(JOINT_ORIGIN_QUANTIZED, kSeverityWarning, "model") \
   X(JOINT_TYPE_MISSING, kSeverityWarning, "model") \
   X(KHR_JOINT_FRAMES_DISAGREE, kSeverityError, "model") \
   X(KHR_JOINT_NOT_WRITTEN, kSeverityWarning, "model") \
@@ -175,7 +175,6 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(NO_LINKS, kSeverityWarning, "model") \
   X(NO_RDTF_PROPERTIES, kSeverityWarning, "model") \
   X(NO_SCENE, kSeverityError, "model") \
-  X(SCENE_NOT_CONVERTED, kSeverityWarning, "model") \
   X(NODE_ANIMATED, kSeverityWarning, "model") \
   X(NODE_SHEARED, kSeverityWarning, "model") \
   X(PRIMITIVE_SKIPPED, kSeverityInfo, "model") \
@@ -188,6 +187,7 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(RDTF_NODE_EXTRAS_IGNORED, kSeverityWarning, "model") \
   X(RDTF_UNKNOWN_KEY, kSeverityWarning, "model") \
   X(RDTF_VERSION_NEWER, kSeverityWarning, "model") \
+  X(SCENE_NOT_CONVERTED, kSeverityWarning, "model") \
   X(SKIN_NO_WEIGHTS, kSeverityWarning, "model") \
   X(SKIN_PART_SHARED, kSeverityInfo, "model") \
   X(UNITS_IMPLAUSIBLE, kSeverityWarning, "model") \

@@ -79,3 +79,6 @@ if command -v gltf-transform >/dev/null; then
   "$root/build/clients/rdtf/rdtf" convert leaf_joint_source.gltf -o /tmp/leaf_joint_rdtf.gltf
   gltf-transform quantize /tmp/leaf_joint_rdtf.gltf leaf_joint_rdtf_gltf_transform_quantize.glb
 fi
+# leaf_joint_on_empty_gltf_transform_quantize.glb: leaf_joint_gltf_transform_quantize.glb edited by
+# hand (a review's repro): the forearm's joint keys moved to a new empty 'elbow' at (0.15, 0.5, 0)
+# holding the forearm, so the joint turns about the empty.

@@ -6,22 +6,12 @@
 
 #include <optional>
 #include <string>
-#include <string_view>
 
 #include <nlohmann/json.hpp>
 
 #include "rdtf/utf8.h"
 
 namespace rdtf::daemon {
-
-inline bool is_utf8(std::string_view text) {
-  for (std::size_t i = 0; i < text.size();) {
-    const std::size_t n = utf8_sequence_length(text, i);
-    if (n == 0) return false;
-    i += n;
-  }
-  return true;
-}
 
 // UTF-8 stays readable text; anything else becomes {"hex": "<two digits a byte>"}.
 inline nlohmann::json bytes_to_json(const std::string& bytes) {

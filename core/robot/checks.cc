@@ -98,6 +98,14 @@ std::string packer_advice(const std::string& packer) {
          "own output instead (rdtf convert first)";
 }
 
+// Whether a node's extras hold any rdtf property (rdtf_density, rdtf_joint, ...).
+bool has_rdtf_key(const Json& node) {
+  if (!node.is_object() || !node.contains("extras") || !node["extras"].is_object()) return false;
+  const Json& extras = node["extras"];
+  return std::any_of(extras.items().begin(), extras.items().end(),
+                     [](const auto& item) { return item.key().rfind("rdtf_", 0) == 0; });
+}
+
 // Whether the model says where its joints are: an extras.RDTF (a converted file), or a node with a
 // joint key or rdtf_type. Densities and masses alone do not: a Blender export of the parts only
 // (the joint empties left out) keeps the densities set on the parts, and its joints are all fixed.
@@ -493,11 +501,7 @@ void check_missing_properties(const Json& document, const std::vector<NodeType>&
   // A packed file that still has rdtf properties (densities, masses) kept its extras: the packer
   // dropped nothing, and the robot is as its source had it (glTF-Transform's copy of an all-fixed
   // robot was warned about, its source not).
-  bool any_rdtf_key = false;
-  for (const Json& node : document["nodes"]) {
-    if (!node.is_object() || !node.contains("extras") || !node["extras"].is_object()) continue;
-    for (const auto& item : node["extras"].items()) any_rdtf_key = any_rdtf_key || item.key().rfind("rdtf_", 0) == 0;
-  }
+  const bool any_rdtf_key = std::any_of(document["nodes"].begin(), document["nodes"].end(), has_rdtf_key);
   const bool parts_only =
       empties.empty() && !bones && links > 1 && (written_by_blender(document) || (packer && !any_rdtf_key));
   if (empties.empty() && !bones && !parts_only) return;
@@ -571,7 +575,6 @@ bool positions_centred_by_a_quantizer(const Json& document, const Json& mesh_ind
   return true;
 }
 
-
 }  // namespace
 
 // glTF-Transform's quantize (run by its meshopt and by optimize's default compression) folds a
@@ -616,13 +619,6 @@ void check_other_scenes(const Json& document, std::size_t scene, const std::vect
     return;
   }
   const Json& nodes = document["nodes"];
-  const auto has_rdtf_keys = [&](std::size_t n) {
-    if (!nodes[n].is_object() || !nodes[n].contains("extras") || !nodes[n]["extras"].is_object()) return false;
-    for (const auto& item : nodes[n]["extras"].items()) {
-      if (item.key().rfind("rdtf_", 0) == 0) return true;
-    }
-    return false;
-  };
   // The nodes outside the converted scene with rdtf keys, each with its root: found once, walking
   // up each chain only to the first node already answered (a chain of 20,000 nodes in 100 scenes
   // took 34 s walked per node and scene).
@@ -643,7 +639,7 @@ void check_other_scenes(const Json& document, std::size_t scene, const std::vect
   }
   std::vector<std::size_t> keyed;
   for (std::size_t n = 0; n < count; ++n) {
-    if (types[n] == NodeType::kNone && has_rdtf_keys(n)) keyed.push_back(n);
+    if (types[n] == NodeType::kNone && has_rdtf_key(nodes[n])) keyed.push_back(n);
   }
   if (keyed.empty()) return;
   std::vector<char> is_root(count, 0);

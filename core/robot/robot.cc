@@ -778,12 +778,10 @@ Robot build_robot(const Json& document, const std::vector<NodeType>& types, std:
       continue;
     }
     const Json* extras = node_extras(document, node);
-    if (extras == nullptr) continue;
+    if (extras == nullptr || (!extras->contains("rdtf_density") && !extras->contains("rdtf_mass"))) continue;
     std::string rides_on;
     for (int up = parents[node]; up >= 0 && rides_on.empty(); up = parents[up]) {
-      for (const Link& link : robot.links) {
-        if (link.node == up) rides_on = link.name;
-      }
+      if (link_of_node[static_cast<std::size_t>(up)] >= 0) rides_on = robot.links[link_of_node[up]].name;
     }
     for (const char* key : {"rdtf_density", "rdtf_mass"}) {
       if (!extras->contains(key)) continue;

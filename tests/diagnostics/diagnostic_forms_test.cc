@@ -51,6 +51,16 @@ TEST(DiagnosticForms, TerminalTextEscapesControlsBackslashesAndBytesThatAreNotUt
   EXPECT_EQ(escape_for_terminal("cut \xe2\x82"), "cut \\xe2\\x82");  // A sequence cut short.
 }
 
+// Whether a text is UTF-8 as a whole: what decides how rdtfd stores a file name (json_bytes.h).
+TEST(DiagnosticForms, IsUtf8JudgesTheWholeText) {
+  EXPECT_TRUE(is_utf8(""));
+  EXPECT_TRUE(is_utf8("/models/\xC3\xBC-arm.gltf"));           // ü
+  EXPECT_FALSE(is_utf8("/models/a\xFF.gltf"));
+  EXPECT_FALSE(is_utf8("\xC3"));                                 // cut short
+  EXPECT_FALSE(is_utf8("\xED\xA0\x80"));                        // a surrogate
+  EXPECT_FALSE(is_utf8("\xC0\xAF"));                             // overlong '/'
+}
+
 TEST(DiagnosticForms, TerminalTextEscapesC1ControlsAndBidirectionalFormatting) {
   // U+009B (CSI as one byte pair), U+0085 (next line): C1 controls.
   EXPECT_EQ(escape_for_terminal("a\xc2\x9b""31mb\xc2\x85""c"), "a\\u009b31mb\\u0085c");

@@ -11,6 +11,9 @@ namespace rdtf {
 // past U+10FFFF), or 0 if there is none. i < text.size().
 std::size_t utf8_sequence_length(std::string_view text, std::size_t i);
 
+// Whether all of `text` is well-formed UTF-8 (as utf8_sequence_length judges each sequence).
+bool is_utf8(std::string_view text);
+
 // One line of text as a terminal or a log shows it safely: a backslash, a control character
 // (newline, carriage return, tab, escape, NUL, DEL) and a byte that is not UTF-8 are escaped
 // ("\\", "\n", "\x1b", "\xff"), and so are the C1 controls, the bidirectional formatting

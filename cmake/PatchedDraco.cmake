@@ -79,7 +79,10 @@ add_library(rdtf_draco OBJECT
 # headers (another features set) may be: every file that includes <draco/...> must use this pair.
 set(RDTF_DRACO_INCLUDE_DIRS ${RDTF_DRACO_FEATURES_DIR} ${RDTF_DRACO_SOURCE_DIR}/src)
 target_include_directories(rdtf_draco SYSTEM PUBLIC ${RDTF_DRACO_INCLUDE_DIRS})
-set_target_properties(rdtf_draco PROPERTIES CXX_STANDARD 17)
+# Hidden: a program that also loads the system's libdraco (libassimp, for URDF import, needs it
+# for its glTF importer) keeps the two apart; exported, rdtf's copy would stand in for libdraco's
+# own symbols inside that library.
+set_target_properties(rdtf_draco PROPERTIES CXX_STANDARD 17 CXX_VISIBILITY_PRESET hidden VISIBILITY_INLINES_HIDDEN ON)
 target_compile_options(rdtf_draco PRIVATE -w)  # Third-party code: its warnings are not ours to fix.
 if(RDTF_SANITIZE)
   # AddressSanitizer checks libdraco's memory accesses; UBSan's aborts stay on rdtf's own code.

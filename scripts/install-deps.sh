@@ -18,7 +18,7 @@ PACKAGES=(
   liblcm-dev liblcm-bin liblcm-java default-jdk-headless
   libeigen3-dev nlohmann-json3-dev libtinygltf-dev libstb-dev
   libdraco-dev libmeshoptimizer-dev draco
-  liburdfdom-dev liburdfdom-tools libode-dev libmujoco-dev
+  liburdfdom-dev liburdfdom-tools libode-dev libmujoco-dev libassimp-dev
   libgtest-dev libgmock-dev libbenchmark-dev libcli11-dev libglib2.0-dev libssl-dev
   clang libclang-rt-14-dev
   iproute2 util-linux strace systemd

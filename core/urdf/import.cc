@@ -106,6 +106,7 @@ class Builder {
   GltfMeshWriter writer;  // One buffer for every mesh.
   Json entries = Json::array();
   std::map<std::string, std::size_t> materials;
+  std::map<std::string, std::size_t> file_materials;
   std::uint64_t triangles = 0;
   bool ok = true;
 
@@ -116,6 +117,17 @@ class Builder {
     if (!extra.is_null()) entry[type] = std::move(extra);
     entries.push_back(std::move(entry));
     return index;
+  }
+
+  // A mesh file's own colour, one glTF material for each name and colour.
+  std::size_t material_for(const MeshMaterial& material) {
+    const std::string key = material.name + '\0' + Json(material.rgba).dump();
+    if (const auto found = file_materials.find(key); found != file_materials.end()) return found->second;
+    Json out{{"name", material.name},
+             {"pbrMetallicRoughness", {{"baseColorFactor", material.rgba}, {"metallicFactor", 0.0}}}};
+    if (material.rgba[3] < 1) out["alphaMode"] = "BLEND";
+    document["materials"].push_back(std::move(out));
+    return file_materials[key] = document["materials"].size() - 1;
   }
 
   std::optional<std::size_t> material_for(const urdf::Visual& visual) {
@@ -132,11 +144,16 @@ class Builder {
     return materials[visual.material_name] = document["materials"].size() - 1;
   }
 
+  static MeshFile whole(TriangleMesh mesh) {
+    const std::size_t count = mesh.triangles.size();
+    return MeshFile{std::move(mesh), {MeshPart{0, count, std::nullopt}}};
+  }
+
   // The triangles of one <visual> (or <collision>) geometry in its own frame, or nothing.
   // `mass_from`: why the link's mass does not come from this geometry ("the link's mass is its
   // <inertial>"), or null where it does.
-  std::optional<TriangleMesh> geometry(const urdf::Geometry& g, const std::string& pointer, int row,
-                                       const char* mass_from, Eigen::Vector3d& scale) {
+  std::optional<MeshFile> geometry(const urdf::Geometry& g, const std::string& pointer, int row,
+                                   const char* mass_from, Eigen::Vector3d& scale) {
     auto skip = [&](const std::string& why) {
       diag.warning_at_line(codes::URDF_GEOMETRY_SKIPPED, pointer, row, why + "; this geometry is skipped");
       return std::nullopt;
@@ -149,20 +166,22 @@ class Builder {
     switch (g.type) {
       // Sizes were checked in the XML (scan_urdf_xml): finite and not negative; 0 is skipped above.
       case urdf::Geometry::BOX:
-        return box_mesh(to_eigen(static_cast<const urdf::Box&>(g).dim));
+        return whole(box_mesh(to_eigen(static_cast<const urdf::Box&>(g).dim)));
       case urdf::Geometry::CYLINDER: {
         const auto& cylinder = static_cast<const urdf::Cylinder&>(g);
-        return cylinder_mesh(cylinder.radius, cylinder.length);
+        return whole(cylinder_mesh(cylinder.radius, cylinder.length));
       }
       case urdf::Geometry::SPHERE:
-        return sphere_mesh(static_cast<const urdf::Sphere&>(g).radius);
+        return whole(sphere_mesh(static_cast<const urdf::Sphere&>(g).radius));
       case urdf::Geometry::MESH:
         break;
     }
     const auto& mesh = static_cast<const urdf::Mesh&>(g);
-    if (!is_stl(mesh.filename)) {
+    const MeshFormat format = mesh_format(mesh.filename);
+    if (format == MeshFormat::kOther) {
       diag.warning_at_line(codes::URDF_MESH_FORMAT_UNSUPPORTED, pointer, row,
-                   "mesh '" + mesh.filename + "' is not STL (the one mesh format import reads); skipped");
+                           "mesh '" + mesh.filename + "' is none of the formats import reads (" +
+                               kMeshFormatsRead + "); skipped");
       return std::nullopt;
     }
     std::string why;
@@ -198,28 +217,37 @@ class Builder {
       }
       return unusable(codes::URDF_MESH_NOT_FOUND, message);
     }
-    auto triangles_read = parse_stl(std::vector<std::uint8_t>(bytes->begin(), bytes->end()), why);
-    if (!triangles_read) return unusable(codes::URDF_MESH_INVALID, "mesh '" + path->string() + "': " + why);
-    if (triangles_read->triangles.empty()) return skip("mesh '" + path->string() + "' has no triangles");
+    std::optional<MeshFile> read;
+    if (format == MeshFormat::kStl) {
+      auto stl = parse_stl(std::vector<std::uint8_t>(bytes->begin(), bytes->end()), why);
+      if (stl) read = whole(std::move(*stl));
+    } else {
+      bool too_many = false;
+      const MeshLimits limits{options.convert.limits.max_file_bytes,
+                              options.convert.limits.max_triangles - std::min(triangles, options.convert.limits.max_triangles)};
+      read = read_assimp_mesh(*path, format, *bytes, limits, why, too_many);
+      if (too_many) {
+        diag.error_at_line(codes::TOO_MANY_TRIANGLES, pointer, row, "mesh '" + path->string() + "': " + why);
+        ok = false;
+        return std::nullopt;
+      }
+      if (!read) why = std::string(format == MeshFormat::kCollada ? "COLLADA" : "OBJ") + ": " + why;
+    }
+    if (!read) return unusable(codes::URDF_MESH_INVALID, "mesh '" + path->string() + "': " + why);
+    if (read->mesh.triangles.empty()) return skip("mesh '" + path->string() + "' has no triangles");
     scale = to_eigen(mesh.scale);
-    return triangles_read;
+    return read;
   }
 
-  // Whether import can read this geometry: a shape with sizes, or an STL mesh that is there. (A
-  // file that is there but no STL is still an error where the mass must come from it.)
+  // Whether import can read this geometry: a shape with sizes, or a mesh of a format import reads
+  // that is there. (A file that is there but cannot be read is still an error where the mass must
+  // come from it.)
   bool readable(const urdf::GeometrySharedPtr& g) const {
     if (!g || degenerate_shape(*g)) return false;
     if (g->type != urdf::Geometry::MESH) return true;
     const auto& mesh = static_cast<const urdf::Mesh&>(*g);
     std::string why;
-    return is_stl(mesh.filename) && resolve_mesh_path(mesh.filename, urdf_folder(), why);
-  }
-
-  // Whether a mesh file name ends in .stl, in any case.
-  static bool is_stl(const std::string& filename) {
-    std::string extension = fs::path(filename).extension().string();
-    for (char& ch : extension) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
-    return extension == ".stl";
+    return mesh_format(mesh.filename) != MeshFormat::kOther && resolve_mesh_path(mesh.filename, urdf_folder(), why);
   }
 
   // Where relative mesh file names start: the URDF's folder.
@@ -269,7 +297,7 @@ class Builder {
       }
       diag.info(codes::URDF_COLLISION_AS_VISUAL, link_pointer(link.name),
                 "link '" + link.name + "': import cannot read its " + unread +
-                    " (it reads STL files that are there, and boxes, cylinders and spheres with a volume)" +
+                    " (it reads " + kMeshFormatsRead + " files that are there, and boxes, cylinders and spheres with a volume)" +
                     (mass_authored ? std::string(", nor any other <visual>")
                                    : std::string(", and the link's mass comes from its geometry")) +
                     ": its <collision> geometry is its mesh");
@@ -281,8 +309,8 @@ class Builder {
         const urdf::GeometrySharedPtr& g = link.collision_array[i]->geometry;
         if (!g || g->type != urdf::Geometry::MESH) continue;
         const std::string& filename = static_cast<const urdf::Mesh&>(*g).filename;
-        std::string why = "is not STL, the one mesh format import reads";
-        const bool missing = is_stl(filename) && !resolve_mesh_path(filename, urdf_folder(), why);
+        std::string why = "is none of the formats import reads (" + std::string(kMeshFormatsRead) + ")";
+        const bool missing = mesh_format(filename) != MeshFormat::kOther && !resolve_mesh_path(filename, urdf_folder(), why);
         if (missing) why = "cannot be read: " + why;
         diag.warning_at_line(missing ? codes::URDF_MESH_NOT_FOUND : codes::URDF_GEOMETRY_SKIPPED,
                              link_pointer(link.name) + "/collision[" + std::to_string(i + 1) + "]",
@@ -305,7 +333,7 @@ class Builder {
       Eigen::Vector3d scale;
       auto mesh = geometry(*g, pointer, row, mass_from, scale);
       if (!mesh) continue;
-      triangles += mesh->triangles.size();
+      triangles += mesh->mesh.triangles.size();
       if (triangles > options.convert.limits.max_triangles) {
         diag.error(codes::TOO_MANY_TRIANGLES, pointer, "more than " + std::to_string(options.convert.limits.max_triangles) + " triangles");
         ok = false;
@@ -313,8 +341,15 @@ class Builder {
       }
       std::string name = use_collision ? link.collision_array[i]->name : link.visual_array[i]->name;
       if (name.empty()) name = link.name + "_" + element + (count > 1 ? "_" + std::to_string(i + 1) : "");
-      const auto material = use_collision ? std::nullopt : material_for(*link.visual_array[i]);
-      const std::size_t mesh_index = writer.add_mesh(*mesh, name, material);
+      // A part in a colour of its own keeps it; the rest take the visual's <material> (RViz's
+      // rule). A collision geometry standing in has no <material>.
+      const auto fallback = use_collision ? std::nullopt : material_for(*link.visual_array[i]);
+      std::vector<GltfMeshWriter::Primitive> primitives;
+      for (const MeshPart& part : mesh->parts) {
+        primitives.push_back({part.first, part.count,
+                              part.material ? std::optional(material_for(*part.material)) : fallback});
+      }
+      const std::size_t mesh_index = writer.add_mesh(mesh->mesh, name, primitives);
       Json node{{"name", name}, {"mesh", mesh_index}};
       Eigen::Isometry3d X = to_isometry(origin);
       X.linear() = C * X.linear();

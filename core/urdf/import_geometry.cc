@@ -248,8 +248,8 @@ std::size_t GltfMeshWriter::add_view(std::size_t offset, std::size_t length, int
 }
 
 std::size_t GltfMeshWriter::add_mesh(const TriangleMesh& mesh, const std::string& name,
-                                     std::optional<std::size_t> material) {
-  // Positions (float32 VEC3), then indices (uint32): both 4-byte aligned.
+                                     const std::vector<Primitive>& primitives) {
+  // Positions (float32 VEC3), then each primitive's indices (uint32): all 4-byte aligned.
   const std::size_t position_offset = bin_.size();
   std::array<float, 3> low{}, high{};
   for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
@@ -262,28 +262,31 @@ std::size_t GltfMeshWriter::add_mesh(const TriangleMesh& mesh, const std::string
       bin_.insert(bin_.end(), bytes, bytes + 4);
     }
   }
-  const std::size_t index_offset = bin_.size();
-  for (const auto& t : mesh.triangles) {
-    for (std::uint32_t i : t) {
-      std::uint8_t bytes[4];
-      std::memcpy(bytes, &i, 4);
-      bin_.insert(bin_.end(), bytes, bytes + 4);
-    }
-  }
-  const std::size_t position_view = add_view(position_offset, index_offset - position_offset, 34962);
-  const std::size_t index_view = add_view(index_offset, bin_.size() - index_offset, 34963);
+  const std::size_t position_view = add_view(position_offset, bin_.size() - position_offset, 34962);
   Json& accessors = document_["accessors"];
   accessors.push_back(Json{{"bufferView", position_view}, {"componentType", 5126},
                            {"count", mesh.positions.size()}, {"type", "VEC3"},
                            {"min", Json::array({low[0], low[1], low[2]})},
                            {"max", Json::array({high[0], high[1], high[2]})}});
   const std::size_t position_accessor = accessors.size() - 1;
-  accessors.push_back(Json{{"bufferView", index_view}, {"componentType", 5125},
-                           {"count", mesh.triangles.size() * 3}, {"type", "SCALAR"}});
-  const std::size_t index_accessor = accessors.size() - 1;
-  Json primitive{{"attributes", {{"POSITION", position_accessor}}}, {"indices", index_accessor}, {"mode", 4}};
-  if (material) primitive["material"] = *material;
-  document_["meshes"].push_back(Json{{"name", name}, {"primitives", Json::array({primitive})}});
+  Json out = Json::array();
+  for (const Primitive& part : primitives) {
+    const std::size_t index_offset = bin_.size();
+    for (std::size_t t = part.first; t < part.first + part.count; ++t) {
+      for (std::uint32_t i : mesh.triangles[t]) {
+        std::uint8_t bytes[4];
+        std::memcpy(bytes, &i, 4);
+        bin_.insert(bin_.end(), bytes, bytes + 4);
+      }
+    }
+    const std::size_t index_view = add_view(index_offset, bin_.size() - index_offset, 34963);
+    accessors.push_back(Json{{"bufferView", index_view}, {"componentType", 5125},
+                             {"count", part.count * 3}, {"type", "SCALAR"}});
+    Json primitive{{"attributes", {{"POSITION", position_accessor}}}, {"indices", accessors.size() - 1}, {"mode", 4}};
+    if (part.material) primitive["material"] = *part.material;
+    out.push_back(std::move(primitive));
+  }
+  document_["meshes"].push_back(Json{{"name", name}, {"primitives", std::move(out)}});
   return document_["meshes"].size() - 1;
 }
 

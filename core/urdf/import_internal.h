@@ -8,6 +8,7 @@
 #include <optional>
 #include <string>
 #include <string_view>
+#include <unordered_map>
 #include <vector>
 
 #include <Eigen/Core>
@@ -91,13 +92,77 @@ std::optional<std::filesystem::path> resolve_mesh_path(const std::string& filena
                                                        const std::filesystem::path& urdf_folder,
                                                        std::string& why);
 
+// Collects triangle corners, welding equal positions into one vertex (an STL repeats each vertex in
+// every triangle; COLLADA and OBJ split one per normal and texture coordinate).
+class Welder {
+ public:
+  void add_corner(const Eigen::Vector3d& p) {
+    const std::array<double, 3> key{p.x(), p.y(), p.z()};
+    auto [it, inserted] = index_.try_emplace(key, static_cast<std::uint32_t>(mesh_.positions.size()));
+    if (inserted) mesh_.positions.push_back(p);
+    corner_[corners_++ % 3] = it->second;
+    if (corners_ % 3 == 0) mesh_.triangles.push_back(corner_);
+  }
+  std::size_t triangles() const { return mesh_.triangles.size(); }
+  TriangleMesh take() { return std::move(mesh_); }
+
+ private:
+  struct KeyHash {
+    std::size_t operator()(const std::array<double, 3>& k) const {
+      const std::hash<double> h;
+      return h(k[0]) ^ (h(k[1]) * 31) ^ (h(k[2]) * 1000003);
+    }
+  };
+  std::unordered_map<std::array<double, 3>, std::uint32_t, KeyHash> index_;
+  TriangleMesh mesh_;
+  std::array<std::uint32_t, 3> corner_{};
+  std::size_t corners_ = 0;
+};
+
+// The mesh file formats import reads, by the name's extension (any case).
+enum class MeshFormat { kStl, kCollada, kObj, kOther };
+MeshFormat mesh_format(const std::string& filename);
+inline constexpr const char* kMeshFormatsRead = "STL, COLLADA (.dae) and OBJ";
+
+// A mesh file's triangles in metres, welded, and the parts drawn in one material each (triangles
+// first .. first + count - 1); a part without a material of its own takes the URDF's <material>.
+struct MeshMaterial {
+  std::string name;
+  std::array<double, 4> rgba{};
+};
+struct MeshPart {
+  std::size_t first = 0, count = 0;
+  std::optional<MeshMaterial> material;
+};
+struct MeshFile {
+  TriangleMesh mesh;
+  std::vector<MeshPart> parts;
+};
+struct MeshLimits {
+  std::uint64_t max_file_bytes = 0;
+  std::uint64_t max_triangles = 0;
+};
+
+// A COLLADA or OBJ file read with assimp as ROS tools (RViz, MoveIt) read it: every node transform
+// applied, COLLADA's <up_axis> ignored, its <unit meter> applied (exactly as `text`, the file's
+// bytes, writes it), OBJ in metres as written, an OBJ's .mtl found beside it. Points and lines are
+// left out; a mirrored instance is wound outward. Nothing, and `why`, when assimp cannot read it,
+// a vertex is not finite, or (`too_many`) it holds more than the limit of triangles.
+std::optional<MeshFile> read_assimp_mesh(const std::filesystem::path& path, MeshFormat format, std::string_view text,
+                                         const MeshLimits& limits, std::string& why, bool& too_many);
+
 // Builds the binary buffer of a generated glTF: one mesh per call, positions as float32 (with
 // min and max) and indices as uint32.
 class GltfMeshWriter {
  public:
   explicit GltfMeshWriter(Json& document) : document_(document) {}
-  // Returns the index of the new mesh.
-  std::size_t add_mesh(const TriangleMesh& mesh, const std::string& name, std::optional<std::size_t> material);
+  // One primitive of triangles first .. first + count - 1, in a material or none.
+  struct Primitive {
+    std::size_t first = 0, count = 0;
+    std::optional<std::size_t> material;
+  };
+  // Returns the index of the new mesh: the positions once, indices for each primitive.
+  std::size_t add_mesh(const TriangleMesh& mesh, const std::string& name, const std::vector<Primitive>& primitives);
   std::vector<std::uint8_t> take_buffer();
 
  private:

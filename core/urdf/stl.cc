@@ -1,12 +1,14 @@
 // STL, binary and ASCII: written for URDF export (binary), read for URDF import (both).
 #include <cstring>
 #include <sstream>
-#include <unordered_map>
 
+#include "import_internal.h"
 #include "rdtf/urdf.h"
 
 namespace rdtf {
 namespace {
+
+using urdf_internal::Welder;
 
 void put_u32(std::vector<std::uint8_t>& out, std::uint32_t value) {
   for (int i = 0; i < 4; ++i) out.push_back(static_cast<std::uint8_t>(value >> (8 * i)));
@@ -30,31 +32,6 @@ float get_f32(const std::uint8_t* p) {
   std::memcpy(&f, &bits, 4);
   return f;
 }
-
-// Collects triangle corners, welding equal positions into one vertex.
-class Welder {
- public:
-  void add_corner(const Eigen::Vector3d& p) {
-    const std::array<double, 3> key{p.x(), p.y(), p.z()};
-    auto [it, inserted] = index_.try_emplace(key, static_cast<std::uint32_t>(mesh_.positions.size()));
-    if (inserted) mesh_.positions.push_back(p);
-    corner_[corners_++ % 3] = it->second;
-    if (corners_ % 3 == 0) mesh_.triangles.push_back(corner_);
-  }
-  TriangleMesh take() { return std::move(mesh_); }
-
- private:
-  struct KeyHash {
-    std::size_t operator()(const std::array<double, 3>& k) const {
-      const std::hash<double> h;
-      return h(k[0]) ^ (h(k[1]) * 31) ^ (h(k[2]) * 1000003);
-    }
-  };
-  std::unordered_map<std::array<double, 3>, std::uint32_t, KeyHash> index_;
-  TriangleMesh mesh_;
-  std::array<std::uint32_t, 3> corner_{};
-  std::size_t corners_ = 0;
-};
 
 std::optional<TriangleMesh> parse_binary(const std::vector<std::uint8_t>& bytes) {
   const std::uint32_t count = get_u32(bytes.data() + 80);

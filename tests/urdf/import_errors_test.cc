@@ -547,7 +547,7 @@ TEST(UrdfImportErrors, CommentsAndInstructionsAfterTheRobotAreFine) {
   }
 }
 
-// A COLLADA visual and a collision STL that is not there: the link shows nothing, and the missing
+// A COLLADA visual and a collision STL, neither there: the link shows nothing, and the missing
 // collision mesh, which would have stood in, went unmentioned (z1's gripper).
 TEST(UrdfImportErrors, AMissingCollisionMeshThatWouldStandInIsNamed) {
   TempDir dir;
@@ -558,13 +558,19 @@ TEST(UrdfImportErrors, AMissingCollisionMeshThatWouldStandInIsNamed) {
                                 "</link>\n</robot>\n");
   Diagnostics diag;
   ASSERT_TRUE(import_urdf(urdf, UrdfImportOptions{}, diag));
+  // Both meshes are named as missing: the visual's (it is only the link's look) and the collision
+  // mesh that would have stood in.
   const Diagnostic* found = nullptr;
+  const Diagnostic* visual_missing = nullptr;
   for (const Diagnostic& d : diag.all()) {
-    if (d.code == "URDF_MESH_NOT_FOUND") found = &d;
+    if (d.code != "URDF_MESH_NOT_FOUND") continue;
+    (d.pointer == "/robot/link[@name='a']/collision[1]" ? found : visual_missing) = &d;
   }
+  ASSERT_NE(visual_missing, nullptr);
+  EXPECT_EQ(visual_missing->pointer, "/robot/link[@name='a']/visual[1]");
+  EXPECT_NE(visual_missing->message.find("mesh file 'meshes/a.dae' not found"), std::string::npos) << visual_missing->message;
   ASSERT_NE(found, nullptr);
   EXPECT_EQ(found->severity, Severity::kWarning);
-  EXPECT_EQ(found->pointer, "/robot/link[@name='a']/collision[1]");
   EXPECT_EQ(found->line, 3);
   EXPECT_NE(found->message.find("its <collision> mesh 'meshes/a_collision.STL', which would stand in, cannot be read: "
                                 "mesh file 'meshes/a_collision.STL' not found"),

@@ -92,7 +92,7 @@ TEST(UrdfImport, CharacterReferencesInNamesAreTheirCharacters) {
   expect_valid_gltf(conversion, dir / "robot.gltf");
 }
 
-TEST(UrdfImport, AuthoredInertialsAreKeptAndColladaMeshesSkippedWithAWarning) {
+TEST(UrdfImport, AuthoredInertialsAreKeptAndTheFingersColladaMeshesRead) {
   Diagnostics diag;
   const Conversion conversion = import_or_fail(tutorial("07-physics.urdf"), diag);
   const auto original = parse_with_urdfdom(testing::read_file(tutorial("07-physics.urdf")));
@@ -106,15 +106,22 @@ TEST(UrdfImport, AuthoredInertialsAreKeptAndColladaMeshesSkippedWithAWarning) {
     EXPECT_EQ(Eigen::Matrix3d(C * link.inertial.inertia * C.transpose()), tensor_of(in));
     EXPECT_EQ(Eigen::Vector3d(C * link.inertial.center_of_mass), vector_of(in.origin.position));
   }
-  bool skipped = false;
-  for (const Diagnostic& d : diag.all()) {
-    if (d.code != "URDF_MESH_FORMAT_UNSUPPORTED") continue;
-    skipped = true;
-    EXPECT_EQ(d.severity, Severity::kWarning);
-    EXPECT_NE(d.message.find("l_finger"), std::string::npos) << d.message;
-    EXPECT_EQ(d.pointer.rfind("/robot/link[@name='", 0), 0u) << d.pointer;
+  // The PR2 finger meshes (COLLADA, tests/data/urdf/urdf_tutorial/meshes) are read: no mesh
+  // diagnostic, and each finger and tip shows its file's 2,000 or 1,000 triangles.
+  for (const Diagnostic& d : diag.all()) EXPECT_EQ(d.code.rfind("URDF_MESH", 0), std::string::npos) << format(d);
+  std::map<std::string, std::size_t> triangles;
+  const Json& document = conversion.asset.document;
+  for (const Json& mesh : document["meshes"]) {
+    std::size_t count = 0;
+    for (const Json& primitive : mesh["primitives"]) {
+      count += document["accessors"][primitive["indices"].get<std::size_t>()]["count"].get<std::size_t>() / 3;
+    }
+    triangles[mesh["name"].get<std::string>()] = count;
   }
-  EXPECT_TRUE(skipped);
+  EXPECT_EQ(triangles["left_gripper_visual"], 2000u);
+  EXPECT_EQ(triangles["right_gripper_visual"], 2000u);
+  EXPECT_EQ(triangles["left_tip_visual"], 1000u);
+  EXPECT_EQ(triangles["right_tip_visual"], 1000u);
 }
 
 // The root and links on moving joints without <inertial> get their mass from the generated

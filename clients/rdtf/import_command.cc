@@ -38,7 +38,7 @@ int run_import(ImportArguments& args) {
 void add_import_command(CLI::App& app, int& exit_code) {
   auto args = std::make_shared<ImportArguments>();
   CLI::App* command = app.add_subcommand(
-      "import", "Import a URDF as RDTF (glTF + extras.RDTF); STL, box, cylinder and sphere geometry");
+      "import", "Import a URDF as RDTF (glTF + extras.RDTF); STL, COLLADA and OBJ meshes, boxes, cylinders and spheres");
   command->add_option("input", args->input, "The URDF file")->required();
   command->add_option("-o,--output", args->output, "The .gltf or .glb to write (its folder is created when missing)")
       ->required();

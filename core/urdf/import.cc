@@ -227,7 +227,10 @@ class Builder {
                               options.convert.limits.max_triangles - std::min(triangles, options.convert.limits.max_triangles)};
       read = read_assimp_mesh(*path, format, *bytes, limits, why, too_many);
       if (too_many) {
-        diag.error_at_line(codes::TOO_MANY_TRIANGLES, pointer, row, "mesh '" + path->string() + "': " + why);
+        diag.error_at_line(codes::TOO_MANY_TRIANGLES, pointer, row,
+                           "mesh '" + path->string() + "': the URDF's meshes have more than " +
+                               std::to_string(options.convert.limits.max_triangles) +
+                               " triangles with this file's (each instance of a mesh counted)");
         ok = false;
         return std::nullopt;
       }

@@ -12,22 +12,49 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
+#include <fcntl.h>
+#include <poll.h>
+#include <signal.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <cctype>
+#include <cerrno>
 #include <charconv>
+#include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <system_error>
+#include <type_traits>
 
 #include <Eigen/LU>
 
 #include "import_internal.h"
 
+// Whether AddressSanitizer is on (GCC says so with a macro, clang with __has_feature).
+#if defined(__SANITIZE_ADDRESS__)
+#define RDTF_ADDRESS_SANITIZER 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define RDTF_ADDRESS_SANITIZER 1
+#endif
+#endif
+#ifndef RDTF_ADDRESS_SANITIZER
+#define RDTF_ADDRESS_SANITIZER 0
+#endif
+
 namespace rdtf::urdf_internal {
 namespace {
 
 namespace fs = std::filesystem;
+
+// How long assimp may read one file (CPU and wall clock): a 100 MB COLLADA file reads in a few
+// seconds; a file that keeps it longer is refused, not waited on.
+constexpr int kReaderSeconds = 60;
 
 // assimp opens the files a mesh names (an OBJ's .mtl) itself: only regular files within the size
 // limit, read-only, so that a FIFO in a material's place cannot block the import and a device
@@ -113,25 +140,35 @@ std::optional<MeshMaterial> material_of(const aiMaterial& material) {
 
 // assimp sizes its arrays from COLLADA's count attributes before reading what they count: 5 KB
 // with <triangles count="1500000000"> asked for 72 GB. Every count (and stride) counts items
-// written in the text, each at least a byte, so one above the file's size is a lie: refused with
-// its line before assimp reads the file.
+// written in the text, each at least a byte, so one above the file's size is a lie; and one that
+// is not plain decimal digits ("+N", "0x...", a character reference) is read by assimp's XML
+// parser however it likes. Either is refused, with its line, before assimp reads the file.
 std::optional<std::string> impossible_count(std::string_view text) {
-  for (const std::string_view name : {std::string_view("count="), std::string_view("stride=")}) {
+  for (const std::string_view name : {std::string_view("count"), std::string_view("stride")}) {
     for (std::size_t at = text.find(name); at != std::string_view::npos; at = text.find(name, at + 1)) {
+      // An attribute: white space before the name, then (white space) '=' (white space) a quote.
       if (at == 0 || !std::isspace(static_cast<unsigned char>(text[at - 1]))) continue;
-      std::size_t digit = at + name.size() + 1;
-      if (digit > text.size() || (text[digit - 1] != '"' && text[digit - 1] != '\'')) continue;
-      while (digit < text.size() && std::isspace(static_cast<unsigned char>(text[digit]))) ++digit;
-      std::size_t end = digit;
-      while (end < text.size() && std::isdigit(static_cast<unsigned char>(text[end]))) ++end;
-      if (end == digit) continue;
-      const std::string_view number = text.substr(digit, end - digit);
-      std::uint64_t value = 0;
-      const auto parsed = std::from_chars(number.data(), number.data() + number.size(), value);
-      if (parsed.ec == std::errc() && value <= text.size()) continue;
+      std::size_t i = at + name.size();
+      while (i < text.size() && std::isspace(static_cast<unsigned char>(text[i]))) ++i;
+      if (i >= text.size() || text[i] != '=') continue;
+      ++i;
+      while (i < text.size() && std::isspace(static_cast<unsigned char>(text[i]))) ++i;
+      if (i >= text.size() || (text[i] != '"' && text[i] != '\'')) continue;
+      const std::size_t close = text.find(text[i], i + 1);
+      if (close == std::string_view::npos) continue;
+      std::string_view value = text.substr(i + 1, close - i - 1);
+      while (!value.empty() && std::isspace(static_cast<unsigned char>(value.front()))) value.remove_prefix(1);
+      while (!value.empty() && std::isspace(static_cast<unsigned char>(value.back()))) value.remove_suffix(1);
+      std::uint64_t number = 0;
+      const auto parsed = std::from_chars(value.data(), value.data() + value.size(), number);
+      const bool digits = !value.empty() && std::all_of(value.begin(), value.end(), [](char c) {
+        return std::isdigit(static_cast<unsigned char>(c)) != 0;
+      });
+      if (digits && parsed.ec == std::errc() && number <= text.size()) continue;
       const auto line = 1 + std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(at), '\n');
-      return std::string(name.substr(0, name.size() - 1)) + "=\"" + std::string(number) + "\" on line " +
-             std::to_string(line) + " is more than the file's " + std::to_string(text.size()) +
+      const std::string shown = std::string(name) + "=\"" + std::string(value.substr(0, 40)) + "\" on line " + std::to_string(line);
+      if (!digits) return shown + " is not a plain decimal number (not read)";
+      return shown + " is more than the file's " + std::to_string(text.size()) +
              " bytes can hold: the file is cut short or crafted (not read)";
     }
   }
@@ -149,15 +186,11 @@ MeshFormat mesh_format(const std::string& filename) {
   return MeshFormat::kOther;
 }
 
-std::optional<MeshFile> read_assimp_mesh(const fs::path& path, MeshFormat format, std::string_view text,
-                                         const MeshLimits& limits, std::string& why, bool& too_many) {
-  too_many = false;
-  if (format == MeshFormat::kCollada) {
-    if (auto impossible = impossible_count(text)) {
-      why = *impossible;
-      return std::nullopt;
-    }
-  }
+namespace {
+
+// Reads the file with assimp in this process (the child of read_assimp_mesh).
+std::optional<MeshFile> read_here(const fs::path& path, MeshFormat format, std::string_view text,
+                                  const MeshLimits& limits, std::string& why, bool& too_many) {
   Assimp::Importer importer;
   importer.SetIOHandler(new RegularFilesOnly(limits.max_file_bytes));  // The importer owns it.
   importer.SetPropertyBool(AI_CONFIG_IMPORT_COLLADA_IGNORE_UP_DIRECTION, true);
@@ -244,6 +277,225 @@ std::optional<MeshFile> read_assimp_mesh(const fs::path& path, MeshFormat format
     file.parts.push_back(std::move(part));
   }
   file.mesh = welder.take();
+  return file;
+}
+
+// What the child sends back through its pipe: a status byte (0 read, 1 not read, 2 too many
+// triangles), the reason, then the mesh. Native byte order: the same program reads it.
+class Writer {
+ public:
+  template <typename T>
+  void put(const T& value) {
+    const auto* bytes = reinterpret_cast<const char*>(&value);
+    out_.append(bytes, sizeof(T));
+  }
+  void put_text(const std::string& text) {
+    put<std::uint64_t>(text.size());
+    out_ += text;
+  }
+  const std::string& bytes() const { return out_; }
+
+ private:
+  std::string out_;
+};
+
+class Reader {
+ public:
+  explicit Reader(std::string_view in) : in_(in) {}
+  template <typename T>
+  bool get(T& value) {
+    if (in_.size() < sizeof(T)) return false;
+    static_assert(std::is_trivially_copyable_v<T> || std::is_same_v<T, Eigen::Vector3d>);
+    std::memcpy(static_cast<void*>(&value), in_.data(), sizeof(T));  // Eigen's vector is three doubles.
+    in_.remove_prefix(sizeof(T));
+    return true;
+  }
+  bool get_text(std::string& text) {
+    std::uint64_t size = 0;
+    if (!get(size) || in_.size() < size) return false;
+    text.assign(in_.substr(0, size));
+    in_.remove_prefix(size);
+    return true;
+  }
+  bool done() const { return in_.empty(); }
+
+ private:
+  std::string_view in_;
+};
+
+std::string encode(const std::optional<MeshFile>& file, const std::string& why, bool too_many) {
+  Writer out;
+  out.put<std::uint8_t>(file ? 0 : too_many ? 2 : 1);
+  out.put_text(why);
+  if (!file) return out.bytes();
+  out.put<std::uint64_t>(file->mesh.positions.size());
+  for (const Eigen::Vector3d& p : file->mesh.positions) out.put(p);
+  out.put<std::uint64_t>(file->mesh.triangles.size());
+  for (const auto& t : file->mesh.triangles) out.put(t);
+  out.put<std::uint64_t>(file->parts.size());
+  for (const MeshPart& part : file->parts) {
+    out.put<std::uint64_t>(part.first);
+    out.put<std::uint64_t>(part.count);
+    out.put<std::uint8_t>(part.material ? 1 : 0);
+    if (part.material) {
+      out.put_text(part.material->name);
+      out.put(part.material->rgba);
+    }
+  }
+  return out.bytes();
+}
+
+bool decode(std::string_view bytes, std::optional<MeshFile>& file, std::string& why, bool& too_many) {
+  Reader in(bytes);
+  std::uint8_t status = 0;
+  if (!in.get(status) || status > 2 || !in.get_text(why)) return false;
+  too_many = status == 2;
+  if (status != 0) return in.done();
+  MeshFile out;
+  std::uint64_t count = 0;
+  // Each count is checked against what is left before anything is sized from it.
+  if (!in.get(count) || count > bytes.size() / sizeof(Eigen::Vector3d)) return false;
+  out.mesh.positions.resize(count);
+  for (Eigen::Vector3d& p : out.mesh.positions) {
+    if (!in.get(p)) return false;
+  }
+  if (!in.get(count) || count > bytes.size() / 12) return false;
+  out.mesh.triangles.resize(count);
+  for (auto& t : out.mesh.triangles) {
+    if (!in.get(t)) return false;
+    for (std::uint32_t v : t) {
+      if (v >= out.mesh.positions.size()) return false;
+    }
+  }
+  if (!in.get(count) || count > bytes.size()) return false;
+  for (std::uint64_t i = 0; i < count; ++i) {
+    MeshPart part;
+    std::uint64_t first = 0, size = 0;
+    std::uint8_t has_material = 0;
+    if (!in.get(first) || !in.get(size) || !in.get(has_material)) return false;
+    if (first > out.mesh.triangles.size() || size > out.mesh.triangles.size() - first) return false;
+    part.first = first;
+    part.count = size;
+    if (has_material != 0) {
+      MeshMaterial material;
+      if (!in.get_text(material.name) || !in.get(material.rgba)) return false;
+      part.material = std::move(material);
+    }
+    out.parts.push_back(std::move(part));
+  }
+  if (!in.done()) return false;
+  file = std::move(out);
+  return true;
+}
+
+}  // namespace
+
+std::optional<MeshFile> read_assimp_mesh(const fs::path& path, MeshFormat format, std::string_view text,
+                                         const MeshLimits& limits, std::string& why, bool& too_many) {
+  too_many = false;
+  if (format == MeshFormat::kCollada) {
+    if (auto impossible = impossible_count(text)) {
+      why = *impossible;
+      return std::nullopt;
+    }
+  }
+  // assimp is not written for hostile files: the mutations of a few fixtures made it overflow its
+  // stack on nested nodes, abort on its own assertions, and loop for minutes. It reads in a child
+  // process, so that whatever it does to that process, `rdtf import` names the file and goes on;
+  // the child's stderr is closed to keep assimp's and a sanitizer's output out of the user's.
+  int pipe_fds[2];
+  if (::pipe2(pipe_fds, O_CLOEXEC) != 0) {
+    why = std::string("could not start the reader: ") + std::strerror(errno);
+    return std::nullopt;
+  }
+  const pid_t child = ::fork();
+  if (child < 0) {
+    why = std::string("could not start the reader: ") + std::strerror(errno);
+    ::close(pipe_fds[0]);
+    ::close(pipe_fds[1]);
+    return std::nullopt;
+  }
+  if (child == 0) {
+    ::close(pipe_fds[0]);
+    if (const int null = ::open("/dev/null", O_WRONLY); null >= 0) ::dup2(null, STDERR_FILENO);
+    const rlimit cpu{kReaderSeconds, kReaderSeconds};
+    ::setrlimit(RLIMIT_CPU, &cpu);
+#if !RDTF_ADDRESS_SANITIZER
+    // Address space for assimp beyond what the process holds: 2 GiB and 40 bytes for each byte of
+    // the file (assimp's COLLADA reader holds about 15 for each byte of a large file). A crafted
+    // file that would grow without end fails an allocation instead. (AddressSanitizer's shadow
+    // memory needs terabytes of address space: no limit in such a build.)
+    long pages = 0;
+    if (std::FILE* statm = std::fopen("/proc/self/statm", "r")) {
+      if (std::fscanf(statm, "%ld", &pages) != 1) pages = 0;
+      std::fclose(statm);
+    }
+    const rlim_t budget = (rlim_t{2} << 30) + 40 * static_cast<rlim_t>(text.size()) +
+                          static_cast<rlim_t>(pages) * static_cast<rlim_t>(::sysconf(_SC_PAGESIZE));
+    const rlimit space{budget, budget};
+    ::setrlimit(RLIMIT_AS, &space);
+#endif
+    std::string child_why;
+    bool child_too_many = false;
+    std::optional<MeshFile> read;
+    try {
+      read = read_here(path, format, text, limits, child_why, child_too_many);
+    } catch (const std::exception& e) {
+      child_why = e.what();
+    }
+    const std::string bytes = encode(read, child_why, child_too_many);
+    for (std::size_t sent = 0; sent < bytes.size();) {
+      const ssize_t n = ::write(pipe_fds[1], bytes.data() + sent, bytes.size() - sent);
+      if (n < 0 && errno == EINTR) continue;
+      if (n <= 0) ::_exit(3);
+      sent += static_cast<std::size_t>(n);
+    }
+    ::_exit(0);
+  }
+  ::close(pipe_fds[1]);
+  // Read everything the child sends until it closes the pipe or the time is up.
+  std::string bytes;
+  bool timed_out = false;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(kReaderSeconds);
+  char buffer[65536];
+  for (;;) {
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+    if (left.count() <= 0) {
+      timed_out = true;
+      break;
+    }
+    pollfd poll_fd{pipe_fds[0], POLLIN, 0};
+    const int ready = ::poll(&poll_fd, 1, static_cast<int>(left.count()));
+    if (ready < 0 && errno == EINTR) continue;
+    if (ready <= 0) {
+      timed_out = ready == 0;
+      break;
+    }
+    const ssize_t n = ::read(pipe_fds[0], buffer, sizeof buffer);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) break;
+    bytes.append(buffer, static_cast<std::size_t>(n));
+  }
+  ::close(pipe_fds[0]);
+  if (timed_out) ::kill(child, SIGKILL);
+  int status = 0;
+  while (::waitpid(child, &status, 0) < 0 && errno == EINTR) {
+  }
+  if (timed_out || (WIFSIGNALED(status) && WTERMSIG(status) == SIGXCPU)) {
+    why = "assimp did not finish reading it in " + std::to_string(kReaderSeconds) + " s (stopped)";
+    return std::nullopt;
+  }
+  if (WIFSIGNALED(status)) {
+    why = std::string("assimp failed reading it (its reader was ended by ") + ::strsignal(WTERMSIG(status)) +
+          ": a file it cannot parse, or one made to crash it)";
+    return std::nullopt;
+  }
+  std::optional<MeshFile> file;
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0 || !decode(bytes, file, why, too_many)) {
+    why = "assimp failed reading it (its reader stopped without a result: a file it cannot parse, or one made to "
+          "crash it)";
+    return std::nullopt;
+  }
   return file;
 }
 

@@ -8,20 +8,7 @@
 #include <vector>
 
 #include "dynamics/dynamics_models.h"
-
-#if defined(__SANITIZE_ADDRESS__)
-#define RDTF_TEST_ASAN 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define RDTF_TEST_ASAN 1
-#endif
-#endif
-
-#ifdef RDTF_TEST_ASAN
-#include <sanitizer/allocator_interface.h>
-#else
-#include <malloc.h>
-#endif
+#include "support/heap_in_use.h"
 
 namespace rdtf {
 namespace {
@@ -29,16 +16,7 @@ namespace {
 using dynamics_test::box_inertial;
 using dynamics_test::RobotBuilder;
 
-// Bytes the program has allocated and not freed (ASan counts its own allocations; glibc's
-// counters sum every arena, and blocks it mapped on their own).
-std::size_t heap_in_use() {
-#ifdef RDTF_TEST_ASAN
-  return __sanitizer_get_current_allocated_bytes();
-#else
-  const struct mallinfo2 info = mallinfo2();
-  return info.uordblks + info.hblkhd;
-#endif
-}
+using testing::heap_in_use;
 
 // Heap per simulation of `robot`, each created and stepped once (ODE sizes its step arenas at
 // the first step), over `count` of them alive at once.

@@ -18,12 +18,19 @@ namespace rdtf {
 namespace {
 
 // Attachment frames must coincide at rest within this (m, and rad as the largest column
-// difference), the precision of float transforms a few metres from the origin.
+// difference), the precision of float transforms a few metres from the origin. Positions are
+// compared relative to their distance from the origin beyond 1 m (position_tolerance): two frames
+// composed through different node chains round apart in proportion to how far out they are.
 constexpr double kFrameTolerance = 1e-6;
 // KHR values that equal the RDTF ones within this (relative) are the same (rdtf's own output).
 constexpr double kAgree = 1e-9;
 // |q| must be 1 within this (glTF's tolerance for node rotations is of this order).
 constexpr double kUnitTolerance = 1e-6;
+
+// The distance within which two points at p and q are the same point (m).
+double position_tolerance(const Eigen::Vector3d& p, const Eigen::Vector3d& q) {
+  return kFrameTolerance * std::max({1.0, p.norm(), q.norm()});
+}
 
 const Json* physics_of(const Json& node) {
   if (!node.is_object() || !node.contains("extensions") || !node["extensions"].is_object()) return nullptr;
@@ -338,7 +345,7 @@ std::optional<Joint> joint_from_khr(const Json& document, const std::vector<Eige
   const Eigen::Isometry3d X_SB = rigid_part(world[static_cast<std::size_t>(ref.connected)]);
   const double offset = (X_SA.translation() - X_SB.translation()).norm();
   const double turn = (X_SA.linear() - X_SB.linear()).cwiseAbs().maxCoeff();
-  if (offset > kFrameTolerance || turn > kFrameTolerance) {
+  if (offset > position_tolerance(X_SA.translation(), X_SB.translation()) || turn > kFrameTolerance) {
     diag.error(codes::KHR_JOINT_FRAMES_DISAGREE, pointer,
                label + ": its frame and that of its connectedNode " + where(document, static_cast<std::size_t>(ref.connected)) +
                    " differ at rest (" + std::to_string(offset) + " m apart, axes differing by up to " + std::to_string(turn) +
@@ -373,7 +380,7 @@ std::optional<Joint> joint_from_khr(const Json& document, const std::vector<Eige
       // frame's origin, so that origin must be on the line.
       const Eigen::Vector3d r = X_SA.translation() - child.X_SL.translation();
       const double off_axis = (r - r.dot(a_S) * a_S).norm();
-      if (off_axis > kFrameTolerance) {
+      if (off_axis > position_tolerance(X_SA.translation(), child.X_SL.translation())) {
         diag.warning(codes::KHR_PHYSICS_UNSUPPORTED, pointer,
                      label + ": its pivot is " + std::to_string(off_axis) + " m off the axis through the RDTF joint frame " +
                          where(document, static_cast<std::size_t>(rdtf.frame_node)) +

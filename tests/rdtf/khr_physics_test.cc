@@ -485,6 +485,26 @@ TEST(KhrPhysicsRead, BadValuesAreNamed) {
   }
 }
 
+// Two attachment frames composed through different node chains round apart in proportion to
+// their distance from the origin: far out they agree relative to it (the fuzzer's model, scaled
+// by 5e18, came out 1024 m apart and its own output was refused), and a real offset still shows.
+TEST(KhrPhysicsRead, FramesFarFromTheOriginAgreeRelativeToTheirDistance) {
+  const auto frames_disagree = [](double x_base, double y_child_attachment) {
+    json doc = khr_twin();
+    doc["nodes"][0]["translation"] = {x_base, 0.0, 0.0};
+    doc["nodes"][4]["translation"] = {0.0, y_child_attachment, 0.0};
+    testing::TempDir dir;
+    Diagnostics diag;
+    convert_json(dir, "far.gltf", doc, diag);
+    return diag.contains(codes::KHR_JOINT_FRAMES_DISAGREE);
+  };
+  EXPECT_FALSE(frames_disagree(1e9, 0.0));
+  EXPECT_FALSE(frames_disagree(1e9, 1.0));     // 1e-9 of the distance: within float precision
+  EXPECT_TRUE(frames_disagree(1e9, 1e4));      // 1e-5 of it: a real offset
+  EXPECT_TRUE(frames_disagree(0.0, 1e-5));     // near the origin the tolerance is 1e-6 m
+  EXPECT_FALSE(frames_disagree(0.0, 1e-7));
+}
+
 TEST(KhrPhysicsRead, RdtfTakesPrecedenceAndSaysSo) {
   {
     json doc = khr_twin();

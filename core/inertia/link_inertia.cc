@@ -153,32 +153,49 @@ double density_for(const Json& document, const std::vector<int>& parents, int no
   return default_density;
 }
 
-// Reports what the surface check found; returns false when the volume cannot be trusted at all.
+// Where a mesh's link has an authored inertial (`authored_by`, the link's name; "" where its mass
+// comes from its meshes), what makes the mesh's volume unreliable changes no mass: it is said as
+// information, with why, and not as a warning about a mass (every open visual of a published
+// robot, whose masses are its <inertial>s, was "its mass is unreliable").
+void report_shape(Diagnostics& diag, const char* code, const std::string& pointer, const std::string& finding,
+                  const std::string& consequence, const std::string& authored_by) {
+  if (authored_by.empty()) {
+    diag.warning(code, pointer, finding + consequence);
+  } else {
+    diag.info(code, pointer,
+              finding + "; link '" + authored_by +
+                  "' has an authored inertial, so no mass comes from this mesh (only its own volume and density, "
+                  "as rdtf inspect lists them, are affected)");
+  }
+}
+
+// Reports what the surface check found.
 void report_topology(const MeshGeometry& geometry, const std::string& pointer,
-                     const std::string& name, Diagnostics& diag) {
+                     const std::string& name, Diagnostics& diag, const std::string& authored_by) {
   const SurfaceTopology& t = geometry.topology();
   if (!t.closed()) {
-    diag.warning(codes::MESH_OPEN, pointer,
+    report_shape(diag, codes::MESH_OPEN, pointer,
                  "mesh of '" + name + "' is not closed (" + std::to_string(t.boundary_edges) +
-                     " boundary edges, " + std::to_string(t.nonmanifold_edges) +
-                     " non-manifold edges): its volume, and so its mass, is unreliable");
+                     " boundary edges, " + std::to_string(t.nonmanifold_edges) + " non-manifold edges)",
+                 ": its volume, and so its mass, is unreliable", authored_by);
   }
   if (!t.consistently_oriented()) {
-    diag.warning(codes::MESH_INCONSISTENT_WINDING, pointer,
+    report_shape(diag, codes::MESH_INCONSISTENT_WINDING, pointer,
                  "mesh of '" + name + "' has " + std::to_string(t.misoriented_edges) +
-                     " edges whose triangles wind the same way: some faces are flipped, so its "
-                     "mass is wrong; recalculate normals outside in the modeller");
+                     " edges whose triangles wind the same way: some faces are flipped",
+                 ", so its mass is wrong; recalculate normals outside in the modeller", authored_by);
   }
 }
 
 // A solid's integrals, inside-out ones turned right with a warning.
-VolumeIntegrals oriented(VolumeIntegrals integrals, const std::string& pointer,
-                         const std::string& name, Diagnostics& diag, int instance = -1) {
+VolumeIntegrals oriented(VolumeIntegrals integrals, const std::string& pointer, const std::string& name,
+                         Diagnostics& diag, const std::string& authored_by, int instance = -1) {
   if (integrals.volume < 0) {
-    diag.warning(codes::MESH_INSIDE_OUT, pointer,
+    report_shape(diag, codes::MESH_INSIDE_OUT, pointer,
                  "mesh of '" + name + "'" + (instance >= 0 ? " (instance " + std::to_string(instance) + ")" : "") +
                      " is inside out (signed volume " + format_number(integrals.volume, 3) +
-                     " m^3): its faces wind clockwise; mass computed as if turned right");
+                     " m^3): its faces wind clockwise",
+                 "; mass computed as if turned right", authored_by);
     integrals.volume = -integrals.volume;
     integrals.second_central = -integrals.second_central;
   }
@@ -370,6 +387,22 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
   std::map<GeometryKey, MeshGeometry>& cache = kept.cache;
   std::vector<std::vector<LinkSolid>>& link_solids = kept.by_link;
   link_solids.assign(robot.links.size(), {});
+  std::vector<std::string> entry_pointers;
+  const auto entries = rdtf_entries(document, entry_pointers);
+  // The name of each link whose mass is an authored inertial (extras.RDTF's, or an inertial node's
+  // rdtf_inertial), "" for the others: its meshes give it no mass (report_shape).
+  std::vector<std::string> authored_by(robot.links.size());
+  for (std::size_t l = 0; l < robot.links.size(); ++l) {
+    for (const Json& child : document["nodes"][robot.links[l].node].value("children", Json::array())) {
+      const auto c = child.get<std::size_t>();
+      if (c >= types.size() || types[c] != NodeType::kInertial) continue;
+      const Json& node = document["nodes"][c];
+      if ((entries[c] != nullptr && entries[c]->contains("inertial")) ||
+          (node.contains("extras") && node["extras"].is_object() && node["extras"].contains("rdtf_inertial"))) {
+        authored_by[l] = robot.links[l].name;
+      }
+    }
+  }
 
   for (std::size_t node = 0; node < types.size(); ++node) {
     // A mesh on a node typed otherwise by its author (a link typed "joint" in extras.RDTF): its
@@ -395,7 +428,7 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
     const auto mesh = document["nodes"][node]["mesh"].get<std::size_t>();
     const MeshGeometry& geometry = geometry_of(asset, mesh, morph_weights(document, node), cache, diag);
     if (geometry.pieces.empty()) continue;
-    if (skinned) report_topology(geometry, pointer, name, diag);
+    if (skinned) report_topology(geometry, pointer, name, diag, "");
     // What is found from here on is reported after the surface check's findings, as when the
     // check ran before it: the check of a large mesh may still be running (check_surface).
     Diagnostics after_check(diag.file());
@@ -439,7 +472,7 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
         part.link = link;
         part.X_LV = robot.links[link].X_SL.inverse() * world[bone.joint_node] * bone.inverse_bind;
         part.signed_integrals = integrate_solid(bone.pieces, part.X_LV);
-        part.integrals = oriented(part.signed_integrals, pointer, name, diag);
+        part.integrals = oriented(part.signed_integrals, pointer, name, diag, authored_by[static_cast<std::size_t>(link)]);
         part.pieces = std::move(bone.pieces);
         volume += part.integrals.volume;
       }
@@ -499,7 +532,7 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
         solids.push_back(integrate_solid(std::span<const TriangleMeshView>(geometry.pieces), X_LI));
       }
     }
-    report_topology(geometry, pointer, name, diag);
+    report_topology(geometry, pointer, name, diag, authored_by[static_cast<std::size_t>(link)]);
     diag.append(after_check);
     if (!instances) continue;
     double volume = 0;
@@ -530,7 +563,8 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
         integrals.second_central.setZero();
         continue;
       }
-      integrals = oriented(integrals, pointer, name, diag, solids.size() > 1 ? static_cast<int>(k) : -1);
+      integrals = oriented(integrals, pointer, name, diag, authored_by[static_cast<std::size_t>(link)],
+                           solids.size() > 1 ? static_cast<int>(k) : -1);
       volume += integrals.volume;
     }
     double mesh_density = density;
@@ -553,8 +587,6 @@ void compute_link_inertia(const GltfAsset& asset, const std::vector<NodeType>& t
     }
   }
 
-  std::vector<std::string> entry_pointers;
-  const auto entries = rdtf_entries(document, entry_pointers);
   std::vector<std::size_t> no_volume;  // links without volume, in order
   for (std::size_t l = 0; l < robot.links.size(); ++l) {
     Link& link = robot.links[l];

@@ -120,11 +120,17 @@ class Builder {
   }
 
   // A mesh file's own colour, one glTF material for each name and colour.
-  std::size_t material_for(const MeshMaterial& material) {
-    const std::string key = material.name + '\0' + Json(material.rgba).dump();
+  // A texture maps the image as its author painted it: the colour factor is white (with the
+  // material's opacity), as Blender and glTF viewers show a textured COLLADA or OBJ material.
+  std::size_t material_for(const MeshMaterial& material, std::optional<std::size_t> texture = std::nullopt) {
+    const std::string key = material.name + '\0' + Json(material.rgba).dump() + '\0' +
+                            (texture ? std::to_string(*texture) : std::string());
     if (const auto found = file_materials.find(key); found != file_materials.end()) return found->second;
+    const std::array<double, 4> factor =
+        texture ? std::array<double, 4>{1.0, 1.0, 1.0, material.rgba[3]} : material.rgba;
     Json out{{"name", material.name},
-             {"pbrMetallicRoughness", {{"baseColorFactor", material.rgba}, {"metallicFactor", 0.0}}}};
+             {"pbrMetallicRoughness", {{"baseColorFactor", factor}, {"metallicFactor", 0.0}}}};
+    if (texture) out["pbrMetallicRoughness"]["baseColorTexture"] = Json{{"index", *texture}};
     if (material.rgba[3] < 1) out["alphaMode"] = "BLEND";
     document["materials"].push_back(std::move(out));
     return file_materials[key] = document["materials"].size() - 1;
@@ -144,9 +150,97 @@ class Builder {
     return materials[visual.material_name] = document["materials"].size() - 1;
   }
 
+  // The glTF texture of a part's material, or nothing (and a warning, once for each mesh file and
+  // texture) where the image is not there, not PNG or JPEG (all glTF carries), or not mapped.
+  std::map<std::string, std::optional<std::size_t>> textures;
+  std::optional<std::size_t> texture_for(const MeshFile& file, const MeshMaterial& material, const std::string& pointer,
+                                         int row) {
+    if (material.texture.empty()) return std::nullopt;
+    const std::string key = file.source.string() + '\0' + material.texture + '\0' + (material.texcoords ? "1" : "0");
+    if (const auto found = textures.find(key); found != textures.end()) return found->second;
+    std::string why;
+    const auto texture = material.texcoords ? read_texture(file.source, material.texture, why) : std::nullopt;
+    if (!material.texcoords) why = "the mesh has no texture coordinates for it (or some that are not finite)";
+    if (!texture) {
+      diag.warning_at_line(codes::URDF_TEXTURE_SKIPPED, pointer, row,
+                           "mesh '" + file.source.string() + "': the texture '" + material.texture + "' of material '" +
+                               material.name + "' is not applied: " + why + "; the part keeps the material's colour");
+    }
+    return textures[key] = texture;
+  }
+
+  // A texture named in a mesh file, found as the file names it (relative to the file's folder, an
+  // absolute path, file://, with %-escapes or backslashes), and its bytes put in the buffer.
+  std::optional<std::size_t> read_texture(const fs::path& mesh_path, const std::string& name, std::string& why) {
+    if (name.starts_with('*')) {
+      why = "it is embedded in the mesh file, which import does not read";
+      return std::nullopt;
+    }
+    // As assimp gives it (it does not decode a COLLADA image's URI), then decoded, then with a
+    // Windows exporter's backslashes as slashes.
+    std::string forward = percent_decoded(name);
+    std::replace(forward.begin(), forward.end(), '\\', '/');
+    std::optional<fs::path> found;
+    for (const std::string& spelling : {name, percent_decoded(name), forward}) {
+      std::string not_here;
+      found = resolve_mesh_path(spelling, mesh_path.parent_path(), not_here, "image");
+      if (found) break;
+      if (why.empty()) why = not_here;
+    }
+    if (!found) return std::nullopt;
+    why.clear();
+    // Only an image inside the folder the URDF and the mesh file share is read: a crafted mesh
+    // naming a photo elsewhere on the machine (~/Pictures/...) gets nothing of it into the model.
+    std::error_code error;
+    const fs::path image = fs::weakly_canonical(fs::absolute(*found, error), error);
+    const fs::path shared = common_folder(fs::weakly_canonical(fs::absolute(urdf, error), error).parent_path(),
+                                          fs::weakly_canonical(fs::absolute(mesh_path, error), error).parent_path());
+    if (error || !within(image, shared)) {
+      why = found->string() + " is outside " + shared.string() +
+            ", the folder the URDF and the mesh file share (an image elsewhere is not read)";
+      return std::nullopt;
+    }
+    if (const auto known = image_textures.find(image.string()); known != image_textures.end()) return known->second;
+    Diagnostics read_diag(found->string());
+    const auto bytes = read_text(*found, options.convert.limits.max_file_bytes, read_diag);
+    if (!bytes) {
+      why = read_diag.all().front().message;
+      return std::nullopt;
+    }
+    // Only an image is copied into the model: a crafted mesh naming some other file of the user's
+    // as its texture gets nothing of it into the output.
+    const char* mime = bytes->starts_with("\x89PNG\r\n\x1a\n") ? "image/png"
+                       : bytes->starts_with("\xFF\xD8\xFF")      ? "image/jpeg"
+                                                                    : nullptr;
+    if (mime == nullptr) {
+      why = found->string() + " is not a PNG or JPEG image (the image formats glTF carries)";
+      return std::nullopt;
+    }
+    return image_textures[image.string()] = writer.add_texture(*bytes, mime, found->filename().string());
+  }
+  std::map<std::string, std::size_t> image_textures;  // By the image's canonical path: one copy each.
+
+  // The deepest folder holding both `a` and `b` (absolute, normal paths).
+  static fs::path common_folder(const fs::path& a, const fs::path& b) {
+    fs::path out;
+    for (auto i = a.begin(), j = b.begin(); i != a.end() && j != b.end() && *i == *j; ++i, ++j) out /= *i;
+    return out;
+  }
+  // Whether `path` is `folder` or below it, component by component.
+  static bool within(const fs::path& path, const fs::path& folder) {
+    auto i = path.begin();
+    for (auto j = folder.begin(); j != folder.end(); ++j, ++i) {
+      if (i == path.end() || *i != *j) return false;
+    }
+    return true;
+  }
+
   static MeshFile whole(TriangleMesh mesh) {
     const std::size_t count = mesh.triangles.size();
-    return MeshFile{std::move(mesh), {MeshPart{0, count, std::nullopt}}};
+    MeshFile file;
+    file.mesh = std::move(mesh);
+    file.parts = {MeshPart{0, count, std::nullopt}};
+    return file;
   }
 
   // The triangles of one <visual> (or <collision>) geometry in its own frame, or nothing.
@@ -237,6 +331,7 @@ class Builder {
       if (!read) why = std::string(format == MeshFormat::kCollada ? "COLLADA" : "OBJ") + ": " + why;
     }
     if (!read) return unusable(codes::URDF_MESH_INVALID, "mesh '" + path->string() + "': " + why);
+    read->source = *path;
     if (read->mesh.triangles.empty()) return skip("mesh '" + path->string() + "' has no triangles");
     scale = to_eigen(mesh.scale);
     return read;
@@ -287,11 +382,26 @@ class Builder {
         // A shape of size 0 (pybullet's laikago draws its toes as spheres of radius 0) is said
         // of itself, with its line, as where the visual is drawn.
         const auto degenerate = g ? degenerate_shape(*g) : std::nullopt;
+        const std::string visual_pointer = link_pointer(link.name) + "/visual[" + std::to_string(i + 1) + "]";
+        const int visual_row = i < xml.visual_rows.size() ? xml.visual_rows[i] : xml.row;
         if (degenerate) {
-          diag.warning_at_line(codes::URDF_SHAPE_DEGENERATE,
-                               link_pointer(link.name) + "/visual[" + std::to_string(i + 1) + "]",
-                               i < xml.visual_rows.size() ? xml.visual_rows[i] : xml.row,
+          diag.warning_at_line(codes::URDF_SHAPE_DEGENERATE, visual_pointer, visual_row,
                                *degenerate + "; this geometry is skipped, the link is kept");
+        }
+        // A visual mesh that is not there, or of a format import does not read, loses the look
+        // its author gave the link: a warning of its own (a TurtleBot3 whose visual meshes were
+        // missing was drawn in its collision boxes with nothing said but an info).
+        if (g && g->type == urdf::Geometry::MESH) {
+          const std::string& filename = static_cast<const urdf::Mesh&>(*g).filename;
+          std::string why;
+          if (mesh_format(filename) == MeshFormat::kOther) {
+            diag.warning_at_line(codes::URDF_MESH_FORMAT_UNSUPPORTED, visual_pointer, visual_row,
+                                 "mesh '" + filename + "' is none of the formats import reads (" + kMeshFormatsRead +
+                                     "): link '" + link.name + "' is drawn with its <collision> geometry");
+          } else if (!resolve_mesh_path(filename, urdf_folder(), why)) {
+            diag.warning_at_line(codes::URDF_MESH_NOT_FOUND, visual_pointer, visual_row,
+                                 why + ": link '" + link.name + "' is drawn with its <collision> geometry");
+          }
         }
         if (!unread.empty()) continue;
         unread = "<visual> " + std::to_string(i + 1);
@@ -349,10 +459,12 @@ class Builder {
       const auto fallback = use_collision ? std::nullopt : material_for(*link.visual_array[i]);
       std::vector<GltfMeshWriter::Primitive> primitives;
       for (const MeshPart& part : mesh->parts) {
+        const auto texture = part.material ? texture_for(*mesh, *part.material, pointer, row) : std::nullopt;
         primitives.push_back({part.first, part.count,
-                              part.material ? std::optional(material_for(*part.material)) : fallback});
+                              part.material ? std::optional(material_for(*part.material, texture)) : fallback,
+                              texture.has_value()});
       }
-      const std::size_t mesh_index = writer.add_mesh(mesh->mesh, name, primitives);
+      const std::size_t mesh_index = writer.add_mesh(mesh->mesh, mesh->texcoords, name, primitives);
       Json node{{"name", name}, {"mesh", mesh_index}};
       Eigen::Isometry3d X = to_isometry(origin);
       X.linear() = C * X.linear();
@@ -617,6 +729,25 @@ std::optional<Conversion> import_urdf(const fs::path& urdf, const UrdfImportOpti
   std::map<std::string, std::vector<std::size_t>> child_joints;
   for (std::size_t j = 0; j < xml->joints.size(); ++j) child_joints[xml->joints[j].parent].push_back(j);
 
+  // Links joined by fixed joints move as one body. Where a link of that body has an <inertial>
+  // with mass, a link of it without one is massless, as URDF reads it, whether it is the root or
+  // moves on a joint: the body has its mass (Clearpath's Husky keeps base_link's in an
+  // inertial_link fixed to it, and its geometry's mass would have added 126 kg to the robot).
+  std::vector<std::size_t> weld(xml->links.size());
+  for (std::size_t i = 0; i < weld.size(); ++i) weld[i] = i;
+  const auto group = [&](std::size_t i) {
+    while (weld[i] != i) i = weld[i] = weld[weld[i]];
+    return i;
+  };
+  for (const XmlJoint& joint : xml->joints) {
+    if (model->getJoint(joint.name)->type == urdf::Joint::FIXED) weld[group(xml_link.at(joint.parent))] = group(xml_link.at(joint.child));
+  }
+  std::map<std::size_t, std::string> carried_by;  // Body -> its first link with a mass, in document order.
+  for (std::size_t i = 0; i < xml->links.size(); ++i) {
+    const urdf::LinkConstSharedPtr link = model->getLink(xml->links[i].name);
+    if (link->inertial && link->inertial->mass > 0) carried_by.try_emplace(group(i), xml->links[i].name);
+  }
+
   std::map<std::string, std::size_t> link_node;
   std::vector<std::pair<std::size_t, std::string>> joint_children;  // (joint node, child link)
   std::vector<std::pair<std::string, const XmlJoint*>> stack{{xml->links[xml->root].name, nullptr}};
@@ -629,10 +760,14 @@ std::optional<Conversion> import_urdf(const fs::path& urdf, const UrdfImportOpti
     const std::size_t index = b.add_node(std::move(node), "link");
     link_node[name] = index;
     Json children = Json::array();
-    // A link without <inertial> on a fixed joint is massless (below), so its geometry is looks only.
+    // A link without <inertial> on a fixed joint, or fixed to links that carry its body's mass, is
+    // massless (below), so its geometry is looks only.
     const bool fixed_massless = !link->inertial && via != nullptr && model->getJoint(via->name)->type == urdf::Joint::FIXED;
-    const char* mass_from = link->inertial ? "the link's mass is its <inertial>"
+    const auto carrier = carried_by.find(group(xml_link.at(name)));
+    const bool body_massive = !link->inertial && !fixed_massless && carrier != carried_by.end();
+    const char* mass_from = link->inertial    ? "the link's mass is its <inertial>"
                             : fixed_massless ? "the link has no <inertial> and is massless on its fixed joint"
+                            : body_massive   ? "the link has no <inertial>, and the links fixed to it carry its body's mass"
                                              : nullptr;
     if (const auto visual = b.visuals(*link, xml->links[xml_link.at(name)], mass_from)) {
       children.push_back(*visual);
@@ -647,6 +782,12 @@ std::optional<Conversion> import_urdf(const fs::path& urdf, const UrdfImportOpti
     for (auto it = joints.rbegin(); it != joints.rend(); ++it) stack.emplace_back(xml->joints[*it].child, &xml->joints[*it]);
     if (link->inertial) {  // Checked in the XML: a finite mass of 0 or more, a finite tensor.
       children.push_back(b.add_node(Json{{"name", name + "_inertial"}}, "inertial", b.inertial_json(*link->inertial)));
+    } else if (body_massive) {
+      children.push_back(b.add_node(Json{{"name", name + "_inertial"}}, "inertial", b.inertial_json(urdf::Inertial())));
+      diag.info(codes::URDF_NO_INERTIAL, link_pointer(name),
+                std::string(via == nullptr ? "root link '" : "link '") + name + "' has no <inertial>, and link '" +
+                    carrier->second + "', fixed to it, carries the mass of the body they make: it is massless, as "
+                    "URDF reads it");
     } else if (fixed_massless) {
       // URDF reads a link without <inertial> as massless. On a fixed joint (a sensor or tool
       // frame, a collision helper) that is what it is: it adds nothing to the body it is fixed to,

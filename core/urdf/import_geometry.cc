@@ -138,14 +138,28 @@ TriangleMesh sphere_mesh(double radius, int subdivisions) {
   return mesh;
 }
 
+std::string percent_decoded(const std::string& text) {
+  std::string out;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const auto hex = [](char c) { return std::isxdigit(static_cast<unsigned char>(c)) != 0; };
+    if (text[i] == '%' && i + 2 < text.size() && hex(text[i + 1]) && hex(text[i + 2])) {
+      out += static_cast<char>(std::stoi(text.substr(i + 1, 2), nullptr, 16));
+      i += 2;
+    } else {
+      out += text[i];
+    }
+  }
+  return out;
+}
+
 std::optional<std::filesystem::path> resolve_mesh_path(const std::string& filename,
                                                        const std::filesystem::path& urdf_folder,
-                                                       std::string& why) {
+                                                       std::string& why, const char* what) {
   namespace fs = std::filesystem;
   std::vector<fs::path> candidates;
   // "$(find my_pkg)/meshes/base.stl" is xacro's, left unexpanded; no file is named so.
   if (filename.find("$(") != std::string::npos || filename.find("${") != std::string::npos) {
-    why = "mesh file '" + filename +
+    why = std::string(what) + " '" + filename +
           "' holds a xacro expression: expand the file with xacro first (xacro robot.urdf.xacro > robot.urdf)";
     return std::nullopt;
   }
@@ -187,17 +201,7 @@ std::optional<std::filesystem::path> resolve_mesh_path(const std::string& filena
             "file:/path are read";
       return std::nullopt;
     }
-    std::string path;
-    for (std::size_t i = 0; i < rest.size(); ++i) {
-      const auto hex = [](char c) { return std::isxdigit(static_cast<unsigned char>(c)) != 0; };
-      if (rest[i] == '%' && i + 2 < rest.size() && hex(rest[i + 1]) && hex(rest[i + 2])) {
-        path += static_cast<char>(std::stoi(rest.substr(i + 1, 2), nullptr, 16));
-        i += 2;
-      } else {
-        path += rest[i];
-      }
-    }
-    candidates.push_back(fs::path(path));
+    candidates.push_back(fs::path(percent_decoded(rest)));
   } else if (filename.find("://") != std::string::npos) {
     why = "'" + filename + "': only relative paths, absolute paths, file:// and package:// are read";
     return std::nullopt;
@@ -222,7 +226,7 @@ std::optional<std::filesystem::path> resolve_mesh_path(const std::string& filena
     not_a_file = candidate.string() + " is " + not_a_file;
   }
   if (!not_a_file.empty()) {
-    why = "mesh file '" + filename + "': " + not_a_file + ", not a file rdtf reads";
+    why = std::string(what) + " '" + filename + "': " + not_a_file + ", not a file rdtf reads";
     return std::nullopt;
   }
   // Every place looked in, so that the user sees which folder to put it in (or which to pass).
@@ -237,7 +241,7 @@ std::optional<std::filesystem::path> resolve_mesh_path(const std::string& filena
   for (std::size_t i = 0; i < shown.size(); ++i) {
     places += (i == 0 ? "" : i + 1 == shown.size() ? " and " : ", ") + shown[i];
   }
-  why = "mesh file '" + filename + "' not found (looked for " + places + ")";
+  why = std::string(what) + " '" + filename + "' not found (looked for " + places + ")";
   return std::nullopt;
 }
 
@@ -247,8 +251,19 @@ std::size_t GltfMeshWriter::add_view(std::size_t offset, std::size_t length, int
   return document_["bufferViews"].size() - 1;
 }
 
-std::size_t GltfMeshWriter::add_mesh(const TriangleMesh& mesh, const std::string& name,
-                                     const std::vector<Primitive>& primitives) {
+std::size_t GltfMeshWriter::add_texture(const std::string& bytes, const char* mime_type, const std::string& name) {
+  const std::size_t offset = bin_.size();
+  bin_.insert(bin_.end(), bytes.begin(), bytes.end());
+  document_["bufferViews"].push_back(Json{{"buffer", 0}, {"byteOffset", offset}, {"byteLength", bytes.size()}});
+  while (bin_.size() % 4 != 0) bin_.push_back(0);  // The next accessor's view starts aligned.
+  document_["images"].push_back(
+      Json{{"name", name}, {"bufferView", document_["bufferViews"].size() - 1}, {"mimeType", mime_type}});
+  document_["textures"].push_back(Json{{"source", document_["images"].size() - 1}});
+  return document_["textures"].size() - 1;
+}
+
+std::size_t GltfMeshWriter::add_mesh(const TriangleMesh& mesh, const std::vector<std::array<float, 2>>& texcoords,
+                                     const std::string& name, const std::vector<Primitive>& primitives) {
   // Positions (float32 VEC3), then each primitive's indices (uint32): all 4-byte aligned.
   const std::size_t position_offset = bin_.size();
   std::array<float, 3> low{}, high{};
@@ -269,6 +284,18 @@ std::size_t GltfMeshWriter::add_mesh(const TriangleMesh& mesh, const std::string
                            {"min", Json::array({low[0], low[1], low[2]})},
                            {"max", Json::array({high[0], high[1], high[2]})}});
   const std::size_t position_accessor = accessors.size() - 1;
+  std::optional<std::size_t> texcoord_accessor;
+  if (!texcoords.empty() && texcoords.size() == mesh.positions.size()) {
+    const std::size_t texcoord_offset = bin_.size();
+    for (const auto& uv : texcoords) {
+      std::uint8_t bytes[8];
+      std::memcpy(bytes, uv.data(), 8);
+      bin_.insert(bin_.end(), bytes, bytes + 8);
+    }
+    accessors.push_back(Json{{"bufferView", add_view(texcoord_offset, bin_.size() - texcoord_offset, 34962)},
+                             {"componentType", 5126}, {"count", texcoords.size()}, {"type", "VEC2"}});
+    texcoord_accessor = accessors.size() - 1;
+  }
   Json out = Json::array();
   for (const Primitive& part : primitives) {
     const std::size_t index_offset = bin_.size();
@@ -283,6 +310,7 @@ std::size_t GltfMeshWriter::add_mesh(const TriangleMesh& mesh, const std::string
     accessors.push_back(Json{{"bufferView", index_view}, {"componentType", 5125},
                              {"count", part.count * 3}, {"type", "SCALAR"}});
     Json primitive{{"attributes", {{"POSITION", position_accessor}}}, {"indices", accessors.size() - 1}, {"mode", 4}};
+    if (part.textured && texcoord_accessor) primitive["attributes"]["TEXCOORD_0"] = *texcoord_accessor;
     if (part.material) primitive["material"] = *part.material;
     out.push_back(std::move(primitive));
   }

@@ -2,6 +2,7 @@
 // before urdfdom sees it) and the geometry that becomes glTF meshes.
 #pragma once
 
+#include <array>
 #include <filesystem>
 #include <functional>
 #include <map>
@@ -85,36 +86,52 @@ TriangleMesh box_mesh(const Eigen::Vector3d& size);
 TriangleMesh cylinder_mesh(double radius, double length, int segments = 32);
 TriangleMesh sphere_mesh(double radius, int subdivisions = 3);
 
+// "my%20dir" as "my dir": every %XX escape (two hex digits) as its byte.
+std::string percent_decoded(const std::string& text);
+
 // Where a <mesh filename> is on disk: a path relative to the URDF's folder, an absolute path,
 // file://, or package://NAME/rest (found as rest under a folder named NAME among the URDF's folder
-// and its ancestors, or under NAME/ in one of them). Nothing, and `why`, when it is not there.
+// and its ancestors, or under NAME/ in one of them). Nothing, and `why` (naming it as `what`), when
+// it is not there.
 std::optional<std::filesystem::path> resolve_mesh_path(const std::string& filename,
                                                        const std::filesystem::path& urdf_folder,
-                                                       std::string& why);
+                                                       std::string& why,
+                                                       const char* what = "mesh file");
 
 // Collects triangle corners, welding equal positions into one vertex (an STL repeats each vertex in
-// every triangle; COLLADA and OBJ split one per normal and texture coordinate).
+// every triangle; COLLADA and OBJ split one per normal and texture coordinate). With texture
+// coordinates, a vertex is an equal position and coordinate: a seam keeps its two.
 class Welder {
  public:
-  void add_corner(const Eigen::Vector3d& p) {
-    const std::array<double, 3> key{p.x(), p.y(), p.z()};
+  using Texcoord = std::array<float, 2>;
+  // Use one form for every corner of a mesh: take_texcoords() has one coordinate per vertex only
+  // when every corner came with one.
+  void add_corner(const Eigen::Vector3d& p) { add(p, Texcoord{}, false); }
+  void add_corner(const Eigen::Vector3d& p, const Texcoord& uv) { add(p, uv, true); }
+  std::size_t triangles() const { return mesh_.triangles.size(); }
+  TriangleMesh take() { return std::move(mesh_); }
+  std::vector<Texcoord> take_texcoords() { return std::move(texcoords_); }
+
+ private:
+  void add(const Eigen::Vector3d& p, const Texcoord& uv, bool keep_uv) {
+    const std::array<double, 5> key{p.x(), p.y(), p.z(), uv[0], uv[1]};
     auto [it, inserted] = index_.try_emplace(key, static_cast<std::uint32_t>(mesh_.positions.size()));
-    if (inserted) mesh_.positions.push_back(p);
+    if (inserted) {
+      mesh_.positions.push_back(p);
+      if (keep_uv) texcoords_.push_back(uv);
+    }
     corner_[corners_++ % 3] = it->second;
     if (corners_ % 3 == 0) mesh_.triangles.push_back(corner_);
   }
-  std::size_t triangles() const { return mesh_.triangles.size(); }
-  TriangleMesh take() { return std::move(mesh_); }
-
- private:
   struct KeyHash {
-    std::size_t operator()(const std::array<double, 3>& k) const {
+    std::size_t operator()(const std::array<double, 5>& k) const {
       const std::hash<double> h;
-      return h(k[0]) ^ (h(k[1]) * 31) ^ (h(k[2]) * 1000003);
+      return h(k[0]) ^ (h(k[1]) * 31) ^ (h(k[2]) * 1000003) ^ (h(k[3]) * 998244353) ^ (h(k[4]) * 1000000007);
     }
   };
-  std::unordered_map<std::array<double, 3>, std::uint32_t, KeyHash> index_;
+  std::unordered_map<std::array<double, 5>, std::uint32_t, KeyHash> index_;
   TriangleMesh mesh_;
+  std::vector<Texcoord> texcoords_;
   std::array<std::uint32_t, 3> corner_{};
   std::size_t corners_ = 0;
 };
@@ -126,9 +143,13 @@ inline constexpr const char* kMeshFormatsRead = "STL, COLLADA (.dae) and OBJ";
 
 // A mesh file's triangles in metres, welded, and the parts drawn in one material each (triangles
 // first .. first + count - 1); a part without a material of its own takes the URDF's <material>.
+// A material's base colour image (its diffuse texture) is named as the file names it; the image
+// multiplies `rgba` only where every triangle of the part has the coordinates it is mapped by.
 struct MeshMaterial {
   std::string name;
   std::array<double, 4> rgba{};
+  std::string texture;         // "" when it has none.
+  bool texcoords = false;      // Whether the part's vertices carry the texture's coordinates.
 };
 struct MeshPart {
   std::size_t first = 0, count = 0;
@@ -136,7 +157,11 @@ struct MeshPart {
 };
 struct MeshFile {
   TriangleMesh mesh;
+  // Each vertex's texture coordinate the glTF way (origin at the image's top left), when a part
+  // has a texture and the coordinates for it; else empty.
+  std::vector<std::array<float, 2>> texcoords;
   std::vector<MeshPart> parts;
+  std::filesystem::path source;  // The file read (what its textures' names are relative to).
 };
 struct MeshLimits {
   std::uint64_t max_file_bytes = 0;
@@ -160,9 +185,14 @@ class GltfMeshWriter {
   struct Primitive {
     std::size_t first = 0, count = 0;
     std::optional<std::size_t> material;
+    bool textured = false;  // Its material maps a texture by TEXCOORD_0.
   };
-  // Returns the index of the new mesh: the positions once, indices for each primitive.
-  std::size_t add_mesh(const TriangleMesh& mesh, const std::string& name, const std::vector<Primitive>& primitives);
+  // Returns the index of the new mesh: the positions (and texture coordinates, when given, one per
+  // vertex) once, indices for each primitive.
+  std::size_t add_mesh(const TriangleMesh& mesh, const std::vector<std::array<float, 2>>& texcoords,
+                       const std::string& name, const std::vector<Primitive>& primitives);
+  // An image in the buffer (PNG or JPEG bytes) and a texture sampling it; returns the texture's index.
+  std::size_t add_texture(const std::string& bytes, const char* mime_type, const std::string& name);
   std::vector<std::uint8_t> take_buffer();
 
  private:

@@ -129,13 +129,30 @@ std::optional<MeshMaterial> material_of(const aiMaterial& material) {
   if (std::strcmp(name.C_Str(), AI_DEFAULT_MATERIAL_NAME) == 0) return std::nullopt;
   aiColor4D diffuse;
   if (aiGetMaterialColor(&material, AI_MATKEY_COLOR_DIFFUSE, &diffuse) != AI_SUCCESS) return std::nullopt;
-  float opacity = 1;
-  const bool has_opacity = aiGetMaterialFloat(&material, AI_MATKEY_OPACITY, &opacity) == AI_SUCCESS;
   const auto unit = [](float v) { return std::isfinite(v) ? std::min(1.0, std::max(0.0, decimal_of(v))) : 1.0; };
   MeshMaterial out;
   out.name = name.C_Str();
-  out.rgba = {unit(diffuse.r), unit(diffuse.g), unit(diffuse.b), unit(has_opacity ? opacity : diffuse.a)};
+  // Opaque, as RViz draws every COLLADA and OBJ part (it reads the diffuse colour's RGB, and looks
+  // for opacity under a key assimp does not use). COLLADA's transparency cannot be trusted anyway:
+  // Blender 2.7x writes <transparent opaque="RGB_ZERO"> white for opaque materials, which the
+  // standard reads as fully transparent (every part of franka_ros's Panda).
+  out.rgba = {unit(diffuse.r), unit(diffuse.g), unit(diffuse.b), 1.0};
+  aiString texture;
+  if (material.GetTextureCount(aiTextureType_DIFFUSE) > 0 &&
+      material.GetTexture(aiTextureType_DIFFUSE, 0, &texture) == AI_SUCCESS) {
+    out.texture = texture.C_Str();
+  }
   return out;
+}
+
+// The texture coordinate set a material's diffuse texture is mapped by (0 unless the file says).
+unsigned texcoord_set(const aiMaterial& material) {
+  int set = 0;
+  if (material.Get(AI_MATKEY_UVWSRC(aiTextureType_DIFFUSE, 0), set) != AI_SUCCESS || set < 0 ||
+      set >= static_cast<int>(AI_MAX_NUMBER_OF_TEXTURECOORDS)) {
+    return 0;
+  }
+  return static_cast<unsigned>(set);
 }
 
 // assimp sizes its arrays from COLLADA's count attributes before reading what they count: 5 KB
@@ -223,6 +240,20 @@ std::optional<MeshFile> read_here(const fs::path& path, MeshFormat format, std::
   // Each mesh instance's triangles, by material, in the link's frame: a node's meshes under the
   // product of the matrices from the root down (an explicit stack: a file's nesting is its own).
   std::vector<std::vector<Eigen::Vector3d>> corners(scene->mNumMaterials + 1);
+  // A textured material's corners carry their texture coordinates, the glTF way (v from the top),
+  // while every mesh drawn in it has them.
+  std::vector<MeshMaterial> materials(scene->mNumMaterials + 1);
+  std::vector<std::optional<MeshMaterial>> own(scene->mNumMaterials + 1);
+  std::vector<std::vector<Welder::Texcoord>> texcoords(scene->mNumMaterials + 1);
+  std::vector<unsigned> sets(scene->mNumMaterials + 1, 0);
+  for (unsigned m = 0; m < scene->mNumMaterials; ++m) {
+    if (scene->mMaterials[m] == nullptr) continue;
+    own[m] = material_of(*scene->mMaterials[m]);
+    if (own[m] && !own[m]->texture.empty()) {
+      own[m]->texcoords = true;
+      sets[m] = texcoord_set(*scene->mMaterials[m]);
+    }
+  }
   std::uint64_t triangles = 0;
   std::vector<std::pair<const aiNode*, Eigen::Matrix4d>> stack{{scene->mRootNode, root}};
   while (!stack.empty()) {
@@ -233,7 +264,12 @@ std::optional<MeshFile> read_here(const fs::path& path, MeshFormat format, std::
     for (unsigned m = 0; m < node->mNumMeshes; ++m) {
       if (node->mMeshes[m] >= scene->mNumMeshes) continue;
       const aiMesh& mesh = *scene->mMeshes[node->mMeshes[m]];
-      auto& out = corners[std::min<std::size_t>(mesh.mMaterialIndex, scene->mNumMaterials)];
+      const std::size_t material = std::min<std::size_t>(mesh.mMaterialIndex, scene->mNumMaterials);
+      auto& out = corners[material];
+      auto& out_uv = texcoords[material];
+      std::optional<MeshMaterial>& drawn_in = own[material];
+      if (drawn_in && drawn_in->texcoords && !mesh.HasTextureCoords(sets[material])) drawn_in->texcoords = false;
+      const aiVector3D* uv = drawn_in && drawn_in->texcoords ? mesh.mTextureCoords[sets[material]] : nullptr;
       for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
         const aiFace& face = mesh.mFaces[f];
         if (face.mNumIndices != 3) continue;
@@ -254,8 +290,20 @@ std::optional<MeshFile> read_here(const fs::path& path, MeshFormat format, std::
             return std::nullopt;
           }
           out.push_back(p);
+          if (uv != nullptr) {
+            const aiVector3D& t = uv[face.mIndices[k]];
+            // A coordinate that is not finite maps nothing (and is no valid glTF): the part keeps
+            // its colour, as where a mesh has none (the part's counts no longer match, below).
+            if (std::isfinite(t.x) && std::isfinite(t.y)) {
+              out_uv.push_back({t.x, 1.0f - t.y});
+            } else {
+              drawn_in->texcoords = false;
+              uv = nullptr;
+            }
+          }
         }
         if (mirrored) std::swap(out[start + 1], out[start + 2]);
+        if (mirrored && uv != nullptr) std::swap(out_uv[start + 1], out_uv[start + 2]);
       }
     }
     for (unsigned c = 0; c < node->mNumChildren; ++c) {
@@ -265,18 +313,24 @@ std::optional<MeshFile> read_here(const fs::path& path, MeshFormat format, std::
 
   MeshFile file;
   Welder welder;
+  bool any_texcoords = false;
   for (std::size_t material = 0; material < corners.size(); ++material) {
     if (corners[material].empty()) continue;
     MeshPart part;
     part.first = welder.triangles();
     part.count = corners[material].size() / 3;
-    if (material < scene->mNumMaterials && scene->mMaterials[material] != nullptr) {
-      part.material = material_of(*scene->mMaterials[material]);
+    part.material = own[material];
+    // A mesh without the coordinates came after others had them: the part keeps its colour alone.
+    const bool mapped = part.material && part.material->texcoords && texcoords[material].size() == corners[material].size();
+    if (part.material && !mapped) part.material->texcoords = false;
+    any_texcoords = any_texcoords || mapped;
+    for (std::size_t c = 0; c < corners[material].size(); ++c) {
+      welder.add_corner(corners[material][c], mapped ? texcoords[material][c] : Welder::Texcoord{});
     }
-    for (const Eigen::Vector3d& p : corners[material]) welder.add_corner(p);
     file.parts.push_back(std::move(part));
   }
   file.mesh = welder.take();
+  if (any_texcoords) file.texcoords = welder.take_texcoords();
   return file;
 }
 
@@ -332,6 +386,8 @@ std::string encode(const std::optional<MeshFile>& file, const std::string& why, 
   for (const Eigen::Vector3d& p : file->mesh.positions) out.put(p);
   out.put<std::uint64_t>(file->mesh.triangles.size());
   for (const auto& t : file->mesh.triangles) out.put(t);
+  out.put<std::uint64_t>(file->texcoords.size());
+  for (const auto& uv : file->texcoords) out.put(uv);
   out.put<std::uint64_t>(file->parts.size());
   for (const MeshPart& part : file->parts) {
     out.put<std::uint64_t>(part.first);
@@ -340,6 +396,8 @@ std::string encode(const std::optional<MeshFile>& file, const std::string& why, 
     if (part.material) {
       out.put_text(part.material->name);
       out.put(part.material->rgba);
+      out.put_text(part.material->texture);
+      out.put<std::uint8_t>(part.material->texcoords ? 1 : 0);
     }
   }
   return out.bytes();
@@ -367,6 +425,11 @@ bool decode(std::string_view bytes, std::optional<MeshFile>& file, std::string& 
       if (v >= out.mesh.positions.size()) return false;
     }
   }
+  if (!in.get(count) || (count != 0 && count != out.mesh.positions.size())) return false;
+  out.texcoords.resize(count);
+  for (auto& uv : out.texcoords) {
+    if (!in.get(uv)) return false;
+  }
   if (!in.get(count) || count > bytes.size()) return false;
   for (std::uint64_t i = 0; i < count; ++i) {
     MeshPart part;
@@ -378,7 +441,12 @@ bool decode(std::string_view bytes, std::optional<MeshFile>& file, std::string& 
     part.count = size;
     if (has_material != 0) {
       MeshMaterial material;
-      if (!in.get_text(material.name) || !in.get(material.rgba)) return false;
+      std::uint8_t texcoords = 0;
+      if (!in.get_text(material.name) || !in.get(material.rgba) || !in.get_text(material.texture) ||
+          !in.get(texcoords)) {
+        return false;
+      }
+      material.texcoords = texcoords != 0 && !out.texcoords.empty();
       part.material = std::move(material);
     }
     out.parts.push_back(std::move(part));

@@ -42,6 +42,8 @@ const std::set<std::string>& not_codes() {
       "NUMBER",
       // Mesh file formats a URDF names (core/urdf/import.cc).
       "COLLADA", "OBJ",
+      // COLLADA's transparency mode (core/urdf/mesh_file.cc).
+      "RGB_ZERO",
       // EXT_meshopt_compression's modes and filters, EXT_mesh_gpu_instancing's attributes.
       "ATTRIBUTES", "TRIANGLES", "INDICES", "NONE", "OCTAHEDRAL", "QUATERNION", "EXPONENTIAL",
       "TRANSLATION", "ROTATION", "SCALE",

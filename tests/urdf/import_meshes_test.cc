@@ -193,6 +193,54 @@ TEST(UrdfImportMeshes, PartsKeepTheirFilesColours) {
   EXPECT_EQ(document["accessors"][primitives[0]["attributes"]["POSITION"].get<std::size_t>()]["count"], 8);
 }
 
+// COLLADA's transparency is not carried, as RViz draws every part opaque: Blender 2.7x writes
+// <transparent opaque="RGB_ZERO"> white for its opaque materials (franka_ros's Panda, all of it),
+// which assimp reads as opacity 0; a <transparency> of 0.5 is opaque too.
+TEST(UrdfImportMeshes, ColladaTransparencyIsNotCarried) {
+  for (const std::string& transparency :
+       {std::string("<transparent opaque=\"RGB_ZERO\"><color>1 1 1 1</color></transparent>"),
+        std::string("<transparent opaque=\"A_ONE\"><color>0 0 0 1</color></transparent><transparency><float>0.5</float></transparency>")}) {
+    SCOPED_TRACE(transparency);
+    TempDir dir;
+    std::string text = collada(kMetres, "Z_UP", {{kIdentity, {}}});
+    const std::string red = "1 0 0 1</color></diffuse>";
+    text.replace(text.find(red), red.size(), red + transparency);
+    testing::write_file(dir / "box.dae", text);
+    testing::write_file(dir / "robot.urdf", one_link("box.dae"));
+    Diagnostics diag;
+    const Conversion conversion = import_ok(dir / "robot.urdf", diag);
+    for (const Json& material : conversion.asset.document["materials"]) {
+      EXPECT_EQ(material["pbrMetallicRoughness"]["baseColorFactor"][3], 1.0) << material.dump();
+      EXPECT_FALSE(material.contains("alphaMode")) << material.dump();
+    }
+  }
+}
+
+// An open visual mesh (most published robots have some) on a link whose mass is its <inertial>
+// changes no mass: MESH_OPEN is information there, saying so, and a warning that the mass is
+// unreliable only where the mass comes from the mesh.
+TEST(UrdfImportMeshes, AnOpenMeshOfALinkWithAnAuthoredMassIsInformation) {
+  for (const bool authored : {true, false}) {
+    SCOPED_TRACE(authored ? "with <inertial>" : "mass from the mesh");
+    TempDir dir;
+    // A tetrahedron without its base: three triangles, three boundary edges.
+    testing::write_file(dir / "open.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+    const std::string inertial =
+        "<inertial><mass value=\"2\"/><inertia ixx=\"1\" ixy=\"0\" ixz=\"0\" iyy=\"1\" iyz=\"0\" izz=\"1\"/></inertial>\n";
+    testing::write_file(dir / "robot.urdf", one_link("open.obj", authored ? inertial : ""));
+    Diagnostics diag;
+    import_urdf(dir / "robot.urdf", UrdfImportOptions{}, diag);
+    const Diagnostic* d = find(diag, "MESH_OPEN");
+    ASSERT_NE(d, nullptr);
+    EXPECT_EQ(d->severity, authored ? Severity::kInfo : Severity::kWarning);
+    EXPECT_NE(d->message.find("3 boundary edges"), std::string::npos) << d->message;
+    EXPECT_EQ(d->message.find("link 'a' has an authored inertial, so no mass comes from this mesh") != std::string::npos,
+              authored)
+        << d->message;
+    EXPECT_EQ(d->message.find("its mass, is unreliable") != std::string::npos, !authored) << d->message;
+  }
+}
+
 // A file without materials (an OBJ without .mtl: assimp's stand-in material) is drawn in the
 // <visual>'s colour, as RViz draws it.
 TEST(UrdfImportMeshes, AMeshWithoutColoursTakesTheVisualsMaterial) {
@@ -310,8 +358,8 @@ TEST(UrdfImportMeshes, TheTutorialsFingersAreWhereRvizShowsThem) {
   EXPECT_EQ(checked, 2);
 }
 
-// An OBJ with its .mtl: Kd colours per part, coordinates in metres as written; the URDF's scale
-// on top. A unit cube scaled by 2 is 8 m^3.
+// An OBJ with its .mtl: Kd colours per part, opaque whatever `d` says (as RViz draws them),
+// coordinates in metres as written; the URDF's scale on top. A unit cube scaled by 2 is 8 m^3.
 TEST(UrdfImportMeshes, ObjWithItsMaterialsAndTheUrdfScale) {
   TempDir dir;
   testing::write_file(dir / "cube.mtl", "newmtl red\nKd 1 0 0\nnewmtl green\nKd 0 1 0\nd 0.5\n");
@@ -337,7 +385,7 @@ TEST(UrdfImportMeshes, ObjWithItsMaterialsAndTheUrdfScale) {
     colours.push_back(document["materials"][primitive["material"].get<std::size_t>()]["pbrMetallicRoughness"]["baseColorFactor"].dump());
   }
   std::sort(colours.begin(), colours.end());
-  EXPECT_EQ(colours, (std::vector<std::string>{"[0.0,1.0,0.0,0.5]", "[1.0,0.0,0.0,1.0]"}));
+  EXPECT_EQ(colours, (std::vector<std::string>{"[0.0,1.0,0.0,1.0]", "[1.0,0.0,0.0,1.0]"}));
   expect_no_validator_errors(conversion, dir / "out.gltf");
 }
 

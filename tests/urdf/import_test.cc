@@ -225,6 +225,54 @@ TEST(UrdfImport, ALinkWithoutInertialOnAFixedJointIsMassless) {
   EXPECT_FALSE(exported->getLink("shoulder_helper")->inertial);
   EXPECT_DOUBLE_EQ(exported->getLink("trunk")->inertial->mass, 12.0);
 }
+
+// Clearpath's Husky keeps its base's mass in an inertial_link fixed to base_link, which has none
+// (KDL ignores a root's inertia): the body they make has that mass, so base_link is massless, root
+// or not, and its geometry adds nothing (from its boxes at 1000 kg/m^3 it had added 126 kg). A link
+// without <inertial> whose body has no mass elsewhere still gets its geometry's.
+TEST(UrdfImport, ALinkFixedToOneThatCarriesItsBodysMassIsMassless) {
+  TempDir dir;
+  testing::write_file(dir / "husky.urdf", R"(<?xml version="1.0"?>
+<robot name="husky">
+  <link name="base_link"><collision><geometry><box size="0.98 0.57 0.25"/></geometry></collision></link>
+  <link name="inertial_link"><inertial><mass value="33.455"/><inertia ixx="0.6" ixy="0" ixz="0" iyy="1.7" iyz="0" izz="2.0"/></inertial></link>
+  <joint name="inertial_joint" type="fixed"><parent link="base_link"/><child link="inertial_link"/><origin xyz="-0.08 0 0"/></joint>
+  <link name="arm"><collision><geometry><box size="0.1 0.1 0.4"/></geometry></collision></link>
+  <joint name="shoulder" type="revolute"><parent link="base_link"/><child link="arm"/><axis xyz="0 1 0"/>
+    <limit lower="-1" upper="1" effort="10" velocity="1"/></joint>
+  <link name="forearm"><collision><geometry><box size="0.1 0.1 0.3"/></geometry></collision></link>
+  <joint name="elbow" type="revolute"><parent link="arm"/><child link="forearm"/><origin xyz="0 0 0.4"/><axis xyz="0 1 0"/>
+    <limit lower="-1" upper="1" effort="10" velocity="1"/></joint>
+  <link name="forearm_mass"><inertial><mass value="2"/><inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link>
+  <joint name="forearm_fixed" type="fixed"><parent link="forearm"/><child link="forearm_mass"/></joint>
+</robot>)");
+  Diagnostics diag;
+  const Conversion conversion = import_or_fail(dir / "husky.urdf", diag);
+  std::map<std::string, double> mass;
+  for (const Link& link : conversion.robot.links) mass[link.name] = link.inertial.mass;
+  EXPECT_EQ(mass.at("base_link"), 0.0);
+  EXPECT_EQ(mass.at("inertial_link"), 33.455);
+  EXPECT_EQ(mass.at("forearm"), 0.0);  // Moves on 'elbow' with forearm_mass, which carries 2 kg.
+  EXPECT_EQ(mass.at("forearm_mass"), 2.0);
+  // 'arm' moves alone: its box's mass at 1000 kg/m^3, 4 kg, with a warning; its half-edges 0.05
+  // and 0.2 are float32 in the buffer, each within 2^-24 relative: the volume within 3 x 2^-24.
+  EXPECT_NEAR(mass.at("arm"), 4.0, 4.0 * 3 * std::ldexp(1.0, -24));
+  std::map<std::string, std::pair<Severity, std::string>> said;
+  for (const Diagnostic& d : diag.all()) {
+    if (d.code == "URDF_NO_INERTIAL") said[d.pointer] = {d.severity, d.message};
+  }
+  ASSERT_EQ(said.count("/robot/link[@name='base_link']"), 1u);
+  EXPECT_EQ(said["/robot/link[@name='base_link']"].first, Severity::kInfo);
+  EXPECT_NE(said["/robot/link[@name='base_link']"].second.find(
+                "root link 'base_link' has no <inertial>, and link 'inertial_link', fixed to it, carries the mass of the "
+                "body they make: it is massless"),
+            std::string::npos)
+      << said["/robot/link[@name='base_link']"].second;
+  EXPECT_EQ(said["/robot/link[@name='forearm']"].first, Severity::kInfo);
+  EXPECT_NE(said["/robot/link[@name='forearm']"].second.find("link 'forearm_mass', fixed to it"), std::string::npos);
+  EXPECT_EQ(said["/robot/link[@name='arm']"].first, Severity::kWarning);
+}
+
 TEST(UrdfImport, StlMeshesAreFoundByRelativeAbsoluteFileAndPackagePaths) {
   TempDir dir;
   fs::create_directories(dir / "my_pkg" / "meshes");

@@ -163,10 +163,10 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(LINK_NO_VOLUME, kSeverityWarning, "model") \
   X(LINK_PARTS_OVERLAP, kSeverityWarning, "model") \
   X(MESH_HOLDS_FRAMES, kSeverityInfo, "model") \
-  X(MESH_INCONSISTENT_WINDING, kSeverityWarning, "model") \
+  X(MESH_INCONSISTENT_WINDING, kSeverityWarning | kSeverityInfo, "model") \
   X(MESH_ENCLOSES_NO_VOLUME, kSeverityWarning, "model") \
-  X(MESH_INSIDE_OUT, kSeverityWarning, "model") \
-  X(MESH_OPEN, kSeverityWarning, "model") \
+  X(MESH_INSIDE_OUT, kSeverityWarning | kSeverityInfo, "model") \
+  X(MESH_OPEN, kSeverityWarning | kSeverityInfo, "model") \
   X(MESH_PRIMITIVE_INCOMPATIBLE_MODE, kSeverityWarning, "model") \
   X(MESH_SCALED_TO_NOTHING, kSeverityWarning, "model") \
   X(MESH_SHELL_INSIDE_OUT, kSeverityWarning, "model") \
@@ -226,6 +226,7 @@ enum SeverityMask : unsigned { kSeverityInfo = 1, kSeverityWarning = 2, kSeverit
   X(URDF_SELF_CHECK_FAILED, kSeverityError, "URDF") \
   X(URDF_SHAPE_DEGENERATE, kSeverityWarning, "URDF") \
   X(URDF_SPRING_DROPPED, kSeverityWarning, "URDF") \
+  X(URDF_TEXTURE_SKIPPED, kSeverityWarning, "URDF") \
   X(URDF_UNKNOWN_JOINT_TYPE, kSeverityError, "URDF") \
   X(URDF_UNKNOWN_LINK, kSeverityError, "URDF") \
   X(URDF_VISUAL_ONLY, kSeverityInfo, "URDF") \

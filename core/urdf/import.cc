@@ -455,13 +455,16 @@ class Builder {
       std::string name = use_collision ? link.collision_array[i]->name : link.visual_array[i]->name;
       if (name.empty()) name = link.name + "_" + element + (count > 1 ? "_" + std::to_string(i + 1) : "");
       // A part in a colour of its own keeps it; the rest take the visual's <material> (RViz's
-      // rule). A collision geometry standing in has no <material>.
-      const auto fallback = use_collision ? std::nullopt : material_for(*link.visual_array[i]);
+      // rule). A collision geometry standing in has no <material>. The visual's is written only
+      // where a part takes it: a glTF material no primitive uses is clutter.
+      const auto fallback = [&]() -> std::optional<std::size_t> {
+        return use_collision ? std::nullopt : material_for(*link.visual_array[i]);
+      };
       std::vector<GltfMeshWriter::Primitive> primitives;
       for (const MeshPart& part : mesh->parts) {
         const auto texture = part.material ? texture_for(*mesh, *part.material, pointer, row) : std::nullopt;
         primitives.push_back({part.first, part.count,
-                              part.material ? std::optional(material_for(*part.material, texture)) : fallback,
+                              part.material ? std::optional(material_for(*part.material, texture)) : fallback(),
                               texture.has_value()});
       }
       const std::size_t mesh_index = writer.add_mesh(mesh->mesh, mesh->texcoords, name, primitives);

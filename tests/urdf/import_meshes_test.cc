@@ -190,6 +190,8 @@ TEST(UrdfImportMeshes, PartsKeepTheirFilesColours) {
     EXPECT_EQ(primitive["attributes"]["POSITION"], primitives[0]["attributes"]["POSITION"]);
   }
   EXPECT_EQ(Json(triangles).dump(), R"({"[0.5,0.5,0.5,1.0]":10,"[1.0,0.0,0.0,1.0]":2})");
+  // The <visual>'s "blue", which no part takes, is not written.
+  EXPECT_EQ(document["materials"].size(), 2u) << document["materials"].dump();
   EXPECT_EQ(document["accessors"][primitives[0]["attributes"]["POSITION"].get<std::size_t>()]["count"], 8);
 }
 

@@ -105,21 +105,6 @@ std::string one_link(const std::string& mesh, const std::string& extra = "") {
          "</link>\n</robot>\n";
 }
 
-Conversion import_ok(const fs::path& urdf, Diagnostics& diag, const UrdfImportOptions& options = {}) {
-  auto conversion = import_urdf(urdf, options, diag);
-  std::string all;
-  for (const Diagnostic& d : diag.all()) all += format(d) + "\n";
-  if (!conversion) throw std::runtime_error(urdf.string() + " not imported:\n" + all);
-  return std::move(*conversion);
-}
-
-const Diagnostic* find(const Diagnostics& diag, const std::string& code) {
-  for (const Diagnostic& d : diag.all()) {
-    if (d.code == code) return &d;
-  }
-  return nullptr;
-}
-
 // The float32 rounding the glTF buffer gives each coordinate c (|c| <= extent) moves the volume of
 // a box of edges e by at most sum of 2 ulp(extent) / e_i relative, and its centre by ulp(extent):
 // ulp(x) <= 2^-23 |x|.
@@ -176,7 +161,7 @@ TEST(UrdfImportMeshes, PartsKeepTheirFilesColours) {
   testing::write_file(dir / "robot.urdf", one_link("box.dae"));
   Diagnostics diag;
   const Conversion conversion = import_ok(dir / "robot.urdf", diag);
-  EXPECT_EQ(find(diag, "MESH_OPEN"), nullptr);
+  EXPECT_EQ(find_code(diag, "MESH_OPEN"), nullptr);
   EXPECT_EQ(conversion.robot.links[0].inertial.mass, 48000.0);  // Corners +-1, +-2, +-3: exact.
   const Json& document = conversion.asset.document;
   ASSERT_EQ(document["meshes"].size(), 1u);
@@ -232,7 +217,7 @@ TEST(UrdfImportMeshes, AnOpenMeshOfALinkWithAnAuthoredMassIsInformation) {
     testing::write_file(dir / "robot.urdf", one_link("open.obj", authored ? inertial : ""));
     Diagnostics diag;
     import_urdf(dir / "robot.urdf", UrdfImportOptions{}, diag);
-    const Diagnostic* d = find(diag, "MESH_OPEN");
+    const Diagnostic* d = find_code(diag, "MESH_OPEN");
     ASSERT_NE(d, nullptr);
     EXPECT_EQ(d->severity, authored ? Severity::kInfo : Severity::kWarning);
     EXPECT_NE(d->message.find("3 boundary edges"), std::string::npos) << d->message;
@@ -271,8 +256,8 @@ TEST(UrdfImportMeshes, NestedInstancedAndMirroredNodesAreAppliedAndWoundOutward)
   testing::write_file(dir / "robot.urdf", one_link("two.dae"));
   Diagnostics diag;
   const Conversion conversion = import_ok(dir / "robot.urdf", diag);
-  EXPECT_EQ(find(diag, "MESH_INSIDE_OUT"), nullptr);
-  EXPECT_EQ(find(diag, "MESH_INCONSISTENT_WINDING"), nullptr);
+  EXPECT_EQ(find_code(diag, "MESH_INSIDE_OUT"), nullptr);
+  EXPECT_EQ(find_code(diag, "MESH_INCONSISTENT_WINDING"), nullptr);
   const Link& link = conversion.robot.links[0];
   EXPECT_NEAR(link.inertial.mass, 96000.0, 96000.0 * 1e-12);  // Every corner is exact in float32.
   const Eigen::Vector3d center = gltf_to_urdf_axes() * link.inertial.center_of_mass;
@@ -377,7 +362,7 @@ TEST(UrdfImportMeshes, ObjWithItsMaterialsAndTheUrdfScale) {
                       "</geometry></visual>\n</link>\n</robot>\n");
   Diagnostics diag;
   const Conversion conversion = import_ok(dir / "robot.urdf", diag);
-  EXPECT_EQ(find(diag, "MESH_OPEN"), nullptr);
+  EXPECT_EQ(find_code(diag, "MESH_OPEN"), nullptr);
   EXPECT_EQ(conversion.robot.links[0].inertial.mass, 8000.0);
   const Eigen::Vector3d center = gltf_to_urdf_axes() * conversion.robot.links[0].inertial.center_of_mass;
   EXPECT_NEAR((center - Eigen::Vector3d(1, 1, 1)).norm(), 0.0, 1e-12);
@@ -426,7 +411,7 @@ TEST(UrdfImportMeshes, AFileThatCrashesAssimpEndsOnlyItsReader) {
   Diagnostics diag;
   const Conversion conversion = import_ok(dir / "robot.urdf", diag);
   EXPECT_EQ(conversion.robot.links[0].inertial.mass, 2.0);
-  const Diagnostic* d = find(diag, "URDF_MESH_INVALID");
+  const Diagnostic* d = find_code(diag, "URDF_MESH_INVALID");
   ASSERT_NE(d, nullptr);
   EXPECT_EQ(d->severity, Severity::kWarning);
   EXPECT_NE(d->message.find("assimp failed reading it"), std::string::npos) << d->message;
@@ -446,7 +431,7 @@ TEST(UrdfImportMeshes, AFileAssimpCannotReadIsNamed) {
     Diagnostics diag;
     const auto conversion = import_urdf(dir / "robot.urdf", UrdfImportOptions{}, diag);
     EXPECT_EQ(conversion.has_value(), authored);
-    const Diagnostic* d = find(diag, "URDF_MESH_INVALID");
+    const Diagnostic* d = find_code(diag, "URDF_MESH_INVALID");
     ASSERT_NE(d, nullptr);
     EXPECT_EQ(d->severity, authored ? Severity::kWarning : Severity::kError);
     EXPECT_EQ(d->pointer, "/robot/link[@name='a']/visual[1]");
@@ -472,7 +457,7 @@ TEST(UrdfImportMeshes, ACountTheFileCannotHoldIsRefusedBeforeReading) {
     testing::write_file(dir / "robot.urdf", one_link("crafted.dae"));
     Diagnostics diag;
     EXPECT_FALSE(import_urdf(dir / "robot.urdf", UrdfImportOptions{}, diag));
-    const Diagnostic* d = find(diag, "URDF_MESH_INVALID");
+    const Diagnostic* d = find_code(diag, "URDF_MESH_INVALID");
     ASSERT_NE(d, nullptr);
     EXPECT_NE(d->message.find(" on line "), std::string::npos) << d->message;
     const bool plain = attribute.find_first_of("+x") == std::string::npos;  // Digits, spaced or not.
@@ -491,7 +476,7 @@ TEST(UrdfImportMeshes, InstancesCountAgainstTheTriangleLimit) {
   options.convert.limits.max_triangles = 100;
   Diagnostics diag;
   EXPECT_FALSE(import_urdf(dir / "robot.urdf", options, diag));
-  const Diagnostic* d = find(diag, "TOO_MANY_TRIANGLES");
+  const Diagnostic* d = find_code(diag, "TOO_MANY_TRIANGLES");
   ASSERT_NE(d, nullptr);
   EXPECT_NE(d->message.find("more than 100 triangles with this file's"), std::string::npos) << d->message;
 }
@@ -504,7 +489,7 @@ TEST(UrdfImportMeshes, AVertexBeyondFloatRangeIsNamed) {
   testing::write_file(dir / "robot.urdf", one_link("far.dae"));
   Diagnostics diag;
   EXPECT_FALSE(import_urdf(dir / "robot.urdf", UrdfImportOptions{}, diag));
-  const Diagnostic* d = find(diag, "URDF_MESH_INVALID");
+  const Diagnostic* d = find_code(diag, "URDF_MESH_INVALID");
   ASSERT_NE(d, nullptr);
   EXPECT_NE(d->message.find("beyond"), std::string::npos) << d->message;
 }
@@ -518,7 +503,7 @@ TEST(UrdfImportMeshes, OtherFormatsAreNamedWithTheOnesImportReads) {
                                            "iyz=\"0\" izz=\"1\"/></inertial>\n"));
   Diagnostics diag;
   import_ok(dir / "robot.urdf", diag);
-  const Diagnostic* d = find(diag, "URDF_MESH_FORMAT_UNSUPPORTED");
+  const Diagnostic* d = find_code(diag, "URDF_MESH_FORMAT_UNSUPPORTED");
   ASSERT_NE(d, nullptr);
   EXPECT_NE(d->message.find("STL, COLLADA (.dae) and OBJ"), std::string::npos) << d->message;
 }

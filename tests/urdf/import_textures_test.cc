@@ -101,21 +101,6 @@ std::string tutorial_png() {
   return testing::read_file(testing::data_dir() / "urdf" / "urdf_tutorial" / "meshes" / "l_finger_tip_color.png");
 }
 
-Conversion import_ok(const fs::path& urdf, Diagnostics& diag) {
-  auto conversion = import_urdf(urdf, UrdfImportOptions{}, diag);
-  std::string all;
-  for (const Diagnostic& d : diag.all()) all += format(d) + "\n";
-  if (!conversion) throw std::runtime_error(urdf.string() + " not imported:\n" + all);
-  return std::move(*conversion);
-}
-
-const Diagnostic* find(const Diagnostics& diag, const std::string& code) {
-  for (const Diagnostic& d : diag.all()) {
-    if (d.code == code) return &d;
-  }
-  return nullptr;
-}
-
 // The float values of an accessor of the import's own buffer (tightly packed float32).
 std::vector<float> floats_of(const Conversion& conversion, std::size_t accessor_index, int components) {
   const Json& document = conversion.asset.document;
@@ -139,7 +124,7 @@ TEST(UrdfImportTextures, ColladaCoordinatesAndImageAreCarried) {
   Diagnostics diag;
   const Conversion conversion = import_ok(dir / "robot.urdf", diag);
   for (const Diagnostic& d : diag.all()) EXPECT_NE(d.severity, Severity::kError) << format(d);
-  EXPECT_EQ(find(diag, "URDF_TEXTURE_SKIPPED"), nullptr);
+  EXPECT_EQ(find_code(diag, "URDF_TEXTURE_SKIPPED"), nullptr);
   EXPECT_EQ(conversion.robot.links[0].inertial.mass, 1000.0);
 
   const Json& document = conversion.asset.document;
@@ -210,7 +195,7 @@ TEST(UrdfImportTextures, ObjMapKdIsCarried) {
                                           "</geometry></visual>\n</link>\n</robot>\n");
   Diagnostics diag;
   const Conversion conversion = import_ok(dir / "robot.urdf", diag);
-  EXPECT_EQ(find(diag, "URDF_TEXTURE_SKIPPED"), nullptr);
+  EXPECT_EQ(find_code(diag, "URDF_TEXTURE_SKIPPED"), nullptr);
   EXPECT_EQ(conversion.robot.links[0].inertial.mass, 1000.0);
   const Json& document = conversion.asset.document;
   const Json& primitive = document["meshes"][0]["primitives"][0];
@@ -266,7 +251,7 @@ TEST(UrdfImportTextures, ATextureThatCannotBeCarriedIsNamed) {
     Diagnostics diag;
     const Conversion conversion = import_ok(folder / "robot.urdf", diag);
     EXPECT_EQ(conversion.robot.links[0].inertial.mass, 1000.0);
-    const Diagnostic* d = find(diag, "URDF_TEXTURE_SKIPPED");
+    const Diagnostic* d = find_code(diag, "URDF_TEXTURE_SKIPPED");
     ASSERT_NE(d, nullptr);
     EXPECT_EQ(d->severity, Severity::kWarning);
     EXPECT_EQ(d->pointer, "/robot/link[@name='a']/visual[1]");
@@ -291,7 +276,7 @@ TEST(UrdfImportTextures, ATextureThatCannotBeCarriedIsNamed) {
                                           "</geometry></visual>\n</link>\n</robot>\n");
   Diagnostics diag;
   const Conversion conversion = import_ok(dir / "robot.urdf", diag);
-  const Diagnostic* d = find(diag, "URDF_TEXTURE_SKIPPED");
+  const Diagnostic* d = find_code(diag, "URDF_TEXTURE_SKIPPED");
   ASSERT_NE(d, nullptr);
   EXPECT_NE(d->message.find("the mesh has no texture coordinates for it"), std::string::npos) << d->message;
   const Json& document = conversion.asset.document;
@@ -308,7 +293,7 @@ TEST(UrdfImportTextures, TheTutorialsFingersAreTexturedAsBlenderReadsThem) {
   const fs::path meshes = testing::data_dir() / "urdf" / "urdf_tutorial" / "meshes";
   Diagnostics diag;
   const Conversion conversion = import_ok(meshes.parent_path() / "05-visual.urdf", diag);
-  EXPECT_EQ(find(diag, "URDF_TEXTURE_SKIPPED"), nullptr);
+  EXPECT_EQ(find_code(diag, "URDF_TEXTURE_SKIPPED"), nullptr);
   const Json& document = conversion.asset.document;
   ASSERT_EQ(document["images"].size(), 2u);
   for (const Json& image : document["images"]) {

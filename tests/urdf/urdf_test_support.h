@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -122,6 +123,23 @@ class GltfBuilder {
   Json document_;
   std::vector<std::uint8_t> bin_;
 };
+
+// import_urdf that must succeed: throws, with every diagnostic, when it does not.
+inline Conversion import_ok(const std::filesystem::path& urdf, Diagnostics& diag, const UrdfImportOptions& options = {}) {
+  auto conversion = import_urdf(urdf, options, diag);
+  std::string all;
+  for (const Diagnostic& d : diag.all()) all += format(d) + "\n";
+  if (!conversion) throw std::runtime_error(urdf.string() + " not imported:\n" + all);
+  return std::move(*conversion);
+}
+
+// The first diagnostic with `code`, or null.
+inline const Diagnostic* find_code(const Diagnostics& diag, const std::string& code) {
+  for (const Diagnostic& d : diag.all()) {
+    if (d.code == code) return &d;
+  }
+  return nullptr;
+}
 
 inline Conversion convert_fixture(const std::string& name) {
   Diagnostics diag;
